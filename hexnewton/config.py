@@ -1,0 +1,137 @@
+"""One dataclass config tree for hexnewton.
+
+The paper's values (Huang et al. 2025, "Hierarchical reinforcement learning for enhancing stability and
+adaptability of hexapod robots in complex terrains") are the defaults; each carries a comment naming the
+section, equation or table it comes from. Values the paper does not give are marked ``# ours`` with the
+reason.
+
+Conventions (used everywhere in hexnewton):
+  * World frame: z up, the robot starts at the origin facing +x; terrain features lie ahead along +x.
+  * Body frame: x forward, y left, z up.
+  * Joint order: legs R1, R2, R3, L1, L2, L3 (front to back), each leg hip, knee (femur), ankle (tibia).
+  * Joint signs (same on every leg):
+      - hip   > 0 swings the foot forward (+x), the hip axis is vertical;
+      - knee  > 0 lifts the femur (rotates the leg upward), 0 = femur horizontal;
+      - ankle < 0 tucks the foot inward toward the body, 0 = tibia perpendicular to the femur, pointing
+        down when the femur is horizontal.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+LEG_NAMES = ("R1", "R2", "R3", "L1", "L2", "L3")
+JOINT_KINDS = ("hip", "knee", "ankle")
+JOINT_NAMES = tuple(f"{leg}_{kind}" for leg in LEG_NAMES for kind in JOINT_KINDS)
+TERRAINS = ("flat", "rugged", "stepped", "complex")
+
+
+@dataclass
+class RobotConfig:
+    """The paper's hexapod (§3.5) plus the physical details the paper leaves open."""
+
+    # §3.5: link lengths [m]
+    hip_length: float = 0.050
+    femur_length: float = 0.080
+    tibia_length: float = 0.130
+    # §3.5: total mass [kg]
+    total_mass: float = 2.5
+    # ours: mass split. Servo-driven legs: 0.15 kg per leg (coxa servo 0.05, femur 0.05, tibia 0.05),
+    # the remaining 1.6 kg in the torso (battery, controller, six servos' share).
+    coxa_mass: float = 0.05
+    femur_mass: float = 0.05
+    tibia_mass: float = 0.05
+    # §3.5: joint limits [rad]
+    hip_limit: tuple[float, float] = (-math.pi / 6, math.pi / 6)
+    knee_limit: tuple[float, float] = (0.0, math.pi / 2)
+    ankle_limit: tuple[float, float] = (-math.pi / 3, 0.0)
+    # ours: torso box (x length, y width, z height) [m], sized like common 2.5 kg servo hexapods
+    torso_size: tuple[float, float, float] = (0.26, 0.14, 0.05)
+    # ours: hip mounts in the body frame, (x, |y|) per leg row front/middle/rear [m]
+    hip_mounts: tuple[tuple[float, float], ...] = ((0.11, 0.07), (0.0, 0.08), (-0.11, 0.07))
+    # ours: outward leg direction, degrees from lateral toward +x for the front row (front legs splay
+    # forward, rear legs backward)
+    mount_splay_deg: tuple[float, float, float] = (30.0, 0.0, -30.0)
+    # ours: collision radii [m]
+    leg_radius: float = 0.010
+    foot_radius: float = 0.012
+    # ours: neutral standing pose (hip, knee, ankle) [rad]: femur slightly raised, tibia vertical, so
+    # stance never rests on the knee's lower limit and the torso stands ~0.13 m high (the paper's
+    # height reward pays above 0.12 m, Table 1).
+    stand_pose: tuple[float, float, float] = (0.0, 0.15, -0.15)
+    # ours: PD position drive. A tripod stance carries ~8 N per foot at ~0.09 m lever: ~0.75 N m at the
+    # knee; kp = 40 N m/rad keeps the sag under 0.02 rad. Effort limit like a 35 kg cm hobby servo.
+    joint_ke: float = 40.0
+    joint_kd: float = 0.8
+    effort_limit: float = 3.5
+    # ours: reflected rotor inertia of a geared servo [kg m^2]; it also keeps the light tibia stable
+    armature: float = 0.005
+    # ours: joint-limit penalty stiffness/damping
+    limit_ke: float = 1.0e3
+    limit_kd: float = 10.0
+    # ours: contact material
+    friction: float = 0.9
+    # initial torso height above the terrain under the origin [m]; the robot drops onto its feet
+    spawn_height: float = 0.15
+
+
+@dataclass
+class TerrainConfig:
+    """The paper's terrains (§3.1). Lengths in metres; +x is the walking direction."""
+
+    name: str = "flat"
+    seed: int = 0
+    # §3.1: rugged = square blocks of 4 cm^2 (2 cm x 2 cm), heights uniform in [0, 6 cm]
+    block_size: float = 0.02
+    block_height_max: float = 0.06
+    # §3.1: stepped = 15 steps, 6 cm rise, 25 cm deep, 90 cm total rise
+    step_count: int = 15
+    step_rise: float = 0.06
+    step_depth: float = 0.25
+    # §3.1: complex = 1.5 m rugged followed by 1.5 m of steps
+    complex_rugged_length: float = 1.5
+    complex_stepped_length: float = 1.5
+    # ours: where the steps begin on the stepped terrain (flat run-up so the robot starts on level ground)
+    stepped_start_x: float = 0.5
+    # ours: extent of the terrain patch: x in [x_min, x_max], |y| <= width / 2. 5 m across the walking
+    # direction; the paper ends an episode at |y| > 1.5 m (§2.4.4), so everything reachable is inside.
+    # The stepped terrain ends at 0.5 + 15 * 0.25 = 4.25 m, then a landing up to x_max.
+    x_min: float = -1.0
+    x_max: float = 5.0
+    width: float = 5.0
+    # ours: rugged blocks cover x in [x_min, rugged_x_max], |y| <= rugged_half_width (flat beyond). The
+    # paper's longest task is 3 m (Table 3), so 4 m of blocks is enough and keeps the mesh small.
+    rugged_x_max: float = 4.0
+    rugged_half_width: float = 2.0
+    # resolution of the in-kernel height query grid [m] (must divide block_size and step_depth)
+    query_resolution: float = 0.01
+
+
+@dataclass
+class SimConfig:
+    """Batched physics settings."""
+
+    num_envs: int = 16
+    device: str | None = None  # None: CUDA if present, else CPU
+    # ours: 5 ms physics frame (contacts detected once per frame) split into substeps
+    frame_dt: float = 0.005
+    substeps: int = 2
+    # ours: MuJoCo (mujoco_warp) solver settings
+    solver: str = "newton"
+    iterations: int = 10
+    ls_iterations: int = 10
+    integrator: str = "implicitfast"
+    # contact gap: the stack-facts probe found the 0.1 m default overflows contact buffers on blocks
+    rigid_gap: float = 0.01
+    # per-world contact capacity handed to MuJoCo (nconmax) and constraint rows (njmax)
+    contacts_per_env: int = 48
+    constraints_per_env: int = 240
+    use_graph: bool = True
+
+
+@dataclass
+class HexConfig:
+    robot: RobotConfig = field(default_factory=RobotConfig)
+    terrain: TerrainConfig = field(default_factory=TerrainConfig)
+    sim: SimConfig = field(default_factory=SimConfig)
