@@ -1,0 +1,387 @@
+"""A batched Newton world: N hexapods, each in its own world, sharing one terrain.
+
+Model/State/Control as in Newton: ``World.model`` is static, ``World.state`` the current physics state,
+``World.control`` the joint targets. One ``World.step()`` advances one physics frame (``frame_dt``): the
+collision pipeline runs once, then ``substeps`` MuJoCo (mujoco_warp) steps reuse its contacts. The whole
+frame is recorded once into a graph (a CUDA graph on GPU, Warp's own capture on CPU) and replayed.
+
+Tensors (torch, zero-copy over the Warp arrays; writes go straight into the simulation):
+  ``joint_q``      (N, 25)  base position xyz, base quaternion xyzw, 18 joint angles
+  ``joint_qd``     (N, 24)  base linear, base angular velocity, 18 joint velocities
+  ``joint_target`` (N, 18)  PD position targets of the 18 joints (a view into ``control.joint_target_q``)
+
+Contact capacity: every frame, a kernel folds MuJoCo's per-world overflow bitmask and the collision
+pipeline's triangle-pair / contact-reduction counters into sticky flags that ``check_contacts()`` reads and
+reports (warning or ``ContactOverflowError``); overflow never passes silently.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import warnings
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+import warp as wp
+
+import newton
+from newton.solvers import SolverMuJoCo
+
+from .config import HexConfig, SimConfig
+from .robot import BASE_Q, BASE_QD, NUM_JOINTS, build_hexapod, stand_height
+from .terrain import Terrain, height_field_from_grid, make_terrain
+
+log = logging.getLogger("hexnewton")
+wp.config.quiet = True  # no per-module compile chatter; errors still print
+
+# overflow bits beyond MuJoCo's own (bits 0-15) and Newton's (16 pipeline contacts, 17 nconmax)
+OVERFLOW_TRIANGLE_PAIRS = 1 << 20
+OVERFLOW_CONTACT_REDUCTION = 1 << 21
+
+
+class HexnewtonError(RuntimeError):
+    """A user-facing error: the CLI prints its message as one line and exits non-zero."""
+
+
+class ContactOverflowError(HexnewtonError):
+    pass
+
+
+def resolve_device(name: str | None) -> str:
+    """``None``/``"auto"`` -> ``cuda:0`` if CUDA is available else ``cpu``; explicit CUDA must exist."""
+    wp.init()
+    if name in (None, "", "auto"):
+        return "cuda:0" if wp.is_cuda_available() else "cpu"
+    if name.startswith("cuda"):
+        if not wp.is_cuda_available():
+            raise HexnewtonError(f"device '{name}' was requested but this machine has no CUDA device")
+        if name == "cuda":
+            return "cuda:0"
+        try:
+            wp.get_device(name)
+        except Exception:
+            raise HexnewtonError(f"device '{name}' does not exist (CUDA devices: {wp.get_cuda_device_count()})")
+        return name
+    if name != "cpu":
+        raise HexnewtonError(f"unknown device '{name}': use cpu, cuda or cuda:N")
+    return name
+
+
+def validate_sim(cfg: SimConfig) -> None:
+    if not isinstance(cfg.num_envs, (int, np.integer)) or cfg.num_envs <= 0:
+        raise HexnewtonError(f"num_envs must be a positive integer, got {cfg.num_envs}")
+    if cfg.substeps < 1:
+        raise HexnewtonError(f"substeps must be >= 1, got {cfg.substeps}")
+    if not cfg.frame_dt > 0:
+        raise HexnewtonError(f"frame_dt must be > 0, got {cfg.frame_dt}")
+
+
+@wp.kernel
+def _accumulate_overflow(
+    solver_overflow: wp.array[wp.int32],
+    triangle_pairs: wp.array[wp.int32],
+    max_triangle_pairs: int,
+    reduction_overflow: wp.array[wp.int32],
+    sticky: wp.array[wp.int32],
+    global_sticky: wp.array[wp.int32],
+):
+    w = wp.tid()
+    bits = solver_overflow[w]
+    if bits != 0:
+        wp.atomic_or(sticky, w, bits)
+    if w == 0:
+        g = wp.int32(0)
+        if triangle_pairs[0] > max_triangle_pairs:
+            g = g | OVERFLOW_TRIANGLE_PAIRS
+        if reduction_overflow[0] != 0:
+            g = g | OVERFLOW_CONTACT_REDUCTION
+        if g != 0:
+            wp.atomic_or(global_sticky, 0, g)
+
+
+@wp.kernel
+def _reset_envs(
+    mask: wp.array[wp.bool],
+    default_q: wp.array2d[wp.float32],
+    joint_q: wp.array2d[wp.float32],
+    joint_qd: wp.array2d[wp.float32],
+    joint_target: wp.array2d[wp.float32],
+):
+    e = wp.tid()
+    if not mask[e]:
+        return
+    for i in range(default_q.shape[1]):
+        joint_q[e, i] = default_q[e, i]
+        joint_target[e, i] = default_q[e, i]
+    for i in range(joint_qd.shape[1]):
+        joint_qd[e, i] = 0.0
+
+
+@wp.kernel
+def _nonfinite_envs(
+    joint_q: wp.array2d[wp.float32],
+    joint_qd: wp.array2d[wp.float32],
+    out: wp.array[wp.bool],
+):
+    e = wp.tid()
+    bad = False
+    for i in range(joint_q.shape[1]):
+        if not wp.isfinite(joint_q[e, i]):
+            bad = True
+    for i in range(joint_qd.shape[1]):
+        if not wp.isfinite(joint_qd[e, i]):
+            bad = True
+    out[e] = bad
+
+
+@dataclass
+class OverflowReport:
+    worlds: int  # worlds whose solver reported an overflow bit
+    bits: int  # union of all bits seen
+    frames_checked: int
+
+    @property
+    def ok(self) -> bool:
+        return self.bits == 0
+
+    def describe(self) -> str:
+        names = []
+        b = self.bits
+        if b & int(SolverMuJoCo.OverflowBits.CONTACT_PIPELINE):
+            names.append("collision pipeline contacts > rigid_contact_max")
+        if b & int(SolverMuJoCo.OverflowBits.SOLVER_NCONMAX):
+            names.append("contacts > MuJoCo nconmax (raise sim.contacts_per_env)")
+        if b & 0xFFFF:
+            names.append(f"mujoco_warp overflow flags 0x{b & 0xFFFF:x} (raise sim.constraints_per_env)")
+        if b & OVERFLOW_TRIANGLE_PAIRS:
+            names.append("triangle-pair buffer (mesh terrain)")
+        if b & OVERFLOW_CONTACT_REDUCTION:
+            names.append("contact-reduction buffer")
+        return f"contact buffers overflowed in {self.worlds} world(s): " + "; ".join(names)
+
+
+class World:
+    """N hexapods on one terrain, stepped by SolverMuJoCo with Newton's collision pipeline."""
+
+    def __init__(self, cfg: HexConfig | None = None, terrain: Terrain | None = None):
+        self.cfg = cfg = cfg or HexConfig()
+        sim = cfg.sim
+        validate_sim(sim)
+        self.device = resolve_device(sim.device)
+        self.num_envs = n = int(sim.num_envs)
+        self.frame_dt = sim.frame_dt
+        self.sim_dt = sim.frame_dt / sim.substeps
+        self.substeps = sim.substeps
+
+        self.terrain = terrain if terrain is not None else make_terrain(cfg.terrain)
+        robot = build_hexapod(cfg.robot, gap=sim.rigid_gap)
+
+        scene = newton.ModelBuilder()
+        SolverMuJoCo.register_custom_attributes(scene)
+        scene.rigid_gap = sim.rigid_gap
+        scene.replicate(robot, n)
+        ground_cfg = newton.ModelBuilder.ShapeConfig(mu=cfg.robot.friction, gap=sim.rigid_gap)
+        self.terrain.add_to_builder(scene, ground_cfg)
+
+        # spawn: torso at the standing height above the highest terrain under the robot, plus a drop
+        footprint = 0.5 * math.hypot(*cfg.robot.torso_size[:2]) + cfg.robot.hip_length + cfg.robot.femur_length
+        ground = float(self.terrain.max_height_around(0.0, 0.0, footprint))
+        self.spawn_z = ground + stand_height(cfg.robot) + (cfg.robot.spawn_height - stand_height(cfg.robot))
+        nq = BASE_Q + NUM_JOINTS
+        q = np.asarray(scene.joint_q, dtype=np.float32).reshape(n, nq)
+        q[:, 2] = self.spawn_z
+        scene.joint_q[:] = q.reshape(-1).tolist()
+
+        with wp.ScopedDevice(self.device):
+            self.model = scene.finalize(device=self.device)
+        self.model.rigid_gap = sim.rigid_gap
+        self.height_field = height_field_from_grid(self.terrain.grid, self.device)
+
+        self.state_0 = self.model.state()
+        self.state_1 = self.model.state()
+        self.control = self.model.control()
+        newton.eval_fk(self.model, self.model.joint_q, self.model.joint_qd, self.state_0)
+
+        self.solver = SolverMuJoCo(
+            self.model,
+            use_mujoco_contacts=False,
+            solver=sim.solver,
+            integrator=sim.integrator,
+            iterations=sim.iterations,
+            ls_iterations=sim.ls_iterations,
+            nconmax=sim.contacts_per_env,
+            njmax=sim.constraints_per_env,
+        )
+        max_contacts = self.solver.get_max_contact_count()
+        self.pipeline = newton.CollisionPipeline(
+            self.model,
+            rigid_contact_max=max_contacts,
+            max_triangle_pairs=max(1_000_000, 64 * n),
+        )
+        self.contacts = self.pipeline.contacts()
+        self.observables = self.solver.observables({SolverMuJoCo.ObservableKind.OVERFLOW})
+        self._overflow_world = wp.zeros(n, dtype=wp.int32, device=self.device)
+        self._overflow_global = wp.zeros(1, dtype=wp.int32, device=self.device)
+        self._frames_since_check = 0
+        self.overflow_frames = 0  # frames in which some overflow was reported (upper bound per check)
+
+        np_default = q.copy()
+        self._default_q = wp.array(np_default, dtype=wp.float32, device=self.device)
+        self._reset_mask = wp.zeros(n, dtype=wp.bool, device=self.device)
+        self._bad = wp.zeros(n, dtype=wp.bool, device=self.device)
+        self.nonfinite_resets = 0
+
+        self._bind_views()
+        self.sim_time = 0.0
+        self.graph = None
+        self.controller: Callable[[World], None] | None = None
+        wp.synchronize_device(self.device)
+
+    def set_controller(self, controller: Callable[[World], None] | None) -> None:
+        """Launch ``controller(world)`` before every physics substep (inside the captured graph)."""
+        self.controller = controller
+        self.graph = None
+
+    # ------------------------------------------------------------------ tensors
+    def _bind_views(self) -> None:
+        n, nq, nqd = self.num_envs, BASE_Q + NUM_JOINTS, BASE_QD + NUM_JOINTS
+        self.joint_q_wp = self.state_0.joint_q.reshape((n, nq))
+        self.joint_qd_wp = self.state_0.joint_qd.reshape((n, nqd))
+        self.joint_target_wp = self.control.joint_target_q.reshape((n, nq))
+
+    @property
+    def joint_q(self):
+        return wp.to_torch(self.joint_q_wp)
+
+    @property
+    def joint_qd(self):
+        return wp.to_torch(self.joint_qd_wp)
+
+    @property
+    def joint_target(self):
+        """(N, 18) joint position targets (torch view; the base columns of the control array are unused)."""
+        return wp.to_torch(self.joint_target_wp)[:, BASE_Q:]
+
+    def numpy_q(self) -> np.ndarray:
+        return self.joint_q_wp.numpy()
+
+    # ------------------------------------------------------------------ stepping
+    def _simulate(self) -> None:
+        self.pipeline.collide(self.state_0, self.contacts)
+        for i in range(self.substeps):
+            if self.controller is not None:
+                self.controller(self)
+            self.state_0.clear_forces()
+            self.solver.step(
+                self.state_0, self.state_1, self.control, self.contacts, self.sim_dt, observables=self.observables
+            )
+            wp.launch(
+                _accumulate_overflow,
+                dim=self.num_envs,
+                inputs=[
+                    self.observables.overflow,
+                    self._triangle_pair_count(),
+                    self.pipeline.narrow_phase.max_triangle_pairs,
+                    self.contacts._reduction_overflow,
+                    self._overflow_world,
+                    self._overflow_global,
+                ],
+                device=self.device,
+            )
+            if self.substeps % 2 == 1 and i == self.substeps - 1:
+                self.state_0.assign(self.state_1)
+            else:
+                self.state_0, self.state_1 = self.state_1, self.state_0
+
+    def _triangle_pair_count(self) -> wp.array:
+        c = getattr(self.pipeline.narrow_phase, "triangle_pairs_count", None)
+        if c is None:  # no mesh in the scene (flat terrain)
+            if not hasattr(self, "_zero_count"):
+                self._zero_count = wp.zeros(1, dtype=wp.int32, device=self.device)
+            c = self._zero_count
+        return c
+
+    def _capture(self) -> None:
+        # run once uncaptured (kernel compilation, lazy allocations), then restore and record
+        saved = [wp.clone(a) for a in (self.state_0.joint_q, self.state_0.joint_qd, self.state_0.body_q,
+                                       self.state_0.body_qd)]  # fmt: skip
+        self._simulate()
+        for dst, src in zip(
+            (self.state_0.joint_q, self.state_0.joint_qd, self.state_0.body_q, self.state_0.body_qd), saved
+        ):
+            wp.copy(dst, src)
+        self._overflow_world.zero_()
+        self._overflow_global.zero_()
+        with wp.ScopedDevice(self.device), wp.ScopedCapture() as cap:
+            self._simulate()
+        self.graph = cap.graph
+
+    def step(self, frames: int = 1) -> None:
+        """Advance ``frames`` physics frames of ``frame_dt`` each."""
+        if self.graph is None and self.cfg.sim.use_graph:
+            self._capture()
+        for _ in range(frames):
+            if self.graph is not None:
+                wp.capture_launch(self.graph)
+            else:
+                self._simulate()
+        self.sim_time += frames * self.frame_dt
+        self._frames_since_check += frames
+
+    # ------------------------------------------------------------------ resets & health
+    def reset(self, mask: np.ndarray | wp.array | None = None) -> None:
+        """Put the selected envs (all if ``mask`` is None) back in the spawn pose, at rest."""
+        if mask is None:
+            self._reset_mask.fill_(True)
+            m = self._reset_mask
+        elif isinstance(mask, wp.array):
+            m = mask
+        else:
+            self._reset_mask.assign(np.asarray(mask, dtype=bool))
+            m = self._reset_mask
+        wp.launch(
+            _reset_envs,
+            dim=self.num_envs,
+            inputs=[m, self._default_q, self.joint_q_wp, self.joint_qd_wp, self.joint_target_wp],
+            device=self.device,
+        )
+        newton.eval_fk(self.model, self.state_0.joint_q, self.state_0.joint_qd, self.state_0, mask=m)
+
+    def reset_nonfinite(self) -> int:
+        """Reset every env whose state holds NaN/Inf; returns how many (also counted in nonfinite_resets)."""
+        wp.launch(_nonfinite_envs, dim=self.num_envs, inputs=[self.joint_q_wp, self.joint_qd_wp, self._bad],
+                  device=self.device)  # fmt: skip
+        bad = int(self._bad.numpy().sum())
+        if bad:
+            self.reset(self._bad)
+            self.nonfinite_resets += bad
+            log.warning("reset %d env(s) with non-finite physics state", bad)
+        return bad
+
+    def check_contacts(self, on_overflow: str = "warn") -> OverflowReport:
+        """Read the sticky overflow flags since the last check; warn (or raise) if any buffer overflowed."""
+        per_world = self._overflow_world.numpy()
+        global_bits = int(self._overflow_global.numpy()[0])
+        bits = int(np.bitwise_or.reduce(per_world)) | global_bits if per_world.size else global_bits
+        report = OverflowReport(worlds=int((per_world != 0).sum()), bits=bits, frames_checked=self._frames_since_check)
+        self._overflow_world.zero_()
+        self._overflow_global.zero_()
+        self._frames_since_check = 0
+        if not report.ok:
+            self.overflow_frames += report.frames_checked
+            if on_overflow == "raise":
+                raise ContactOverflowError(report.describe())
+            warnings.warn(report.describe(), RuntimeWarning, stacklevel=2)
+        return report
+
+    # ------------------------------------------------------------------ convenience
+    def base_pos(self) -> np.ndarray:
+        return self.numpy_q()[:, 0:3]
+
+    def base_quat(self) -> np.ndarray:
+        return self.numpy_q()[:, 3:7]
+
+    def terrain_height_at(self, xy: np.ndarray) -> np.ndarray:
+        return self.terrain.height_at(xy[:, 0], xy[:, 1])

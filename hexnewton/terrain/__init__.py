@@ -1,0 +1,97 @@
+"""The paper's terrains (Huang et al. 2025, §3.1): flat, rugged, stepped and complex.
+
+``make_terrain(cfg)`` builds a :class:`Terrain`: the exact piecewise-constant height grid
+(:mod:`.heightmap`), its compact closed collision mesh (:mod:`.mesh`, ``None`` for flat, which is an
+infinite ground plane at z = 0) and helpers to add it to a ``newton.ModelBuilder`` and to query
+heights on the host. :mod:`.query` provides the in-kernel height lookup (``HeightField``).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+import newton
+import numpy as np
+import warp as wp
+
+from hexnewton.config import TerrainConfig
+from hexnewton.terrain.heightmap import HeightGrid, build_height_grid, complex_step_count, validate_config
+from hexnewton.terrain.mesh import grid_to_mesh
+from hexnewton.terrain.query import (
+    HeightField,
+    height_field_from_grid,
+    max_terrain_height,
+    max_terrain_height_np,
+    sample_heights,
+    sample_heights_kernel,
+    terrain_height,
+    terrain_height_np,
+)
+
+__all__ = [
+    "HeightField",
+    "HeightGrid",
+    "Terrain",
+    "build_height_grid",
+    "complex_step_count",
+    "generate",
+    "grid_to_mesh",
+    "height_field_from_grid",
+    "make_terrain",
+    "max_terrain_height",
+    "max_terrain_height_np",
+    "sample_heights",
+    "sample_heights_kernel",
+    "terrain_height",
+    "terrain_height_np",
+    "validate_config",
+]
+
+
+@dataclass
+class Terrain:
+    """One built terrain: config, exact height grid and collision mesh (None for flat)."""
+
+    name: str
+    cfg: TerrainConfig
+    grid: HeightGrid
+    mesh: newton.Mesh | None
+
+    def add_to_builder(self, builder: newton.ModelBuilder, cfg: newton.ModelBuilder.ShapeConfig) -> int:
+        """Add the terrain as a static shape; returns the shape index.
+
+        flat: an infinite ground plane at z = 0; otherwise a static triangle mesh (body -1).
+        """
+        if self.mesh is None:
+            return builder.add_ground_plane(cfg=cfg)
+        return builder.add_shape_mesh(-1, mesh=self.mesh, cfg=cfg, label=f"terrain_{self.name}")
+
+    def height_at(self, x: np.ndarray | float, y: np.ndarray | float) -> np.ndarray:
+        """Terrain height at (x, y) (float64, broadcast shape); off-patch points see the edge cell."""
+        return terrain_height_np(self.grid, x, y)
+
+    def height_field(self, device: wp.DeviceLike = None) -> HeightField:
+        """The grid as a device :class:`HeightField` for in-kernel queries."""
+        return height_field_from_grid(self.grid, device)
+
+
+def _mesh_from_grid(grid: HeightGrid) -> newton.Mesh:
+    vertices, indices = grid_to_mesh(grid)
+    # a static terrain needs no mass properties
+    return newton.Mesh(vertices, indices, compute_inertia=False)
+
+
+def make_terrain(cfg: TerrainConfig) -> Terrain:
+    """Build terrain ``cfg.name``; raises ``ValueError`` for unknown names or invalid parameters."""
+    grid = build_height_grid(cfg)
+    mesh = None if cfg.name == "flat" else _mesh_from_grid(grid)
+    return Terrain(name=cfg.name, cfg=cfg, grid=grid, mesh=mesh)
+
+
+def generate(name: str, seed: int = 0, **overrides) -> newton.Mesh | None:
+    """Collision mesh of terrain ``name`` (None for flat: an infinite plane at z = 0).
+
+    ``overrides`` replace other :class:`TerrainConfig` fields.
+    """
+    cfg = replace(TerrainConfig(), name=name, seed=seed, **overrides)
+    return make_terrain(cfg).mesh
