@@ -31,7 +31,7 @@ from newton.solvers import SolverMuJoCo
 
 from .config import HexConfig, SimConfig
 from .robot import BASE_Q, BASE_QD, NUM_JOINTS, build_hexapod, stand_height
-from .terrain import Terrain, height_field_from_grid, make_terrain
+from .terrain import Terrain, height_field_from_grid, make_terrain, max_terrain_height_np
 
 log = logging.getLogger("hexnewton")
 wp.config.quiet = True  # no per-module compile chatter; errors still print
@@ -126,14 +126,14 @@ def _nonfinite_envs(
     out: wp.array[wp.bool],
 ):
     e = wp.tid()
-    bad = False
+    bad = int(0)
     for i in range(joint_q.shape[1]):
         if not wp.isfinite(joint_q[e, i]):
-            bad = True
+            bad = 1
     for i in range(joint_qd.shape[1]):
         if not wp.isfinite(joint_qd[e, i]):
-            bad = True
-    out[e] = bad
+            bad = 1
+    out[e] = bad != 0
 
 
 @dataclass
@@ -185,10 +185,10 @@ class World:
         ground_cfg = newton.ModelBuilder.ShapeConfig(mu=cfg.robot.friction, gap=sim.rigid_gap)
         self.terrain.add_to_builder(scene, ground_cfg)
 
-        # spawn: torso at the standing height above the highest terrain under the robot, plus a drop
+        # spawn: torso spawn_height above the highest terrain under the robot's footprint; it drops onto its feet
         footprint = 0.5 * math.hypot(*cfg.robot.torso_size[:2]) + cfg.robot.hip_length + cfg.robot.femur_length
-        ground = float(self.terrain.max_height_around(0.0, 0.0, footprint))
-        self.spawn_z = ground + stand_height(cfg.robot) + (cfg.robot.spawn_height - stand_height(cfg.robot))
+        ground = float(max_terrain_height_np(self.terrain.grid, 0.0, 0.0, footprint))
+        self.spawn_z = ground + max(cfg.robot.spawn_height, stand_height(cfg.robot))
         nq = BASE_Q + NUM_JOINTS
         q = np.asarray(scene.joint_q, dtype=np.float32).reshape(n, nq)
         q[:, 2] = self.spawn_z
