@@ -34,7 +34,6 @@ from .robot import BASE_Q, BASE_QD, NUM_JOINTS, build_hexapod, stand_height
 from .terrain import Terrain, height_field_from_grid, make_terrain, max_terrain_height_np
 
 log = logging.getLogger("hexnewton")
-wp.config.quiet = True  # no per-module compile chatter; errors still print
 
 # overflow bits beyond MuJoCo's own (bits 0-15) and Newton's (16 pipeline contacts, 17 nconmax)
 OVERFLOW_TRIANGLE_PAIRS = 1 << 20

@@ -1,0 +1,142 @@
+"""The batched world on CPU: standing on every terrain, walking on flat, overflow reporting, resets, torch views."""
+
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+import torch
+import warp as wp
+
+from hexnewton.config import TERRAINS, HexConfig, SimConfig, TerrainConfig
+from hexnewton.kernels.gait import TripodSineGait
+from hexnewton.robot import stand_height
+from hexnewton.sim import ContactOverflowError, HexnewtonError, World, resolve_device
+from hexnewton.terrain import max_terrain_height_np
+
+N = 4
+
+
+def _world(terrain: str, **sim) -> World:
+    return World(HexConfig(sim=SimConfig(num_envs=N, device="cpu", **sim), terrain=TerrainConfig(name=terrain)))
+
+
+def _upright(q: np.ndarray) -> np.ndarray:
+    """z component of the torso's up axis, from quaternions (x, y, z, w)."""
+    return 1.0 - 2.0 * (q[:, 3] ** 2 + q[:, 4] ** 2)
+
+
+@pytest.mark.parametrize("terrain", TERRAINS)
+def test_stands_two_seconds(terrain):
+    world = _world(terrain)
+    frames = int(round(2.0 / world.frame_dt))
+    lowest = np.full(N, np.inf)
+    for _ in range(10):
+        world.step(frames // 10)
+        q = world.numpy_q()
+        assert np.isfinite(q).all(), "NaN/Inf in the physics state"
+        ground = max_terrain_height_np(world.terrain.grid, q[:, 0], q[:, 1], 0.5 * world.cfg.robot.torso_size[0])
+        lowest = np.minimum(lowest, q[:, 2] - ground)
+        assert (_upright(q) > 0.95).all(), f"robot tipped over on {terrain}"
+    # torso (half height 2.5 cm) stays clear of the highest terrain under it, near the standing height
+    assert (lowest > 0.06).all(), lowest
+    assert world.sim_time == pytest.approx(2.0)
+    assert world.check_contacts(on_overflow="raise").ok
+    if terrain in ("flat", "stepped"):  # level ground under the robot: the exact standing height
+        np.testing.assert_allclose(q[:, 2], stand_height(world.cfg.robot), atol=0.01)
+
+
+def test_tripod_walks_forward_on_flat():
+    world = _world("flat")
+    world.set_controller(TripodSineGait(world, freq=1.5, amp_hip=0.3, amp_knee=0.5))
+    x0 = world.base_pos().copy()
+    world.step(int(3.0 / world.frame_dt))
+    q = world.numpy_q()
+    dx = q[:, 0] - x0[:, 0]
+    assert (dx > 0.3).all(), dx  # ~0.23 m/s
+    assert (np.abs(q[:, 1]) < 0.1).all()
+    assert (_upright(q) > 0.9).all()
+    assert world.check_contacts(on_overflow="raise").ok
+
+
+def test_torch_views_are_zero_copy():
+    world = _world("flat")
+    target = world.joint_target
+    assert target.shape == (N, 18) and world.joint_q.shape == (N, 25) and world.joint_qd.shape == (N, 24)
+    target[:, 0] = 0.25  # R1 hip of every robot
+    ctrl = world.control.joint_target_q.numpy().reshape(N, 25)
+    assert np.all(ctrl[:, 7] == np.float32(0.25))
+    world.step(40)
+    assert torch.all(world.joint_q[:, 7] > 0.15)  # the hip followed the target written through torch
+
+
+def test_overflow_is_reported_never_silent():
+    world = _world("rugged", contacts_per_env=4, constraints_per_env=40)
+    world.set_controller(TripodSineGait(world))
+    world.step(20)
+    with pytest.warns(RuntimeWarning, match="overflowed"):
+        report = world.check_contacts()
+    assert not report.ok and report.worlds == N
+    world.step(5)
+    with pytest.raises(ContactOverflowError, match="nconmax"):
+        world.check_contacts(on_overflow="raise")
+
+
+def test_nonfinite_env_is_reset_and_counted():
+    world = _world("flat")
+    world.step(10)
+    q = world.joint_q
+    q[1, 9] = float("nan")
+    assert world.reset_nonfinite() == 1
+    assert world.nonfinite_resets == 1
+    assert torch.isfinite(world.joint_q).all()
+    world.step(10)
+    assert np.isfinite(world.numpy_q()).all()
+
+
+def test_reset_restores_spawn_pose():
+    world = _world("flat")
+    world.set_controller(TripodSineGait(world))
+    world.step(100)
+    mask = np.array([True, False, True, False])
+    before = world.numpy_q().copy()
+    world.reset(mask)
+    after = world.numpy_q()
+    assert np.allclose(after[mask, 0:3], [0.0, 0.0, world.spawn_z])
+    assert np.array_equal(after[~mask], before[~mask])
+    body_q = world.state_0.body_q.numpy().reshape(N, -1, 7)
+    assert np.allclose(body_q[mask, 0, :3], [0.0, 0.0, world.spawn_z], atol=1e-6)  # FK refreshed
+
+
+def test_device_resolution():
+    assert resolve_device(None) == ("cuda:0" if wp.is_cuda_available() else "cpu")
+    assert resolve_device("cpu") == "cpu"
+    with pytest.raises(HexnewtonError, match="unknown device"):
+        resolve_device("tpu")
+    if not wp.is_cuda_available():
+        with pytest.raises(HexnewtonError, match="no CUDA device"):
+            resolve_device("cuda")
+
+
+def test_bad_num_envs_raises():
+    with pytest.raises(HexnewtonError, match="num_envs"):
+        World(HexConfig(sim=SimConfig(num_envs=0, device="cpu")))
+
+
+@pytest.mark.parametrize(
+    "args, message",
+    [
+        (["--terrain", "moon"], "unknown terrain 'moon'"),
+        (["--num_envs", "0"], "positive integer"),
+        (["--num_envs", "-5"], "positive integer"),
+        (["--device", "tpu"], "unknown device"),
+    ]
+    + ([(["--device", "cuda"], "no CUDA device")] if not wp.is_cuda_available() else []),
+)
+def test_cli_bad_input_is_one_line(args, message):
+    proc = subprocess.run([sys.executable, "-m", "hexnewton.bench", *args], capture_output=True, text=True,
+                          timeout=300)  # fmt: skip
+    assert proc.returncode == 2
+    err = [line for line in proc.stderr.splitlines() if line.strip() and "Warp" not in line and not line.startswith(" ")]
+    assert len(err) == 1 and message in err[0], proc.stderr
+    assert "Traceback" not in proc.stderr
