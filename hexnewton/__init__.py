@@ -2,6 +2,7 @@
 
 import warp as _wp
 
-_wp.config.quiet = True  # no init banner or per-module compile chatter; errors and warnings still print
+# no init banner or per-module compile chatter; warnings and errors still print
+_wp.config.log_level = _wp.LOG_WARNING
 
 __version__ = "0.1.0"
