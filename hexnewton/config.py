@@ -130,6 +130,8 @@ class SimConfig:
     # friction cones use 4 rows per contact, plus joint limits)
     contacts_per_env: int = 64
     constraints_per_env: int = 300
+    # triangle-pair candidates per env for mesh terrain (H100, complex, 16384 envs: 64/env overflowed)
+    triangle_pairs_per_env: int = 256
     use_graph: bool = True
 
 

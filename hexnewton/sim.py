@@ -217,7 +217,7 @@ class World:
         self.pipeline = newton.CollisionPipeline(
             self.model,
             rigid_contact_max=max_contacts,
-            max_triangle_pairs=max(1_000_000, 64 * n),
+            max_triangle_pairs=max(1_000_000, sim.triangle_pairs_per_env * n),
         )
         self.contacts = self.pipeline.contacts()
         self.observables = self.solver.observables({SolverMuJoCo.ObservableKind.OVERFLOW})
