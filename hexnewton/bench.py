@@ -40,6 +40,7 @@ class BenchResult:
     build_s: float
     capture_s: float
     overflow: str
+    not_converged_worlds: int
     mean_forward_m: float
     upright_frac: float
 
@@ -79,6 +80,7 @@ def bench_one(terrain: str, num_envs: int, device: str, frames: int, sim: SimCon
         build_s=build_s,
         capture_s=capture_s,
         overflow="none" if report.ok else report.describe(),
+        not_converged_worlds=report.not_converged_worlds,
         mean_forward_m=float(np.nanmean(q[:, 0] - x0)),
         upright_frac=float(np.mean(up_z > 0.5)),
     )

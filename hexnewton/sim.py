@@ -38,6 +38,9 @@ log = logging.getLogger("hexnewton")
 # overflow bits beyond MuJoCo's own (bits 0-15) and Newton's (16 pipeline contacts, 17 nconmax)
 OVERFLOW_TRIANGLE_PAIRS = 1 << 20
 OVERFLOW_CONTACT_REDUCTION = 1 << 21
+# mujoco_warp's ITERATIONS (1 << 9) and LS_ITERATIONS (1 << 10) flags mean "solver hit its iteration cap",
+# not a dropped contact or constraint: counted apart from capacity overflow.
+NOT_CONVERGED_BITS = (1 << 9) | (1 << 10)
 
 
 class HexnewtonError(RuntimeError):
@@ -137,9 +140,10 @@ def _nonfinite_envs(
 
 @dataclass
 class OverflowReport:
-    worlds: int  # worlds whose solver reported an overflow bit
-    bits: int  # union of all bits seen
+    worlds: int  # worlds whose solver reported a capacity-overflow bit
+    bits: int  # union of all capacity-overflow bits seen
     frames_checked: int
+    not_converged_worlds: int = 0  # worlds where the MuJoCo solver hit its iteration cap (not an overflow)
 
     @property
     def ok(self) -> bool:
@@ -213,6 +217,8 @@ class World:
             nconmax=sim.contacts_per_env,
             njmax=sim.constraints_per_env,
         )
+        # iteration-cap hits are reported by check_contacts(), not printed per world by mujoco_warp
+        self.solver.mjw_model.opt.warn_overflow &= ~NOT_CONVERGED_BITS
         max_contacts = self.solver.get_max_contact_count()
         self.pipeline = newton.CollisionPipeline(
             self.model,
@@ -361,10 +367,15 @@ class World:
 
     def check_contacts(self, on_overflow: str = "warn") -> OverflowReport:
         """Read the sticky overflow flags since the last check; warn (or raise) if any buffer overflowed."""
-        per_world = self._overflow_world.numpy()
-        global_bits = int(self._overflow_global.numpy()[0])
-        bits = int(np.bitwise_or.reduce(per_world)) | global_bits if per_world.size else global_bits
-        report = OverflowReport(worlds=int((per_world != 0).sum()), bits=bits, frames_checked=self._frames_since_check)
+        flags = self._overflow_world.numpy()
+        capacity = flags & ~NOT_CONVERGED_BITS
+        bits = int(np.bitwise_or.reduce(capacity)) | int(self._overflow_global.numpy()[0])
+        report = OverflowReport(
+            worlds=int((capacity != 0).sum()),
+            bits=bits,
+            frames_checked=self._frames_since_check,
+            not_converged_worlds=int(((flags & NOT_CONVERGED_BITS) != 0).sum()),
+        )
         self._overflow_world.zero_()
         self._overflow_global.zero_()
         self._frames_since_check = 0
