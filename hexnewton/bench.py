@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import datetime
 import json
+import os
 import platform
 import subprocess
 import sys
@@ -96,8 +97,8 @@ def git_rev() -> str:
     try:
         return subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True,
                               check=True).stdout.strip()  # fmt: skip
-    except Exception:
-        return "unknown"
+    except Exception:  # e.g. a copy of the tree without .git (the GPU machine)
+        return os.environ.get("HEXNEWTON_GIT_REV", "unknown")
 
 
 def table(results: list[BenchResult], sim: SimConfig, command: str) -> str:
