@@ -130,10 +130,12 @@ class SimConfig:
     # rugged mesh a foot sees one contact per triangle within the gap: measured ~67 contacts per walking
     # robot at 0.01 m, ~39 at 0.005 m, ~26 at 0.002 m. 5 mm still exceeds a foot's travel per 5 ms frame.
     rigid_gap: float = 0.005
-    # per-world contact capacity handed to MuJoCo (nconmax) and constraint rows (njmax; pyramidal
-    # friction cones use 4 rows per contact, plus joint limits)
+    # per-world contact capacity handed to MuJoCo (nconmax; mujoco_warp pools it over all worlds) and
+    # constraint rows per world (njmax; pyramidal friction cones take 4 rows per contact, plus joint
+    # limits). A world may take more than its share of the contact pool: 352 rows overflowed once in
+    # 4096 walking robots on complex terrain (H100), so njmax leaves room for ~110 contacts.
     contacts_per_env: int = 64
-    constraints_per_env: int = 352
+    constraints_per_env: int = 480
     # triangle-pair candidates per env for mesh terrain (H100, complex, 16384 envs: 64/env overflowed)
     triangle_pairs_per_env: int = 256
     use_graph: bool = True
