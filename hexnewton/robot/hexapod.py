@@ -127,7 +127,6 @@ def build_hexapod(cfg: RobotConfig | None = None, gap: float | None = None) -> n
         limit_ke=cfg.limit_ke,
         limit_kd=cfg.limit_kd,
     )
-    lim_hip, lim_knee, lim_ankle = cfg.hip_limit, cfg.knee_limit, cfg.ankle_limit
     r = cfg.leg_radius
     # capsules run along their local z; rotate local z onto the leg frame's +x
     z_to_x = wp.quat_from_axis_angle(wp.vec3(0.0, 1.0, 0.0), math.pi / 2)
@@ -141,56 +140,40 @@ def build_hexapod(cfg: RobotConfig | None = None, gap: float | None = None) -> n
         # initial world poses only seed the builder; eval_fk from joint_q is authoritative
         p_world = wp.vec3(mount[0], mount[1], base_z)
 
-        coxa = b.add_link(
-            xform=wp.transform(p_world, q_leg),
-            com=wp.vec3(cfg.hip_length / 2, 0.0, 0.0),
-            mass=cfg.coxa_mass,
-            inertia=_rod_inertia(cfg.coxa_mass, cfg.hip_length, r, 0),
-            label=f"{name}_coxa",
-            lock_inertia=True,
+        # links: (name, mass, length, com, long axis 0 = x / 2 = z); joints: (name, parent offset, axis, limits,
+        # standing angle). The tibia hangs along its local -z; coxa and femur run along the leg frame's +x.
+        links = (
+            ("coxa", cfg.coxa_mass, cfg.hip_length, wp.vec3(cfg.hip_length / 2, 0.0, 0.0), 0),
+            ("femur", cfg.femur_mass, cfg.femur_length, wp.vec3(cfg.femur_length / 2, 0.0, 0.0), 0),
+            ("tibia", cfg.tibia_mass, cfg.tibia_length, wp.vec3(0.0, 0.0, -cfg.tibia_length / 2), 2),
         )
-        femur = b.add_link(
-            xform=wp.transform(p_world, q_leg),
-            com=wp.vec3(cfg.femur_length / 2, 0.0, 0.0),
-            mass=cfg.femur_mass,
-            inertia=_rod_inertia(cfg.femur_mass, cfg.femur_length, r, 0),
-            label=f"{name}_femur",
-            lock_inertia=True,
-        )
-        tibia = b.add_link(
-            xform=wp.transform(p_world, q_leg),
-            com=wp.vec3(0.0, 0.0, -cfg.tibia_length / 2),
-            mass=cfg.tibia_mass,
-            inertia=_rod_inertia(cfg.tibia_mass, cfg.tibia_length, r, 2),
-            label=f"{name}_tibia",
-            lock_inertia=True,
-        )
-        joints.append(
-            b.add_joint_revolute(
-                torso, coxa,
-                parent_xform=wp.transform(mount, q_leg), child_xform=wp.transform_identity(),
-                axis=hip_axis, limit_lower=lim_hip[0], limit_upper=lim_hip[1], target_q=hip_q,
-                label=f"{name}_hip", **drive,
-            )
+        joint_specs = (
+            ("hip", wp.transform(mount, q_leg), hip_axis, cfg.hip_limit, hip_q),
+            ("knee", wp.transform(wp.vec3(cfg.hip_length, 0.0, 0.0), wp.quat_identity()), pitch_axis,
+             cfg.knee_limit, knee_q),
+            ("ankle", wp.transform(wp.vec3(cfg.femur_length, 0.0, 0.0), wp.quat_identity()), pitch_axis,
+             cfg.ankle_limit, ankle_q),
         )  # fmt: skip
-        joints.append(
-            b.add_joint_revolute(
-                coxa, femur,
-                parent_xform=wp.transform(wp.vec3(cfg.hip_length, 0.0, 0.0), wp.quat_identity()),
-                child_xform=wp.transform_identity(),
-                axis=pitch_axis, limit_lower=lim_knee[0], limit_upper=lim_knee[1], target_q=knee_q,
-                label=f"{name}_knee", **drive,
+        parent = torso
+        bodies = []
+        for (link, mass, length, com, long_axis), (kind, parent_xform, axis, limit, q0) in zip(links, joint_specs):
+            body = b.add_link(
+                xform=wp.transform(p_world, q_leg),
+                com=com,
+                mass=mass,
+                inertia=_rod_inertia(mass, length, r, long_axis),
+                label=f"{name}_{link}",
+                lock_inertia=True,
             )
-        )  # fmt: skip
-        joints.append(
-            b.add_joint_revolute(
-                femur, tibia,
-                parent_xform=wp.transform(wp.vec3(cfg.femur_length, 0.0, 0.0), wp.quat_identity()),
-                child_xform=wp.transform_identity(),
-                axis=pitch_axis, limit_lower=lim_ankle[0], limit_upper=lim_ankle[1], target_q=ankle_q,
-                label=f"{name}_ankle", **drive,
-            )
-        )  # fmt: skip
+            joints.append(
+                b.add_joint_revolute(
+                    parent, body, parent_xform=parent_xform, child_xform=wp.transform_identity(), axis=axis,
+                    limit_lower=limit[0], limit_upper=limit[1], target_q=q0, label=f"{name}_{kind}", **drive,
+                )
+            )  # fmt: skip
+            bodies.append(body)
+            parent = body
+        _, femur, tibia = bodies
         # collision shapes: femur capsule, tibia capsule ending in a foot sphere (coxa hides in the torso)
         b.add_shape_capsule(
             femur,
