@@ -128,7 +128,7 @@ class SimConfig:
     integrator: str = "implicitfast"
     # ours: contact detection gap [m]. Newton's 0.1 m default overflows every buffer on 2 cm blocks; on the
     # rugged mesh a foot sees one contact per triangle within the gap: measured ~67 contacts per walking
-    # robot at 0.01 m, ~39 at 0.005 m, ~26 at 0.002 m. 5 mm still exceeds a foot's travel per 5 ms frame.
+    # robot at 0.01 m, ~39 at 0.005 m, ~26 at 0.002 m.
     rigid_gap: float = 0.005
     # per-world contact capacity handed to MuJoCo (nconmax; mujoco_warp pools it over all worlds) and
     # constraint rows per world (njmax; pyramidal friction cones take 4 rows per contact, plus joint
@@ -141,8 +141,86 @@ class SimConfig:
     use_graph: bool = True
 
 
+#: The 15 high-level parameters (§2.4.2) in the order the policy emits them.
+PARAM_NAMES = ("omega", "A1_R", "A1_L") + tuple(f"A2_{leg}" for leg in LEG_NAMES) + tuple(
+    f"A3_{leg}" for leg in LEG_NAMES
+)
+#: Oscillator of each leg (R1, R2, R3, L1, L2, L3): tripod {R1, L2, R3} on 0, {L1, R2, L3} on 1 (§2.2).
+LEG_OSCILLATOR = (0, 1, 0, 1, 0, 1)
+
+
+@dataclass
+class CPGConfig:
+    """Mid level (Eq. 3, two coupled Hopf oscillators) and low level (Eq. 4, mapping function).
+
+    The paper names alpha, mu, omega_sw, omega_st, delta and theta but gives no values (§2.2); ours are
+    marked. Frequencies are angular [rad/s]; amplitudes are joint angles [rad] added to the standing pose.
+    """
+
+    # ours: convergence rate to the limit cycle [1/s]; radial time constant 1 / (2 alpha mu) = 10 ms.
+    # Eq. 3's coupling does not vanish at the lock (Delta_ji = y_i there), so the locked radius is
+    # ~sqrt(mu + delta / (2 alpha)): alpha = 50, delta = 5 keep it within 2.5 % of sqrt(mu). RK4 at the
+    # 2.5 ms substep stays stable for starts up to |x|, |y| <= 2 sqrt(mu).
+    alpha: float = 50.0
+    # Eq. 3: mu is the squared limit-cycle radius; 1 makes y/sqrt(mu) = y, as Eq. 4 assumes
+    mu: float = 1.0
+    # ours: coupling strength delta [1/s]; phase locking time constant ~1 / delta = 0.2 s
+    delta: float = 5.0
+    # §2.2: phase difference between the two oscillators; pi gives the tripod gait
+    theta: float = math.pi
+    # ours: duty factor (stance share of a cycle). Eq. 3 names omega_sw / omega_st: omega_sw =
+    # omega / (2 (1 - duty)), omega_st = omega / (2 duty), so a cycle lasts 2 pi / omega at any duty.
+    # 0.5 makes them equal. It is also the only duty two anti-phase oscillators agree on: at 0.35 or 0.65
+    # the coupled pair runs up to 10 % fast at 0.5 Hz.
+    duty: float = 0.5
+    # ours: steepness of the logistic switch between omega_sw (x > 0: y rising, swing) and omega_st
+    steepness: float = 50.0
+    # ours: time constant [s] of the first-order filter the 15 parameters pass through at every substep,
+    # so a new action never makes the joint targets jump
+    param_tau: float = 0.03
+    # ours: ranges of the 15 parameters; an action a in [-1, 1] maps to lo + (a + 1) / 2 * (hi - lo)
+    omega_range: tuple[float, float] = (math.pi, 5.0 * math.pi)  # 0.5 - 2.5 Hz
+    a1_range: tuple[float, float] = (0.0, 0.5)  # hip; the hip limit is pi/6 = 0.52 about the pose's 0
+    a2_range: tuple[float, float] = (0.0, 0.8)  # knee lift
+    a3_range: tuple[float, float] = (0.0, 0.8)  # ankle tuck; 0.15 + 0.8 < pi/3 keeps it inside the limit
+    # ours: the fixed-parameter "CPG" baseline (§3.3), tuned to walk straight on flat ground
+    fixed_omega: float = 3.0 * math.pi  # 1.5 Hz
+    fixed_a1: float = 0.3
+    fixed_a2: float = 0.5
+    fixed_a3: float = 0.5
+
+    def fixed_params(self) -> list[float]:
+        """The fixed baseline's 15 parameters in PARAM_NAMES order."""
+        return [self.fixed_omega] + [self.fixed_a1] * 2 + [self.fixed_a2] * 6 + [self.fixed_a3] * 6
+
+    def param_ranges(self) -> tuple[list[float], list[float]]:
+        """(lower, upper) bounds of the 15 parameters in PARAM_NAMES order."""
+        rows = [self.omega_range] + [self.a1_range] * 2 + [self.a2_range] * 6 + [self.a3_range] * 6
+        return [r[0] for r in rows], [r[1] for r in rows]
+
+
+@dataclass
+class TaskConfig:
+    """Episode definition (§2.4.4) shared by play, evaluation and the RL environment."""
+
+    # ours: one high-level decision every control_dt [s] (a multiple of SimConfig.frame_dt)
+    control_dt: float = 0.02
+    # §3.4: the farthest success distance; the goal lies this far ahead along +x
+    goal_distance: float = 3.0
+    # §2.4.4 (3): within this distance of the goal the task is complete
+    goal_radius: float = 0.5
+    # §2.4.4 (1): fallen below this torso height above the terrain [m], or |roll| / |pitch| beyond pi/3
+    min_height: float = 0.05
+    max_tilt: float = math.pi / 3
+    # §2.4.4 (2): off course beyond |y| [m]; time out after this many control steps
+    max_abs_y: float = 1.5
+    max_episode_steps: int = 7000
+
+
 @dataclass
 class HexConfig:
     robot: RobotConfig = field(default_factory=RobotConfig)
     terrain: TerrainConfig = field(default_factory=TerrainConfig)
     sim: SimConfig = field(default_factory=SimConfig)
+    cpg: CPGConfig = field(default_factory=CPGConfig)
+    task: TaskConfig = field(default_factory=TaskConfig)

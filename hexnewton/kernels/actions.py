@@ -1,0 +1,39 @@
+"""High level -> mid/low level: a policy action in [-1, 1]^15 to the 15 physical CPG parameters.
+
+    p_k = lo_k + (clip(a_k, -1, 1) + 1) / 2 * (hi_k - lo_k)
+
+with the ranges of ``CPGConfig`` (omega in rad/s, amplitudes in rad). A non-finite action component maps
+to the middle of its range, so a diverged policy cannot poison the oscillators.
+"""
+
+import numpy as np
+import warp as wp
+
+
+@wp.kernel
+def scale_actions_kernel(
+    actions: wp.array2d[wp.float32],
+    lower: wp.array[wp.float32],
+    upper: wp.array[wp.float32],
+    params_target: wp.array2d[wp.float32],
+):
+    e, k = wp.tid()
+    a = actions[e, k]
+    if not wp.isfinite(a):
+        a = 0.0
+    a = wp.clamp(a, -1.0, 1.0)
+    params_target[e, k] = lower[k] + 0.5 * (a + 1.0) * (upper[k] - lower[k])
+
+
+def scale_actions_reference(actions, lower, upper):
+    """Float64 reference of :func:`scale_actions_kernel`."""
+    a = np.asarray(actions, np.float64)
+    a = np.clip(np.where(np.isfinite(a), a, 0.0), -1.0, 1.0)
+    lo, hi = np.asarray(lower, np.float64), np.asarray(upper, np.float64)
+    return lo + 0.5 * (a + 1.0) * (hi - lo)
+
+
+def params_to_actions(params, lower, upper):
+    """Inverse of the scaling (for fixed physical parameters expressed as actions)."""
+    lo, hi = np.asarray(lower, np.float64), np.asarray(upper, np.float64)
+    return 2.0 * (np.asarray(params, np.float64) - lo) / (hi - lo) - 1.0

@@ -1,0 +1,73 @@
+"""Low level: the mapping function (Huang et al. 2025, Eq. 4), from oscillator output to the 18 joint targets.
+
+For every leg, with its oscillator's normalised output y = y_osc / sqrt(mu) (in [-1, 1] on the limit cycle):
+
+    hip   = A1[side] * y
+    knee  = A2[leg] * (1 - y^2)    while y is rising (dy/dt >= 0, the swing phase, §2.3), else 0
+    ankle = -A3[leg] * (1 - y^2)   while y is rising, else 0
+
+Eq. 4 writes the ankle as -A3 * phi_2, but the paper's text calls A3 "the amplitude of the ankle joint",
+and the policy's ranges treat A1, A2 and A3 alike as angles. We therefore read A3 as the ankle's own
+amplitude, so ankle = -(A3 / A2) * knee. The knee and ankle both vanish at y = +-1, where the edge
+changes, so the targets stay continuous. A1 has one value per side: A1[1] for the right legs, A1[2] for
+the left. A2 and A3 have one value per leg.
+
+The outputs are offsets from the standing pose. They are clipped to the joint limits and written straight
+into Newton's ``control.joint_target_q``. The robot's joint convention (``hexnewton.config``) already
+mirrors the left side: hip > 0 swings the foot forward on every leg. So the same formula makes every
+stance leg push backward, and no sign flip is needed here.
+
+Tripods: R1, L2, R3 follow oscillator 0; L1, R2, L3 follow oscillator 1. With leg order R1, R2, R3, L1,
+L2, L3 that is ``oscillator = leg % 2``.
+Parameter layout per env (15): omega, A1_R, A1_L, A2[R1..L3], A3[R1..L3].
+"""
+
+import numpy as np
+import warp as wp
+
+
+@wp.kernel
+def mapping_kernel(
+    state: wp.array2d[wp.float32],
+    dy: wp.array2d[wp.float32],
+    params: wp.array2d[wp.float32],
+    inv_sqrt_mu: float,
+    stand: wp.vec3,
+    lower: wp.vec3,
+    upper: wp.vec3,
+    target_offset: int,
+    targets: wp.array2d[wp.float32],
+):
+    e = wp.tid()
+    for leg in range(6):
+        osc = leg % 2
+        y = state[e, 2 * osc + 1] * inv_sqrt_mu
+        lift = float(0.0)
+        if dy[e, osc] >= 0.0:
+            lift = wp.max(1.0 - y * y, 0.0)
+        a1 = params[e, 1]
+        if leg >= 3:
+            a1 = params[e, 2]
+        col = target_offset + 3 * leg
+        targets[e, col + 0] = wp.clamp(stand[0] + a1 * y, lower[0], upper[0])
+        targets[e, col + 1] = wp.clamp(stand[1] + params[e, 3 + leg] * lift, lower[1], upper[1])
+        targets[e, col + 2] = wp.clamp(stand[2] - params[e, 9 + leg] * lift, lower[2], upper[2])
+
+
+def mapping_offsets_np(state, dy, params, mu):
+    """Float64 Eq. 4 offsets (N, 6, 3) before the standing pose and clipping are applied."""
+    state = np.asarray(state, np.float64)
+    dy = np.asarray(dy, np.float64)
+    params = np.asarray(params, np.float64)
+    osc = np.arange(6) % 2
+    y = state[:, 2 * osc + 1] / np.sqrt(mu)  # (N, 6)
+    lift = np.where(dy[:, osc] >= 0.0, np.maximum(1.0 - y**2, 0.0), 0.0)
+    a1 = np.where(np.arange(6) < 3, params[:, 1:2], params[:, 2:3])
+    return np.stack([a1 * y, params[:, 3:9] * lift, -params[:, 9:15] * lift], axis=-1)
+
+
+def mapping_reference(state, dy, params, mu, stand, lower, upper):
+    """Float64 reference of :func:`mapping_kernel`: joint targets (N, 18)."""
+    out = mapping_offsets_np(state, dy, params, mu) + np.asarray(stand, np.float64)
+    out = np.clip(out, np.asarray(lower, np.float64), np.asarray(upper, np.float64))
+    return out.reshape(len(out), 18)
