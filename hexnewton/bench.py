@@ -4,8 +4,9 @@
     python -m hexnewton.bench --num_envs 1024 4096 16384 --terrain flat complex --device cuda
     python -m hexnewton.bench --append BENCHMARKS.md  # also append the table (date, device, git rev)
 
-Every robot walks the open-loop tripod pattern (``kernels.gait``) so contacts are those of walking, and the
-whole frame (gait kernel + collision + substeps) replays from one captured graph. Contact overflow is
+Every robot walks under the CPG controller (Eq. 3 + Eq. 4 kernels at every substep) with its own
+parameters, the fixed baseline's scaled by a random factor in [0.7, 1.3], so contacts are those of walking.
+The whole frame (CPG, mapping, collision, substeps) replays from one captured graph. Contact overflow is
 checked after the timed frames and reported in the table.
 """
 
@@ -25,7 +26,7 @@ import warp as wp
 
 from .cli import ArgumentParser, positive_int, run, terrain_name
 from .config import TERRAINS, HexConfig, SimConfig, TerrainConfig
-from .kernels.gait import TripodSineGait
+from .controller import CPGController
 from .sim import World, resolve_device
 
 
@@ -51,10 +52,11 @@ def bench_one(terrain: str, num_envs: int, device: str, frames: int, sim: SimCon
     t0 = time.perf_counter()
     world = World(cfg)
     rng = np.random.default_rng(seed)
-    # varied but walking gaits: frequency 1-2 Hz, hip 0.2-0.4 rad, knee lift 0.3-0.6 rad
-    gait = TripodSineGait(world, freq=rng.uniform(1.0, 2.0, num_envs), amp_hip=rng.uniform(0.2, 0.4, num_envs),
-                          amp_knee=rng.uniform(0.3, 0.6, num_envs))  # fmt: skip
-    world.set_controller(gait)
+    controller = CPGController(world)
+    fixed = np.asarray(cfg.cpg.fixed_params())
+    controller.set_params(fixed * rng.uniform(0.7, 1.3, (num_envs, fixed.size)))
+    controller.reset()
+    world.set_controller(controller)
     build_s = time.perf_counter() - t0
     t0 = time.perf_counter()
     world.step(1)  # captures the graph

@@ -1,1 +1,1 @@
-"""Warp kernels: gait patterns now; the CPG (Eq. 3), mapping (Eq. 4), observations, rewards, resets next."""
+"""Warp kernels (each with a float64 NumPy reference): CPG (Eq. 3), mapping (Eq. 4), action scaling, episode ends."""

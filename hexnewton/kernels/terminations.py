@@ -1,0 +1,106 @@
+"""Episode end conditions (Huang et al. 2025, §2.4.4), evaluated per env in one kernel.
+
+Status codes (``STATUS_NAMES``), checked in this order:
+  1 fell       the torso is less than ``min_height`` above the terrain under it, or |roll| or |pitch| exceeds
+               ``max_tilt`` (§2.4.4 (1));
+  2 off course |y| > ``max_abs_y`` (§2.4.4 (2));
+  3 success    within ``goal_radius`` of the goal (§2.4.4 (3));
+  4 timeout    ``episode_steps >= max_episode_steps`` (§2.4.4 (2));
+  5 nonfinite  NaN/Inf in the env's base state (the physics blew up; the env is reset and counted).
+0 means the episode goes on. The kernel also writes roll, pitch and yaw (ZYX Euler angles of the base
+quaternion) for observations, logging and recording.
+"""
+
+import numpy as np
+import warp as wp
+
+from ..terrain.query import HeightField, terrain_height
+
+RUNNING, FELL, OFF_COURSE, SUCCESS, TIMEOUT, NONFINITE = 0, 1, 2, 3, 4, 5
+STATUS_NAMES = ("running", "fell", "off_course", "success", "timeout", "nonfinite")
+
+
+@wp.func
+def quat_to_rpy(q: wp.quat) -> wp.vec3:
+    """ZYX Euler angles (roll about x, pitch about y, yaw about z) of a unit quaternion (x, y, z, w)."""
+    x = q[0]
+    y = q[1]
+    z = q[2]
+    w = q[3]
+    roll = wp.atan2(2.0 * (w * x + y * z), 1.0 - 2.0 * (x * x + y * y))
+    pitch = wp.asin(wp.clamp(2.0 * (w * y - z * x), -1.0, 1.0))
+    yaw = wp.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
+    return wp.vec3(roll, pitch, yaw)
+
+
+@wp.kernel
+def episode_status_kernel(
+    joint_q: wp.array2d[wp.float32],
+    episode_steps: wp.array[wp.int32],
+    hf: HeightField,
+    goal: wp.vec2,
+    goal_radius: float,
+    min_height: float,
+    max_tilt: float,
+    max_abs_y: float,
+    max_episode_steps: int,
+    status: wp.array[wp.int32],
+    rpy: wp.array2d[wp.float32],
+):
+    e = wp.tid()
+    px = joint_q[e, 0]
+    py = joint_q[e, 1]
+    pz = joint_q[e, 2]
+    q = wp.quat(joint_q[e, 3], joint_q[e, 4], joint_q[e, 5], joint_q[e, 6])
+    finite = wp.isfinite(px) and wp.isfinite(py) and wp.isfinite(pz)
+    finite = finite and wp.isfinite(q[0]) and wp.isfinite(q[1]) and wp.isfinite(q[2]) and wp.isfinite(q[3])
+    if not finite:
+        status[e] = NONFINITE
+        for k in range(3):
+            rpy[e, k] = 0.0
+        return
+    a = quat_to_rpy(wp.normalize(q))
+    for k in range(3):
+        rpy[e, k] = a[k]
+    s = int(RUNNING)
+    if pz - terrain_height(hf, px, py) < min_height or wp.abs(a[0]) > max_tilt or wp.abs(a[1]) > max_tilt:
+        s = FELL
+    elif wp.abs(py) > max_abs_y:
+        s = OFF_COURSE
+    elif wp.length(wp.vec2(px, py) - goal) < goal_radius:
+        s = SUCCESS
+    elif episode_steps[e] >= max_episode_steps:
+        s = TIMEOUT
+    status[e] = s
+
+
+# ----------------------------------------------------------------------------------------------------
+# float64 NumPy references
+# ----------------------------------------------------------------------------------------------------
+
+
+def quat_to_rpy_np(q: np.ndarray) -> np.ndarray:
+    """Float64 reference of :func:`quat_to_rpy` for quaternions (..., 4) in (x, y, z, w) order."""
+    q = np.asarray(q, np.float64)
+    q = q / np.linalg.norm(q, axis=-1, keepdims=True)
+    x, y, z, w = np.moveaxis(q, -1, 0)
+    roll = np.arctan2(2 * (w * x + y * z), 1 - 2 * (x * x + y * y))
+    pitch = np.arcsin(np.clip(2 * (w * y - z * x), -1, 1))
+    yaw = np.arctan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
+    return np.stack([roll, pitch, yaw], axis=-1)
+
+
+def episode_status_np(joint_q, episode_steps, ground_height, goal, goal_radius, min_height, max_tilt, max_abs_y,
+                      max_episode_steps):  # fmt: skip
+    """Float64 reference of :func:`episode_status_kernel`; ``ground_height`` (N,) is the terrain under the base."""
+    jq = np.asarray(joint_q, np.float64)
+    finite = np.isfinite(jq[:, :7]).all(axis=1)
+    safe_q = np.where(finite[:, None], jq[:, 3:7], [0.0, 0.0, 0.0, 1.0])
+    rpy = np.where(finite[:, None], quat_to_rpy_np(safe_q), 0.0)
+    fell = (jq[:, 2] - ground_height < min_height) | (np.abs(rpy[:, 0]) > max_tilt) | (np.abs(rpy[:, 1]) > max_tilt)
+    off = np.abs(jq[:, 1]) > max_abs_y
+    success = np.hypot(jq[:, 0] - goal[0], jq[:, 1] - goal[1]) < goal_radius
+    timeout = np.asarray(episode_steps) >= max_episode_steps
+    status = np.select([fell, off, success, timeout], [FELL, OFF_COURSE, SUCCESS, TIMEOUT], RUNNING)
+    status = np.where(finite, status, NONFINITE)
+    return status, rpy

@@ -1,0 +1,167 @@
+"""Episode ends (§2.4.4) in-kernel vs reference, fixed-CPG rollouts on CPU, and play.py's outputs."""
+
+import math
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+import warp as wp
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from hexnewton.config import JOINT_NAMES, HexConfig, SimConfig, TaskConfig, TerrainConfig
+from hexnewton.kernels.terminations import (
+    FELL,
+    NONFINITE,
+    RUNNING,
+    SUCCESS,
+    episode_status_kernel,
+    episode_status_np,
+    quat_to_rpy_np,
+)
+from hexnewton.play import rollout_cpg
+from hexnewton.rollout import Rollout
+from hexnewton.terrain import make_terrain, terrain_height_np
+from hexnewton.terrain.query import height_field_from_grid
+
+TASK = TaskConfig()
+
+
+def _random_quats(rng, n, max_angle):
+    axis = rng.normal(size=(n, 3))
+    axis /= np.linalg.norm(axis, axis=1, keepdims=True)
+    ang = rng.uniform(0, max_angle, n)
+    return np.concatenate([axis * np.sin(ang / 2)[:, None], np.cos(ang / 2)[:, None]], axis=1)
+
+
+@settings(max_examples=15, deadline=None)
+@given(seed=st.integers(0, 2**31 - 1))
+def test_episode_status_kernel_matches_reference(seed):
+    rng = np.random.default_rng(seed)
+    n = 256
+    terrain = make_terrain(TerrainConfig(name="complex", seed=3))
+    hf = height_field_from_grid(terrain.grid, "cpu")
+    q = np.zeros((n, 25))
+    q[:, 0] = rng.uniform(-0.5, 3.5, n)
+    q[:, 1] = rng.uniform(-2.0, 2.0, n)
+    # keep sample points off 1 cm cell edges (float32 vs float64 cell index)
+    q[:, :2] = (np.floor(q[:, :2] / 0.01) + rng.uniform(0.1, 0.9, (n, 2))) * 0.01
+    ground = terrain_height_np(terrain.grid, q[:, 0], q[:, 1])
+    q[:, 2] = ground + rng.uniform(0.0, 0.2, n)
+    q[:, 3:7] = _random_quats(rng, n, 1.6)
+    q[: n // 16, rng.integers(0, 7)] = np.nan
+    steps = rng.integers(6990, 7010, n).astype(np.int32)
+    status = wp.zeros(n, dtype=wp.int32, device="cpu")
+    rpy = wp.zeros((n, 3), dtype=wp.float32, device="cpu")
+    args = (TASK.goal_radius, TASK.min_height, TASK.max_tilt, TASK.max_abs_y, TASK.max_episode_steps)
+    wp.launch(episode_status_kernel, dim=n,
+              inputs=[wp.array(q.astype(np.float32), device="cpu"), wp.array(steps, device="cpu"), hf,
+                      wp.vec2(TASK.goal_distance, 0.0), *args], outputs=[status, rpy], device="cpu")  # fmt: skip
+    ref_status, ref_rpy = episode_status_np(q.astype(np.float32), steps, ground, (TASK.goal_distance, 0.0), *args)
+    # thresholds compared in float32 vs float64 can differ right at the boundary: allow a handful
+    assert (status.numpy() != ref_status).sum() <= 2
+    finite = ref_status != NONFINITE
+    np.testing.assert_allclose(rpy.numpy()[finite], ref_rpy[finite], atol=2e-4)
+    assert np.all(status.numpy()[~finite] == NONFINITE)
+
+
+def test_quat_to_rpy_round_trip():
+    rng = np.random.default_rng(0)
+    rpy = np.stack([rng.uniform(-1.5, 1.5, 100), rng.uniform(-1.4, 1.4, 100), rng.uniform(-3, 3, 100)], axis=1)
+    r, p, y = rpy.T
+    cr, sr, cp, sp, cy, sy = np.cos(r / 2), np.sin(r / 2), np.cos(p / 2), np.sin(p / 2), np.cos(y / 2), np.sin(y / 2)
+    q = np.stack([sr * cp * cy - cr * sp * sy, cr * sp * cy + sr * cp * sy, cr * cp * sy - sr * sp * cy,
+                  cr * cp * cy + sr * sp * sy], axis=1)  # fmt: skip  (ZYX, x y z w)
+    np.testing.assert_allclose(quat_to_rpy_np(q), rpy, atol=1e-9)
+
+
+def _cfg(terrain, n, **task):
+    return HexConfig(sim=SimConfig(num_envs=n, device="cpu"), terrain=TerrainConfig(name=terrain),
+                     task=TaskConfig(**task))  # fmt: skip
+
+
+def test_fixed_cpg_walks_straight_on_flat():
+    """Issue 3: 64 robots walk >= 1 m forward in 10 s with |y| drift < 0.2 m, none falls."""
+    stats, roll = rollout_cpg(_cfg("flat", 64), steps=int(10.0 / TASK.control_dt), progress=False)
+    assert stats["distance_min_m"] >= 1.0, stats
+    assert stats["lateral_drift_max_m"] < 0.2, stats
+    assert stats["ended"]["fell"] == 0 and stats["ended"]["nonfinite"] == 0, stats
+    assert roll.world.check_contacts(on_overflow="raise").ok
+
+
+def test_episodes_end_and_restart():
+    """A goal 0.4 m ahead: success ends the episode, the env restarts at the spawn, the CPG restarts."""
+    roll = Rollout(_cfg("flat", 4, goal_distance=0.5, goal_radius=0.1))
+    ended_at = None
+    for k in range(200):
+        roll.step()
+        status = roll.status.numpy()
+        if status.any():
+            assert np.all(status == SUCCESS)
+            ended_at = k
+            roll.reset_done(status)
+            break
+    assert ended_at is not None and 50 < ended_at < 150  # ~0.24 m/s
+    q = roll.world.numpy_q()
+    np.testing.assert_allclose(q[:, :2], 0.0, atol=1e-6)
+    assert np.all(roll.episode_steps.numpy() == 0)
+    assert roll.ended[SUCCESS] == 4
+    roll.step()
+    assert np.all(roll.status.numpy() == RUNNING) and np.all(roll.episode_steps.numpy() == 1)
+
+
+def test_nan_state_ends_episode_as_nonfinite_and_resets():
+    roll = Rollout(_cfg("flat", 4))
+    roll.step()
+    roll.world.joint_q[2, 0] = float("nan")
+    roll.step()
+    status = roll.reset_done()
+    assert status[2] == NONFINITE and roll.world.nonfinite_resets == 1
+    assert np.isfinite(roll.world.numpy_q()).all()
+
+
+def test_tilted_robot_counts_as_fallen():
+    roll = Rollout(_cfg("flat", 2))
+    roll.world.joint_q[0, 3:7] = roll.world.joint_q.new_tensor(
+        [math.sin(0.6), 0.0, 0.0, math.cos(0.6)])  # 1.2 rad roll > pi / 3  # fmt: skip
+    roll.step()
+    assert roll.status.numpy()[0] == FELL
+
+
+def test_play_records_and_plots(tmp_path):
+    rec, png = tmp_path / "r.npz", tmp_path / "g.png"
+    proc = subprocess.run(
+        [sys.executable, "play.py", "--controller", "cpg", "--terrain", "flat", "--num_envs", "3", "--steps", "30",
+         "--device", "cpu", "--record", str(rec), "--plot", str(png)],
+        capture_output=True, text=True, timeout=600,
+    )  # fmt: skip
+    assert proc.returncode == 0, proc.stderr
+    assert "flat: 3 robots" in proc.stdout and "heading error" in proc.stdout
+    d = np.load(rec)
+    T, N = 30, 3
+    shapes = {"t": (T,), "joint_target": (T, N, 18), "joint_pos": (T, N, 18), "base_pos": (T, N, 3),
+              "base_rpy": (T, N, 3), "cpg_xy": (T, N, 2, 2), "params": (T, N, 15), "done": (T, N),
+              "joint_names": (18,)}  # fmt: skip
+    assert {k: d[k].shape for k in d.files} == shapes
+    assert tuple(d["joint_names"]) == JOINT_NAMES
+    np.testing.assert_allclose(d["t"], np.arange(1, T + 1) * TASK.control_dt)
+    np.testing.assert_allclose(d["params"][0, 0], HexConfig().cpg.fixed_params(), rtol=1e-6)
+    assert png.stat().st_size > 10_000
+
+
+@pytest.mark.parametrize(
+    "args, message",
+    [
+        (["--steps", "0"], "positive integer"),
+        (["--terrain", "lava"], "unknown terrain 'lava'"),
+        (["--record", "out.txt"], "expected a .npz file name"),
+        (["--record", "/nonexistent-dir/r.npz"], "cannot write"),
+        (["--controller", "policy"], "invalid choice"),
+    ],
+)
+def test_play_bad_input_is_one_line(args, message):
+    proc = subprocess.run([sys.executable, "play.py", *args], capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 2
+    err = [line for line in proc.stderr.splitlines() if line.strip() and "Warp CUDA" not in line]
+    assert len(err) == 1 and message in err[0], proc.stderr
