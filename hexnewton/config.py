@@ -139,6 +139,9 @@ class SimConfig:
     # triangle-pair candidates per env for mesh terrain (H100, complex, 16384 envs: 64/env overflowed)
     triangle_pairs_per_env: int = 256
     use_graph: bool = True
+    # ours: env i starts at (0, y_i), y_i evenly spread over [-spread, spread] [m], so robots meet different
+    # rugged blocks; goal and off-course limit (TaskConfig) are relative to each env's start
+    spawn_y_spread: float = 0.5
 
 
 #: The 15 high-level parameters (§2.4.2) in the order the policy emits them.
@@ -205,14 +208,14 @@ class TaskConfig:
 
     # ours: one high-level decision every control_dt [s] (a multiple of SimConfig.frame_dt)
     control_dt: float = 0.02
-    # §3.4: the farthest success distance; the goal lies this far ahead along +x
+    # §3.4: the farthest success distance; each env's goal lies this far ahead of its start along +x
     goal_distance: float = 3.0
     # §2.4.4 (3): within this distance of the goal the task is complete
     goal_radius: float = 0.5
     # §2.4.4 (1): fallen below this torso height above the terrain [m], or |roll| / |pitch| beyond pi/3
     min_height: float = 0.05
     max_tilt: float = math.pi / 3
-    # §2.4.4 (2): off course beyond |y| [m]; time out after this many control steps
+    # §2.4.4 (2): off course beyond |y - y_start| [m]; time out after this many control steps
     max_abs_y: float = 1.5
     max_episode_steps: int = 7000
 

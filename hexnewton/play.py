@@ -36,8 +36,8 @@ def check_writable(path: str, ext: str) -> None:
 
 
 def first_episode_stats(pos: np.ndarray, rpy: np.ndarray, done: np.ndarray, status: np.ndarray) -> dict:
-    """Statistics over every env's first episode. Arrays are (T, N, ...) per control step; a row with
-    ``done`` is the last row of that episode, and ``status`` gives the reason."""
+    """Statistics over every env's first episode. Arrays are (T, N, ...) per control step, positions relative
+    to each env's start; a row with ``done`` is the last row of that episode, ``status`` gives the reason."""
     ended_before = np.cumsum(done, axis=0) - done  # episodes finished before this row
     first = ended_before == 0  # (T, N)
     last_row = np.where(done.any(axis=0), np.argmax(done, axis=0), len(done) - 1)
@@ -91,6 +91,7 @@ def rollout_cpg(cfg: HexConfig, steps: int, recorder: Recorder | None = None, pr
         status = roll.status.numpy()
         q = roll.world.numpy_q()
         pos[k], rpy[k], done[k], status_log[k] = q[:, :3], roll.rpy.numpy(), status != 0, status
+        pos[k, :, :2] -= roll.world.spawn_xy  # relative to each env's start
         if recorder is not None:
             recorder.add(roll, (k + 1) * cfg.task.control_dt, status, q)
         roll.reset_done(status)

@@ -49,7 +49,6 @@ class Rollout:
         self.status = wp.zeros(n, dtype=wp.int32, device=dev)
         self.done = wp.zeros(n, dtype=wp.bool, device=dev)
         self.rpy = wp.zeros((n, 3), dtype=wp.float32, device=dev)
-        self.goal = wp.vec2(task.goal_distance, 0.0)
         self.step_count = 0
         self.ended = np.zeros(len(STATUS_NAMES), dtype=np.int64)  # episodes ended, by status
 
@@ -63,8 +62,8 @@ class Rollout:
         wp.launch(
             episode_status_kernel,
             dim=self.num_envs,
-            inputs=[self.world.joint_q_wp, self.episode_steps, self.world.height_field, self.goal, t.goal_radius,
-                    t.min_height, t.max_tilt, t.max_abs_y, t.max_episode_steps],  # fmt: skip
+            inputs=[self.world.joint_q_wp, self.episode_steps, self.world.height_field, self.world.spawn_xy_wp,
+                    t.goal_distance, t.goal_radius, t.min_height, t.max_tilt, t.max_abs_y, t.max_episode_steps],  # fmt: skip
             outputs=[self.status, self.rpy],
             device=self.world.device,
         )
@@ -97,7 +96,7 @@ class Recorder:
         self.rows["t"].append(np.float64(t))
         self.rows["joint_target"].append(world.joint_target_wp.numpy()[:, 7:].copy())
         self.rows["joint_pos"].append(pre_reset_q[:, 7:].copy())
-        self.rows["base_pos"].append(pre_reset_q[:, 0:3].copy())
+        self.rows["base_pos"].append(pre_reset_q[:, 0:3].copy())  # world frame
         self.rows["base_rpy"].append(rollout.rpy.numpy().copy())
         self.rows["cpg_xy"].append(ctrl.state.numpy().reshape(-1, 2, 2).copy())
         self.rows["params"].append(ctrl.params.numpy().copy())

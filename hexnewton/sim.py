@@ -188,12 +188,17 @@ class World:
         ground_cfg = newton.ModelBuilder.ShapeConfig(mu=cfg.robot.friction, gap=sim.rigid_gap)
         self.terrain.add_to_builder(scene, ground_cfg)
 
-        # spawn: torso spawn_height above the highest terrain under the robot's footprint; it drops onto its feet
+        # spawn: env i stands at x = 0 in its own lane y_i, evenly spread over +-spawn_y_spread so that the
+        # robots meet different blocks; torso spawn_height above the highest terrain under its footprint
+        self.spawn_xy = np.zeros((n, 2))
+        if n > 1:
+            self.spawn_xy[:, 1] = np.linspace(-sim.spawn_y_spread, sim.spawn_y_spread, n)
         footprint = 0.5 * math.hypot(*cfg.robot.torso_size[:2]) + cfg.robot.hip_length + cfg.robot.femur_length
-        ground = float(max_terrain_height_np(self.terrain.grid, 0.0, 0.0, footprint))
+        ground = max_terrain_height_np(self.terrain.grid, self.spawn_xy[:, 0], self.spawn_xy[:, 1], footprint)
         self.spawn_z = ground + max(cfg.robot.spawn_height, stand_height(cfg.robot))
         nq = BASE_Q + NUM_JOINTS
         q = np.asarray(scene.joint_q, dtype=np.float32).reshape(n, nq)
+        q[:, 0:2] = self.spawn_xy
         q[:, 2] = self.spawn_z
         scene.joint_q[:] = q.reshape(-1).tolist()
 
@@ -201,6 +206,7 @@ class World:
             self.model = scene.finalize(device=self.device)
         self.model.rigid_gap = sim.rigid_gap
         self.height_field = height_field_from_grid(self.terrain.grid, self.device)
+        self.spawn_xy_wp = wp.array(self.spawn_xy.astype(np.float32), dtype=wp.vec2, device=self.device)
 
         self.state_0 = self.model.state()
         self.state_1 = self.model.state()

@@ -50,15 +50,17 @@ def test_episode_status_kernel_matches_reference(seed):
     ground = terrain_height_np(terrain.grid, q[:, 0], q[:, 1])
     q[:, 2] = ground + rng.uniform(0.0, 0.2, n)
     q[:, 3:7] = _random_quats(rng, n, 1.6)
+    start = np.stack([rng.uniform(-0.2, 0.2, n), rng.uniform(-0.5, 0.5, n)], axis=1).astype(np.float32)
     q[: n // 16, rng.integers(0, 7)] = np.nan
     steps = rng.integers(6990, 7010, n).astype(np.int32)
     status = wp.zeros(n, dtype=wp.int32, device="cpu")
     rpy = wp.zeros((n, 3), dtype=wp.float32, device="cpu")
-    args = (TASK.goal_radius, TASK.min_height, TASK.max_tilt, TASK.max_abs_y, TASK.max_episode_steps)
+    args = (TASK.goal_distance, TASK.goal_radius, TASK.min_height, TASK.max_tilt, TASK.max_abs_y,
+            TASK.max_episode_steps)  # fmt: skip
     wp.launch(episode_status_kernel, dim=n,
               inputs=[wp.array(q.astype(np.float32), device="cpu"), wp.array(steps, device="cpu"), hf,
-                      wp.vec2(TASK.goal_distance, 0.0), *args], outputs=[status, rpy], device="cpu")  # fmt: skip
-    ref_status, ref_rpy = episode_status_np(q.astype(np.float32), steps, ground, (TASK.goal_distance, 0.0), *args)
+                      wp.array(start, dtype=wp.vec2, device="cpu"), *args], outputs=[status, rpy], device="cpu")  # fmt: skip
+    ref_status, ref_rpy = episode_status_np(q.astype(np.float32), steps, ground, start, *args)
     # thresholds compared in float32 vs float64 can differ right at the boundary: allow a handful
     assert (status.numpy() != ref_status).sum() <= 2
     finite = ref_status != NONFINITE
@@ -104,7 +106,7 @@ def test_episodes_end_and_restart():
             break
     assert ended_at is not None and 50 < ended_at < 150  # ~0.24 m/s
     q = roll.world.numpy_q()
-    np.testing.assert_allclose(q[:, :2], 0.0, atol=1e-6)
+    np.testing.assert_allclose(q[:, :2], roll.world.spawn_xy, atol=1e-6)
     assert np.all(roll.episode_steps.numpy() == 0)
     assert roll.ended[SUCCESS] == 4
     roll.step()

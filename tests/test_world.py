@@ -54,7 +54,7 @@ def test_tripod_walks_forward_on_flat():
     q = world.numpy_q()
     dx = q[:, 0] - x0[:, 0]
     assert (dx > 0.5).all(), dx  # ~0.24 m/s
-    assert (np.abs(q[:, 1]) < 0.1).all()
+    assert (np.abs(q[:, 1] - world.spawn_xy[:, 1]) < 0.1).all()
     assert (_upright(q) > 0.9).all()
     assert world.check_contacts(on_overflow="raise").ok
 
@@ -102,10 +102,17 @@ def test_reset_restores_spawn_pose():
     before = world.numpy_q().copy()
     world.reset(mask)
     after = world.numpy_q()
-    assert np.allclose(after[mask, 0:3], [0.0, 0.0, world.spawn_z])
+    spawn = np.column_stack([world.spawn_xy, world.spawn_z])
+    assert np.allclose(after[mask, 0:3], spawn[mask])
     assert np.array_equal(after[~mask], before[~mask])
     body_q = world.state_0.body_q.numpy().reshape(N, -1, 7)
-    assert np.allclose(body_q[mask, 0, :3], [0.0, 0.0, world.spawn_z], atol=1e-6)  # FK refreshed
+    assert np.allclose(body_q[mask, 0, :3], spawn[mask], atol=1e-6)  # FK refreshed
+
+
+def test_envs_start_in_spread_lanes():
+    world = _world("rugged")
+    np.testing.assert_allclose(world.spawn_xy[:, 1], np.linspace(-0.5, 0.5, N))
+    np.testing.assert_allclose(world.numpy_q()[:, :2], world.spawn_xy, atol=1e-6)
 
 
 def test_device_resolution():

@@ -3,8 +3,8 @@
 Status codes (``STATUS_NAMES``), checked in this order:
   1 fell       the torso is less than ``min_height`` above the terrain under it, or |roll| or |pitch| exceeds
                ``max_tilt`` (§2.4.4 (1));
-  2 off course |y| > ``max_abs_y`` (§2.4.4 (2));
-  3 success    within ``goal_radius`` of the goal (§2.4.4 (3));
+  2 off course |y - y_start| > ``max_abs_y`` (§2.4.4 (2));
+  3 success    within ``goal_radius`` of the goal, ``goal_distance`` ahead of the env's start (§2.4.4 (3));
   4 timeout    ``episode_steps >= max_episode_steps`` (§2.4.4 (2));
   5 nonfinite  NaN/Inf in the env's base state (the physics blew up; the env is reset and counted).
 0 means the episode goes on. The kernel also writes roll, pitch and yaw (ZYX Euler angles of the base
@@ -38,7 +38,8 @@ def episode_status_kernel(
     joint_q: wp.array2d[wp.float32],
     episode_steps: wp.array[wp.int32],
     hf: HeightField,
-    goal: wp.vec2,
+    start: wp.array[wp.vec2],
+    goal_distance: float,
     goal_radius: float,
     min_height: float,
     max_tilt: float,
@@ -65,9 +66,9 @@ def episode_status_kernel(
     s = int(RUNNING)
     if pz - terrain_height(hf, px, py) < min_height or wp.abs(a[0]) > max_tilt or wp.abs(a[1]) > max_tilt:
         s = FELL
-    elif wp.abs(py) > max_abs_y:
+    elif wp.abs(py - start[e][1]) > max_abs_y:
         s = OFF_COURSE
-    elif wp.length(wp.vec2(px, py) - goal) < goal_radius:
+    elif wp.length(wp.vec2(px, py) - start[e] - wp.vec2(goal_distance, 0.0)) < goal_radius:
         s = SUCCESS
     elif episode_steps[e] >= max_episode_steps:
         s = TIMEOUT
@@ -90,16 +91,18 @@ def quat_to_rpy_np(q: np.ndarray) -> np.ndarray:
     return np.stack([roll, pitch, yaw], axis=-1)
 
 
-def episode_status_np(joint_q, episode_steps, ground_height, goal, goal_radius, min_height, max_tilt, max_abs_y,
-                      max_episode_steps):  # fmt: skip
-    """Float64 reference of :func:`episode_status_kernel`; ``ground_height`` (N,) is the terrain under the base."""
+def episode_status_np(joint_q, episode_steps, ground_height, start, goal_distance, goal_radius, min_height, max_tilt,
+                      max_abs_y, max_episode_steps):  # fmt: skip
+    """Float64 reference of :func:`episode_status_kernel`; ``ground_height`` (N,) is the terrain under the base,
+    ``start`` (N, 2) each env's start."""
     jq = np.asarray(joint_q, np.float64)
     finite = np.isfinite(jq[:, :7]).all(axis=1)
     safe_q = np.where(finite[:, None], jq[:, 3:7], [0.0, 0.0, 0.0, 1.0])
     rpy = np.where(finite[:, None], quat_to_rpy_np(safe_q), 0.0)
     fell = (jq[:, 2] - ground_height < min_height) | (np.abs(rpy[:, 0]) > max_tilt) | (np.abs(rpy[:, 1]) > max_tilt)
-    off = np.abs(jq[:, 1]) > max_abs_y
-    success = np.hypot(jq[:, 0] - goal[0], jq[:, 1] - goal[1]) < goal_radius
+    start = np.asarray(start, np.float64)
+    off = np.abs(jq[:, 1] - start[:, 1]) > max_abs_y
+    success = np.hypot(jq[:, 0] - start[:, 0] - goal_distance, jq[:, 1] - start[:, 1]) < goal_radius
     timeout = np.asarray(episode_steps) >= max_episode_steps
     status = np.select([fell, off, success, timeout], [FELL, OFF_COURSE, SUCCESS, TIMEOUT], RUNNING)
     status = np.where(finite, status, NONFINITE)
