@@ -62,7 +62,7 @@ class Rollout:
         wp.launch(
             episode_status_kernel,
             dim=self.num_envs,
-            inputs=[self.world.joint_q_wp, self.episode_steps, self.world.height_field, self.world.spawn_xy_wp,
+            inputs=[self.world.joint_q_wp, self.episode_steps, self.world.height_field, self.world.start_wp,
                     t.goal_distance, t.goal_radius, t.min_height, t.max_tilt, t.max_abs_y, t.max_episode_steps],  # fmt: skip
             outputs=[self.status, self.rpy],
             device=self.world.device,

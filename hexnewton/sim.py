@@ -31,6 +31,7 @@ from newton.solvers import SolverMuJoCo
 
 from .config import HexConfig, SimConfig
 from .robot import BASE_Q, BASE_QD, NUM_JOINTS, build_hexapod, stand_height
+from .kernels.resets import advance_counter_kernel, reset_envs_kernel
 from .terrain import Terrain, height_field_from_grid, make_terrain, max_terrain_height_np
 
 log = logging.getLogger("hexnewton")
@@ -101,24 +102,6 @@ def _accumulate_overflow(
             g = g | OVERFLOW_CONTACT_REDUCTION
         if g != 0:
             wp.atomic_or(global_sticky, 0, g)
-
-
-@wp.kernel
-def _reset_envs(
-    mask: wp.array[wp.bool],
-    default_q: wp.array2d[wp.float32],
-    joint_q: wp.array2d[wp.float32],
-    joint_qd: wp.array2d[wp.float32],
-    joint_target: wp.array2d[wp.float32],
-):
-    e = wp.tid()
-    if not mask[e]:
-        return
-    for i in range(default_q.shape[1]):
-        joint_q[e, i] = default_q[e, i]
-        joint_target[e, i] = default_q[e, i]
-    for i in range(joint_qd.shape[1]):
-        joint_qd[e, i] = 0.0
 
 
 @wp.kernel
@@ -206,7 +189,10 @@ class World:
             self.model = scene.finalize(device=self.device)
         self.model.rigid_gap = sim.rigid_gap
         self.height_field = height_field_from_grid(self.terrain.grid, self.device)
+        # lanes (fixed) and each episode's actual start (written by every reset)
         self.spawn_xy_wp = wp.array(self.spawn_xy.astype(np.float32), dtype=wp.vec2, device=self.device)
+        self.start_wp = wp.clone(self.spawn_xy_wp)
+        self.spawn_z_wp = wp.array(np.asarray(self.spawn_z, np.float32), device=self.device)
 
         self.state_0 = self.model.state()
         self.state_1 = self.model.state()
@@ -238,9 +224,13 @@ class World:
         self._frames_since_check = 0
         self.overflow_frames = 0  # frames in which some overflow was reported (upper bound per check)
 
-        np_default = q.copy()
-        self._default_q = wp.array(np_default, dtype=wp.float32, device=self.device)
         self._reset_mask = wp.zeros(n, dtype=wp.bool, device=self.device)
+        self._reset_counter = wp.zeros(1, dtype=wp.int32, device=self.device)
+        self._prev_x_scratch = wp.zeros(n, dtype=wp.float32, device=self.device)
+        rc = cfg.robot
+        self._stand = wp.vec3(*rc.stand_pose)
+        self._joint_lower = wp.vec3(rc.hip_limit[0], rc.knee_limit[0], rc.ankle_limit[0])
+        self._joint_upper = wp.vec3(rc.hip_limit[1], rc.knee_limit[1], rc.ankle_limit[1])
         self._bad = wp.zeros(n, dtype=wp.bool, device=self.device)
         self.nonfinite_resets = 0
 
@@ -342,8 +332,20 @@ class World:
         self._frames_since_check += frames
 
     # ------------------------------------------------------------------ resets & health
-    def reset(self, mask: np.ndarray | wp.array | None = None) -> None:
-        """Put the selected envs (all if ``mask`` is None) back in the spawn pose, at rest."""
+    def reset(
+        self,
+        mask: np.ndarray | wp.array | None = None,
+        lateral: float = 0.0,
+        yaw: float = 0.0,
+        joint_noise: float = 0.0,
+        seed: int = 0,
+        prev_x: wp.array | None = None,
+    ) -> None:
+        """Put the selected envs (all if ``mask`` is None) back on their start lane, at rest.
+
+        With ``lateral``/``yaw``/``joint_noise`` > 0 the start is randomised (``kernels.resets``); the new
+        start lands in ``start_wp`` (and ``prev_x`` if given). Capturable when ``mask`` is a Warp array.
+        """
         if mask is None:
             self._reset_mask.fill_(True)
             m = self._reset_mask
@@ -353,11 +355,15 @@ class World:
             self._reset_mask.assign(np.asarray(mask, dtype=bool))
             m = self._reset_mask
         wp.launch(
-            _reset_envs,
+            reset_envs_kernel,
             dim=self.num_envs,
-            inputs=[m, self._default_q, self.joint_q_wp, self.joint_qd_wp, self.joint_target_wp],
+            inputs=[m, self.spawn_xy_wp, self.spawn_z_wp, self._stand, self._joint_lower, self._joint_upper,
+                    float(lateral), float(yaw), float(joint_noise), int(seed), self._reset_counter],  # fmt: skip
+            outputs=[self.joint_q_wp, self.joint_qd_wp, self.joint_target_wp, self.start_wp,
+                     prev_x if prev_x is not None else self._prev_x_scratch],  # fmt: skip
             device=self.device,
         )
+        wp.launch(advance_counter_kernel, dim=1, inputs=[self._reset_counter], device=self.device)
         newton.eval_fk(self.model, self.state_0.joint_q, self.state_0.joint_qd, self.state_0, mask=m)
 
     def reset_nonfinite(self) -> int:

@@ -1,0 +1,125 @@
+"""The paper's reward, Table 1 and Eq. 5, one kernel for every env.
+
+    R_t = w_h r_h + w_d r_d + w_theta r_theta + r_f + r_s   (Eq. 5)   + r_goal (ours)
+
+The paper leaves the weights, the direction condition and its step length unstated. Our choices follow.
+
+**Units.** Per-step terms are quoted for a 20 ms control step (``REF_DT``) and scaled by
+``control_dt / REF_DT``, so they mean the same per second at any control rate. The one-off success bonus is
+not scaled.
+
+**The terms** (z is the torso height above the terrain under it, because the terrain height varies):
+- r_h (height), "(z_r - 0.11), condition z_r > 0.12": exactly that, and 0 otherwise.
+- r_theta (direction), "(cos θ, sin θ) · D / ||D||, condition θ > π/6". Taken literally, a term paid only
+  outside the ±30° cone would be largest just outside it. We therefore read the condition as "heading error
+  beyond π/6" and pay min(0, (cos θ, sin θ) · D̂ - cos(π/6)). That is 0 inside the cone and falls
+  continuously to -1.87 when walking backward. D is the start-to-goal vector.
+- r_d (distance), "exp(-(d_n - d_t))": d_n is the distance to the goal and d_t the goal radius, so
+  r_d = 1 on reaching the goal.
+- r_s (stability), "-100 if z_r < 0.05 or |θ_y| > π/6 or |θ_x| > π/6", weight 1. Paid per (20 ms) step while
+  the condition holds. A fall (z < 0.05, or tilt > π/3) ends the episode at that step.
+- r_f (forward), "-0.3 if x_r - x_pr < 0.01", weight 1. The paper's step is unstated. 1 cm per 20 ms would
+  be 0.5 m/s, twice what the fixed CPG walks. We read the threshold as a speed, ``FORWARD_MIN_SPEED`` =
+  0.1 m/s along +x (the start-to-goal direction), i.e. 2 mm per 20 ms step.
+- r_goal (ours), +100 when the goal is reached. The episode ends there, so without a bonus the paper's
+  rewards would pay more for lingering just outside the goal radius than for entering it.
+
+Weights (ours, marked in ``RewardConfig``): w_h = 1, w_d = 1, w_theta = 1.
+"""
+
+import numpy as np
+import warp as wp
+
+from ..terrain.query import HeightField, terrain_height
+from .terminations import FELL, SUCCESS
+
+REF_DT = 0.02
+FORWARD_MIN_SPEED = 0.1
+TERMS = ("height", "direction", "distance", "stability", "forward", "goal")
+
+
+@wp.kernel
+def rewards_kernel(
+    joint_q: wp.array2d[wp.float32],
+    rpy: wp.array2d[wp.float32],
+    status: wp.array[wp.int32],
+    hf: HeightField,
+    start: wp.array[wp.vec2],
+    goal_distance: float,
+    goal_radius: float,
+    w_height: float,
+    w_direction: float,
+    w_distance: float,
+    stability_penalty: float,
+    forward_penalty: float,
+    goal_bonus: float,
+    control_dt: float,
+    prev_x: wp.array[wp.float32],
+    reward: wp.array[wp.float32],
+    terms: wp.array2d[wp.float32],
+):
+    e = wp.tid()
+    scale = control_dt / REF_DT
+    px = joint_q[e, 0]
+    py = joint_q[e, 1]
+    z = joint_q[e, 2] - terrain_height(hf, px, py)
+    st = status[e]
+    if not (wp.isfinite(px) and wp.isfinite(py) and wp.isfinite(z)):
+        # a blown-up env (reset and counted by the caller): no reward signal from garbage
+        for k in range(6):
+            terms[e, k] = 0.0
+        reward[e] = 0.0
+        prev_x[e] = 0.0
+        return
+    r_h = float(0.0)
+    if z > 0.12:
+        r_h = z - 0.11
+    # start-to-goal direction D is +x, so (cos θ, sin θ) . D / |D| = cos(yaw)
+    r_dir = wp.min(0.0, wp.cos(rpy[e, 2]) - wp.cos(wp.pi / 6.0))
+    d_n = wp.length(wp.vec2(px, py) - start[e] - wp.vec2(goal_distance, 0.0))
+    r_d = wp.exp(-(d_n - goal_radius))
+    tilted = wp.abs(rpy[e, 0]) > wp.pi / 6.0 or wp.abs(rpy[e, 1]) > wp.pi / 6.0
+    r_s = float(0.0)
+    if z < 0.05 or tilted or st == FELL:
+        r_s = -stability_penalty
+    r_f = float(0.0)
+    if px - prev_x[e] < FORWARD_MIN_SPEED * control_dt:
+        r_f = -forward_penalty
+    r_g = float(0.0)
+    if st == SUCCESS:
+        r_g = goal_bonus
+    t0 = w_height * r_h * scale
+    t1 = w_direction * r_dir * scale
+    t2 = w_distance * r_d * scale
+    t3 = r_s * scale
+    t4 = r_f * scale
+    terms[e, 0] = t0
+    terms[e, 1] = t1
+    terms[e, 2] = t2
+    terms[e, 3] = t3
+    terms[e, 4] = t4
+    terms[e, 5] = r_g
+    reward[e] = t0 + t1 + t2 + t3 + t4 + r_g
+    prev_x[e] = px
+
+
+def rewards_reference(joint_q, rpy, status, ground, start, prev_x, goal_distance, goal_radius, w_height, w_direction,
+                      w_distance, stability_penalty, forward_penalty, goal_bonus, control_dt):  # fmt: skip
+    """Float64 reference of :func:`rewards_kernel` (finite states); ``ground`` (N,) is the terrain under the base.
+
+    Returns (reward (N,), terms (N, 6))."""
+    jq, rpy = np.asarray(joint_q, np.float64), np.asarray(rpy, np.float64)
+    start = np.asarray(start, np.float64)
+    scale = control_dt / REF_DT
+    z = jq[:, 2] - ground
+    r_h = np.where(z > 0.12, z - 0.11, 0.0)
+    r_dir = np.minimum(0.0, np.cos(rpy[:, 2]) - np.cos(np.pi / 6))
+    d_n = np.hypot(jq[:, 0] - start[:, 0] - goal_distance, jq[:, 1] - start[:, 1])
+    r_d = np.exp(-(d_n - goal_radius))
+    tilted = (np.abs(rpy[:, 0]) > np.pi / 6) | (np.abs(rpy[:, 1]) > np.pi / 6)
+    r_s = np.where((z < 0.05) | tilted | (np.asarray(status) == FELL), -stability_penalty, 0.0)
+    r_f = np.where(jq[:, 0] - np.asarray(prev_x, np.float64) < FORWARD_MIN_SPEED * control_dt, -forward_penalty, 0.0)
+    r_g = np.where(np.asarray(status) == SUCCESS, goal_bonus, 0.0)
+    terms = np.stack([w_height * r_h * scale, w_direction * r_dir * scale, w_distance * r_d * scale, r_s * scale,
+                      r_f * scale, r_g], axis=1)  # fmt: skip
+    return terms.sum(axis=1), terms
