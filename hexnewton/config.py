@@ -208,8 +208,9 @@ class TaskConfig:
 
     # ours: one high-level decision every control_dt [s] (a multiple of SimConfig.frame_dt)
     control_dt: float = 0.02
-    # §3.4: the farthest success distance; each env's goal lies this far ahead of its start along +x
-    goal_distance: float = 3.0
+    # each env's goal lies this far ahead of its start along +x: with the 0.5 m goal radius, success means
+    # 3 m walked, Table 3's longest distance (§3.4)
+    goal_distance: float = 3.5
     # §2.4.4 (3): within this distance of the goal the task is complete
     goal_radius: float = 0.5
     # §2.4.4 (1): fallen below this torso height above the terrain [m], or |roll| / |pitch| beyond pi/3
@@ -218,6 +219,23 @@ class TaskConfig:
     # §2.4.4 (2): off course beyond |y - y_start| [m]; time out after this many control steps
     max_abs_y: float = 1.5
     max_episode_steps: int = 7000
+    # ours: start randomisation at every reset (robots sharing one terrain must not all see the same ground)
+    reset_lateral: float = 0.1  # [m] on top of the env's lane (SimConfig.spawn_y_spread)
+    reset_yaw: float = 0.2  # [rad]
+    reset_joint_noise: float = 0.05  # [rad]
+    seed: int = 0
+
+
+@dataclass
+class RewardConfig:
+    """Table 1 / Eq. 5 weights. The paper names w_h, w_d, w_theta but gives no values (kernels/rewards.py)."""
+
+    w_height: float = 1.0  # ours
+    w_direction: float = 1.0  # ours
+    w_distance: float = 1.0  # ours
+    stability_penalty: float = 100.0  # Table 1: r_s = -100, weight 1
+    forward_penalty: float = 0.3  # Table 1: r_f = -0.3, weight 1
+    goal_bonus: float = 100.0  # ours: see kernels/rewards.py
 
 
 @dataclass
@@ -227,3 +245,4 @@ class HexConfig:
     sim: SimConfig = field(default_factory=SimConfig)
     cpg: CPGConfig = field(default_factory=CPGConfig)
     task: TaskConfig = field(default_factory=TaskConfig)
+    reward: RewardConfig = field(default_factory=RewardConfig)

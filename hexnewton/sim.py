@@ -269,7 +269,8 @@ class World:
         return self.joint_q_wp.numpy()
 
     # ------------------------------------------------------------------ stepping
-    def _simulate(self) -> None:
+    def simulate_frame(self) -> None:
+        """One physics frame (collision + substeps), uncaptured: callers may record it into their own graph."""
         self.pipeline.collide(self.state_0, self.contacts)
         for i in range(self.substeps):
             if self.controller is not None:
@@ -308,7 +309,7 @@ class World:
         # run once uncaptured (kernel compilation, lazy allocations), then restore and record
         saved = [wp.clone(a) for a in (self.state_0.joint_q, self.state_0.joint_qd, self.state_0.body_q,
                                        self.state_0.body_qd)]  # fmt: skip
-        self._simulate()
+        self.simulate_frame()
         for dst, src in zip(
             (self.state_0.joint_q, self.state_0.joint_qd, self.state_0.body_q, self.state_0.body_qd), saved
         ):
@@ -316,7 +317,7 @@ class World:
         self._overflow_world.zero_()
         self._overflow_global.zero_()
         with wp.ScopedDevice(self.device), wp.ScopedCapture() as cap:
-            self._simulate()
+            self.simulate_frame()
         self.graph = cap.graph
 
     def step(self, frames: int = 1) -> None:
@@ -327,7 +328,7 @@ class World:
             if self.graph is not None:
                 wp.capture_launch(self.graph)
             else:
-                self._simulate()
+                self.simulate_frame()
         self.sim_time += frames * self.frame_dt
         self._frames_since_check += frames
 

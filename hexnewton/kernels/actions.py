@@ -37,3 +37,28 @@ def params_to_actions(params, lower, upper):
     """Inverse of the scaling (for fixed physical parameters expressed as actions)."""
     lo, hi = np.asarray(lower, np.float64), np.asarray(upper, np.float64)
     return 2.0 * (np.asarray(params, np.float64) - lo) / (hi - lo) - 1.0
+
+
+@wp.kernel
+def joint_actions_kernel(
+    actions: wp.array2d[wp.float32],
+    lower: wp.vec3,
+    upper: wp.vec3,
+    target_offset: int,
+    targets: wp.array2d[wp.float32],
+):
+    """The pure-DRL action mode: 18 actions in [-1, 1] map straight onto each joint's limit range."""
+    e, j = wp.tid()
+    a = actions[e, j]
+    if not wp.isfinite(a):
+        a = 0.0
+    a = wp.clamp(a, -1.0, 1.0)
+    k = j % 3
+    targets[e, target_offset + j] = lower[k] + 0.5 * (a + 1.0) * (upper[k] - lower[k])
+
+
+def joint_actions_reference(actions, lower, upper):
+    """Float64 reference of :func:`joint_actions_kernel`: (N, 18) joint targets."""
+    lo = np.tile(np.asarray(lower, np.float64), 6)
+    hi = np.tile(np.asarray(upper, np.float64), 6)
+    return scale_actions_reference(actions, lo, hi)

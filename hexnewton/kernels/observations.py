@@ -26,6 +26,7 @@ import numpy as np
 import warp as wp
 
 from ..terrain.query import HeightField, max_terrain_height, terrain_height
+from .terminations import quat_to_rpy, quat_to_rpy_np
 
 H_HALF_EXTENT = 0.3  # ours: the square that "max height h" looks at: +-30 cm, about the legs' reach [m]
 OBS_DIM = {"cpg": 59, "joint": 44}
@@ -42,14 +43,12 @@ def observations_kernel(
     joint_q: wp.array2d[wp.float32],
     joint_qd: wp.array2d[wp.float32],
     params: wp.array2d[wp.float32],
-    yaw: wp.array2d[wp.float32],
     hf: HeightField,
     start: wp.array[wp.vec2],
     goal_distance: float,
     with_params: int,
     obs: wp.array2d[wp.float32],
 ):
-    """``yaw`` is the (N, 3) roll-pitch-yaw array of the episode-status kernel (column 2 is used)."""
     e = wp.tid()
     for j in range(18):
         obs[e, j] = joint_q[e, 7 + j]
@@ -61,8 +60,9 @@ def observations_kernel(
     gy = start[e][1]
     dx = gx - px
     dy = gy - py
-    c = wp.cos(yaw[e, 2])
-    s = wp.sin(yaw[e, 2])
+    yaw = quat_to_rpy(wp.normalize(wp.quat(joint_q[e, 3], joint_q[e, 4], joint_q[e, 5], joint_q[e, 6])))[2]
+    c = wp.cos(yaw)
+    s = wp.sin(yaw)
     obs[e, 36] = c * dx + s * dy
     obs[e, 37] = -s * dx + c * dy
     obs[e, 38] = terrain_height(hf, gx, gy) - pz
@@ -79,7 +79,7 @@ def observations_kernel(
     obs[e, k + 4] = max_terrain_height(hf, px, py, H_HALF_EXTENT) - terrain_height(hf, px, py)
 
 
-def observations_reference(joint_q, joint_qd, params, yaw, ground_at, start, goal_distance, with_params):
+def observations_reference(joint_q, joint_qd, params, ground_at, start, goal_distance, with_params):
     """Float64 reference of :func:`observations_kernel`.
 
     ``ground_at(x, y)`` returns terrain heights and ``ground_at.max(x, y, half_extent)`` the max over a square
@@ -90,6 +90,7 @@ def observations_reference(joint_q, joint_qd, params, yaw, ground_at, start, goa
     start = np.asarray(start, np.float64)
     gx, gy = start[:, 0] + goal_distance, start[:, 1]
     dx, dy = gx - jq[:, 0], gy - jq[:, 1]
+    yaw = quat_to_rpy_np(jq[:, 3:7])[:, 2]
     c, s = np.cos(yaw), np.sin(yaw)
     target = np.stack([c * dx + s * dy, -s * dx + c * dy, ground_at(gx, gy) - jq[:, 2]], axis=1)
     quat = jq[:, 3:7] * np.where(jq[:, 6:7] < 0, -1.0, 1.0)

@@ -1,0 +1,276 @@
+"""The paper's MDP (§2.4) as an rsl-rl-lib 5.5.1 ``VecEnv`` over the batched Newton world.
+
+One ``step(actions)`` is one control step (``TaskConfig.control_dt``). Apart from the action copy, it is a
+single captured graph (a CUDA graph on GPU, Warp's capture on CPU) of Warp kernels on preallocated arrays:
+
+    actions -> parameters (kernels/actions.py)  -> [CPG (cpg.py) + mapping (mapping.py) + physics] x substeps
+            -> episode ends (terminations.py)   -> rewards (rewards.py) -> episode bookkeeping
+            -> randomised resets of finished envs (resets.py) -> observations (observations.py)
+
+torch sees every buffer zero-copy (``wp.to_torch``), and nothing goes back to the host inside a step.
+Finished envs auto-reset. ``extras["time_outs"]`` marks time-limit ends. ``extras["log"]`` carries:
+- the mean of each reward term;
+- success, fall, off-course, timeout and non-finite rates, with distance and length, over the last 1024
+  finished episodes.
+
+Action modes:
+- ``cpg`` (15 actions): omega, A1[2], A2[6], A3[6], each scaled to its range (the paper's CPG_RL);
+- ``joint`` (18 actions): joint targets over each joint's limits (the pure-DRL comparison). Its observation
+  lacks the CPG parameters (44 values instead of 59); the reward is the same.
+"""
+
+from __future__ import annotations
+
+import math
+
+import torch
+import warp as wp
+from rsl_rl.env import VecEnv
+from tensordict import TensorDict
+
+from .config import HexConfig
+from .controller import CPGController
+from .kernels.actions import joint_actions_kernel, scale_actions_kernel
+from .kernels.observations import OBS_DIM, observations_kernel
+from .kernels.rewards import TERMS, rewards_kernel
+from .kernels.terminations import STATUS_NAMES, TIMEOUT, episode_status_kernel
+from .robot import BASE_Q
+from .sim import HexnewtonError, World
+
+ACTION_MODES = {"cpg": 15, "joint": 18}
+RING = 1024  # finished episodes the logged rates average over
+
+
+@wp.kernel
+def _bookkeeping(
+    status: wp.array[wp.int32],
+    joint_q: wp.array2d[wp.float32],
+    start: wp.array[wp.vec2],
+    steps: wp.array[wp.int32],
+    done: wp.array[wp.bool],
+    done_u8: wp.array[wp.uint8],
+    time_out: wp.array[wp.uint8],
+    cursor: wp.array[wp.int32],
+    ring: wp.array2d[wp.float32],
+):
+    """Done flags and step counters; each finished episode writes (status one-hot, distance, length) to the ring."""
+    e = wp.tid()
+    st = status[e]
+    d = st != 0
+    done[e] = d
+    done_u8[e] = wp.uint8(0)
+    time_out[e] = wp.uint8(0)
+    if st == TIMEOUT:
+        time_out[e] = wp.uint8(1)
+    if d:
+        done_u8[e] = wp.uint8(1)
+        slot = wp.atomic_add(cursor, 0, 1) % ring.shape[0]
+        for k in range(5):
+            ring[slot, k] = 0.0
+        ring[slot, st - 1] = 1.0  # status 1..5 -> columns fell, off_course, success, timeout, nonfinite
+        dist = float(0.0)
+        if wp.isfinite(joint_q[e, 0]):
+            dist = joint_q[e, 0] - start[e][0]
+        ring[slot, 5] = dist
+        ring[slot, 6] = float(steps[e] + 1)
+        steps[e] = 0
+    else:
+        steps[e] = steps[e] + 1
+
+
+class HexapodEnv(VecEnv):
+    """N hexapods, one terrain, the paper's observation, action, reward and terminations."""
+
+    def __init__(self, cfg: HexConfig, action_mode: str = "cpg"):
+        if action_mode not in ACTION_MODES:
+            raise HexnewtonError(f"unknown action mode '{action_mode}': choose one of {', '.join(ACTION_MODES)}")
+        self.cfg = cfg
+        self.action_mode = action_mode
+        self.world = world = World(cfg)
+        task = cfg.task
+        ratio = task.control_dt / world.frame_dt
+        if task.control_dt <= 0 or abs(ratio - round(ratio)) > 1e-6:
+            raise HexnewtonError(
+                f"task.control_dt ({task.control_dt}) must be a positive multiple of sim.frame_dt ({world.frame_dt})"
+            )
+        self.decimation = int(round(ratio))
+        self.num_envs = n = world.num_envs
+        self.num_actions = ACTION_MODES[action_mode]
+        self.num_obs = OBS_DIM[action_mode]
+        self.max_episode_length = task.max_episode_steps
+        self.device = world.device
+        dev = self.device
+
+        self.controller = CPGController(world) if action_mode == "cpg" else None
+        world.set_controller(self.controller)
+
+        z = lambda *shape, dtype=wp.float32: wp.zeros(shape, dtype=dtype, device=dev)  # noqa: E731
+        self.actions = z(n, self.num_actions)
+        self.status, self.rpy = z(n, dtype=wp.int32), z(n, 3)
+        self.episode_steps = z(n, dtype=wp.int32)
+        self.done, self.done_u8, self.time_out = z(n, dtype=wp.bool), z(n, dtype=wp.uint8), z(n, dtype=wp.uint8)
+        self.reward, self.terms, self.prev_x = z(n), z(n, len(TERMS)), z(n)
+        self.obs = z(n, self.num_obs)
+        self._cursor = z(1, dtype=wp.int32)
+        self._ring = wp.full((RING, 7), float("nan"), dtype=wp.float32, device=dev)
+        rc = cfg.robot
+        self._lower = wp.vec3(rc.hip_limit[0], rc.knee_limit[0], rc.ankle_limit[0])
+        self._upper = wp.vec3(rc.hip_limit[1], rc.knee_limit[1], rc.ankle_limit[1])
+
+        # torch views (zero-copy)
+        self._obs_t = wp.to_torch(self.obs)
+        self._rew_t = wp.to_torch(self.reward)
+        self._done_t = wp.to_torch(self.done_u8)
+        self._time_out_t = wp.to_torch(self.time_out)
+        self._actions_t = wp.to_torch(self.actions)
+        self._terms_t = wp.to_torch(self.terms)
+        self._ring_t = wp.to_torch(self._ring)
+        self._steps_t = wp.to_torch(self.episode_steps)
+
+        self._stream = None
+        if dev.startswith("cuda"):
+            self._stream = wp.stream_from_torch(torch.cuda.current_stream(torch.device(dev)))
+
+        self._reset(None)
+        self._observe()
+        wp.synchronize_device(dev)
+        self.graph = None
+        self.common_step_counter = 0
+
+    # ------------------------------------------------------------------ rsl-rl VecEnv API
+    @property
+    def episode_length_buf(self) -> torch.Tensor:
+        return self._steps_t
+
+    @episode_length_buf.setter
+    def episode_length_buf(self, value: torch.Tensor) -> None:
+        # rsl-rl's learn(init_at_random_ep_len=True) assigns a new tensor: copy it into the Warp buffer
+        self._steps_t.copy_(value.to(self._steps_t.dtype))
+
+    def get_observations(self) -> TensorDict:
+        return TensorDict({"policy": self._obs_t}, batch_size=[self.num_envs], device=self._obs_t.device)
+
+    def step(self, actions: torch.Tensor) -> tuple[TensorDict, torch.Tensor, torch.Tensor, dict]:
+        self._actions_t.copy_(actions)
+        if self._stream is not None:
+            with wp.ScopedStream(self._stream, sync_enter=False, sync_exit=False):
+                self._launch()
+        else:
+            self._launch()
+        self.common_step_counter += 1
+        if self.common_step_counter % 250 == 0:  # one host read every 250 steps: contact overflow never silent
+            self.world.check_contacts()
+        extras = {"time_outs": self._time_out_t, "log": self._log()}
+        return self.get_observations(), self._rew_t, self._done_t, extras
+
+    # ------------------------------------------------------------------ the control step
+    def _launch(self) -> None:
+        if not self.cfg.sim.use_graph:
+            self._control_step()
+            return
+        if self.graph is None:
+            self._capture()
+        wp.capture_launch(self.graph)
+
+    def _capture(self) -> None:
+        # warm up once outside the capture (compiles kernels, allocates solver scratch), then record on Warp's
+        # own stream (CUDA graphs cannot be captured on torch's legacy default stream)
+        snapshot = [wp.clone(a) for a in self._state_arrays()]
+        self._control_step()
+        for dst, src in zip(self._state_arrays(), snapshot):
+            wp.copy(dst, src)
+        wp.synchronize_device(self.device)
+        stream = wp.get_stream(self.device) if self.device.startswith("cuda") else None
+        with wp.ScopedDevice(self.device), wp.ScopedCapture(stream=stream) as cap:
+            self._control_step()
+        self.graph = cap.graph
+
+    def _state_arrays(self) -> list[wp.array]:
+        s = self.world.state_0
+        arrays = [s.joint_q, s.joint_qd, s.body_q, s.body_qd, self.episode_steps, self.prev_x, self.world.start_wp,
+                  self._ring, self._cursor, self.obs, self.reward, self.done_u8, self.time_out]  # fmt: skip
+        if self.controller is not None:
+            arrays += [self.controller.params, self.controller.params_target, self.controller.state]
+        return arrays
+
+    def _control_step(self) -> None:
+        w, t, r, dev, n = self.world, self.cfg.task, self.cfg.reward, self.device, self.num_envs
+        if self.controller is not None:
+            wp.launch(scale_actions_kernel, dim=(n, self.num_actions),
+                      inputs=[self.actions, self.controller.lower, self.controller.upper],
+                      outputs=[self.controller.params_target], device=dev)  # fmt: skip
+        else:
+            wp.launch(joint_actions_kernel, dim=(n, self.num_actions),
+                      inputs=[self.actions, self._lower, self._upper, BASE_Q], outputs=[w.joint_target_wp],
+                      device=dev)  # fmt: skip
+        for _ in range(self.decimation):
+            w.simulate_frame()
+        wp.launch(
+            episode_status_kernel, dim=n,
+            inputs=[w.joint_q_wp, self.episode_steps, w.height_field, w.start_wp, t.goal_distance, t.goal_radius,
+                    t.min_height, t.max_tilt, t.max_abs_y, t.max_episode_steps],
+            outputs=[self.status, self.rpy], device=dev,
+        )  # fmt: skip
+        wp.launch(
+            rewards_kernel, dim=n,
+            inputs=[w.joint_q_wp, self.rpy, self.status, w.height_field, w.start_wp, t.goal_distance, t.goal_radius,
+                    r.w_height, r.w_direction, r.w_distance, r.stability_penalty, r.forward_penalty, r.goal_bonus,
+                    t.control_dt],
+            outputs=[self.prev_x, self.reward, self.terms], device=dev,
+        )  # fmt: skip
+        wp.launch(
+            _bookkeeping, dim=n,
+            inputs=[self.status, w.joint_q_wp, w.start_wp],
+            outputs=[self.episode_steps, self.done, self.done_u8, self.time_out, self._cursor, self._ring], device=dev,
+        )  # fmt: skip
+        self._reset(self.done)
+        self._observe()
+
+    def _reset(self, mask: wp.array | None) -> None:
+        t = self.cfg.task
+        self.world.reset(mask, lateral=t.reset_lateral, yaw=t.reset_yaw, joint_noise=t.reset_joint_noise,
+                         seed=t.seed, prev_x=self.prev_x)  # fmt: skip
+        if self.controller is not None:
+            self.controller.reset(mask)
+
+    def _observe(self) -> None:
+        w, ctrl = self.world, self.controller
+        params = ctrl.params if ctrl is not None else self.terms  # unused placeholder in joint mode
+        wp.launch(
+            observations_kernel, dim=self.num_envs,
+            inputs=[w.joint_q_wp, w.joint_qd_wp, params, w.height_field, w.start_wp, self.cfg.task.goal_distance,
+                    int(ctrl is not None)],
+            outputs=[self.obs], device=self.device,
+        )  # fmt: skip
+
+    # ------------------------------------------------------------------ logging
+    def _log(self) -> dict[str, torch.Tensor]:
+        means = self._terms_t.mean(dim=0)
+        log = {f"Reward/{name}": means[k] for k, name in enumerate(TERMS)}
+        rates = torch.nanmean(self._ring_t, dim=0)
+        for k, name in enumerate(STATUS_NAMES[1:]):
+            log[f"Episode/{name}_rate"] = rates[k]
+        log["Episode/distance_m"] = rates[5]
+        log["Episode/length_steps"] = rates[6]
+        return log
+
+    def episode_stats(self) -> dict[str, float]:
+        """Host copy of the logged episode rates (syncs; for reports, not for the training loop)."""
+        rates = torch.nanmean(self._ring_t, dim=0).cpu().numpy()
+        out = {f"{name}_rate": float(rates[k]) for k, name in enumerate(STATUS_NAMES[1:])}
+        out.update(distance_m=float(rates[5]), length_steps=float(rates[6]),
+                   episodes=int(min(int(self._cursor.numpy()[0]), RING)))  # fmt: skip
+        return out
+
+    def close(self) -> None:
+        self.graph = None
+
+
+def make_env(cfg: HexConfig, action_mode: str = "cpg") -> HexapodEnv:
+    """Build the environment; configuration errors become ``HexnewtonError`` / ``ValueError`` with one line."""
+    if not math.isfinite(cfg.task.goal_distance) or cfg.task.goal_distance <= cfg.task.goal_radius:
+        raise HexnewtonError("task.goal_distance must exceed task.goal_radius")
+    return HexapodEnv(cfg, action_mode)
+
+
+__all__ = ["ACTION_MODES", "HexapodEnv", "make_env"]
