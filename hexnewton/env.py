@@ -111,6 +111,9 @@ class HexapodEnv(VecEnv):
         self.done, self.done_u8, self.time_out = z(n, dtype=wp.bool), z(n, dtype=wp.uint8), z(n, dtype=wp.uint8)
         self.reward, self.terms, self.prev_x = z(n), z(n, len(TERMS)), z(n)
         self.obs = z(n, self.num_obs)
+        # the state at the end of the last step, before finished envs were reset (play.py records these)
+        self.last_q, self.last_start = z(n, 7 + 18), wp.zeros(n, dtype=wp.vec2, device=dev)
+        self.last_cpg_state, self.last_params = z(n, 4), z(n, 15)
         self._cursor = z(1, dtype=wp.int32)
         self._ring = wp.full((RING, 7), float("nan"), dtype=wp.float32, device=dev)
         rc = cfg.robot
@@ -223,6 +226,11 @@ class HexapodEnv(VecEnv):
             inputs=[self.status, w.joint_q_wp, w.start_wp],
             outputs=[self.episode_steps, self.done, self.done_u8, self.time_out, self._cursor, self._ring], device=dev,
         )  # fmt: skip
+        wp.copy(self.last_q, w.joint_q_wp)
+        wp.copy(self.last_start, w.start_wp)
+        if self.controller is not None:
+            wp.copy(self.last_cpg_state, self.controller.state)
+            wp.copy(self.last_params, self.controller.params)
         self._reset(self.done)
         self._observe()
 

@@ -2,16 +2,23 @@
 
     python play.py --controller cpg --terrain flat --num_envs 64 --steps 500
     python play.py --controller cpg --terrain stepped --record rollout.npz --plot gait.png
+    python play.py --controller cpg_rl --terrain rugged                  # newest run's newest checkpoint
+    python play.py --controller cpg_rl --checkpoint logs/.../model_299.pt
 
-``--controller cpg`` is the paper's fixed-parameter "CPG" baseline (§3.3): the two-Hopf CPG and the
-mapping function with the constant parameters of ``CPGConfig`` (``fixed_*``). Episodes end and restart
-as §2.4.4 says (fall, off course, success, timeout); the statistics cover each robot's first episode.
+Controllers:
+- ``cpg``: the paper's fixed-parameter "CPG" baseline (§3.3). The two-Hopf CPG and the mapping run with the
+  constant parameters of ``CPGConfig`` (``fixed_*``).
+- ``cpg_rl``: a trained CPG_RL policy, acting deterministically.
+- ``joint``: a trained pure-DRL policy that sets the 18 joint targets directly.
 
-``--record PATH.npz`` stores, per control step, the arrays listed under ``Recorder``.
+All three run in the same ``HexapodEnv``, so episodes end and restart as §2.4.4 says (fall, off course,
+success, timeout). The statistics cover each robot's first episode. ``--record PATH.npz`` stores, per
+control step, the arrays listed under ``Recorder``.
 """
 
 from __future__ import annotations
 
+import glob
 import math
 import os
 import sys
@@ -21,9 +28,10 @@ from dataclasses import replace
 import numpy as np
 
 from .cli import ArgumentParser, positive_int, run, terrain_name
-from .config import TERRAINS, HexConfig, SimConfig, TaskConfig, TerrainConfig
+from .config import JOINT_NAMES, TERRAINS, HexConfig, SimConfig, TaskConfig, TerrainConfig
 from .kernels.terminations import STATUS_NAMES
-from .rollout import Recorder, Rollout
+
+CONTROLLERS = {"cpg": "cpg", "cpg_rl": "cpg", "joint": "joint"}  # controller -> env action mode
 
 
 def check_writable(path: str, ext: str) -> None:
@@ -75,38 +83,114 @@ def format_stats(terrain: str, s: dict, seconds: float) -> str:
     )
 
 
-def rollout_cpg(cfg: HexConfig, steps: int, recorder: Recorder | None = None, progress: bool = True):
-    """Run the fixed CPG for ``steps`` control steps; returns (stats, rollout)."""
-    roll = Rollout(cfg)
-    n = roll.num_envs
+class Recorder:
+    """Collects per-control-step arrays on the host; ``save(path)`` writes one ``.npz``.
+
+    Keys: ``t`` (T,), ``joint_target``/``joint_pos`` (T, N, 18), ``base_pos``/``base_rpy`` (T, N, 3) (world frame;
+    roll, pitch, yaw), ``cpg_xy`` (T, N, 2, 2) (oscillator, [x, y]), ``params`` (T, N, 15) (physical units),
+    ``done`` (T, N) (that env's episode ended at this step; the next row starts a new one), ``joint_names``.
+    A row holds the state at the end of the step, before a finished env is reset.
+    """
+
+    KEYS = ("t", "joint_target", "joint_pos", "base_pos", "base_rpy", "cpg_xy", "params", "done")
+
+    def __init__(self):
+        self.rows: dict[str, list[np.ndarray]] = {k: [] for k in self.KEYS}
+
+    def add(self, env, t: float, q: np.ndarray, rpy: np.ndarray, done: np.ndarray) -> None:
+        r = self.rows
+        r["t"].append(np.float64(t))
+        r["joint_target"].append(env.world.joint_target_wp.numpy()[:, 7:].copy())
+        r["joint_pos"].append(q[:, 7:].copy())
+        r["base_pos"].append(q[:, 0:3].copy())
+        r["base_rpy"].append(rpy.copy())
+        r["cpg_xy"].append(env.last_cpg_state.numpy().reshape(-1, 2, 2).copy())
+        r["params"].append(env.last_params.numpy().copy())
+        r["done"].append(done.copy())
+
+    def save(self, path: str) -> None:
+        arrays = {k: np.stack(v) for k, v in self.rows.items()}
+        arrays["joint_names"] = np.array(JOINT_NAMES)
+        np.savez_compressed(path, **arrays)
+
+
+def fixed_cpg_actions(env) -> "torch.Tensor":  # noqa: F821
+    """The fixed baseline's parameters expressed as (constant) policy actions."""
+    import torch
+
+    from .kernels.actions import params_to_actions
+
+    lo, hi = env.cfg.cpg.param_ranges()
+    a = np.clip(params_to_actions(env.cfg.cpg.fixed_params(), lo, hi), -1.0, 1.0)
+    return torch.tensor(a, dtype=torch.float32, device=env._obs_t.device).repeat(env.num_envs, 1)
+
+
+def rollout(env, policy, steps: int, recorder: Recorder | None = None, progress: bool = True) -> dict:
+    """Run ``policy(obs) -> actions`` for ``steps`` control steps; returns first-episode statistics."""
+    import torch
+
+    n = env.num_envs
     pos = np.zeros((steps, n, 3), np.float32)
     rpy = np.zeros((steps, n, 3), np.float32)
     done = np.zeros((steps, n), bool)
     status_log = np.zeros((steps, n), np.int32)
-    from rich.progress import track
+    it = range(steps)
+    if progress:
+        from rich.progress import track
 
-    it = track(range(steps), description=f"{cfg.terrain.name}", transient=True) if progress else range(steps)
-    for k in it:
-        roll.step()
-        status = roll.status.numpy()
-        q = roll.world.numpy_q()
-        pos[k], rpy[k], done[k], status_log[k] = q[:, :3], roll.rpy.numpy(), status != 0, status
-        pos[k, :, :2] -= roll.world.spawn_xy  # relative to each env's start
-        if recorder is not None:
-            recorder.add(roll, (k + 1) * cfg.task.control_dt, status, q)
-        roll.reset_done(status)
-    roll.world.check_contacts()
-    return first_episode_stats(pos, rpy, done, status_log), roll
+        it = track(it, description=f"{env.cfg.terrain.name}", transient=True)
+    obs = env.get_observations()
+    with torch.inference_mode():
+        for k in it:
+            obs, _, _, _ = env.step(policy(obs))
+            status = env.status.numpy()
+            q, r = env.last_q.numpy(), env.rpy.numpy()
+            pos[k], rpy[k], done[k], status_log[k] = q[:, :3], r, status != 0, status
+            pos[k, :, :2] -= env.last_start.numpy()  # relative to each env's start
+            if recorder is not None:
+                recorder.add(env, (k + 1) * env.cfg.task.control_dt, q, r, status != 0)
+    env.world.check_contacts()
+    return first_episode_stats(pos, rpy, done, status_log)
+
+
+def newest_checkpoint(log_dir: str, experiment: str) -> str:
+    runs = sorted(glob.glob(os.path.join(log_dir, experiment, "*")))
+    for run_dir in reversed(runs):
+        models = glob.glob(os.path.join(run_dir, "model_*.pt"))
+        if models:
+            return max(models, key=lambda m: int(m.rsplit("_", 1)[1].split(".")[0]))
+    raise ValueError(f"no checkpoint under {os.path.join(log_dir, experiment)}: pass --checkpoint PATH")
+
+
+def load_policy(env, path: str, action_mode: str):
+    """Deterministic policy from an rsl-rl checkpoint, after checking it fits this environment."""
+    import copy
+
+    from rsl_rl.runners import OnPolicyRunner
+
+    from .train import check_compatible, load_checkpoint, train_cfg
+
+    ckpt = load_checkpoint(path)
+    check_compatible(ckpt, path, env.num_obs, env.num_actions, action_mode)
+    meta = (ckpt.get("infos") or {}).get("hexnewton", {})
+    tcfg = train_cfg(meta.get("preset", "default"), env.num_envs)
+    runner = OnPolicyRunner(env, copy.deepcopy(tcfg), log_dir=None, device=str(env._obs_t.device))
+    runner.load(path, map_location=str(env._obs_t.device))
+    return runner.get_inference_policy(device=str(env._obs_t.device))
 
 
 def main(argv: list[str] | None = None) -> int:
     p = ArgumentParser(prog="python play.py", description="Headless rollouts with statistics.")
-    p.add_argument("--controller", choices=["cpg"], default="cpg", help="cpg: the fixed-parameter CPG baseline")
+    p.add_argument("--controller", choices=list(CONTROLLERS), default="cpg")
+    p.add_argument("--checkpoint", metavar="PATH", help="cpg_rl / joint: default the newest run's newest model")
+    p.add_argument("--log_dir", default="logs")
     p.add_argument("--terrain", type=terrain_name, nargs="+", default=["flat"], help=f"one or more of {TERRAINS}")
     p.add_argument("--num_envs", type=positive_int, default=64)
     p.add_argument("--steps", type=positive_int, default=500, help="control steps (20 ms each by default)")
     p.add_argument("--device", default=None, help="cpu, cuda or cuda:N (default: cuda if present, else cpu)")
-    p.add_argument("--seed", type=int, default=0, help="terrain seed")
+    p.add_argument("--seed", type=int, default=0, help="terrain and reset seed")
+    p.add_argument("--reset_yaw", type=float, default=0.0,
+                   help="start yaw noise [rad] (training uses 0.2; 0 starts every robot facing its goal)")
     p.add_argument("--record", metavar="PATH.npz", help="save the rollout (first terrain)")
     p.add_argument("--plot", metavar="PATH.png", help="plot the six legs' joint targets over two gait cycles")
     p.add_argument("--no-progress", action="store_true")
@@ -114,18 +198,35 @@ def main(argv: list[str] | None = None) -> int:
     for path, ext in ((args.record, ".npz"), (args.plot, ".png")):
         if path:
             check_writable(path, ext)
+    mode = CONTROLLERS[args.controller]
+    if args.controller != "cpg" and args.checkpoint is None:
+        args.checkpoint = newest_checkpoint(args.log_dir, f"hexnewton_{mode}_{args.terrain[0]}")
+    if args.checkpoint:
+        from .train import load_checkpoint
+
+        load_checkpoint(args.checkpoint)  # fail before building a world
+
+    from .env import make_env
 
     for i, terrain in enumerate(args.terrain):
         cfg = HexConfig(
             sim=replace(SimConfig(), num_envs=args.num_envs, device=args.device),
             terrain=TerrainConfig(name=terrain, seed=args.seed),
-            task=TaskConfig(),
+            task=replace(TaskConfig(), seed=args.seed, reset_yaw=args.reset_yaw),
         )
+        env = make_env(cfg, mode)
+        if args.controller == "cpg":
+            actions = fixed_cpg_actions(env)
+            policy = lambda obs: actions  # noqa: E731
+        else:
+            policy = load_policy(env, args.checkpoint, mode)
         recorder = Recorder() if (args.record and i == 0) else None
         t0 = time.perf_counter()
-        stats, roll = rollout_cpg(cfg, args.steps, recorder, progress=not args.no_progress and sys.stderr.isatty())
+        stats = rollout(env, policy, args.steps, recorder, progress=not args.no_progress and sys.stderr.isatty())
         wall = time.perf_counter() - t0
-        print(format_stats(terrain, stats, args.steps * cfg.task.control_dt) + f"  [{wall:.1f} s wall, {roll.world.device}]")
+        label = args.controller if args.controller == "cpg" else f"{args.controller} ({args.checkpoint})"
+        print(f"[{label}] " + format_stats(terrain, stats, args.steps * cfg.task.control_dt)
+              + f"  [{wall:.1f} s wall, {env.device}]")  # fmt: skip
         if recorder is not None:
             recorder.save(args.record)
             print(f"recorded {args.steps} steps x {args.num_envs} envs to {args.record}")

@@ -20,8 +20,8 @@ from hexnewton.kernels.terminations import (
     episode_status_np,
     quat_to_rpy_np,
 )
-from hexnewton.play import rollout_cpg
-from hexnewton.rollout import Rollout
+from hexnewton.env import make_env
+from hexnewton.play import fixed_cpg_actions, rollout
 from hexnewton.terrain import make_terrain, terrain_height_np
 from hexnewton.terrain.query import height_field_from_grid
 
@@ -83,52 +83,62 @@ def _cfg(terrain, n, **task):
                      task=TaskConfig(**task))  # fmt: skip
 
 
+def _fixed(env):
+    actions = fixed_cpg_actions(env)
+    return lambda obs: actions
+
+
 def test_fixed_cpg_walks_straight_on_flat():
     """Issue 3: 64 robots walk >= 1 m forward in 10 s with |y| drift < 0.2 m, none falls."""
-    stats, roll = rollout_cpg(_cfg("flat", 64), steps=int(10.0 / TASK.control_dt), progress=False)
+    env = make_env(_cfg("flat", 64, reset_yaw=0.0))  # as play.py: every robot starts facing its goal
+    stats = rollout(env, _fixed(env), steps=int(10.0 / TASK.control_dt), progress=False)
     assert stats["distance_min_m"] >= 1.0, stats
     assert stats["lateral_drift_max_m"] < 0.2, stats
     assert stats["ended"]["fell"] == 0 and stats["ended"]["nonfinite"] == 0, stats
-    assert roll.world.check_contacts(on_overflow="raise").ok
+    assert env.world.check_contacts(on_overflow="raise").ok
 
 
 def test_episodes_end_and_restart():
-    """A goal 0.4 m ahead: success ends the episode, the env restarts at the spawn, the CPG restarts."""
-    roll = Rollout(_cfg("flat", 4, goal_distance=0.5, goal_radius=0.1))
+    """A goal 0.4 m ahead: success ends the episode, the env restarts near its lane start, the CPG restarts."""
+    env = make_env(_cfg("flat", 4, goal_distance=0.5, goal_radius=0.1, reset_yaw=0.0))
+    policy = _fixed(env)
+    lanes = env.world.spawn_xy
     ended_at = None
     for k in range(200):
-        roll.step()
-        status = roll.status.numpy()
+        env.step(policy(None))
+        status = env.status.numpy()
         if status.any():
-            assert np.all(status == SUCCESS)
+            ended = status != 0
+            assert np.all(status[ended] == SUCCESS) and np.all(env.done_u8.numpy()[ended] == 1)
             ended_at = k
-            roll.reset_done(status)
             break
     assert ended_at is not None and 50 < ended_at < 150  # ~0.24 m/s
-    q = roll.world.numpy_q()
-    np.testing.assert_allclose(q[:, :2], roll.world.spawn_xy, atol=1e-6)
-    assert np.all(roll.episode_steps.numpy() == 0)
-    assert roll.ended[SUCCESS] == 4
-    roll.step()
-    assert np.all(roll.status.numpy() == RUNNING) and np.all(roll.episode_steps.numpy() == 1)
+    assert np.all(env.last_q.numpy()[ended, 0] - env.last_start.numpy()[ended, 0] > 0.39)  # the terminal state
+    q = env.world.numpy_q()
+    np.testing.assert_allclose(q[ended, 0], lanes[ended, 0], atol=1e-6)
+    assert np.all(np.abs(q[ended, 1] - lanes[ended, 1]) <= TASK.reset_lateral + 1e-6)
+    assert np.all(env.episode_steps.numpy()[ended] == 0) and np.all(env.episode_steps.numpy()[~ended] == ended_at + 1)
+    assert env.episode_stats()["success_rate"] == 1.0
+    env.step(policy(None))
+    assert np.all(env.episode_steps.numpy()[ended] == 1)
 
 
 def test_nan_state_ends_episode_as_nonfinite_and_resets():
-    roll = Rollout(_cfg("flat", 4))
-    roll.step()
-    roll.world.joint_q[2, 0] = float("nan")
-    roll.step()
-    status = roll.reset_done()
-    assert status[2] == NONFINITE and roll.world.nonfinite_resets == 1
-    assert np.isfinite(roll.world.numpy_q()).all()
+    env = make_env(_cfg("flat", 4))
+    policy = _fixed(env)
+    env.step(policy(None))
+    env.world.joint_q[2, 0] = float("nan")
+    _, rew, done, _ = env.step(policy(None))
+    assert env.status.numpy()[2] == NONFINITE and done[2] == 1 and np.isfinite(rew.numpy()).all()
+    assert np.isfinite(env.world.numpy_q()).all() and np.isfinite(env.get_observations()["policy"].numpy()).all()
+    assert env.episode_stats()["nonfinite_rate"] == 1.0
 
 
 def test_tilted_robot_counts_as_fallen():
-    roll = Rollout(_cfg("flat", 2))
-    roll.world.joint_q[0, 3:7] = roll.world.joint_q.new_tensor(
-        [math.sin(0.6), 0.0, 0.0, math.cos(0.6)])  # 1.2 rad roll > pi / 3  # fmt: skip
-    roll.step()
-    assert roll.status.numpy()[0] == FELL
+    env = make_env(_cfg("flat", 2))
+    env.world.joint_q[0, 3:7] = env.world.joint_q.new_tensor([math.sin(0.6), 0.0, 0.0, math.cos(0.6)])  # 1.2 rad roll
+    env.step(_fixed(env)(None))
+    assert env.status.numpy()[0] == FELL
 
 
 def test_play_records_and_plots(tmp_path):
