@@ -127,7 +127,7 @@ def check_compatible(ckpt: dict, path: str, num_obs: int, num_actions: int, acti
 
 def main(argv: list[str] | None = None) -> int:
     p = ArgumentParser(prog="python train.py", description="Train CPG_RL with rsl-rl PPO.")
-    p.add_argument("--num_envs", type=positive_int, default=4096)
+    p.add_argument("--num_envs", type=positive_int, default=None, help="default 4096 on CUDA, 64 on CPU")
     p.add_argument("--terrain", type=terrain_name, default="flat")
     p.add_argument("--terrain_seed", type=int, default=0)
     p.add_argument("--device", default=None, help="cpu, cuda or cuda:N (default: cuda if present, else cpu)")
@@ -152,6 +152,8 @@ def main(argv: list[str] | None = None) -> int:
     from .sim import resolve_device
 
     device = resolve_device(args.device)
+    if args.num_envs is None:
+        args.num_envs = 4096 if device.startswith("cuda") else 64
     seed_everything(args.seed)
     cfg = HexConfig(
         sim=dataclasses.replace(SimConfig(), num_envs=args.num_envs, device=device),

@@ -5,7 +5,8 @@ Status codes (``STATUS_NAMES``), checked in this order:
                ``max_tilt`` (§2.4.4 (1));
   2 off course |y - y_start| > ``max_abs_y`` (§2.4.4 (2));
   3 success    within ``goal_radius`` of the goal, ``goal_distance`` ahead of the env's start (§2.4.4 (3));
-  4 timeout    ``episode_steps >= max_episode_steps`` (§2.4.4 (2));
+  4 timeout    this step is the episode's ``max_episode_steps``-th (``episode_steps`` counts the steps before it)
+               (§2.4.4 (2));
   5 nonfinite  NaN/Inf in the env's base state (the physics blew up; the env is reset and counted).
 0 means the episode goes on. The kernel also writes roll, pitch and yaw (ZYX Euler angles of the base
 quaternion) for observations, logging and recording.
@@ -70,7 +71,7 @@ def episode_status_kernel(
         s = OFF_COURSE
     elif wp.length(wp.vec2(px, py) - start[e] - wp.vec2(goal_distance, 0.0)) < goal_radius:
         s = SUCCESS
-    elif episode_steps[e] >= max_episode_steps:
+    elif episode_steps[e] + 1 >= max_episode_steps:
         s = TIMEOUT
     status[e] = s
 
@@ -103,7 +104,7 @@ def episode_status_np(joint_q, episode_steps, ground_height, start, goal_distanc
     start = np.asarray(start, np.float64)
     off = np.abs(jq[:, 1] - start[:, 1]) > max_abs_y
     success = np.hypot(jq[:, 0] - start[:, 0] - goal_distance, jq[:, 1] - start[:, 1]) < goal_radius
-    timeout = np.asarray(episode_steps) >= max_episode_steps
+    timeout = np.asarray(episode_steps) + 1 >= max_episode_steps
     status = np.select([fell, off, success, timeout], [FELL, OFF_COURSE, SUCCESS, TIMEOUT], RUNNING)
     status = np.where(finite, status, NONFINITE)
     return status, rpy

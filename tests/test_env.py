@@ -1,0 +1,267 @@
+"""The rsl-rl VecEnv: API conformance, reward / observation / reset kernels vs NumPy, train.py -> play.py."""
+
+import glob
+import math
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+import torch
+import warp as wp
+from tensordict import TensorDict
+
+from hexnewton.config import HexConfig, RewardConfig, SimConfig, TaskConfig, TerrainConfig
+from hexnewton.env import make_env
+from hexnewton.kernels.actions import joint_actions_kernel, joint_actions_reference
+from hexnewton.kernels.observations import OBS_LAYOUT, observations_kernel, observations_reference
+from hexnewton.kernels.resets import reset_bounds_reference
+from hexnewton.kernels.rewards import TERMS, rewards_kernel, rewards_reference
+from hexnewton.kernels.terminations import FELL, SUCCESS, TIMEOUT
+from hexnewton.terrain import make_terrain, max_terrain_height_np, terrain_height_np
+from hexnewton.terrain.query import height_field_from_grid
+
+DEV = "cpu"
+TASK, REW = TaskConfig(), RewardConfig()
+
+
+def _cfg(terrain="flat", n=4, **task):
+    return HexConfig(sim=SimConfig(num_envs=n, device=DEV), terrain=TerrainConfig(name=terrain), task=TaskConfig(**task))
+
+
+@pytest.fixture(scope="module")
+def env():
+    return make_env(_cfg("rugged", 6))
+
+
+# ------------------------------------------------------------------ API conformance
+
+
+def test_vecenv_api(env):
+    obs = env.get_observations()
+    assert isinstance(obs, TensorDict) and obs["policy"].shape == (6, 59) and obs["policy"].dtype == torch.float32
+    assert env.num_actions == 15 and env.max_episode_length == 7000
+    obs, rew, done, extras = env.step(torch.zeros(6, 15))
+    assert obs["policy"].shape == (6, 59) and torch.isfinite(obs["policy"]).all()
+    assert rew.shape == (6,) and rew.dtype == torch.float32
+    assert done.shape == (6,) and extras["time_outs"].shape == (6,)
+    assert all(k.count("/") == 1 and v.dim() == 0 for k, v in extras["log"].items())
+    assert {f"Reward/{t}" for t in TERMS} <= set(extras["log"])
+    # rsl-rl's learn(init_at_random_ep_len=True) assigns a new tensor: it must reach the Warp buffer
+    env.episode_length_buf = torch.randint_like(env.episode_length_buf, high=100)
+    assert np.array_equal(env.episode_steps.numpy(), env.episode_length_buf.numpy())
+
+
+def test_time_outs_and_auto_reset():
+    env = make_env(_cfg("flat", 3, max_episode_steps=5))
+    for k in range(5):
+        _, _, done, extras = env.step(torch.zeros(3, 15))
+        assert done.sum() == (3 if k == 4 else 0)
+    assert torch.all(extras["time_outs"] == 1) and np.all(env.status.numpy() == TIMEOUT)
+    assert np.all(env.episode_steps.numpy() == 0)
+    assert env.episode_stats()["timeout_rate"] == 1.0 and env.episode_stats()["length_steps"] == 5.0
+    q = env.world.numpy_q()
+    assert reset_bounds_reference(env.world.spawn_xy, env.world.spawn_z, HexConfig().robot.stand_pose,
+                                  (-math.pi / 6, 0, -math.pi / 3), (math.pi / 6, math.pi / 2, 0), TASK.reset_lateral,
+                                  TASK.reset_yaw, TASK.reset_joint_noise, q)  # fmt: skip
+    np.testing.assert_allclose(env.world.start_wp.numpy(), q[:, :2], atol=1e-6)
+
+
+def test_joint_action_mode():
+    env = make_env(_cfg("flat", 2), action_mode="joint")
+    assert env.num_actions == 18 and env.get_observations()["policy"].shape == (2, 44)
+    env.step(torch.ones(2, 18))
+    t = env.world.joint_target.numpy()
+    np.testing.assert_allclose(t.reshape(2, 6, 3), np.broadcast_to([math.pi / 6, math.pi / 2, 0.0], (2, 6, 3)), atol=1e-6)
+
+
+def test_joint_actions_kernel_matches_reference():
+    rng = np.random.default_rng(0)
+    a = rng.uniform(-1.5, 1.5, (16, 18)).astype(np.float32)
+    lo, hi = (-0.5, 0.0, -1.0), (0.5, 1.5, 0.0)
+    out = wp.zeros((16, 25), dtype=wp.float32, device=DEV)
+    wp.launch(joint_actions_kernel, dim=(16, 18), inputs=[wp.array(a, device=DEV), wp.vec3(*lo), wp.vec3(*hi), 7],
+              outputs=[out], device=DEV)  # fmt: skip
+    np.testing.assert_allclose(out.numpy()[:, 7:], joint_actions_reference(a, lo, hi), atol=1e-6)
+
+
+# ------------------------------------------------------------------ rewards (Table 1, Eq. 5)
+
+
+def _reward_args(q, rpy, status, start, prev_x, dt=TASK.control_dt):
+    return (TASK.goal_distance, TASK.goal_radius, REW.w_height, REW.w_direction, REW.w_distance,
+            REW.stability_penalty, REW.forward_penalty, REW.goal_bonus, dt)  # fmt: skip
+
+
+def _run_rewards(grid, q, rpy, status, start, prev_x, dt=TASK.control_dt):
+    n = len(q)
+    hf = height_field_from_grid(grid, DEV)
+    px, rew, terms = wp.array(prev_x.astype(np.float32), device=DEV), wp.zeros(n, device=DEV), wp.zeros((n, 6), device=DEV)
+    f = lambda a, **k: wp.array(np.asarray(a, np.float32), device=DEV, **k)  # noqa: E731
+    wp.launch(rewards_kernel, dim=n,
+              inputs=[f(q), f(rpy), wp.array(np.asarray(status, np.int32), device=DEV), hf, f(start, dtype=wp.vec2),
+                      TASK.goal_distance, TASK.goal_radius, REW.w_height, REW.w_direction, REW.w_distance,
+                      REW.stability_penalty, REW.forward_penalty, REW.goal_bonus, dt],
+              outputs=[px, rew, terms], device=DEV)  # fmt: skip
+    return rew.numpy(), terms.numpy(), px.numpy()
+
+
+def test_reward_kernel_matches_reference_on_random_states():
+    rng = np.random.default_rng(1)
+    n = 256
+    grid = make_terrain(TerrainConfig(name="complex")).grid
+    q = np.zeros((n, 25))
+    q[:, 0] = (np.floor(rng.uniform(-0.5, 3.5, n) / 0.01) + 0.5) * 0.01
+    q[:, 1] = (np.floor(rng.uniform(-1.0, 1.0, n) / 0.01) + 0.5) * 0.01
+    ground = terrain_height_np(grid, q[:, 0], q[:, 1])
+    q[:, 2] = ground + rng.uniform(0.02, 0.2, n)
+    rpy = rng.uniform(-1.2, 1.2, (n, 3))
+    status = rng.integers(0, 5, n)
+    start = rng.uniform(-0.2, 0.2, (n, 2))
+    prev_x = q[:, 0] - rng.uniform(-0.01, 0.01, n)
+    for dt in (0.02, 0.04):
+        rew, terms, px = _run_rewards(grid, q, rpy, status, start, prev_x, dt)
+        ref_rew, ref_terms = rewards_reference(q.astype(np.float32), rpy.astype(np.float32), status, ground,
+                                               start.astype(np.float32), prev_x.astype(np.float32),
+                                               *_reward_args(q, rpy, status, start, prev_x, dt))  # fmt: skip
+        np.testing.assert_allclose(terms, ref_terms, rtol=1e-4, atol=1e-4)
+        np.testing.assert_allclose(rew, ref_rew, rtol=1e-4, atol=1e-3)
+        np.testing.assert_allclose(px, q[:, 0], atol=1e-6)
+
+
+def test_reward_terms_on_hand_made_states():
+    grid = make_terrain(TerrainConfig(name="flat")).grid
+    # 0: upright at 0.13 m, facing the goal, 1 cm progress in a 20 ms step, 3 m from the goal
+    # 1: fallen (status), tilted 40 deg, no progress; 2: reached the goal; 3: facing backward
+    q = np.zeros((4, 25))
+    q[:, 2] = [0.13, 0.04, 0.13, 0.13]
+    q[:, 0] = [0.5, 0.5, 3.2, 0.5]
+    rpy = np.array([[0, 0, 0], [0.7, 0, 0], [0, 0, 0], [0, 0, math.pi]])
+    status = np.array([0, FELL, SUCCESS, 0])
+    prev_x = q[:, 0] - np.array([0.01, 0.0, 0.01, 0.01])
+    _, terms, _ = _run_rewards(grid, q, rpy, status, np.zeros((4, 2)), prev_x)
+    t = dict(zip(TERMS, terms.T))
+    np.testing.assert_allclose(t["height"], [0.02, 0.0, 0.02, 0.02], atol=1e-6)  # z - 0.11 when z > 0.12
+    np.testing.assert_allclose(t["distance"][0], math.exp(-(3.0 - 0.5)), rtol=1e-5)  # exp(-(d_n - d_t))
+    np.testing.assert_allclose(t["stability"], [0, -100, 0, 0])
+    np.testing.assert_allclose(t["forward"], [0, -0.3, 0, 0])
+    np.testing.assert_allclose(t["goal"], [0, 0, 100, 0])
+    np.testing.assert_allclose(t["direction"], [0, 0, 0, -1 - math.cos(math.pi / 6)], atol=1e-6)
+
+
+# ------------------------------------------------------------------ observations (§2.4.1)
+
+
+def test_observation_layout_covers_59_and_44():
+    for mode, dim in (("cpg", 59), ("joint", 44)):
+        spans = OBS_LAYOUT[mode]
+        assert spans[0][1] == 0 and spans[-1][2] == dim
+        assert all(a[2] == b[1] for a, b in zip(spans, spans[1:]))
+
+
+def test_observation_kernel_matches_reference():
+    rng = np.random.default_rng(2)
+    n = 64
+    grid = make_terrain(TerrainConfig(name="stepped")).grid
+    q = np.zeros((n, 25), np.float32)
+    q[:, 0] = (np.floor(rng.uniform(-0.5, 4.0, n) / 0.01) + 0.5) * 0.01
+    q[:, 1] = (np.floor(rng.uniform(-1.0, 1.0, n) / 0.01) + 0.5) * 0.01
+    q[:, 2] = rng.uniform(0.1, 1.0, n)
+    quat = rng.normal(size=(n, 4))
+    q[:, 3:7] = quat / np.linalg.norm(quat, axis=1, keepdims=True)
+    q[:, 7:] = rng.uniform(-1, 1, (n, 18))
+    qd = rng.normal(size=(n, 24)).astype(np.float32)
+    params = rng.uniform(0, 10, (n, 15)).astype(np.float32)
+    start = rng.uniform(-0.2, 0.2, (n, 2)).astype(np.float32)
+    hf = height_field_from_grid(grid, DEV)
+
+    def ground_at(x, y):
+        return terrain_height_np(grid, x, y)
+
+    ground_at.max = lambda x, y, h: max_terrain_height_np(grid, x, y, h)
+    for with_params, dim in ((1, 59), (0, 44)):
+        out = wp.zeros((n, dim), dtype=wp.float32, device=DEV)
+        wp.launch(observations_kernel, dim=n,
+                  inputs=[wp.array(q, device=DEV), wp.array(qd, device=DEV), wp.array(params, device=DEV), hf,
+                          wp.array(start, dtype=wp.vec2, device=DEV), TASK.goal_distance, with_params],
+                  outputs=[out], device=DEV)  # fmt: skip
+        ref = observations_reference(q, qd, params, ground_at, start, TASK.goal_distance, with_params)
+        np.testing.assert_allclose(out.numpy(), ref, atol=2e-4, rtol=1e-4)
+
+
+def test_target_is_in_the_heading_frame():
+    env = make_env(_cfg("flat", 1, reset_yaw=0.0, reset_lateral=0.0))
+    q = env.world.joint_q
+    q[0, 3:7] = q.new_tensor([0.0, 0.0, math.sin(math.pi / 4), math.cos(math.pi / 4)])  # facing +y (yaw 90 deg)
+    env._observe()
+    obs = env.get_observations()["policy"][0]
+    sl = {name: slice(a, b) for name, a, b in OBS_LAYOUT["cpg"]}
+    start_y = env.world.start_wp.numpy()[0, 1]
+    np.testing.assert_allclose(obs[sl["target"]][:2].numpy(), [start_y - q[0, 1].item(), -3.5], atol=1e-4)
+    np.testing.assert_allclose(obs[sl["amplitudes"]].numpy(), HexConfig().cpg.fixed_params()[1:], rtol=1e-6)
+
+
+# ------------------------------------------------------------------ train.py -> play.py
+
+
+@pytest.fixture(scope="module")
+def trained(tmp_path_factory):
+    logs = tmp_path_factory.mktemp("logs")
+    proc = subprocess.run(
+        [sys.executable, "train.py", "--num_envs", "16", "--max_iterations", "2", "--device", "cpu", "--log_dir",
+         str(logs), "--terrain", "flat"],
+        capture_output=True, text=True, timeout=900,
+    )  # fmt: skip
+    assert proc.returncode == 0, proc.stdout[-2000:] + proc.stderr[-3000:]
+    return logs, proc.stdout
+
+
+def test_training_writes_checkpoint_onnx_and_tensorboard(trained):
+    logs, out = trained
+    run_dir = glob.glob(str(logs / "hexnewton_cpg_flat" / "*"))[0]
+    files = {p.rsplit("/", 1)[1] for p in glob.glob(run_dir + "/*")}
+    assert {"model_0.pt", "model_1.pt", "policy.onnx", "config.json"} <= files
+    assert any(f.startswith("events.out.tfevents") for f in files)
+    assert "onnxruntime vs torch" in out
+    import onnx
+
+    model = onnx.load(run_dir + "/policy.onnx")  # one self-contained file, dynamic batch
+    assert not glob.glob(run_dir + "/*.onnx.data")
+    assert model.graph.input[0].type.tensor_type.shape.dim[0].dim_param
+    assert model.graph.input[0].type.tensor_type.shape.dim[1].dim_value == 59
+
+
+def test_play_loads_the_trained_checkpoint(trained):
+    logs, _ = trained
+    proc = subprocess.run([sys.executable, "play.py", "--controller", "cpg_rl", "--log_dir", str(logs), "--num_envs",
+                           "2", "--steps", "10", "--device", "cpu"], capture_output=True, text=True, timeout=600)  # fmt: skip
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    assert "[cpg_rl (" in proc.stdout and "model_1.pt" in proc.stdout
+
+
+def test_bad_checkpoints_are_one_line_errors(trained, tmp_path):
+    logs, _ = trained
+    good = sorted(glob.glob(str(logs / "hexnewton_cpg_flat" / "*" / "model_1.pt")))[0]
+    corrupt = tmp_path / "corrupt.pt"
+    corrupt.write_bytes(b"not a checkpoint")
+    ckpt = torch.load(good, weights_only=False)
+    ckpt["actor_state_dict"]["mlp.0.weight"] = torch.zeros(256, 44)
+    ckpt["infos"] = None
+    mismatched = tmp_path / "mismatched.pt"
+    torch.save(ckpt, mismatched)
+    cases = [
+        (["play.py", "--controller", "cpg_rl", "--checkpoint", str(tmp_path / "missing.pt")], "checkpoint not found"),
+        (["play.py", "--controller", "cpg_rl", "--checkpoint", str(corrupt)], "cannot read checkpoint"),
+        (["play.py", "--controller", "cpg_rl", "--checkpoint", str(mismatched), "--num_envs", "1", "--steps", "1"],
+         "expects 44 observations"),
+        (["play.py", "--controller", "joint", "--checkpoint", good, "--num_envs", "1", "--steps", "1"],
+         "action mode 'cpg'"),
+        (["train.py", "--preset", "fancy"], "unknown preset 'fancy'"),
+        (["train.py", "--resume", str(corrupt)], "cannot read checkpoint"),
+    ]
+    before = sorted(glob.glob(str(logs / "**"), recursive=True))
+    for args, message in cases:
+        proc = subprocess.run([sys.executable, *args, "--device", "cpu"], capture_output=True, text=True, timeout=600)
+        err = [line for line in proc.stderr.splitlines() if line.strip() and "Warp CUDA" not in line]
+        assert proc.returncode == 2 and len(err) == 1 and message in err[0], (args, proc.stderr[-2000:])
+    assert sorted(glob.glob(str(logs / "**"), recursive=True)) == before  # nothing written or overwritten
