@@ -10,6 +10,14 @@ import numpy as np
 import warp as wp
 
 
+@wp.func
+def action_to_range(a: float, lo: float, hi: float) -> float:
+    """lo + (clip(a, -1, 1) + 1) / 2 * (hi - lo); a non-finite action maps to the middle of the range."""
+    if not wp.isfinite(a):
+        a = 0.0
+    return lo + 0.5 * (wp.clamp(a, -1.0, 1.0) + 1.0) * (hi - lo)
+
+
 @wp.kernel
 def scale_actions_kernel(
     actions: wp.array2d[wp.float32],
@@ -18,11 +26,7 @@ def scale_actions_kernel(
     params_target: wp.array2d[wp.float32],
 ):
     e, k = wp.tid()
-    a = actions[e, k]
-    if not wp.isfinite(a):
-        a = 0.0
-    a = wp.clamp(a, -1.0, 1.0)
-    params_target[e, k] = lower[k] + 0.5 * (a + 1.0) * (upper[k] - lower[k])
+    params_target[e, k] = action_to_range(actions[e, k], lower[k], upper[k])
 
 
 def scale_actions_reference(actions, lower, upper):
@@ -49,12 +53,8 @@ def joint_actions_kernel(
 ):
     """The pure-DRL action mode: 18 actions in [-1, 1] map straight onto each joint's limit range."""
     e, j = wp.tid()
-    a = actions[e, j]
-    if not wp.isfinite(a):
-        a = 0.0
-    a = wp.clamp(a, -1.0, 1.0)
     k = j % 3
-    targets[e, target_offset + j] = lower[k] + 0.5 * (a + 1.0) * (upper[k] - lower[k])
+    targets[e, target_offset + j] = action_to_range(actions[e, j], lower[k], upper[k])
 
 
 def joint_actions_reference(actions, lower, upper):
