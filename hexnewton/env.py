@@ -130,10 +130,6 @@ class HexapodEnv(VecEnv):
         self._ring_t = wp.to_torch(self._ring)
         self._steps_t = wp.to_torch(self.episode_steps)
 
-        self._stream = None
-        if dev.startswith("cuda"):
-            self._stream = wp.stream_from_torch(torch.cuda.current_stream(torch.device(dev)))
-
         self._reset(None)
         self._observe()
         wp.synchronize_device(dev)
@@ -154,12 +150,11 @@ class HexapodEnv(VecEnv):
         return TensorDict({"policy": self._obs_t}, batch_size=[self.num_envs], device=self._obs_t.device)
 
     def step(self, actions: torch.Tensor) -> tuple[TensorDict, torch.Tensor, torch.Tensor, dict]:
+        # torch writes the actions on its (legacy default) stream; Warp's own streams are blocking streams, so
+        # the graph below starts after that copy and torch's later reads wait for the graph. (Wrapping torch's
+        # stream with wp.stream_from_torch failed on an H100 with "Warp error: unknown stream".)
         self._actions_t.copy_(actions)
-        if self._stream is not None:
-            with wp.ScopedStream(self._stream, sync_enter=False, sync_exit=False):
-                self._launch()
-        else:
-            self._launch()
+        self._launch()
         self.common_step_counter += 1
         if self.common_step_counter % 250 == 0:  # one host read every 250 steps: contact overflow never silent
             self.world.check_contacts()
@@ -177,14 +172,13 @@ class HexapodEnv(VecEnv):
 
     def _capture(self) -> None:
         # warm up once outside the capture (compiles kernels, allocates solver scratch), then record on Warp's
-        # own stream (CUDA graphs cannot be captured on torch's legacy default stream)
+        # own stream of the device (CUDA graphs cannot be captured on torch's legacy default stream)
         snapshot = [wp.clone(a) for a in self._state_arrays()]
         self._control_step()
         for dst, src in zip(self._state_arrays(), snapshot):
             wp.copy(dst, src)
         wp.synchronize_device(self.device)
-        stream = wp.get_stream(self.device) if self.device.startswith("cuda") else None
-        with wp.ScopedDevice(self.device), wp.ScopedCapture(stream=stream) as cap:
+        with wp.ScopedDevice(self.device), wp.ScopedCapture() as cap:  # as World._capture (proven on the H100)
             self._control_step()
         self.graph = cap.graph
 
