@@ -265,3 +265,16 @@ def test_bad_checkpoints_are_one_line_errors(trained, tmp_path):
         err = [line for line in proc.stderr.splitlines() if line.strip() and "Warp CUDA" not in line]
         assert proc.returncode == 2 and len(err) == 1 and message in err[0], (args, proc.stderr[-2000:])
     assert sorted(glob.glob(str(logs / "**"), recursive=True)) == before  # nothing written or overwritten
+
+
+def test_learning_curves_from_a_run(trained, tmp_path):
+    logs, _ = trained
+    run_dir = glob.glob(str(logs / "hexnewton_cpg_flat" / "*"))[0]
+    out = tmp_path / "curve.png"
+    proc = subprocess.run([sys.executable, "-m", "hexnewton.curves", run_dir, "--out", str(out)], capture_output=True,
+                          text=True, timeout=300)  # fmt: skip
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    assert out.stat().st_size > 5000 and "Train/mean_reward" in (tmp_path / "curve.csv").read_text()
+    bad = subprocess.run([sys.executable, "-m", "hexnewton.curves", str(tmp_path / "nope")], capture_output=True,
+                         text=True, timeout=300)  # fmt: skip
+    assert bad.returncode == 2 and "not a run directory" in bad.stderr
