@@ -274,7 +274,7 @@ def test_learning_curves_from_a_run(trained, tmp_path):
     proc = subprocess.run([sys.executable, "-m", "hexnewton.curves", run_dir, "--out", str(out)], capture_output=True,
                           text=True, timeout=300)  # fmt: skip
     assert proc.returncode == 0, proc.stderr[-2000:]
-    assert out.stat().st_size > 5000 and "Train/mean_reward" in (tmp_path / "curve.csv").read_text()
+    assert out.stat().st_size > 5000 and "Episode/success_rate" in (tmp_path / "curve.csv").read_text()
     bad = subprocess.run([sys.executable, "-m", "hexnewton.curves", str(tmp_path / "nope")], capture_output=True,
                          text=True, timeout=300)  # fmt: skip
     assert bad.returncode == 2 and "not a run directory" in bad.stderr
