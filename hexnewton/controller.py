@@ -23,7 +23,7 @@ from .config import CPGConfig, RobotConfig
 from .kernels.actions import scale_actions_kernel
 from .kernels.cpg import hopf_cpg_kernel
 from .kernels.mapping import mapping_kernel
-from .robot import BASE_Q
+from .robot import BASE_Q, leg_bounds
 
 
 def initial_cpg_state(cfg: CPGConfig) -> tuple[float, float, float, float]:
@@ -78,9 +78,8 @@ class CPGController:
         self.dy = wp.zeros((n, 2), dtype=wp.float32, device=dev)
         self._actions = wp.zeros((n, self.num_params), dtype=wp.float32, device=dev)
         self._mask = wp.zeros(n, dtype=wp.bool, device=dev)
-        self.stand = wp.vec3(*robot.stand_pose)
-        self.joint_lower = wp.vec3(robot.hip_limit[0], robot.knee_limit[0], robot.ankle_limit[0])
-        self.joint_upper = wp.vec3(robot.hip_limit[1], robot.knee_limit[1], robot.ankle_limit[1])
+        lower, upper = leg_bounds(robot)
+        self.stand, self.joint_lower, self.joint_upper = wp.vec3(*robot.stand_pose), wp.vec3(*lower), wp.vec3(*upper)
 
     # ------------------------------------------------------------------ high-level inputs
     def set_actions(self, actions) -> None:

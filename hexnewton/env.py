@@ -116,9 +116,6 @@ class HexapodEnv(VecEnv):
         self.last_cpg_state, self.last_params = z(n, 4), z(n, 15)
         self._cursor = z(1, dtype=wp.int32)
         self._ring = wp.full((RING, 7), float("nan"), dtype=wp.float32, device=dev)
-        rc = cfg.robot
-        self._lower = wp.vec3(rc.hip_limit[0], rc.knee_limit[0], rc.ankle_limit[0])
-        self._upper = wp.vec3(rc.hip_limit[1], rc.knee_limit[1], rc.ankle_limit[1])
 
         # torch views (zero-copy)
         self._obs_t = wp.to_torch(self.obs)
@@ -198,7 +195,7 @@ class HexapodEnv(VecEnv):
                       outputs=[self.controller.params_target], device=dev)  # fmt: skip
         else:
             wp.launch(joint_actions_kernel, dim=(n, self.num_actions),
-                      inputs=[self.actions, self._lower, self._upper, BASE_Q], outputs=[w.joint_target_wp],
+                      inputs=[self.actions, w.joint_lower, w.joint_upper, BASE_Q], outputs=[w.joint_target_wp],
                       device=dev)  # fmt: skip
         for _ in range(self.decimation):
             w.simulate_frame()

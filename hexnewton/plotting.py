@@ -9,6 +9,7 @@ import warp as wp
 
 from .config import LEG_NAMES, HexConfig
 from .controller import initial_cpg_state
+from .robot import leg_bounds
 from .kernels.cpg import hopf_cpg_kernel
 from .kernels.mapping import mapping_kernel
 
@@ -25,8 +26,8 @@ def gait_trajectory(cfg: HexConfig, cycles: float = 2.0, device: str = "cpu"):
     dy = wp.zeros((1, 2), dtype=wp.float32, device=device)
     targets = wp.zeros((1, 18), dtype=wp.float32, device=device)
     stand = wp.vec3(*r.stand_pose)
-    lo = wp.vec3(r.hip_limit[0], r.knee_limit[0], r.ankle_limit[0])
-    hi = wp.vec3(r.hip_limit[1], r.knee_limit[1], r.ankle_limit[1])
+    lower, upper = leg_bounds(r)
+    lo, hi = wp.vec3(*lower), wp.vec3(*upper)
     steps = int(round(cycles * 2 * math.pi / c.fixed_omega / dt))
     ts, ss, qs = [], [], []
     for k in range(steps):

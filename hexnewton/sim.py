@@ -30,7 +30,7 @@ import newton
 from newton.solvers import SolverMuJoCo
 
 from .config import HexConfig, SimConfig
-from .robot import BASE_Q, BASE_QD, NUM_JOINTS, build_hexapod, stand_height
+from .robot import BASE_Q, BASE_QD, NUM_JOINTS, build_hexapod, leg_bounds, stand_height
 from .kernels.resets import advance_counter_kernel, reset_envs_kernel
 from .terrain import Terrain, height_field_from_grid, make_terrain, max_terrain_height_np
 
@@ -227,10 +227,10 @@ class World:
         self._reset_mask = wp.zeros(n, dtype=wp.bool, device=self.device)
         self._reset_counter = wp.zeros(1, dtype=wp.int32, device=self.device)
         self._prev_x_scratch = wp.zeros(n, dtype=wp.float32, device=self.device)
-        rc = cfg.robot
-        self._stand = wp.vec3(*rc.stand_pose)
-        self._joint_lower = wp.vec3(rc.hip_limit[0], rc.knee_limit[0], rc.ankle_limit[0])
-        self._joint_upper = wp.vec3(rc.hip_limit[1], rc.knee_limit[1], rc.ankle_limit[1])
+        # one leg's standing pose and (hip, knee, ankle) limits, as kernels take them
+        lower, upper = leg_bounds(cfg.robot)
+        self.stand_pose, self.joint_lower, self.joint_upper = (wp.vec3(*cfg.robot.stand_pose), wp.vec3(*lower),
+                                                               wp.vec3(*upper))  # fmt: skip
         self._bad = wp.zeros(n, dtype=wp.bool, device=self.device)
         self.nonfinite_resets = 0
 
@@ -358,7 +358,7 @@ class World:
         wp.launch(
             reset_envs_kernel,
             dim=self.num_envs,
-            inputs=[m, self.spawn_xy_wp, self.spawn_z_wp, self._stand, self._joint_lower, self._joint_upper,
+            inputs=[m, self.spawn_xy_wp, self.spawn_z_wp, self.stand_pose, self.joint_lower, self.joint_upper,
                     float(lateral), float(yaw), float(joint_noise), int(seed), self._reset_counter],  # fmt: skip
             outputs=[self.joint_q_wp, self.joint_qd_wp, self.joint_target_wp, self.start_wp,
                      prev_x if prev_x is not None else self._prev_x_scratch],  # fmt: skip

@@ -87,6 +87,12 @@ def joint_limits(cfg: RobotConfig) -> list[tuple[float, float]]:
     return [cfg.hip_limit, cfg.knee_limit, cfg.ankle_limit] * 6
 
 
+def leg_bounds(cfg: RobotConfig) -> tuple[tuple[float, float, float], tuple[float, float, float]]:
+    """(lower, upper) limits of one leg's (hip, knee, ankle), the same on every leg."""
+    return (cfg.hip_limit[0], cfg.knee_limit[0], cfg.ankle_limit[0]), (cfg.hip_limit[1], cfg.knee_limit[1],
+                                                                         cfg.ankle_limit[1])
+
+
 def build_hexapod(cfg: RobotConfig | None = None, gap: float | None = None) -> newton.ModelBuilder:
     """Build one hexapod as a Newton ``ModelBuilder`` (free base + 18 revolute joints, one articulation).
 
