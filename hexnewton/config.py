@@ -233,6 +233,8 @@ class RewardConfig:
     w_height: float = 1.0  # ours
     w_direction: float = 1.0  # ours
     w_distance: float = 1.0  # ours
+    # Table 1's direction condition "θ > π/6": no direction penalty within this heading error [rad]
+    direction_deadband: float = math.pi / 6
     stability_penalty: float = 100.0  # Table 1: r_s = -100, weight 1
     forward_penalty: float = 0.3  # Table 1: r_f = -0.3, weight 1
     goal_bonus: float = 100.0  # ours: see kernels/rewards.py

@@ -34,7 +34,7 @@ import sys
 import numpy as np
 
 from .cli import ArgumentParser, positive_int, run, terrain_name
-from .config import HexConfig, SimConfig, TaskConfig, TerrainConfig
+from .config import HexConfig, RewardConfig, SimConfig, TaskConfig, TerrainConfig
 
 PRESETS = ("default", "paper")
 
@@ -141,6 +141,8 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--num_steps_per_env", type=positive_int, default=24)
     p.add_argument("--save_interval", type=positive_int, default=50)
     p.add_argument("--goal_distance", type=float, default=TaskConfig.goal_distance)
+    p.add_argument("--direction_deadband", type=float, default=RewardConfig.direction_deadband,
+                   help="heading error [rad] below which the direction term is 0 (Table 1: pi/6)")
     args = p.parse_args(argv)
     if args.preset not in PRESETS:
         raise ValueError(f"unknown preset '{args.preset}': choose one of {', '.join(PRESETS)}")
@@ -159,6 +161,7 @@ def main(argv: list[str] | None = None) -> int:
         sim=dataclasses.replace(SimConfig(), num_envs=args.num_envs, device=device),
         terrain=TerrainConfig(name=args.terrain, seed=args.terrain_seed),
         task=dataclasses.replace(TaskConfig(), seed=args.seed, goal_distance=args.goal_distance),
+        reward=dataclasses.replace(RewardConfig(), direction_deadband=args.direction_deadband),
     )
     env = make_env(cfg, args.action_mode)
     if ckpt is not None:

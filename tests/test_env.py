@@ -90,7 +90,7 @@ def test_joint_actions_kernel_matches_reference():
 
 def _reward_args(q, rpy, status, start, prev_x, dt=TASK.control_dt):
     return (TASK.goal_distance, TASK.goal_radius, REW.w_height, REW.w_direction, REW.w_distance,
-            REW.stability_penalty, REW.forward_penalty, REW.goal_bonus, dt)  # fmt: skip
+            REW.direction_deadband, REW.stability_penalty, REW.forward_penalty, REW.goal_bonus, dt)  # fmt: skip
 
 
 def _run_rewards(grid, q, rpy, status, start, prev_x, dt=TASK.control_dt):
@@ -101,7 +101,7 @@ def _run_rewards(grid, q, rpy, status, start, prev_x, dt=TASK.control_dt):
     wp.launch(rewards_kernel, dim=n,
               inputs=[f(q), f(rpy), wp.array(np.asarray(status, np.int32), device=DEV), hf, f(start, dtype=wp.vec2),
                       TASK.goal_distance, TASK.goal_radius, REW.w_height, REW.w_direction, REW.w_distance,
-                      REW.stability_penalty, REW.forward_penalty, REW.goal_bonus, dt],
+                      REW.direction_deadband, REW.stability_penalty, REW.forward_penalty, REW.goal_bonus, dt],
               outputs=[px, rew, terms], device=DEV)  # fmt: skip
     return rew.numpy(), terms.numpy(), px.numpy()
 

@@ -12,8 +12,8 @@ not scaled.
 - r_h (height), "(z_r - 0.11), condition z_r > 0.12": exactly that, and 0 otherwise.
 - r_theta (direction), "(cos θ, sin θ) · D / ||D||, condition θ > π/6". Taken literally, a term paid only
   outside the ±30° cone would be largest just outside it. We therefore read the condition as "heading error
-  beyond π/6" and pay min(0, (cos θ, sin θ) · D̂ - cos(π/6)). That is 0 inside the cone and falls
-  continuously to -1.87 when walking backward. D is the start-to-goal vector.
+  beyond π/6" and pay min(0, (cos θ, sin θ) · D̂ - cos(π/6)) (π/6 is ``RewardConfig.direction_deadband``).
+  That is 0 inside the cone and falls continuously to -1.87 when walking backward. D is the start-to-goal vector.
 - r_d (distance), "exp(-(d_n - d_t))": d_n is the distance to the goal and d_t the goal radius, so
   r_d = 1 on reaching the goal.
 - r_s (stability), "-100 if z_r < 0.05 or |θ_y| > π/6 or |θ_x| > π/6", weight 1. Paid per (20 ms) step while
@@ -50,6 +50,7 @@ def rewards_kernel(
     w_height: float,
     w_direction: float,
     w_distance: float,
+    direction_deadband: float,
     stability_penalty: float,
     forward_penalty: float,
     goal_bonus: float,
@@ -75,7 +76,7 @@ def rewards_kernel(
     if z > 0.12:
         r_h = z - 0.11
     # start-to-goal direction D is +x, so (cos θ, sin θ) . D / |D| = cos(yaw)
-    r_dir = wp.min(0.0, wp.cos(rpy[e, 2]) - wp.cos(wp.pi / 6.0))
+    r_dir = wp.min(0.0, wp.cos(rpy[e, 2]) - wp.cos(direction_deadband))
     d_n = wp.length(wp.vec2(px, py) - start[e] - wp.vec2(goal_distance, 0.0))
     r_d = wp.exp(-(d_n - goal_radius))
     tilted = wp.abs(rpy[e, 0]) > wp.pi / 6.0 or wp.abs(rpy[e, 1]) > wp.pi / 6.0
@@ -104,7 +105,8 @@ def rewards_kernel(
 
 
 def rewards_reference(joint_q, rpy, status, ground, start, prev_x, goal_distance, goal_radius, w_height, w_direction,
-                      w_distance, stability_penalty, forward_penalty, goal_bonus, control_dt):  # fmt: skip
+                      w_distance, direction_deadband, stability_penalty, forward_penalty, goal_bonus,
+                      control_dt):  # fmt: skip
     """Float64 reference of :func:`rewards_kernel` (finite states); ``ground`` (N,) is the terrain under the base.
 
     Returns (reward (N,), terms (N, 6))."""
@@ -113,7 +115,7 @@ def rewards_reference(joint_q, rpy, status, ground, start, prev_x, goal_distance
     scale = control_dt / REF_DT
     z = jq[:, 2] - ground
     r_h = np.where(z > 0.12, z - 0.11, 0.0)
-    r_dir = np.minimum(0.0, np.cos(rpy[:, 2]) - np.cos(np.pi / 6))
+    r_dir = np.minimum(0.0, np.cos(rpy[:, 2]) - np.cos(direction_deadband))
     d_n = np.hypot(jq[:, 0] - start[:, 0] - goal_distance, jq[:, 1] - start[:, 1])
     r_d = np.exp(-(d_n - goal_radius))
     tilted = (np.abs(rpy[:, 0]) > np.pi / 6) | (np.abs(rpy[:, 1]) > np.pi / 6)
