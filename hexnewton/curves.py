@@ -32,16 +32,21 @@ def main(argv: list[str] | None = None) -> int:
     p = ArgumentParser(prog="python -m hexnewton.curves", description=__doc__.split("\n")[0])
     p.add_argument("runs", nargs="+")
     p.add_argument("--out", default="curve.png")
+    p.add_argument("--labels", nargs="+", help="one legend label per run (default: experiment/run)")
     args = p.parse_args(argv)
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
+    if args.labels and len(args.labels) != len(args.runs):
+        raise ValueError(f"--labels needs one label per run ({len(args.runs)}), got {len(args.labels)}")
     data = {r: read_scalars(r) for r in args.runs}
+    default = ["/".join(os.path.normpath(r).split(os.sep)[-2:]) for r in args.runs]
+    labels = dict(zip(args.runs, args.labels or default))
     fig, axes = plt.subplots(1, 3, figsize=(14, 4))
     for r, scalars in data.items():
-        label = os.path.basename(os.path.dirname(os.path.normpath(r))) or r
+        label = labels[r]
         for ax, tag in zip(axes, TAGS[:3]):
             if tag in scalars:
                 it, v = zip(*scalars[tag])
