@@ -24,6 +24,7 @@ from .kernels.actions import scale_actions_kernel
 from .kernels.cpg import hopf_cpg_kernel
 from .kernels.mapping import mapping_kernel
 from .robot import BASE_Q, leg_bounds
+from .sim import as_mask
 
 
 def initial_cpg_state(cfg: CPGConfig) -> tuple[float, float, float, float]:
@@ -121,14 +122,7 @@ class CPGController:
 
     def reset(self, mask=None) -> None:
         """Selected envs (all if None): oscillators back to the locked start, parameters at their targets."""
-        if mask is None:
-            self._mask.fill_(True)
-            m = self._mask
-        elif isinstance(mask, wp.array):
-            m = mask
-        else:
-            self._mask.assign(np.asarray(mask, dtype=bool))
-            m = self._mask
+        m = as_mask(mask, self._mask)
         wp.launch(_reset_cpg, dim=self.num_envs,
                   inputs=[m, wp.vec4(*initial_cpg_state(self.cfg)), self.params_target],
                   outputs=[self.params, self.state, self.dy], device=self.device)  # fmt: skip

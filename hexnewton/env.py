@@ -35,7 +35,7 @@ from .kernels.observations import OBS_DIM, observations_kernel
 from .kernels.rewards import TERMS, rewards_kernel
 from .kernels.terminations import STATUS_NAMES, TIMEOUT, episode_status_kernel
 from .robot import BASE_Q
-from .sim import HexnewtonError, World
+from .sim import HexnewtonError, World, capture_graph
 
 ACTION_MODES = {"cpg": 15, "joint": 18}
 RING = 1024  # finished episodes the logged rates average over
@@ -168,16 +168,9 @@ class HexapodEnv(VecEnv):
         wp.capture_launch(self.graph)
 
     def _capture(self) -> None:
-        # warm up once outside the capture (compiles kernels, allocates solver scratch), then record on Warp's
-        # own stream of the device (CUDA graphs cannot be captured on torch's legacy default stream)
-        snapshot = [wp.clone(a) for a in self._state_arrays()]
-        self._control_step()
-        for dst, src in zip(self._state_arrays(), snapshot):
-            wp.copy(dst, src)
-        wp.synchronize_device(self.device)
-        with wp.ScopedDevice(self.device), wp.ScopedCapture() as cap:  # as World._capture (proven on the H100)
-            self._control_step()
-        self.graph = cap.graph
+        # the same capture as World's (proven on the H100), on Warp's own stream of the device: CUDA graphs
+        # cannot be captured on torch's legacy default stream
+        self.graph = capture_graph(self.device, self._control_step, self._state_arrays())
 
     def _state_arrays(self) -> list[wp.array]:
         s = self.world.state_0

@@ -32,7 +32,7 @@ from newton.solvers import SolverMuJoCo
 from .config import HexConfig, SimConfig
 from .robot import BASE_Q, BASE_QD, NUM_JOINTS, build_hexapod, leg_bounds, stand_height
 from .kernels.resets import advance_counter_kernel, reset_envs_kernel
-from .terrain import Terrain, height_field_from_grid, make_terrain, max_terrain_height_np
+from .terrain import Terrain, make_terrain, max_terrain_height_np
 
 log = logging.getLogger("hexnewton")
 
@@ -121,6 +121,31 @@ def _nonfinite_envs(
     out[e] = bad != 0
 
 
+def as_mask(mask: np.ndarray | wp.array | None, buffer: wp.array) -> wp.array:
+    """A per-env bool mask as a Warp array: ``None`` selects all (filled into ``buffer``), a Warp array is used as
+    is (capturable), anything else is copied into ``buffer``."""
+    if mask is None:
+        buffer.fill_(True)
+        return buffer
+    if isinstance(mask, wp.array):
+        return mask
+    buffer.assign(np.asarray(mask, dtype=bool))
+    return buffer
+
+
+def capture_graph(device: str, step: Callable[[], None], restore: list[wp.array]) -> wp.Graph:
+    """Run ``step`` once uncaptured (kernel compilation, lazy solver allocations), put the ``restore`` arrays
+    back as they were, then record ``step`` into a graph (a CUDA graph on GPU, Warp's capture on CPU)."""
+    saved = [wp.clone(a) for a in restore]
+    step()
+    for dst, src in zip(restore, saved):
+        wp.copy(dst, src)
+    wp.synchronize_device(device)
+    with wp.ScopedDevice(device), wp.ScopedCapture() as cap:
+        step()
+    return cap.graph
+
+
 @dataclass
 class OverflowReport:
     worlds: int  # worlds whose solver reported a capacity-overflow bit
@@ -188,7 +213,7 @@ class World:
         with wp.ScopedDevice(self.device):
             self.model = scene.finalize(device=self.device)
         self.model.rigid_gap = sim.rigid_gap
-        self.height_field = height_field_from_grid(self.terrain.grid, self.device)
+        self.height_field = self.terrain.height_field(self.device)
         # lanes (fixed) and each episode's actual start (written by every reset)
         self.spawn_xy_wp = wp.array(self.spawn_xy.astype(np.float32), dtype=wp.vec2, device=self.device)
         self.start_wp = wp.clone(self.spawn_xy_wp)
@@ -306,19 +331,9 @@ class World:
         return c
 
     def _capture(self) -> None:
-        # run once uncaptured (kernel compilation, lazy allocations), then restore and record
-        saved = [wp.clone(a) for a in (self.state_0.joint_q, self.state_0.joint_qd, self.state_0.body_q,
-                                       self.state_0.body_qd)]  # fmt: skip
-        self.simulate_frame()
-        for dst, src in zip(
-            (self.state_0.joint_q, self.state_0.joint_qd, self.state_0.body_q, self.state_0.body_qd), saved
-        ):
-            wp.copy(dst, src)
-        self._overflow_world.zero_()
-        self._overflow_global.zero_()
-        with wp.ScopedDevice(self.device), wp.ScopedCapture() as cap:
-            self.simulate_frame()
-        self.graph = cap.graph
+        s = self.state_0
+        restore = [s.joint_q, s.joint_qd, s.body_q, s.body_qd, self._overflow_world, self._overflow_global]
+        self.graph = capture_graph(self.device, self.simulate_frame, restore)
 
     def step(self, frames: int = 1) -> None:
         """Advance ``frames`` physics frames of ``frame_dt`` each."""
@@ -347,14 +362,7 @@ class World:
         With ``lateral``/``yaw``/``joint_noise`` > 0 the start is randomised (``kernels.resets``); the new
         start lands in ``start_wp`` (and ``prev_x`` if given). Capturable when ``mask`` is a Warp array.
         """
-        if mask is None:
-            self._reset_mask.fill_(True)
-            m = self._reset_mask
-        elif isinstance(mask, wp.array):
-            m = mask
-        else:
-            self._reset_mask.assign(np.asarray(mask, dtype=bool))
-            m = self._reset_mask
+        m = as_mask(mask, self._reset_mask)
         wp.launch(
             reset_envs_kernel,
             dim=self.num_envs,
@@ -403,8 +411,3 @@ class World:
     def base_pos(self) -> np.ndarray:
         return self.numpy_q()[:, 0:3]
 
-    def base_quat(self) -> np.ndarray:
-        return self.numpy_q()[:, 3:7]
-
-    def terrain_height_at(self, xy: np.ndarray) -> np.ndarray:
-        return self.terrain.height_at(xy[:, 0], xy[:, 1])

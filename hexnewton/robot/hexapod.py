@@ -20,7 +20,7 @@ import warp as wp
 
 import newton
 
-from ..config import JOINT_NAMES, LEG_NAMES, RobotConfig
+from ..config import LEG_NAMES, RobotConfig
 
 #: Free-joint coordinates per robot (position xyz + quaternion xyzw) and velocities (linear + angular).
 BASE_Q = 7
@@ -213,7 +213,3 @@ def build_hexapod(cfg: RobotConfig | None = None, gap: float | None = None) -> n
     q[BASE_Q:] = np.tile(cfg.stand_pose, 6)
     b.joint_q[:] = q.tolist()
     return b
-
-
-def joint_names() -> tuple[str, ...]:
-    return JOINT_NAMES
