@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import logging
 import math
+import os
 import warnings
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -146,6 +147,30 @@ def capture_graph(device: str, step: Callable[[], None], restore: list[wp.array]
     return cap.graph
 
 
+# Warp modules (defined at import time) that a World's step launches, as listed by a CPU run. On CUDA they
+# are compiled in parallel before the first step (``precompile``): a cold start of ~2-5 min of serial
+# NVRTC compilation drops to the slowest module. Kernels that mujoco_warp builds on the fly still compile
+# lazily; a module missing from this list only costs time, never correctness.
+STEP_MODULES = (
+    "newton._src.geometry.broad_phase_nxn", "newton._src.geometry.bvh", "newton._src.geometry.narrow_phase",
+    "newton._src.sim.articulation", "newton._src.sim.collide", "newton._src.solvers.mujoco.kernels",
+    "mujoco_warp._src.constraint", "mujoco_warp._src.derivative", "mujoco_warp._src.forward",
+    "mujoco_warp._src.passive", "mujoco_warp._src.set_const", "mujoco_warp._src.smooth",
+    "mujoco_warp._src.solver", "mujoco_warp._src.support",
+)  # fmt: skip
+
+
+def precompile(device: str, max_workers: int | None = None) -> list[str]:
+    """Compile ``STEP_MODULES`` and every ``hexnewton`` Warp module for ``device`` on parallel threads
+    (default: one per CPU core); returns the module names loaded."""
+    from warp._src.context import user_modules
+
+    modules = [m for m in list(user_modules.values())
+               if m.kernels and (m.name in STEP_MODULES or m.name.startswith("hexnewton."))]  # fmt: skip
+    wp.force_load(device=device, modules=modules, max_workers=max_workers or os.cpu_count() or 1)
+    return [m.name for m in modules]
+
+
 @dataclass
 class OverflowReport:
     worlds: int  # worlds whose solver reported a capacity-overflow bit
@@ -243,6 +268,8 @@ class World:
             max_triangle_pairs=max(1_000_000, sim.triangle_pairs_per_env * n),
         )
         self.contacts = self.pipeline.contacts()
+        if wp.get_device(self.device).is_cuda:
+            precompile(self.device)
         self.observables = self.solver.observables({SolverMuJoCo.ObservableKind.OVERFLOW})
         self._overflow_world = wp.zeros(n, dtype=wp.int32, device=self.device)
         self._overflow_global = wp.zeros(1, dtype=wp.int32, device=self.device)

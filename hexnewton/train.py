@@ -29,7 +29,9 @@ import datetime
 import json
 import os
 import random
+import signal
 import sys
+import time
 
 import numpy as np
 
@@ -65,6 +67,14 @@ def train_cfg(preset: str, num_envs: int, num_steps_per_env: int = 24) -> dict:
         "critic": dict(model),
         "algorithm": algorithm,
     }
+
+
+class TrainingStopped(Exception):
+    """Raised by the signal handler (Ctrl-C, SIGTERM, or the --max_minutes alarm) to end training cleanly."""
+
+
+def _stop(signum, frame):
+    raise TrainingStopped(signal.Signals(signum).name)
 
 
 def seed_everything(seed: int) -> None:
@@ -140,6 +150,8 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--experiment", default=None, help="default: hexnewton_<action_mode>_<terrain>")
     p.add_argument("--num_steps_per_env", type=positive_int, default=24)
     p.add_argument("--save_interval", type=positive_int, default=50)
+    p.add_argument("--max_minutes", type=float, default=None,
+                   help="stop after this wall time (then save, export and evaluate as at the end)")
     p.add_argument("--goal_distance", type=float, default=TaskConfig.goal_distance)
     p.add_argument("--direction_deadband", type=float, default=RewardConfig.direction_deadband,
                    help="heading error [rad] below which the direction term is 0 (Table 1: pi/6)")
@@ -178,12 +190,38 @@ def main(argv: list[str] | None = None) -> int:
 
     runner = OnPolicyRunner(env, copy.deepcopy(tcfg), log_dir=run_dir, device=device)
     _save = runner.save
-    runner.save = lambda path, infos=None: _save(path, infos={"hexnewton": meta, **(infos or {})})  # metadata
+
+    def save(path: str, infos: dict | None = None) -> None:
+        """Checkpoint with hexnewton metadata, written to a temporary file and renamed (atomic)."""
+        _save(path + ".tmp", infos={"hexnewton": meta, **(infos or {})})
+        os.replace(path + ".tmp", path)
+
+    runner.save = save
     if ckpt is not None:
         runner.load(args.resume, map_location=device)
         print(f"resumed from {args.resume} (iteration {runner.current_learning_iteration})")
     print(f"training {experiment}: {args.num_envs} envs on {device}, preset {args.preset}, logs in {run_dir}")
-    runner.learn(args.max_iterations, init_at_random_ep_len=True)
+    if args.max_minutes is not None and not args.max_minutes > 0:
+        raise ValueError("--max_minutes must be positive")
+    t0 = time.time()
+    handlers = {sig: signal.signal(sig, _stop) for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGALRM)}
+    if args.max_minutes:
+        signal.setitimer(signal.ITIMER_REAL, 60.0 * args.max_minutes)
+    try:
+        runner.learn(args.max_iterations, init_at_random_ep_len=True)
+    except TrainingStopped as stop:  # save what was learnt; rsl-rl only saves at intervals and at the end
+        signal.setitimer(signal.ITIMER_REAL, 0)
+        it = runner.current_learning_iteration
+        print(f"stopped by {stop} after iteration {it}: saving model_{it}.pt")
+        runner.save(os.path.join(run_dir, f"model_{it}.pt"))
+        runner.logger.stop_logging_writer()
+    finally:
+        signal.setitimer(signal.ITIMER_REAL, 0)
+        for sig, handler in handlers.items():
+            signal.signal(sig, handler)
+        if hasattr(runner.logger.writer, "flush"):
+            runner.logger.writer.flush()  # TensorBoard otherwise writes every 120 s
+    print(f"trained {runner.current_learning_iteration + 1} iterations in {time.time() - t0:.0f} s")
     stats = env.episode_stats()
     print("last episodes: " + ", ".join(f"{k} {v:.3f}" for k, v in stats.items()))
     onnx_path = os.path.join(run_dir, "policy.onnx")

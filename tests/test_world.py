@@ -147,3 +147,14 @@ def test_cli_bad_input_is_one_line(args, message):
     err = [line for line in proc.stderr.splitlines() if line.strip() and "Warp" not in line and not line.startswith(" ")]
     assert len(err) == 1 and message in err[0], proc.stderr
     assert "Traceback" not in proc.stderr
+
+
+def test_precompile_finds_every_step_module():
+    """The CUDA cold-start list names modules that exist once a World is built (guards against renames)."""
+    from hexnewton.sim import STEP_MODULES, precompile
+
+    world = _world("flat")
+    world.step(1)
+    names = precompile("cpu", max_workers=2)
+    assert set(STEP_MODULES) <= set(names)
+    assert any(n.startswith("hexnewton.") for n in names)

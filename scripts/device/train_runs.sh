@@ -1,0 +1,38 @@
+#!/bin/bash
+# Train several CPG_RL runs concurrently on one GPU until a wall-clock deadline, then pack each run
+# (TensorBoard events, config, last checkpoint, policy.onnx, train log) into $OUT/run_<name>.tgz.
+#
+#   DEADLINE_S=540 bash scripts/device/train_runs.sh "flat:--terrain flat" "rugged:--terrain rugged" ...
+#
+# Each argument is NAME:TRAIN_ARGS. The first run compiles every kernel alone (2 iterations) so that the
+# concurrent runs load them from Warp's cache. Used for RESULTS.md (issue 4) on the device tool's H100.
+set -u
+OUT=${OUT:-out}
+START=${START_S:-0}            # seconds already spent in this call before the script started
+DEADLINE=${DEADLINE_S:-540}    # end training this many seconds into the call
+mkdir -p "$OUT/logs"
+nvidia-smi --query-gpu=name,memory.total,driver_version --format=csv,noheader | tee "$OUT/gpu.txt"
+if [ "${SKIP_WARMUP:-0}" != 1 ]; then
+  t=$SECONDS
+  python train.py --num_envs 4096 --terrain rugged --max_iterations 2 --log_dir /tmp/warm --experiment warm \
+    > "$OUT/warmup.log" 2>&1 || { tail -40 "$OUT/warmup.log"; exit 1; }
+  echo "warm-up (compile + 2 iterations): $((SECONDS - t)) s"
+fi
+left=$((DEADLINE - START - SECONDS - 45))   # 45 s for saving, ONNX export and packing
+minutes=$(python -c "print(max(0.5, $left / 60))")
+echo "training ${#@} runs concurrently for $minutes min"
+for spec in "$@"; do
+  name=${spec%%:*}; args=${spec#*:}
+  python train.py $args --max_iterations 100000 --max_minutes "$minutes" --save_interval 100 \
+    --log_dir "$OUT/logs" --experiment "$name" > "$OUT/logs/$name.log" 2>&1 &
+done
+wait
+for spec in "$@"; do
+  name=${spec%%:*}; run=$(ls -d "$OUT/logs/$name"/*/ | tail -1)
+  last=$(ls -v "$run"/model_*.pt | tail -1)
+  echo "== $name: $(grep -E '^(trained|stopped|last episodes)' "$OUT/logs/$name.log" | tr '\n' ' ')"
+  tar czf "$OUT/run_$name.tgz" -C "$OUT/logs" "$name.log" -C "$OUT/logs/$name" \
+    "$(basename "$run")/config.json" "$(basename "$run")/policy.onnx" "$(basename "$run")/$(basename "$last")" \
+    $(cd "$OUT/logs/$name" && ls "$(basename "$run")"/events.*)
+done
+rm -rf "$OUT/logs"
