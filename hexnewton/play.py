@@ -175,7 +175,8 @@ def load_policy(env, path: str, action_mode: str):
     meta = (ckpt.get("infos") or {}).get("hexnewton", {})
     tcfg = train_cfg(meta.get("preset", "default"), env.num_envs)
     runner = OnPolicyRunner(env, copy.deepcopy(tcfg), log_dir=None, device=str(env._obs_t.device))
-    runner.load(path, map_location=str(env._obs_t.device))
+    # the actor alone: full training checkpoints and actor-only policy files (results/policies) both load
+    runner.load(path, load_cfg={"actor": True}, map_location=str(env._obs_t.device))
     return runner.get_inference_policy(device=str(env._obs_t.device))
 
 

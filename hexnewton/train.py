@@ -154,7 +154,7 @@ def main(argv: list[str] | None = None) -> int:
                    help="stop after this wall time (then save, export and evaluate as at the end)")
     p.add_argument("--goal_distance", type=float, default=TaskConfig.goal_distance)
     p.add_argument("--direction_deadband", type=float, default=RewardConfig.direction_deadband,
-                   help="heading error [rad] below which the direction term is 0 (Table 1: pi/6)")
+                   help="heading error [rad] below which the direction term is 0 (Table 1: pi/6; default 0)")
     args = p.parse_args(argv)
     if args.preset not in PRESETS:
         raise ValueError(f"unknown preset '{args.preset}': choose one of {', '.join(PRESETS)}")

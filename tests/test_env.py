@@ -278,3 +278,41 @@ def test_learning_curves_from_a_run(trained, tmp_path):
     bad = subprocess.run([sys.executable, "-m", "hexnewton.curves", str(tmp_path / "nope")], capture_output=True,
                          text=True, timeout=300)  # fmt: skip
     assert bad.returncode == 2 and "not a run directory" in bad.stderr
+
+
+def test_curve_axes_and_resumed_pieces(trained):
+    """env-steps come from config.json (iterations x envs x steps per env); a piece that repeats iterations
+    already plotted adds nothing; wall time starts at 0."""
+    from hexnewton.curves import read_curve, steps_per_iteration
+
+    logs, _ = trained
+    run_dir = glob.glob(str(logs / "hexnewton_cpg_flat" / "*"))[0]
+    per_it = steps_per_iteration(run_dir)
+    tag = next(iter(read_curve(run_dir)))
+    its = [x for x, _ in read_curve(run_dir, "iteration")[tag]]
+    steps = [x for x, _ in read_curve(run_dir, "env_steps")[tag]]
+    assert steps == [(i - its[0] + 1) * per_it for i in its]
+    joined = read_curve(f"{run_dir},{run_dir}", "env_steps")
+    assert {t: [x for x, _ in rows] for t, rows in joined.items()} == {t: [x for x, _ in rows] for t, rows in
+                                                                       read_curve(run_dir, "env_steps").items()}
+    wall = [x for x, _ in read_curve(run_dir, "wall_time")[tag]]
+    assert wall[0] >= 0.0 and wall == sorted(wall)
+
+
+@pytest.mark.parametrize("name", ["cpg_rl_flat", "cpg_rl_rugged"])
+def test_shipped_policies_fit_the_environment(name):
+    """results/policies holds the GPU-trained actors (RESULTS.md); they must keep matching the observation
+    layout and action count, in torch and in ONNX."""
+    import os
+
+    import onnxruntime as ort
+
+    from hexnewton.kernels.observations import OBS_DIM
+    from hexnewton.train import check_compatible, load_checkpoint
+
+    base = os.path.join(os.path.dirname(__file__), "..", "results", "policies", name)
+    ckpt = load_checkpoint(base + ".pt")
+    check_compatible(ckpt, base + ".pt", OBS_DIM["cpg"], 15, "cpg")
+    sess = ort.InferenceSession(base + ".onnx", providers=["CPUExecutionProvider"])
+    out = sess.run(None, {sess.get_inputs()[0].name: np.zeros((3, OBS_DIM["cpg"]), np.float32)})[0]
+    assert out.shape == (3, 15) and np.isfinite(out).all()

@@ -5,7 +5,10 @@
 #   DEADLINE_S=540 bash scripts/device/train_runs.sh "flat:--terrain flat" "rugged:--terrain rugged" ...
 #
 # Each argument is NAME:TRAIN_ARGS. The first run compiles every kernel alone (2 iterations) so that the
-# concurrent runs load them from Warp's cache. Used for RESULTS.md (issue 4) on the device tool's H100.
+# concurrent runs load them from Warp's cache (SKIP_WARMUP=1 when the cache is warm). With EVAL_STEPS set,
+# each run's last checkpoint is then evaluated deterministically by play.py on its training terrain
+# (EVAL_ENVS robots, start yaw noise 0.2 rad as in training, an unseen terrain/reset seed).
+# Used for RESULTS.md (issue 4) on the device tool's H100.
 set -u
 OUT=${OUT:-out}
 START=${START_S:-0}            # seconds already spent in this call before the script started
@@ -28,11 +31,17 @@ for spec in "$@"; do
 done
 wait
 for spec in "$@"; do
-  name=${spec%%:*}; run=$(ls -d "$OUT/logs/$name"/*/ | tail -1)
+  name=${spec%%:*}; args=${spec#*:}; run=$(ls -d "$OUT/logs/$name"/*/ | tail -1)
   last=$(ls -v "$run"/model_*.pt | tail -1)
   echo "== $name: $(grep -E '^(trained|stopped|last episodes)' "$OUT/logs/$name.log" | tr '\n' ' ')"
+  if [ -n "${EVAL_STEPS:-}" ]; then
+    terrain=$(echo "$args" | sed -n 's/.*--terrain \([a-z]*\).*/\1/p')
+    python play.py --controller cpg_rl --checkpoint "$last" --terrain "${terrain:-flat}" --num_envs "${EVAL_ENVS:-1024}" \
+      --steps "$EVAL_STEPS" --reset_yaw 0.2 --seed 11 --no-progress 2>&1 | grep -A1 '^\[' | tee "$run/eval.txt"
+  fi
   tar czf "$OUT/run_$name.tgz" -C "$OUT/logs" "$name.log" -C "$OUT/logs/$name" \
     "$(basename "$run")/config.json" "$(basename "$run")/policy.onnx" "$(basename "$run")/$(basename "$last")" \
+    $(cd "$OUT/logs/$name" && ls "$(basename "$run")"/eval.txt 2>/dev/null) \
     $(cd "$OUT/logs/$name" && ls "$(basename "$run")"/events.*)
 done
 rm -rf "$OUT/logs"
