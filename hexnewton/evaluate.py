@@ -1,0 +1,415 @@
+"""The paper's evaluation (§3.3-3.4): success at 0.5 / 1 / 2 / 3 m, stability, trajectories, and a report.
+
+    python -m hexnewton.evaluate --controllers cpg cpg_rl --checkpoint cpg_rl=results/policies/cpg_rl_rugged.pt \\
+        --terrains rugged stepped complex --rounds 25 --out eval/paper
+    python -m hexnewton.evaluate ... --checkpoint cpg_rl:rugged=A.pt cpg_rl:stepped=B.pt   # one policy per terrain
+    python -m hexnewton.evaluate ... --runs cpg_rl=logs/.../run joint=logs/.../run       # adds Fig. 5a
+
+Protocol. A round is one robot walking toward the target 3.5 m ahead, from its own start pose, until its
+first episode ends (goal, fall, off course) or the episode limit (``TaskConfig.max_episode_steps``,
+7000 steps = 140 s). R rounds run as R robots in parallel; a deterministic policy acts in every round.
+The robots use terrain seed ``EVAL_TERRAIN_SEED`` and reset seed ``EVAL_RESET_SEED``. Training uses
+``train.py --terrain_seed 0 --seed 1`` by default, so both the ground and the start poses (lane,
+±0.1 m, ±0.2 rad yaw, ±0.05 rad joints) are unseen.
+
+A round *reaches* d metres when the robot's x progress from its start is >= d at some control step before
+its episode ended by a fall, by leaving |y - y_start| <= 1.5 m, or by a non-finite state (§3.4, Table 3).
+The goal circle (0.5 m around x = 3.5 m) lies beyond x = 3 m, so success implies 3 m.
+
+Stability (§3.3, Figs. 6-8): roll and pitch in degrees over every control step of every round's episode,
+as a mean, a variance and a peak |angle|; the Y deviation as each round's largest |y - y_start|; the time to
+each distance. Outputs in ``--out``:
+- ``report.md`` (Table 3's shape, the paper's numbers beside ours, then stability);
+- ``results.json`` (every number);
+- ``fig_<terrain>.png`` (Figs. 6-8: pitch and roll over time for round 0, box plots over all rounds, XY
+  trajectories);
+- ``fig_params.png`` (Fig. 5b: CPG_RL's parameters against the fixed CPG's along round 0);
+- ``fig_learning.png`` (Fig. 5a: reward against env-steps and against wall time) with ``--runs``.
+"""
+
+from __future__ import annotations
+
+import datetime
+import json
+import math
+import os
+import sys
+import time
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from .cli import ArgumentParser, positive_int, run, terrain_name
+from .config import PARAM_NAMES, HexConfig, SimConfig, TaskConfig, TerrainConfig
+from .kernels.terminations import FELL, NONFINITE, OFF_COURSE, STATUS_NAMES
+
+DISTANCES = (0.5, 1.0, 2.0, 3.0)  # Table 3's columns [m]
+EVAL_TERRAIN_SEED = 1000
+EVAL_RESET_SEED = 2000
+CONTROLLERS = {"cpg": "cpg", "cpg_rl": "cpg", "joint": "joint"}  # controller -> env action mode
+LABELS = {"cpg": "CPG", "cpg_rl": "CPG_RL", "joint": "pure DRL"}
+# Table 3 of Huang et al. 2025 (25 rounds): success [%] at 0.5, 1, 2, 3 m
+PAPER_TABLE3 = {
+    "rugged": {"CPG": (96, 96, 88, 60), "TD3-CPG": (100, 100, 100, 70), "SAC-CPG": (100, 100, 100, 96),
+               "CPG_RL": (100, 100, 100, 100)},
+    "stepped": {"CPG": (60, 28, 0, 0), "TD3-CPG": (100, 84, 0, 0), "SAC-CPG": (96, 96, 96, 52),
+                "CPG_RL": (100, 100, 100, 100)},
+    "complex": {"CPG": (92, 56, 8, 0), "TD3-CPG": (100, 100, 12, 0), "SAC-CPG": (100, 80, 40, 4),
+                "CPG_RL": (100, 100, 100, 100)},
+}  # fmt: skip
+_BAD_END = (FELL, OFF_COURSE, NONFINITE)
+
+
+# ----------------------------------------------------------------------------------------------------
+# metrics (host, float64)
+# ----------------------------------------------------------------------------------------------------
+
+
+def round_metrics(pos: np.ndarray, rpy: np.ndarray, done: np.ndarray, status: np.ndarray, dt: float,
+                  distances: tuple[float, ...] = DISTANCES) -> dict:  # fmt: skip
+    """Per-round metrics of each env's first episode.
+
+    ``pos`` (T, N, 2+) x, y relative to the round's start; ``rpy`` (T, N, 3) [rad]; ``done`` (T, N) the
+    episode ended at that step; ``status`` (T, N) why (``kernels.terminations`` codes); ``dt`` the control
+    period. Returns arrays over the N rounds: ``reached`` (D, N) bool, ``time_to`` (D, N) [s] (nan if not
+    reached), ``y_dev`` (N,) [m], ``end`` (N,) status code (0 = still running at the last step),
+    ``steps`` (N,), and ``in_episode`` (T, N), the rows that belong to each first episode.
+    """
+    pos, rpy = np.asarray(pos, np.float64), np.asarray(rpy, np.float64)
+    done, status = np.asarray(done, bool), np.asarray(status)
+    t_len, n = done.shape
+    ended_before = np.cumsum(done, axis=0) - done
+    in_episode = ended_before == 0  # (T, N): rows up to and including the first done
+    has_end = done.any(axis=0)
+    last = np.where(has_end, np.argmax(done, axis=0), t_len - 1)
+    envs = np.arange(n)
+    end = np.where(has_end, status[last, envs], 0)
+    # the row on which a fall / off-course / blow-up ended the episode does not count as progress
+    bad_row = done & np.isin(status, _BAD_END)
+    valid = in_episode & ~bad_row & np.isfinite(pos[..., 0])
+    x = np.where(valid, pos[..., 0], -np.inf)
+    reached = np.zeros((len(distances), n), bool)
+    time_to = np.full((len(distances), n), np.nan)
+    for k, d in enumerate(distances):
+        hit = x >= d
+        reached[k] = hit.any(axis=0)
+        first = np.argmax(hit, axis=0)
+        time_to[k] = np.where(reached[k], (first + 1) * dt, np.nan)
+    y_abs = np.where(in_episode & np.isfinite(pos[..., 1]), np.abs(pos[..., 1]), 0.0)
+    return {"reached": reached, "time_to": time_to, "y_dev": y_abs.max(axis=0), "end": end, "steps": last + 1,
+            "in_episode": in_episode}  # fmt: skip
+
+
+def summarize(metrics: dict, rpy: np.ndarray, distances: tuple[float, ...] = DISTANCES) -> dict:
+    """Rates and stability over all rounds (JSON-ready; angles in degrees)."""
+    deg = 180.0 / math.pi
+    mask = metrics["in_episode"]
+    rpy = np.asarray(rpy, np.float64)
+    out = {"rounds": int(mask.shape[1])}
+    for k, d in enumerate(distances):
+        out[f"success_{d:g}m"] = float(metrics["reached"][k].mean())
+        t = metrics["time_to"][k]
+        out[f"time_to_{d:g}m_s"] = float(np.nanmean(t)) if np.isfinite(t).any() else None
+    for i, name in ((0, "roll"), (1, "pitch")):
+        a = rpy[..., i][mask & np.isfinite(rpy[..., i])] * deg
+        out[f"{name}_mean_deg"] = float(a.mean()) if a.size else None
+        out[f"{name}_var_deg2"] = float(a.var()) if a.size else None
+        out[f"{name}_peak_deg"] = float(np.abs(a).max()) if a.size else None
+    out["y_dev_mean_m"] = float(metrics["y_dev"].mean())
+    out["y_dev_max_m"] = float(metrics["y_dev"].max())
+    out["ended"] = {STATUS_NAMES[c]: int((metrics["end"] == c).sum()) for c in range(len(STATUS_NAMES))}
+    return out
+
+
+# ----------------------------------------------------------------------------------------------------
+# rollouts
+# ----------------------------------------------------------------------------------------------------
+
+
+@dataclass
+class Episode:
+    """Host arrays of one controller's rounds on one terrain (T steps, N rounds)."""
+
+    pos: np.ndarray  # (T, N, 2) relative to each round's start
+    rpy: np.ndarray  # (T, N, 3)
+    done: np.ndarray  # (T, N)
+    status: np.ndarray  # (T, N)
+    params: np.ndarray  # (T, 15) round 0's CPG parameters (physical units); NaN in joint mode
+    dt: float
+
+
+def run_rounds(controller: str, checkpoint: str | None, terrain: str, rounds: int, device: str | None,
+               max_steps: int, reset_yaw: float, progress: bool = True) -> Episode:  # fmt: skip
+    """``rounds`` robots, one first episode each, with a deterministic controller on unseen seeds."""
+    import torch
+
+    from .env import make_env
+    from .play import fixed_cpg_actions, load_policy
+
+    mode = CONTROLLERS[controller]
+    cfg = HexConfig(
+        sim=replace(SimConfig(), num_envs=rounds, device=device),
+        terrain=TerrainConfig(name=terrain, seed=EVAL_TERRAIN_SEED),
+        task=replace(TaskConfig(), seed=EVAL_RESET_SEED, reset_yaw=reset_yaw),
+    )
+    env = make_env(cfg, mode)
+    if controller == "cpg":
+        actions = fixed_cpg_actions(env)
+        policy = lambda obs: actions  # noqa: E731
+    else:
+        policy = load_policy(env, checkpoint, mode)
+    pos, rpy, done, status, params = [], [], [], [], []
+    finished = np.zeros(rounds, bool)
+    steps = range(max_steps)
+    if progress:
+        from rich.progress import track
+
+        steps = track(steps, description=f"{LABELS[controller]} on {terrain}", transient=True)
+    obs = env.get_observations()
+    with torch.inference_mode():
+        for _ in steps:
+            obs, _, _, _ = env.step(policy(obs))
+            st = env.status.numpy()
+            q = env.last_q.numpy()
+            pos.append(q[:, :2] - env.last_start.numpy())
+            rpy.append(env.rpy.numpy().copy())
+            done.append(st != 0)
+            status.append(st.copy())
+            params.append(env.last_params.numpy()[0].copy() if mode == "cpg" else np.full(len(PARAM_NAMES), np.nan))
+            finished |= st != 0
+            if finished.all():
+                break
+    env.world.check_contacts()
+    return Episode(np.stack(pos), np.stack(rpy), np.stack(done), np.stack(status), np.stack(params),
+                   cfg.task.control_dt)  # fmt: skip
+
+
+# ----------------------------------------------------------------------------------------------------
+# report and figures
+# ----------------------------------------------------------------------------------------------------
+
+
+def _pct(v: float | None) -> str:
+    return "—" if v is None else f"{100 * v:.0f}%"
+
+
+def report_markdown(results: dict, meta: dict) -> str:
+    """Table 3's shape (ours beside the paper's), then stability per terrain and controller."""
+    lines = ["# hexnewton evaluation", ""]
+    lines += [f"- {k}: {v}" for k, v in meta.items()]
+    lines += ["", "## Success rate at each distance (Table 3)", "",
+              "| terrain | method | " + " | ".join(f"{d:g} m" for d in DISTANCES) + " | paper (" +
+              " / ".join(f"{d:g}" for d in DISTANCES) + " m) |",
+              "|---|---|" + "---:|" * len(DISTANCES) + "---|"]  # fmt: skip
+    for terrain, by_ctrl in results.items():
+        for ctrl, s in by_ctrl.items():
+            paper = PAPER_TABLE3.get(terrain, {}).get(LABELS[ctrl])
+            ref = " / ".join(f"{p}%" for p in paper) if paper else "—"
+            cells = " | ".join(_pct(s[f"success_{d:g}m"]) for d in DISTANCES)
+            lines.append(f"| {terrain} | {LABELS[ctrl]} | {cells} | {ref} |")
+    lines += ["", "## Stability (§3.3; angles in degrees over every step of every round)", "",
+              "| terrain | method | rounds | pitch mean / var / peak | roll mean / var / peak | Y dev. mean / max [m] "
+              "| time to 3 m [s] | ended |", "|---|---|---:|---|---|---|---:|---|"]  # fmt: skip
+    for terrain, by_ctrl in results.items():
+        for ctrl, s in by_ctrl.items():
+            ang = {n: " / ".join("—" if s[f"{n}_{k}"] is None else f"{s[f'{n}_{k}']:.2f}"
+                                 for k in ("mean_deg", "var_deg2", "peak_deg")) for n in ("pitch", "roll")}  # fmt: skip
+            t3 = s["time_to_3m_s"]
+            ended = ", ".join(f"{k} {v}" for k, v in s["ended"].items() if v)
+            lines.append(f"| {terrain} | {LABELS[ctrl]} | {s['rounds']} | {ang['pitch']} | {ang['roll']} | "
+                         f"{s['y_dev_mean_m']:.3f} / {s['y_dev_max_m']:.3f} | "
+                         f"{'—' if t3 is None else f'{t3:.1f}'} | {ended} |")  # fmt: skip
+    return "\n".join(lines) + "\n"
+
+
+def plot_terrain(path: str, terrain: str, episodes: dict[str, Episode], metrics: dict[str, dict]) -> None:
+    """Figs. 6-8: pitch / roll of round 0 over time, box plots over all rounds, XY trajectories."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    deg = 180.0 / math.pi
+    fig, axes = plt.subplots(1, 5, figsize=(24, 4.2))
+    for idx, (axis, name) in enumerate(((1, "pitch"), (0, "roll"))):
+        line_ax, box_ax = axes[2 * idx], axes[2 * idx + 1]
+        boxes = []
+        for ctrl, ep in episodes.items():
+            m = metrics[ctrl]["in_episode"]
+            n0 = int(m[:, 0].sum())
+            line_ax.plot(np.arange(n0) * ep.dt, ep.rpy[:n0, 0, axis] * deg, label=LABELS[ctrl], lw=0.8)
+            boxes.append(ep.rpy[..., axis][m] * deg)
+        line_ax.set(title=f"{name}, round 0", xlabel="time [s]", ylabel=f"{name} [deg]")
+        box_ax.boxplot(boxes, showfliers=False)
+        box_ax.set_xticks(range(1, len(boxes) + 1), [LABELS[c] for c in episodes])
+        box_ax.set(title=f"{name}, all rounds", ylabel=f"{name} [deg]")
+    ax = axes[4]
+    for i, (ctrl, ep) in enumerate(episodes.items()):
+        m = metrics[ctrl]["in_episode"]
+        for r in range(min(ep.pos.shape[1], 25)):
+            k = m[:, r]
+            ax.plot(ep.pos[k, r, 0], ep.pos[k, r, 1], color=f"C{i}", lw=0.6, alpha=0.6,
+                    label=LABELS[ctrl] if r == 0 else None)  # fmt: skip
+    ax.axhline(1.5, color="k", ls=":", lw=0.8)
+    ax.axhline(-1.5, color="k", ls=":", lw=0.8)
+    ax.add_patch(matplotlib.patches.Circle((3.5, 0.0), 0.5, fill=False, color="g"))
+    ax.set(title=f"trajectories (x, y from start), {terrain}", xlabel="x [m]", ylabel="y [m]")
+    ax.set_aspect("equal", adjustable="datalim")
+    for a in axes:
+        a.grid(alpha=0.3)
+    axes[0].legend(fontsize=8)
+    axes[4].legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=90)
+    plt.close(fig)
+
+
+def plot_params(path: str, terrain: str, episodes: dict[str, Episode]) -> None:
+    """Fig. 5b: omega and the mean A1 / A2 / A3 along round 0, learned against fixed."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    groups = {"omega [rad/s]": [0], "A1 (hip)": [1, 2], "A2 (knee), mean of 6": list(range(3, 9)),
+              "A3 (ankle), mean of 6": list(range(9, 15))}  # fmt: skip
+    fig, axes = plt.subplots(1, 4, figsize=(18, 3.6))
+    for ctrl, ep in episodes.items():
+        if np.isnan(ep.params).all():
+            continue
+        t = np.arange(len(ep.params)) * ep.dt
+        for ax, (title, cols) in zip(axes, groups.items()):
+            ax.plot(t, ep.params[:, cols].mean(axis=1), label=LABELS[ctrl])
+            ax.set(title=title, xlabel="time [s]")
+    for ax in axes:
+        ax.grid(alpha=0.3)
+    axes[0].legend(fontsize=8)
+    fig.suptitle(f"CPG parameters along round 0 on {terrain}")
+    fig.tight_layout()
+    fig.savefig(path, dpi=90)
+    plt.close(fig)
+
+
+def plot_learning(path: str, runs: dict[str, str]) -> None:
+    """Fig. 5a: mean episode reward against env-steps and against wall time, one curve per controller."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from .curves import read_curve
+
+    fig, axes = plt.subplots(1, 2, figsize=(11, 3.8))
+    for ax, x in zip(axes, ("env_steps", "wall_time")):
+        for ctrl, spec in runs.items():
+            curve = read_curve(spec, x).get("Train/mean_reward")
+            if curve:
+                xs, v = zip(*curve)
+                ax.plot(xs, v, label=LABELS.get(ctrl, ctrl))
+        ax.set(xlabel="env-steps" if x == "env_steps" else "wall time [min]", ylabel="mean episode reward")
+        ax.grid(alpha=0.3)
+    axes[0].legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=90)
+    plt.close(fig)
+
+
+# ----------------------------------------------------------------------------------------------------
+# command line
+# ----------------------------------------------------------------------------------------------------
+
+
+def _pairs(items: list[str] | None, what: str) -> dict[str, str]:
+    out = {}
+    for item in items or []:
+        key, sep, value = item.partition("=")
+        if not sep or not key or not value:
+            raise ValueError(f"{what} takes NAME=PATH, got '{item}'")
+        out[key] = value
+    return out
+
+
+def checkpoint_for(checkpoints: dict[str, str], controller: str, terrain: str) -> str:
+    """``controller:terrain=PATH`` wins over ``controller=PATH``."""
+    path = checkpoints.get(f"{controller}:{terrain}") or checkpoints.get(controller)
+    if path is None:
+        raise ValueError(f"controller {controller} needs --checkpoint {controller}=PATH (or {controller}:{terrain}=PATH)")
+    return path
+
+
+def main(argv: list[str] | None = None) -> int:
+    p = ArgumentParser(prog="python -m hexnewton.evaluate", description="The paper's evaluation and report.")
+    p.add_argument("--controllers", nargs="+", default=["cpg", "cpg_rl"], choices=list(CONTROLLERS))
+    p.add_argument("--checkpoint", nargs="+", metavar="CTRL[:TERRAIN]=PATH", help="policy of cpg_rl / joint")
+    p.add_argument("--terrains", nargs="+", type=terrain_name, default=["rugged", "stepped", "complex"])
+    p.add_argument("--rounds", type=positive_int, default=25, help="rounds per controller and terrain (paper: 25)")
+    p.add_argument("--max_steps", type=positive_int, default=TaskConfig.max_episode_steps,
+                   help="control steps per round (default: the episode limit)")  # fmt: skip
+    p.add_argument("--reset_yaw", type=float, default=TaskConfig.reset_yaw, help="start yaw noise [rad]")
+    p.add_argument("--runs", nargs="+", metavar="CTRL=RUN[,RUN]", help="training runs for Fig. 5a")
+    p.add_argument("--device", default=None)
+    p.add_argument("--out", default=None, help="output directory (default eval/<date_time>); must not exist")
+    p.add_argument("--no-progress", action="store_true")
+    args = p.parse_args(argv)
+    checkpoints = _pairs(args.checkpoint, "--checkpoint")
+    runs = _pairs(args.runs, "--runs")
+    from .train import load_checkpoint
+
+    for ctrl in args.controllers:
+        for terrain in args.terrains:
+            if ctrl != "cpg":
+                load_checkpoint(checkpoint_for(checkpoints, ctrl, terrain))  # fail before any simulation
+    for spec in runs.values():
+        for piece in spec.split(","):
+            if not os.path.isdir(piece):
+                raise ValueError(f"not a run directory: {piece}")
+    out = args.out or os.path.join("eval", datetime.datetime.now().strftime("%Y-%m-%d_%H-%M-%S"))
+    if os.path.exists(out):
+        raise ValueError(f"{out} exists: choose a new --out (nothing is overwritten)")
+    parent = os.path.dirname(os.path.abspath(out))
+    if not os.path.isdir(parent) or not os.access(parent, os.W_OK):
+        raise ValueError(f"cannot create {out}: {parent} is not a writable directory")
+
+    from .sim import resolve_device
+
+    device = resolve_device(args.device)
+    progress = not args.no_progress and sys.stderr.isatty()
+    results: dict[str, dict[str, dict]] = {}
+    t0 = time.perf_counter()
+    figures: dict[str, tuple[dict, dict]] = {}
+    for terrain in args.terrains:
+        episodes, metrics = {}, {}
+        for ctrl in args.controllers:
+            ck = None if ctrl == "cpg" else checkpoint_for(checkpoints, ctrl, terrain)
+            ep = run_rounds(ctrl, ck, terrain, args.rounds, device, args.max_steps, args.reset_yaw, progress)
+            m = round_metrics(ep.pos, ep.rpy, ep.done, ep.status, ep.dt)
+            s = summarize(m, ep.rpy)
+            s["checkpoint"] = ck
+            results.setdefault(terrain, {})[ctrl] = s
+            episodes[ctrl], metrics[ctrl] = ep, m
+            print(f"{terrain:8s} {LABELS[ctrl]:8s} " + "  ".join(f"{d:g} m {_pct(s[f'success_{d:g}m'])}" for d in DISTANCES)
+                  + f"  ({s['rounds']} rounds, {len(ep.done)} steps)", flush=True)  # fmt: skip
+        figures[terrain] = (episodes, metrics)
+    wall = time.perf_counter() - t0
+    meta = {"device": device, "rounds": args.rounds, "max_steps": args.max_steps, "reset_yaw": args.reset_yaw,
+            "terrain_seed": EVAL_TERRAIN_SEED, "reset_seed": EVAL_RESET_SEED,
+            "unseen": "terrain seed and start poses differ from training (train.py: terrain seed 0, seed 1)",
+            "wall_s": round(wall, 1)}  # fmt: skip
+    os.makedirs(out)
+    with open(os.path.join(out, "results.json"), "w") as f:
+        json.dump({"meta": meta, "results": results}, f, indent=1)
+    with open(os.path.join(out, "report.md"), "w") as f:
+        f.write(report_markdown(results, meta))
+    for terrain, (episodes, metrics) in figures.items():
+        plot_terrain(os.path.join(out, f"fig_{terrain}.png"), terrain, episodes, metrics)
+    first = args.terrains[0]
+    if any(not np.isnan(ep.params).all() for ep in figures[first][0].values()):
+        plot_params(os.path.join(out, "fig_params.png"), first, figures[first][0])
+    if runs:
+        plot_learning(os.path.join(out, "fig_learning.png"), runs)
+    print(f"report in {out}/ (report.md, results.json, figures) after {wall:.0f} s")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(run(main, "python -m hexnewton.evaluate"))

@@ -1,0 +1,113 @@
+"""The evaluation protocol (hexnewton.evaluate): metrics on synthetic trajectories, the report on a tiny run."""
+
+import json
+import os
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from hexnewton.evaluate import DISTANCES, round_metrics, summarize
+from hexnewton.kernels.terminations import FELL, OFF_COURSE, SUCCESS
+
+DT = 0.02
+ROOT = os.path.join(os.path.dirname(__file__), "..")
+
+
+def _synthetic():
+    """Four rounds of 300 steps at 0.6 m/s along x (1.2 cm per step):
+    0 reaches the goal at step 270 (x = 3.24 m); 1 falls at step 150 (x = 1.8 m); 2 drifts in y and leaves
+    the course at step 200 (x = 2.4 m); 3 walks at a quarter speed and never ends (x = 0.9 m)."""
+    t_len, n = 300, 4
+    k = np.arange(1, t_len + 1)[:, None]
+    x = np.repeat(0.012 * k, n, axis=1)
+    x[:, 3] *= 0.25
+    y = np.zeros((t_len, n))
+    y[:, 2] = 0.0076 * k[:, 0]  # |y| passes 1.5 m at step 198
+    done = np.zeros((t_len, n), bool)
+    status = np.zeros((t_len, n), np.int32)
+    for env, step, code in ((0, 269, SUCCESS), (1, 149, FELL), (2, 199, OFF_COURSE)):
+        done[step, env], status[step, env] = True, code
+        x[step + 1:, env] = 0.0  # the env was reset: a new episode starts at its origin
+        y[step + 1:, env] = 0.0
+    rpy = np.zeros((t_len, n, 3))
+    rpy[:, :, 1] = np.deg2rad(2.0) * np.sin(k * 0.3)
+    rpy[100, 0, 0] = np.deg2rad(-10.0)  # one roll peak inside round 0's episode
+    rpy[280, 0, 0] = np.deg2rad(50.0)  # after round 0 ended: must be ignored
+    return np.stack([x, y], axis=-1), rpy, done, status
+
+
+def test_reached_distances_and_times():
+    pos, rpy, done, status = _synthetic()
+    m = round_metrics(pos, rpy, done, status, DT)
+    assert DISTANCES == (0.5, 1.0, 2.0, 3.0)
+    # reached flags: success walks 3 m; the fall counts up to its last valid step (1.788 m); off course
+    # counts to 2.388 m; the slow robot covers 0.9 m
+    np.testing.assert_array_equal(m["reached"], [[1, 1, 1, 1], [1, 1, 1, 0], [1, 0, 1, 0], [1, 0, 0, 0]])  # (D, N)
+    # x >= d first at step ceil(d / 0.012) (1-based), times in seconds
+    np.testing.assert_allclose(m["time_to"][0, :3], np.ceil(0.5 / 0.012 - 1e-9) * DT)
+    np.testing.assert_allclose(m["time_to"][3, 0], np.ceil(3.0 / 0.012 - 1e-9) * DT)
+    assert np.isnan(m["time_to"][3, 1:]).all()
+    np.testing.assert_array_equal(m["end"], [SUCCESS, FELL, OFF_COURSE, 0])
+    np.testing.assert_array_equal(m["steps"], [270, 150, 200, 300])
+    assert m["y_dev"][2] == pytest.approx(0.0076 * 200) and m["y_dev"][0] == 0.0
+
+
+def test_summary_rates_and_angles():
+    pos, rpy, done, status = _synthetic()
+    s = summarize(round_metrics(pos, rpy, done, status, DT), rpy)
+    assert [s[f"success_{d:g}m"] for d in DISTANCES] == [1.0, 0.75, 0.5, 0.25]
+    assert s["roll_peak_deg"] == pytest.approx(10.0)  # the 50 deg sample lies after round 0's episode
+    assert s["pitch_peak_deg"] <= 2.0 + 1e-9 and s["pitch_var_deg2"] == pytest.approx(2.0, rel=0.1)
+    assert s["ended"]["success"] == 1 and s["ended"]["running"] == 1
+    assert s["time_to_3m_s"] == pytest.approx(250 * DT)
+
+
+def _fake_run(path, rewards):
+    from torch.utils.tensorboard import SummaryWriter
+
+    os.makedirs(path)
+    w = SummaryWriter(path)
+    for it, r in enumerate(rewards):
+        w.add_scalar("Train/mean_reward", r, it)
+    w.close()
+    with open(os.path.join(path, "config.json"), "w") as f:
+        json.dump({"hexnewton": {"config": {"sim": {"num_envs": 8}}}, "train": {"num_steps_per_env": 24}}, f)
+
+
+def test_report_on_a_tiny_run(tmp_path):
+    """Fixed CPG and the shipped CPG_RL policy, 2 rounds of 25 steps on stepped ground, plus Fig. 5a from
+    two fake runs: every output exists and the Markdown carries the paper's row."""
+    _fake_run(str(tmp_path / "a"), [0.0, 1.0, 3.0])
+    _fake_run(str(tmp_path / "b"), [0.0, 0.5])
+    out = tmp_path / "report"
+    policy = os.path.join(ROOT, "results", "policies", "cpg_rl_flat.pt")
+    cmd = [sys.executable, "-m", "hexnewton.evaluate", "--controllers", "cpg", "cpg_rl", "--checkpoint",
+           f"cpg_rl={policy}", "--terrains", "stepped", "--rounds", "2", "--max_steps", "25", "--device", "cpu",
+           "--runs", f"cpg_rl={tmp_path / 'a'}", f"joint={tmp_path / 'b'}", "--out", str(out)]  # fmt: skip
+    proc = subprocess.run(cmd, capture_output=True, text=True, timeout=900, cwd=ROOT)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    for name in ("report.md", "results.json", "fig_stepped.png", "fig_params.png", "fig_learning.png"):
+        assert (out / name).stat().st_size > 200, name
+    res = json.loads((out / "results.json").read_text())
+    assert res["meta"]["terrain_seed"] == 1000 and set(res["results"]["stepped"]) == {"cpg", "cpg_rl"}
+    assert res["results"]["stepped"]["cpg"]["rounds"] == 2
+    report = (out / "report.md").read_text()
+    assert "| stepped | CPG | " in report and "60% / 28% / 0% / 0%" in report  # Table 3's fixed-CPG row
+
+    # bad input: one line, exit 2, nothing overwritten
+    before = sorted(os.listdir(out))
+    cases = [
+        (["--out", str(out), "--controllers", "cpg", "--terrains", "flat"], "exists"),
+        (["--controllers", "cpg_rl", "--terrains", "flat", "--out", str(tmp_path / "x")], "needs --checkpoint"),
+        (["--controllers", "cpg_rl", "--checkpoint", "cpg_rl=/nope.pt", "--out", str(tmp_path / "x")], "not found"),
+        (["--checkpoint", "cpg_rl", "--out", str(tmp_path / "x")], "NAME=PATH"),
+        (["--rounds", "0"], "positive"),
+    ]
+    for args, message in cases:
+        p = subprocess.run([sys.executable, "-m", "hexnewton.evaluate", *args, "--device", "cpu"], capture_output=True,
+                           text=True, timeout=300, cwd=ROOT)  # fmt: skip
+        err = [line for line in p.stderr.splitlines() if line.strip() and "Warp CUDA" not in line]
+        assert p.returncode == 2 and len(err) == 1 and message in err[0], (args, p.stderr[-1500:])
+    assert sorted(os.listdir(out)) == before and not (tmp_path / "x").exists()
