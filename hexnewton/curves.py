@@ -5,7 +5,8 @@
 
 A run given as ``DIR1,DIR2,...`` is one curve: the pieces of a run continued with ``train.py --resume``,
 joined in order. The x axis is the iteration, the env-steps (iterations x envs x steps per env, from each
-piece's ``config.json``) or the wall time (each piece's own time from its first to its last logged
+piece's ``config.json``; a Stable-Baselines3 run from ``hexnewton.baselines`` logs env-steps directly) or
+the wall time (each piece's own time from its first to its last logged
 iteration, so the pause between pieces does not count).
 """
 
@@ -20,6 +21,8 @@ from .cli import ArgumentParser, run
 
 TAGS = ("Episode/success_rate", "Episode/distance_m", "Train/mean_reward", "Episode/fell_rate",
         "Episode/off_course_rate")  # fmt: skip
+# Stable-Baselines3 runs (hexnewton.baselines) log the mean episode return against env-steps
+SB3_ALIASES = {"rollout/ep_rew_mean": "Train/mean_reward"}
 X_AXES = {"iteration": "iteration", "env_steps": "env-steps", "wall_time": "wall time [min]"}
 
 
@@ -34,15 +37,22 @@ def read_scalars(run_dir: str) -> dict[str, list[tuple[int, float, float]]]:
     tags = set(acc.Tags().get("scalars", []))
     if not tags:
         raise ValueError(f"no TensorBoard scalars under {run_dir}")
-    return {t: [(e.step, e.value, e.wall_time) for e in acc.Scalars(t)] for t in TAGS if t in tags}
+    out = {t: [(e.step, e.value, e.wall_time) for e in acc.Scalars(t)] for t in TAGS if t in tags}
+    for sb3_tag, tag in SB3_ALIASES.items():
+        if sb3_tag in tags and tag not in out:
+            out[tag] = [(e.step, e.value, e.wall_time) for e in acc.Scalars(sb3_tag)]
+    return out
 
 
-def steps_per_iteration(run_dir: str) -> int:
-    """Env-steps collected per PPO iteration (num_envs x num_steps_per_env) from the run's config.json."""
+def steps_per_iteration(run_dir: str) -> int | None:
+    """Env-steps collected per PPO iteration (num_envs x num_steps_per_env) from the run's config.json;
+    None for a Stable-Baselines3 run, whose TensorBoard step already counts env-steps."""
     path = os.path.join(run_dir, "config.json")
     try:
         with open(path) as f:
             cfg = json.load(f)
+        if "algo" in cfg["hexnewton"]:
+            return None
         return int(cfg["hexnewton"]["config"]["sim"]["num_envs"]) * int(cfg["train"]["num_steps_per_env"])
     except (OSError, ValueError, KeyError, TypeError) as exc:
         raise ValueError(f"cannot read env-steps per iteration from {path}: {exc}")
@@ -65,12 +75,13 @@ def read_curve(spec: str, x: str = "iteration") -> dict[str, list[tuple[float, f
                 if x == "iteration":
                     xv = float(it)
                 elif x == "env_steps":
-                    xv = steps_done + (it - first + 1) * per_it
+                    xv = steps_done + (it if per_it is None else (it - first + 1) * per_it)
                 else:
                     xv = (time_done + wall - t0) / 60.0
                 out.setdefault(tag, []).append((xv, v))
         last = max(r[0] for rows in scalars.values() for r in rows)
-        steps_done += (last - max(first, last_it + 1) + 1) * per_it
+        if x == "env_steps":
+            steps_done += last if per_it is None else (last - max(first, last_it + 1) + 1) * per_it
         time_done += t1 - t0
         last_it = last
     return out

@@ -25,6 +25,9 @@ each distance. Outputs in ``--out``:
   trajectories);
 - ``fig_params.png`` (Fig. 5b: CPG_RL's parameters against the fixed CPG's along round 0);
 - ``fig_learning.png`` (Fig. 5a: reward against env-steps and against wall time) with ``--runs``.
+
+Controllers: ``cpg`` (fixed parameters), ``cpg_rl`` and ``joint`` (rsl-rl checkpoints from ``train.py``),
+``sac_cpg`` / ``td3_cpg`` / ``a2c_cpg`` (Stable-Baselines3 ``model.zip`` from ``hexnewton.baselines``).
 """
 
 from __future__ import annotations
@@ -46,8 +49,11 @@ from .kernels.terminations import FELL, NONFINITE, OFF_COURSE, STATUS_NAMES
 DISTANCES = (0.5, 1.0, 2.0, 3.0)  # Table 3's columns [m]
 EVAL_TERRAIN_SEED = 1000
 EVAL_RESET_SEED = 2000
-CONTROLLERS = {"cpg": "cpg", "cpg_rl": "cpg", "joint": "joint"}  # controller -> env action mode
-LABELS = {"cpg": "CPG", "cpg_rl": "CPG_RL", "joint": "pure DRL"}
+# controller -> env action mode; *_cpg are the Stable-Baselines3 baselines (hexnewton.baselines)
+CONTROLLERS = {"cpg": "cpg", "cpg_rl": "cpg", "joint": "joint", "sac_cpg": "cpg", "td3_cpg": "cpg", "a2c_cpg": "cpg"}
+LABELS = {"cpg": "CPG", "cpg_rl": "CPG_RL", "joint": "pure DRL", "sac_cpg": "SAC-CPG", "td3_cpg": "TD3-CPG",
+          "a2c_cpg": "A2C-CPG"}  # fmt: skip
+SB3 = {"sac_cpg": "sac", "td3_cpg": "td3", "a2c_cpg": "a2c"}
 # Table 3 of Huang et al. 2025 (25 rounds): success [%] at 0.5, 1, 2, 3 m
 PAPER_TABLE3 = {
     "rugged": {"CPG": (96, 96, 88, 60), "TD3-CPG": (100, 100, 100, 70), "SAC-CPG": (100, 100, 100, 96),
@@ -156,6 +162,10 @@ def run_rounds(controller: str, checkpoint: str | None, terrain: str, rounds: in
     if controller == "cpg":
         actions = fixed_cpg_actions(env)
         policy = lambda obs: actions  # noqa: E731
+    elif controller in SB3:
+        from .baselines import load_sb3_policy
+
+        policy = load_sb3_policy(env, checkpoint, SB3[controller])
     else:
         policy = load_policy(env, checkpoint, mode)
     pos, rpy, done, status, params = [], [], [], [], []
@@ -353,16 +363,20 @@ def main(argv: list[str] | None = None) -> int:
     args = p.parse_args(argv)
     checkpoints = _pairs(args.checkpoint, "--checkpoint")
     runs = _pairs(args.runs, "--runs")
+    from .baselines import check_model_file
     from .train import load_checkpoint
 
-    for ctrl in args.controllers:
+    for ctrl in args.controllers:  # fail before any simulation
         for terrain in args.terrains:
-            if ctrl != "cpg":
-                load_checkpoint(checkpoint_for(checkpoints, ctrl, terrain))  # fail before any simulation
+            if ctrl in SB3:
+                check_model_file(checkpoint_for(checkpoints, ctrl, terrain))
+            elif ctrl != "cpg":
+                load_checkpoint(checkpoint_for(checkpoints, ctrl, terrain))
+    from .curves import read_curve
+
     for spec in runs.values():
-        for piece in spec.split(","):
-            if not os.path.isdir(piece):
-                raise ValueError(f"not a run directory: {piece}")
+        if "Train/mean_reward" not in read_curve(spec, "env_steps"):
+            raise ValueError(f"no mean episode reward logged under {spec}")
     out = args.out or os.path.join("eval", datetime.datetime.now().strftime("%Y-%m-%d_%H-%M-%S"))
     if os.path.exists(out):
         raise ValueError(f"{out} exists: choose a new --out (nothing is overwritten)")
