@@ -13,7 +13,8 @@ not scaled.
 - r_theta (direction), "(cos θ, sin θ) · D / ||D||, condition θ > π/6". Taken literally, a term paid only
   outside the ±30° cone would be largest just outside it. We therefore read the condition as "heading error
   beyond π/6" and pay min(0, (cos θ, sin θ) · D̂ - cos(π/6)) (π/6 is ``RewardConfig.direction_deadband``).
-  That is 0 inside the cone and falls continuously to -1.87 when walking backward. D is the start-to-goal vector.
+  That is 0 inside the cone and falls continuously to -1 - cos(π/6) = -1.87 when walking backward. D is the
+  start-to-goal vector.
   The default dead band is 0 (ours, ``RewardConfig``): inside Table 1's ±30° cone nothing asks the policy to
   correct a heading error, and the goal circle (0.5 m at 3.5 m) allows only ~8°.
 - r_d (distance), "exp(-(d_n - d_t))": d_n is the distance to the goal and d_t the goal radius, so
