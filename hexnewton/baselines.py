@@ -56,6 +56,8 @@ def make_sb3_env(env):
     from stable_baselines3.common.vec_env import VecEnv, VecMonitor
 
     class Sb3VecEnv(VecEnv):
+        render_mode = None  # headless
+
         def __init__(self):
             obs_space = spaces.Box(-np.inf, np.inf, (env.num_obs,), np.float32)
             act_space = spaces.Box(-1.0, 1.0, (env.num_actions,), np.float32)

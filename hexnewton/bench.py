@@ -1,13 +1,21 @@
-"""Simulation throughput: robot-seconds simulated per wall-clock second, per terrain and env count.
+"""Throughput: simulation, env-step and end-to-end training, per terrain and env count.
 
     python -m hexnewton.bench                         # default device, all terrains, N = 1024 (64 on CPU)
     python -m hexnewton.bench --num_envs 1024 4096 16384 --terrain flat complex --device cuda
+    python -m hexnewton.bench --mode sim              # simulation only
     python -m hexnewton.bench --append BENCHMARKS.md  # also append the table (date, device, git rev)
 
-Every robot walks under the CPG controller (Eq. 3 + Eq. 4 kernels at every substep) with its own
-parameters, the fixed baseline's scaled by a random factor in [0.7, 1.3], so contacts are those of walking.
-The whole frame (CPG, mapping, collision, substeps) replays from one captured graph. Contact overflow is
-checked after the timed frames and reported in the table.
+Three measurements, each in robot-seconds simulated per wall second (robot-s/s) so they compare directly:
+- ``sim``: the physics world alone. Every robot walks under the CPG controller (Eq. 3 + Eq. 4 kernels at
+  every substep) with its own parameters: the fixed baseline's, scaled by a random factor in [0.7, 1.3],
+  so the contacts are those of walking. The whole frame (CPG, mapping, collision, substeps) replays from one
+  captured graph. Contact overflow is checked after the timed frames and reported.
+- ``env``: ``HexapodEnv.step`` with random actions: the parameter, CPG, physics, termination, reward, reset
+  and observation kernels, plus the torch hand-off. Also reported as env-steps/s (one env-step is one
+  20 ms control step).
+- ``train``: ``OnPolicyRunner.learn`` with the ``default`` preset: rollout collection plus the PPO update.
+  Also reported as env-steps/s, with the device memory per env on CUDA (torch's peak plus Warp's
+  allocations, read from the driver).
 """
 
 from __future__ import annotations
@@ -89,6 +97,105 @@ def bench_one(terrain: str, num_envs: int, device: str, frames: int, sim: SimCon
     )
 
 
+@dataclass
+class PipelineResult:
+    terrain: str
+    num_envs: int
+    env_steps_per_s: float = float("nan")  # env-step mode
+    env_robot_s_per_s: float = float("nan")
+    train_steps_per_s: float = float("nan")  # train mode (collection + PPO update)
+    train_robot_s_per_s: float = float("nan")
+    train_iteration_s: float = float("nan")
+    memory_per_env_kb: float = float("nan")  # CUDA only
+
+
+def _used_device_memory(device: str) -> int:
+    import torch
+
+    free, total = torch.cuda.mem_get_info(torch.device(device))
+    return total - free
+
+
+def bench_env(terrain: str, num_envs: int, device: str, steps: int, seed: int = 0) -> PipelineResult:
+    """``steps`` timed ``HexapodEnv.step`` calls with uniform random actions (drawn before the timing)."""
+    import torch
+
+    from .env import make_env
+
+    cfg = HexConfig(sim=replace(SimConfig(), num_envs=num_envs, device=device),
+                    terrain=TerrainConfig(name=terrain, seed=seed))  # fmt: skip
+    env = make_env(cfg)
+    gen = torch.Generator(device=env._obs_t.device).manual_seed(seed)
+    actions = torch.rand((8, num_envs, env.num_actions), generator=gen, device=env._obs_t.device) * 2 - 1
+    for k in range(max(steps // 10, 2)):  # capture + warm-up
+        env.step(actions[k % 8])
+    wp.synchronize_device(env.device)
+    t0 = time.perf_counter()
+    for k in range(steps):
+        obs, rew, done, extras = env.step(actions[k % 8])
+    float(rew.sum())  # the last step's results reach torch
+    wp.synchronize_device(env.device)
+    wall = time.perf_counter() - t0
+    rate = num_envs * steps / wall
+    return PipelineResult(terrain, num_envs, env_steps_per_s=rate, env_robot_s_per_s=rate * cfg.task.control_dt)
+
+
+def bench_train(terrain: str, num_envs: int, device: str, iterations: int, seed: int = 0) -> PipelineResult:
+    """``iterations`` timed PPO iterations (preset ``default``) after one untimed warm-up iteration."""
+    import copy
+
+    import torch
+    from rsl_rl.runners import OnPolicyRunner
+
+    from .env import make_env
+    from .train import seed_everything, train_cfg
+
+    seed_everything(seed)
+    used0 = _used_device_memory(device) if device.startswith("cuda") else 0
+    if device.startswith("cuda"):
+        torch.cuda.reset_peak_memory_stats(device)
+    cfg = HexConfig(sim=replace(SimConfig(), num_envs=num_envs, device=device),
+                    terrain=TerrainConfig(name=terrain, seed=seed))  # fmt: skip
+    env = make_env(cfg)
+    tcfg = train_cfg("default", num_envs)
+    runner = OnPolicyRunner(env, copy.deepcopy(tcfg), log_dir=None, device=device)
+    runner.learn(1)  # capture, kernel loading, optimizer state
+    wp.synchronize_device(env.device)
+    t0 = time.perf_counter()
+    runner.learn(iterations)
+    wp.synchronize_device(env.device)
+    wall = time.perf_counter() - t0
+    rate = num_envs * tcfg["num_steps_per_env"] * iterations / wall
+    mem = float("nan")
+    if device.startswith("cuda"):
+        mem = (_used_device_memory(device) - used0) / num_envs / 1024
+    return PipelineResult(terrain, num_envs, train_steps_per_s=rate, train_robot_s_per_s=rate * cfg.task.control_dt,
+                          train_iteration_s=wall / iterations, memory_per_env_kb=mem)  # fmt: skip
+
+
+def pipeline_table(sim_results: list[BenchResult], results: list[PipelineResult]) -> str:
+    """Sim, env-step and training throughput side by side (robot-s/s) with their ratios to sim-only."""
+    sim = {(r.terrain, r.num_envs): r.robot_s_per_s for r in sim_results}
+    head = ("| terrain | envs | sim robot-s/s | env-step robot-s/s (env-steps/s) | env / sim | training robot-s/s "
+            "(env-steps/s) | training / sim | s per iteration | memory per env |\n"
+            "|---|---:|---:|---:|---:|---:|---:|---:|---:|\n")  # fmt: skip
+
+    def num(v, fmt="{:,.0f}"):
+        return "—" if v != v else fmt.format(v)
+
+    def ratio(a, b):
+        return "—" if a != a or b != b or not b else f"{a / b:.0%}"
+
+    rows = []
+    for r in results:
+        s = sim.get((r.terrain, r.num_envs), float("nan"))
+        rows.append(f"| {r.terrain} | {r.num_envs} | {num(s)} | {num(r.env_robot_s_per_s)} ({num(r.env_steps_per_s)}) | "
+                    f"{ratio(r.env_robot_s_per_s, s)} | {num(r.train_robot_s_per_s)} ({num(r.train_steps_per_s)}) | "
+                    f"{ratio(r.train_robot_s_per_s, s)} | {num(r.train_iteration_s, '{:.2f}')} | "
+                    f"{num(r.memory_per_env_kb, '{:,.0f} KB')} |")  # fmt: skip
+    return head + "\n".join(rows) + "\n"
+
+
 def device_name(device: str) -> str:
     if device.startswith("cuda"):
         return wp.get_device(device).name
@@ -130,6 +237,9 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--iterations", type=positive_int, default=SimConfig.iterations)
     p.add_argument("--ls_iterations", type=positive_int, default=SimConfig.ls_iterations)
     p.add_argument("--frame_dt", type=float, default=SimConfig.frame_dt)
+    p.add_argument("--mode", nargs="+", choices=["sim", "env", "train"], default=["sim", "env", "train"])
+    p.add_argument("--env_steps", type=positive_int, default=None, help="timed env steps (default 200 GPU, 25 CPU)")
+    p.add_argument("--train_iterations", type=positive_int, default=None, help="timed PPO iterations (default 10 GPU, 2 CPU)")
     p.add_argument("--append", metavar="PATH", help="append the markdown table to this file")
     p.add_argument("--json", metavar="PATH", help="write the raw results as JSON")
     args = p.parse_args(argv)
@@ -141,15 +251,35 @@ def main(argv: list[str] | None = None) -> int:
     sim = replace(SimConfig(), substeps=args.substeps, iterations=args.iterations, ls_iterations=args.ls_iterations,
                   frame_dt=args.frame_dt)  # fmt: skip
     command = "python -m hexnewton.bench " + " ".join(sys.argv[1:] if argv is None else argv)
-    results = []
+    results, pipeline = [], []
+    env_steps = args.env_steps or (200 if gpu else 25)
+    iterations = args.train_iterations or (10 if gpu else 2)
     for terrain in args.terrain:
         for n in envs:
-            r = bench_one(terrain, n, device, frames, sim)
-            print(f"{terrain:8s} N={n:6d} {r.robot_s_per_s:12,.0f} robot-s/s  ({r.robot_frames_per_s:,.0f} "
-                  f"robot-frames/s, build {r.build_s:.1f} s, capture {r.capture_s:.1f} s, overflow: {r.overflow})",
-                  flush=True)  # fmt: skip
-            results.append(r)
-    md = table(results, sim, command)
+            if "sim" in args.mode:
+                r = bench_one(terrain, n, device, frames, sim)
+                print(f"{terrain:8s} N={n:6d} sim   {r.robot_s_per_s:12,.0f} robot-s/s  ({r.robot_frames_per_s:,.0f} "
+                      f"robot-frames/s, build {r.build_s:.1f} s, capture {r.capture_s:.1f} s, overflow: {r.overflow})",
+                      flush=True)  # fmt: skip
+                results.append(r)
+            if "env" in args.mode or "train" in args.mode:
+                pr = PipelineResult(terrain, n)
+                if "env" in args.mode:
+                    e = bench_env(terrain, n, device, env_steps)
+                    pr.env_steps_per_s, pr.env_robot_s_per_s = e.env_steps_per_s, e.env_robot_s_per_s
+                    print(f"{terrain:8s} N={n:6d} env   {e.env_robot_s_per_s:12,.0f} robot-s/s  "
+                          f"({e.env_steps_per_s:,.0f} env-steps/s)", flush=True)  # fmt: skip
+                if "train" in args.mode:
+                    t = bench_train(terrain, n, device, iterations)
+                    for k in ("train_steps_per_s", "train_robot_s_per_s", "train_iteration_s", "memory_per_env_kb"):
+                        setattr(pr, k, getattr(t, k))
+                    print(f"{terrain:8s} N={n:6d} train {t.train_robot_s_per_s:12,.0f} robot-s/s  "
+                          f"({t.train_steps_per_s:,.0f} env-steps/s, {t.train_iteration_s:.2f} s/iteration)", flush=True)  # fmt: skip
+                pipeline.append(pr)
+    md = table(results, sim, command) if results else (
+        f"### Throughput, {datetime.date.today().isoformat()}, {device_name(device)}, git {git_rev()}\n\n`{command}`\n\n")
+    if pipeline:
+        md += "\n" + pipeline_table(results, pipeline)
     print()
     print(md)
     if args.append:
@@ -157,7 +287,7 @@ def main(argv: list[str] | None = None) -> int:
             f.write("\n" + md)
     if args.json:
         with open(args.json, "w") as f:
-            json.dump([asdict(r) for r in results], f, indent=1)
+            json.dump({"sim": [asdict(r) for r in results], "pipeline": [asdict(r) for r in pipeline]}, f, indent=1)
     return 0
 
 

@@ -158,3 +158,20 @@ def test_precompile_finds_every_step_module():
     names = precompile("cpu", max_workers=2)
     assert set(STEP_MODULES) <= set(names)
     assert any(n.startswith("hexnewton.") for n in names)
+
+
+def test_bench_reports_sim_env_and_training(tmp_path):
+    """One tiny run of every benchmark mode: JSON numbers and the appended Markdown table."""
+    import json
+
+    out, md = tmp_path / "b.json", tmp_path / "B.md"
+    proc = subprocess.run([sys.executable, "-m", "hexnewton.bench", "--device", "cpu", "--terrain", "flat", "--num_envs",
+                           "4", "--frames", "5", "--env_steps", "3", "--train_iterations", "1", "--json", str(out),
+                           "--append", str(md)], capture_output=True, text=True, timeout=600)  # fmt: skip
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    res = json.loads(out.read_text())
+    (sim,), (pipe,) = res["sim"], res["pipeline"]
+    assert sim["robot_s_per_s"] > 0 and pipe["env_steps_per_s"] > 0 and pipe["train_steps_per_s"] > 0
+    assert pipe["env_robot_s_per_s"] == pytest.approx(pipe["env_steps_per_s"] * 0.02)
+    text = md.read_text()
+    assert "| flat | 4 |" in text and "env / sim" in text and "training / sim" in text
