@@ -219,6 +219,11 @@ class TaskConfig:
     # §2.4.4 (2): off course beyond |y - y_start| [m]; time out after this many control steps
     max_abs_y: float = 1.5
     max_episode_steps: int = 7000
+    # ours: a state is "blown up" (status nonfinite: reset and counted) when any coordinate or velocity is
+    # NaN/Inf, or runs away: base speed above max_base_speed [m/s] (the robot walks at < 0.5 m/s) or any
+    # joint speed above max_joint_speed [rad/s] (a 2.5 Hz gait of 0.8 rad amplitude peaks near 13 rad/s)
+    max_base_speed: float = 20.0
+    max_joint_speed: float = 200.0
     # ours: start randomisation at every reset (robots sharing one terrain must not all see the same ground)
     reset_lateral: float = 0.1  # [m] on top of the env's lane (SimConfig.spawn_y_spread)
     reset_yaw: float = 0.2  # [rad]

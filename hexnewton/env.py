@@ -11,7 +11,10 @@ torch sees every buffer zero-copy (``wp.to_torch``), and nothing goes back to th
 Finished envs auto-reset. ``extras["time_outs"]`` marks time-limit ends. ``extras["log"]`` carries:
 - the mean of each reward term;
 - success, fall, off-course, timeout and non-finite rates, with distance and length, over the last 1024
-  finished episodes.
+  finished episodes;
+- ``Episode/nonfinite_resets_total``: how many blown-up envs (NaN/Inf or runaway state, ``kernels/terminations``)
+  were reset since the env was built. Their reward stays finite (0 if the position itself is not) and their
+  observation comes from the fresh start, so training never sees a NaN.
 
 Action modes:
 - ``cpg`` (15 actions): omega, A1[2], A2[6], A3[6], each scaled to its range (the paper's CPG_RL);
@@ -33,7 +36,7 @@ from .controller import CPGController
 from .kernels.actions import joint_actions_kernel, scale_actions_kernel
 from .kernels.observations import OBS_DIM, observations_kernel
 from .kernels.rewards import TERMS, rewards_kernel
-from .kernels.terminations import STATUS_NAMES, TIMEOUT, episode_status_kernel
+from .kernels.terminations import NONFINITE, STATUS_NAMES, TIMEOUT, episode_status_kernel
 from .robot import BASE_Q
 from .sim import HexnewtonError, World, capture_graph
 
@@ -52,8 +55,10 @@ def _bookkeeping(
     time_out: wp.array[wp.uint8],
     cursor: wp.array[wp.int32],
     ring: wp.array2d[wp.float32],
+    nonfinite_total: wp.array[wp.int32],
 ):
-    """Done flags and step counters; each finished episode writes (status one-hot, distance, length) to the ring."""
+    """Done flags and step counters; each finished episode writes (status one-hot, distance, length) to the ring;
+    blown-up envs are counted in ``nonfinite_total``."""
     e = wp.tid()
     st = status[e]
     d = st != 0
@@ -62,6 +67,8 @@ def _bookkeeping(
     time_out[e] = wp.uint8(0)
     if st == TIMEOUT:
         time_out[e] = wp.uint8(1)
+    if st == NONFINITE:
+        wp.atomic_add(nonfinite_total, 0, 1)
     if d:
         done_u8[e] = wp.uint8(1)
         slot = wp.atomic_add(cursor, 0, 1) % ring.shape[0]
@@ -115,6 +122,7 @@ class HexapodEnv(VecEnv):
         self.last_q, self.last_start = z(n, 7 + 18), wp.zeros(n, dtype=wp.vec2, device=dev)
         self.last_cpg_state, self.last_params = z(n, 4), z(n, 15)
         self._cursor = z(1, dtype=wp.int32)
+        self._nonfinite_total = z(1, dtype=wp.int32)  # blown-up envs reset since the env was built
         self._ring = wp.full((RING, 7), float("nan"), dtype=wp.float32, device=dev)
 
         # torch views (zero-copy)
@@ -126,6 +134,7 @@ class HexapodEnv(VecEnv):
         self._terms_t = wp.to_torch(self.terms)
         self._ring_t = wp.to_torch(self._ring)
         self._steps_t = wp.to_torch(self.episode_steps)
+        self._nonfinite_t = wp.to_torch(self._nonfinite_total)
 
         self._reset(None)
         self._observe()
@@ -194,8 +203,9 @@ class HexapodEnv(VecEnv):
             w.simulate_frame()
         wp.launch(
             episode_status_kernel, dim=n,
-            inputs=[w.joint_q_wp, self.episode_steps, w.height_field, w.start_wp, t.goal_distance, t.goal_radius,
-                    t.min_height, t.max_tilt, t.max_abs_y, t.max_episode_steps],
+            inputs=[w.joint_q_wp, w.joint_qd_wp, self.episode_steps, w.height_field, w.start_wp, t.goal_distance,
+                    t.goal_radius, t.min_height, t.max_tilt, t.max_abs_y, t.max_episode_steps, t.max_base_speed,
+                    t.max_joint_speed],
             outputs=[self.status, self.rpy], device=dev,
         )  # fmt: skip
         wp.launch(
@@ -209,7 +219,8 @@ class HexapodEnv(VecEnv):
         wp.launch(
             _bookkeeping, dim=n,
             inputs=[self.status, w.joint_q_wp, w.start_wp],
-            outputs=[self.episode_steps, self.done, self.done_u8, self.time_out, self._cursor, self._ring], device=dev,
+            outputs=[self.episode_steps, self.done, self.done_u8, self.time_out, self._cursor, self._ring,
+                     self._nonfinite_total], device=dev,
         )  # fmt: skip
         wp.copy(self.last_q, w.joint_q_wp)
         wp.copy(self.last_start, w.start_wp)
@@ -245,6 +256,7 @@ class HexapodEnv(VecEnv):
             log[f"Episode/{name}_rate"] = rates[k]
         log["Episode/distance_m"] = rates[5]
         log["Episode/length_steps"] = rates[6]
+        log["Episode/nonfinite_resets_total"] = self._nonfinite_t[0].float()
         return log
 
     def episode_stats(self) -> dict[str, float]:
@@ -252,7 +264,8 @@ class HexapodEnv(VecEnv):
         rates = torch.nanmean(self._ring_t, dim=0).cpu().numpy()
         out = {f"{name}_rate": float(rates[k]) for k, name in enumerate(STATUS_NAMES[1:])}
         out.update(distance_m=float(rates[5]), length_steps=float(rates[6]),
-                   episodes=int(min(int(self._cursor.numpy()[0]), RING)))  # fmt: skip
+                   episodes=int(min(int(self._cursor.numpy()[0]), RING)),
+                   nonfinite_resets_total=int(self._nonfinite_total.numpy()[0]))  # fmt: skip
         return out
 
     def close(self) -> None:

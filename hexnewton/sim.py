@@ -122,6 +122,14 @@ def _nonfinite_envs(
     out[e] = bad != 0
 
 
+@wp.kernel
+def _zero_world_rows(mask: wp.array[wp.bool], values: wp.array2d[wp.float32]):
+    """values[w, :] = 0 for the worlds w selected by mask."""
+    w, i = wp.tid()
+    if mask[w]:
+        values[w, i] = 0.0
+
+
 def as_mask(mask: np.ndarray | wp.array | None, buffer: wp.array) -> wp.array:
     """A per-env bool mask as a Warp array: ``None`` selects all (filled into ``buffer``), a Warp array is used as
     is (capturable), anything else is copied into ``buffer``."""
@@ -277,6 +285,11 @@ class World:
         self.overflow_frames = 0  # frames in which some overflow was reported (upper bound per check)
 
         self._reset_mask = wp.zeros(n, dtype=wp.bool, device=self.device)
+        # SolverMuJoCo.reset's world mask: one entry per world plus the global world -1 (never reset)
+        self._solver_mask = wp.zeros(n + 1, dtype=wp.bool, device=self.device)
+        efc = self.solver.mjw_data.efc
+        self._efc_rows = [a.reshape((n, -1)) for a in (efc.J, efc.D, efc.Jqvel, efc.aref, efc.force, efc.frictionloss,
+                                                        efc.margin, efc.pos, efc.vel)]  # fmt: skip
         self._reset_counter = wp.zeros(1, dtype=wp.int32, device=self.device)
         self._prev_x_scratch = wp.zeros(n, dtype=wp.float32, device=self.device)
         # one leg's standing pose and (hip, knee, ankle) limits, as kernels take them
@@ -387,7 +400,8 @@ class World:
         """Put the selected envs (all if ``mask`` is None) back on their start lane, at rest.
 
         With ``lateral``/``yaw``/``joint_noise`` > 0 the start is randomised (``kernels.resets``); the new
-        start lands in ``start_wp`` (and ``prev_x`` if given). Capturable when ``mask`` is a Warp array.
+        start lands in ``start_wp`` (and ``prev_x`` if given). MuJoCo's warm start for those worlds is cleared.
+        Capturable when ``mask`` is a Warp array.
         """
         m = as_mask(mask, self._reset_mask)
         wp.launch(
@@ -401,6 +415,14 @@ class World:
         )
         wp.launch(advance_counter_kernel, dim=1, inputs=[self._reset_counter], device=self.device)
         newton.eval_fk(self.model, self.state_0.joint_q, self.state_0.joint_qd, self.state_0, mask=m)
+        # MuJoCo's per-world warm start and applied forces survive a state reset: after a blow-up they would
+        # poison the next step, so clear them for the reset worlds (the joint state was set above: flags 0)
+        wp.copy(self._solver_mask, m, count=self.num_envs)
+        self.solver.reset(self.state_0, self._solver_mask, flags=0)
+        # ... and so do the constraint rows (mujoco_warp fills only the non-zero Jacobian entries of a new row):
+        # zero them, or a NaN left by a blow-up returns a few steps later
+        for rows in self._efc_rows:
+            wp.launch(_zero_world_rows, dim=rows.shape, inputs=[m, rows], device=self.device)
 
     def reset_nonfinite(self) -> int:
         """Reset every env whose state holds NaN/Inf; returns how many (also counted in nonfinite_resets)."""

@@ -17,7 +17,7 @@ from hexnewton.kernels.actions import joint_actions_kernel, joint_actions_refere
 from hexnewton.kernels.observations import OBS_LAYOUT, observations_kernel, observations_reference
 from hexnewton.kernels.resets import reset_bounds_reference
 from hexnewton.kernels.rewards import TERMS, rewards_kernel, rewards_reference
-from hexnewton.kernels.terminations import FELL, SUCCESS, TIMEOUT
+from hexnewton.kernels.terminations import FELL, NONFINITE, SUCCESS, TIMEOUT
 from hexnewton.terrain import make_terrain, max_terrain_height_np, terrain_height_np
 from hexnewton.terrain.query import height_field_from_grid
 
@@ -50,6 +50,38 @@ def test_vecenv_api(env):
     # rsl-rl's learn(init_at_random_ep_len=True) assigns a new tensor: it must reach the Warp buffer
     env.episode_length_buf = torch.randint_like(env.episode_length_buf, high=100)
     assert np.array_equal(env.episode_steps.numpy(), env.episode_length_buf.numpy())
+
+
+@pytest.mark.parametrize("where", ["velocity", "runaway", "joint angle"])
+def test_blown_up_env_is_reset_counted_and_isolated(where):
+    """Corrupt one env's state: it ends as nonfinite, is reset and counted; observations and rewards stay
+    finite; the other envs go on exactly as in an untouched twin."""
+    a, b = make_env(_cfg("flat", 4)), make_env(_cfg("flat", 4))
+    act = torch.zeros(4, 15)
+    for env in (a, b):
+        for _ in range(5):
+            env.step(act)
+    qd, q = b.world.joint_qd, b.world.joint_q
+    if where == "velocity":
+        qd[1, 8] = float("nan")
+    elif where == "runaway":
+        qd[1, 0] = 2.0 * TASK.max_base_speed
+    else:
+        q[1, 12] = float("inf")
+    _, ra, _, _ = a.step(act)
+    ob, rb, db, extras = b.step(act)
+    assert b.status.numpy()[1] == NONFINITE and int(db[1]) == 1
+    assert torch.isfinite(ob["policy"]).all() and torch.isfinite(rb).all()
+    assert float(extras["log"]["Episode/nonfinite_resets_total"]) == 1.0
+    assert torch.isfinite(b.world.joint_q).all() and torch.isfinite(b.world.joint_qd).all()
+    others = [0, 2, 3]
+    np.testing.assert_array_equal(b.last_q.numpy()[others], a.last_q.numpy()[others])
+    np.testing.assert_array_equal(rb.numpy()[others], ra.numpy()[others])
+    for _ in range(10):  # the reset env walks on (no NaN left in the solver's warm start)
+        ob, rb, _, _ = b.step(act)
+        a.step(act)
+    assert torch.isfinite(b.world.joint_q).all() and b.episode_stats()["nonfinite_resets_total"] == 1
+    np.testing.assert_array_equal(b.last_q.numpy()[others], a.last_q.numpy()[others])
 
 
 def test_time_outs_and_auto_reset():

@@ -51,16 +51,22 @@ def test_episode_status_kernel_matches_reference(seed):
     q[:, 2] = ground + rng.uniform(0.0, 0.2, n)
     q[:, 3:7] = _random_quats(rng, n, 1.6)
     start = np.stack([rng.uniform(-0.2, 0.2, n), rng.uniform(-0.5, 0.5, n)], axis=1).astype(np.float32)
-    q[: n // 16, rng.integers(0, 7)] = np.nan
+    q[: n // 16, rng.integers(0, 25)] = np.nan
+    qd = rng.normal(0.0, 1.0, (n, 24))
+    qd[n // 16: n // 8, rng.integers(0, 24)] = np.inf  # non-finite velocities
+    qd[n // 8: n // 8 + 4, 0] = 1.5 * TASK.max_base_speed  # runaway base
+    qd[n // 8 + 4: n // 8 + 8, 6 + rng.integers(0, 18)] = -1.5 * TASK.max_joint_speed  # runaway joint
     steps = rng.integers(6990, 7010, n).astype(np.int32)
     status = wp.zeros(n, dtype=wp.int32, device="cpu")
     rpy = wp.zeros((n, 3), dtype=wp.float32, device="cpu")
     args = (TASK.goal_distance, TASK.goal_radius, TASK.min_height, TASK.max_tilt, TASK.max_abs_y,
-            TASK.max_episode_steps)  # fmt: skip
+            TASK.max_episode_steps, TASK.max_base_speed, TASK.max_joint_speed)  # fmt: skip
+    f32 = lambda a: wp.array(a.astype(np.float32), device="cpu")  # noqa: E731
     wp.launch(episode_status_kernel, dim=n,
-              inputs=[wp.array(q.astype(np.float32), device="cpu"), wp.array(steps, device="cpu"), hf,
-                      wp.array(start, dtype=wp.vec2, device="cpu"), *args], outputs=[status, rpy], device="cpu")  # fmt: skip
-    ref_status, ref_rpy = episode_status_np(q.astype(np.float32), steps, ground, start, *args)
+              inputs=[f32(q), f32(qd), wp.array(steps, device="cpu"), hf, wp.array(start, dtype=wp.vec2, device="cpu"),
+                      *args], outputs=[status, rpy], device="cpu")  # fmt: skip
+    ref_status, ref_rpy = episode_status_np(q.astype(np.float32), qd.astype(np.float32), steps, ground, start, *args)
+    assert (ref_status[: n // 8 + 8] == NONFINITE).all()
     # thresholds compared in float32 vs float64 can differ right at the boundary: allow a handful
     assert (status.numpy() != ref_status).sum() <= 2
     finite = ref_status != NONFINITE

@@ -7,7 +7,8 @@ Status codes (``STATUS_NAMES``), checked in this order:
   3 success    within ``goal_radius`` of the goal, ``goal_distance`` ahead of the env's start (§2.4.4 (3));
   4 timeout    this step is the episode's ``max_episode_steps``-th (``episode_steps`` counts the steps before it)
                (§2.4.4 (2));
-  5 nonfinite  NaN/Inf in the env's base state (the physics blew up; the env is reset and counted).
+  5 nonfinite  the physics blew up: NaN/Inf in any coordinate or velocity, or a runaway (base speed above
+               ``max_base_speed``, a joint speed above ``max_joint_speed``); the env is reset and counted.
 0 means the episode goes on. The kernel also writes roll, pitch and yaw (ZYX Euler angles of the base
 quaternion) for observations, logging and recording.
 """
@@ -37,6 +38,7 @@ def quat_to_rpy(q: wp.quat) -> wp.vec3:
 @wp.kernel
 def episode_status_kernel(
     joint_q: wp.array2d[wp.float32],
+    joint_qd: wp.array2d[wp.float32],
     episode_steps: wp.array[wp.int32],
     hf: HeightField,
     start: wp.array[wp.vec2],
@@ -46,6 +48,8 @@ def episode_status_kernel(
     max_tilt: float,
     max_abs_y: float,
     max_episode_steps: int,
+    max_base_speed: float,
+    max_joint_speed: float,
     status: wp.array[wp.int32],
     rpy: wp.array2d[wp.float32],
 ):
@@ -54,8 +58,17 @@ def episode_status_kernel(
     py = joint_q[e, 1]
     pz = joint_q[e, 2]
     q = wp.quat(joint_q[e, 3], joint_q[e, 4], joint_q[e, 5], joint_q[e, 6])
-    finite = wp.isfinite(px) and wp.isfinite(py) and wp.isfinite(pz)
-    finite = finite and wp.isfinite(q[0]) and wp.isfinite(q[1]) and wp.isfinite(q[2]) and wp.isfinite(q[3])
+    finite = bool(True)
+    for i in range(joint_q.shape[1]):
+        finite = finite and wp.isfinite(joint_q[e, i])
+    for i in range(joint_qd.shape[1]):
+        v = joint_qd[e, i]
+        finite = finite and wp.isfinite(v)
+        if i >= 6 and wp.abs(v) > max_joint_speed:
+            finite = False
+    base_v = wp.vec3(joint_qd[e, 0], joint_qd[e, 1], joint_qd[e, 2])
+    if wp.length(base_v) > max_base_speed:
+        finite = False
     if not finite:
         status[e] = NONFINITE
         for k in range(3):
@@ -92,12 +105,14 @@ def quat_to_rpy_np(q: np.ndarray) -> np.ndarray:
     return np.stack([roll, pitch, yaw], axis=-1)
 
 
-def episode_status_np(joint_q, episode_steps, ground_height, start, goal_distance, goal_radius, min_height, max_tilt,
-                      max_abs_y, max_episode_steps):  # fmt: skip
+def episode_status_np(joint_q, joint_qd, episode_steps, ground_height, start, goal_distance, goal_radius, min_height,
+                      max_tilt, max_abs_y, max_episode_steps, max_base_speed, max_joint_speed):  # fmt: skip
     """Float64 reference of :func:`episode_status_kernel`; ``ground_height`` (N,) is the terrain under the base,
     ``start`` (N, 2) each env's start."""
-    jq = np.asarray(joint_q, np.float64)
-    finite = np.isfinite(jq[:, :7]).all(axis=1)
+    jq, jqd = np.asarray(joint_q, np.float64), np.asarray(joint_qd, np.float64)
+    with np.errstate(invalid="ignore"):
+        runaway = (np.linalg.norm(jqd[:, :3], axis=1) > max_base_speed) | (np.abs(jqd[:, 6:]) > max_joint_speed).any(axis=1)
+    finite = np.isfinite(jq).all(axis=1) & np.isfinite(jqd).all(axis=1) & ~runaway
     safe_q = np.where(finite[:, None], jq[:, 3:7], [0.0, 0.0, 0.0, 1.0])
     rpy = np.where(finite[:, None], quat_to_rpy_np(safe_q), 0.0)
     fell = (jq[:, 2] - ground_height < min_height) | (np.abs(rpy[:, 0]) > max_tilt) | (np.abs(rpy[:, 1]) > max_tilt)
