@@ -34,7 +34,8 @@ def terrain_name(text: str) -> str:
 
 
 def run(main: Callable[[list[str] | None], int | None], prog: str, argv: list[str] | None = None) -> int:
-    """Run ``main``; user errors (HexnewtonError, ValueError) become one stderr line and exit status 2."""
+    """Run ``main``; user errors (HexnewtonError, ValueError) become one stderr line and exit status 2, file
+    system errors one line and exit status 1."""
     from .sim import HexnewtonError
 
     try:
@@ -42,6 +43,9 @@ def run(main: Callable[[list[str] | None], int | None], prog: str, argv: list[st
     except (HexnewtonError, ValueError) as exc:
         sys.stderr.write(f"{prog}: error: {exc}\n")
         return 2
+    except OSError as exc:  # a log directory that cannot be written, a full disk, ...
+        sys.stderr.write(f"{prog}: error: {exc}\n")
+        return 1
     except KeyboardInterrupt:
         sys.stderr.write(f"{prog}: interrupted\n")
         return 130

@@ -73,9 +73,14 @@ def resolve_device(name: str | None) -> str:
     return name
 
 
+MAX_ENVS = 1 << 20  # per device; an H100 holds 16384 envs in a few GB (BENCHMARKS.md)
+
+
 def validate_sim(cfg: SimConfig) -> None:
     if not isinstance(cfg.num_envs, (int, np.integer)) or cfg.num_envs <= 0:
         raise HexnewtonError(f"num_envs must be a positive integer, got {cfg.num_envs}")
+    if cfg.num_envs > MAX_ENVS:
+        raise HexnewtonError(f"num_envs {cfg.num_envs:,} exceeds the {MAX_ENVS:,} robots one device can hold")
     if cfg.substeps < 1:
         raise HexnewtonError(f"substeps must be >= 1, got {cfg.substeps}")
     if not cfg.frame_dt > 0:

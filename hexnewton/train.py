@@ -106,6 +106,15 @@ def export_onnx(policy, num_obs: int, path: str) -> float:
     return float(np.abs(out - ref).max())
 
 
+def check_log_dir(log_dir: str) -> None:
+    """Fail before any simulation if runs could not be written under ``log_dir``."""
+    path = os.path.abspath(log_dir)
+    while not os.path.exists(path):
+        path = os.path.dirname(path)
+    if not os.path.isdir(path) or not os.access(path, os.W_OK | os.X_OK):
+        raise ValueError(f"cannot write runs under {log_dir}: {path} is not a writable directory")
+
+
 def load_checkpoint(path: str, map_location: str = "cpu") -> dict:
     """torch.load with one-line errors for missing or corrupt files."""
     import torch
@@ -158,7 +167,10 @@ def main(argv: list[str] | None = None) -> int:
     args = p.parse_args(argv)
     if args.preset not in PRESETS:
         raise ValueError(f"unknown preset '{args.preset}': choose one of {', '.join(PRESETS)}")
+    if args.max_minutes is not None and not args.max_minutes > 0:
+        raise ValueError("--max_minutes must be positive")
     ckpt = load_checkpoint(args.resume) if args.resume else None  # fail before building anything
+    check_log_dir(args.log_dir)
 
     from rsl_rl.runners import OnPolicyRunner
 
@@ -182,7 +194,9 @@ def main(argv: list[str] | None = None) -> int:
     tcfg["save_interval"] = args.save_interval
     experiment = args.experiment or f"hexnewton_{args.action_mode}_{args.terrain}"
     run_dir = os.path.join(args.log_dir, experiment, datetime.datetime.now().strftime("%Y-%m-%d_%H-%M-%S"))
-    os.makedirs(run_dir, exist_ok=False)
+    if os.path.exists(run_dir):
+        raise ValueError(f"{run_dir} exists: nothing is overwritten (start again in a second, or change --experiment)")
+    os.makedirs(run_dir)
     meta = {"action_mode": args.action_mode, "num_obs": env.num_obs, "num_actions": env.num_actions,
             "preset": args.preset, "config": dataclasses.asdict(cfg)}  # fmt: skip
     with open(os.path.join(run_dir, "config.json"), "w") as f:
@@ -199,10 +213,11 @@ def main(argv: list[str] | None = None) -> int:
     runner.save = save
     if ckpt is not None:
         runner.load(args.resume, map_location=device)
-        print(f"resumed from {args.resume} (iteration {runner.current_learning_iteration})")
+        # rsl-rl stores the last finished iteration and would start again from it: continue after it instead
+        runner.current_learning_iteration += 1
+        print(f"resumed from {args.resume}: continuing at iteration {runner.current_learning_iteration}, "
+              f"learning rate {runner.alg.learning_rate:.2e}")
     print(f"training {experiment}: {args.num_envs} envs on {device}, preset {args.preset}, logs in {run_dir}")
-    if args.max_minutes is not None and not args.max_minutes > 0:
-        raise ValueError("--max_minutes must be positive")
     t0 = time.time()
     handlers = {sig: signal.signal(sig, _stop) for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGALRM)}
     if args.max_minutes:
@@ -221,7 +236,7 @@ def main(argv: list[str] | None = None) -> int:
             signal.signal(sig, handler)
         if hasattr(runner.logger.writer, "flush"):
             runner.logger.writer.flush()  # TensorBoard otherwise writes every 120 s
-    print(f"trained {runner.current_learning_iteration + 1} iterations in {time.time() - t0:.0f} s")
+    print(f"finished at iteration {runner.current_learning_iteration} after {time.time() - t0:.0f} s")
     stats = env.episode_stats()
     print("last episodes: " + ", ".join(f"{k} {v:.3f}" for k, v in stats.items()))
     onnx_path = os.path.join(run_dir, "policy.onnx")

@@ -2,8 +2,11 @@
 
 import glob
 import math
+import os
+import signal
 import subprocess
 import sys
+import time
 
 import numpy as np
 import pytest
@@ -286,6 +289,10 @@ def test_bad_checkpoints_are_one_line_errors(trained, tmp_path):
     ckpt["infos"] = None
     mismatched = tmp_path / "mismatched.pt"
     torch.save(ckpt, mismatched)
+    truncated = tmp_path / "truncated.pt"
+    truncated.write_bytes(open(good, "rb").read()[:5000])
+    a_file = tmp_path / "a_file"
+    a_file.write_text("x")
     cases = [
         (["play.py", "--controller", "cpg_rl", "--checkpoint", str(tmp_path / "missing.pt")], "checkpoint not found"),
         (["play.py", "--controller", "cpg_rl", "--checkpoint", str(corrupt)], "cannot read checkpoint"),
@@ -295,6 +302,17 @@ def test_bad_checkpoints_are_one_line_errors(trained, tmp_path):
          "action mode 'cpg'"),
         (["train.py", "--preset", "fancy"], "unknown preset 'fancy'"),
         (["train.py", "--resume", str(corrupt)], "cannot read checkpoint"),
+        (["train.py", "--resume", str(truncated)], "cannot read checkpoint"),
+        (["play.py", "--controller", "cpg_rl", "--checkpoint", str(truncated)], "cannot read checkpoint"),
+        (["play.py", "--controller", "pid"], "invalid choice: 'pid'"),
+        (["train.py", "--num_envs", "abc"], "positive integer"),
+        (["train.py", "--num_envs", "0"], "positive integer"),
+        (["train.py", "--num_envs", "100000000"], "exceeds"),
+        (["train.py", "--max_iterations", "1.5"], "positive integer"),
+        (["train.py", "--goal_distance", "far"], "invalid float value"),
+        (["train.py", "--terrain", "moon"], "unknown terrain 'moon'"),
+        (["train.py", "--log_dir", str(a_file / "sub")], "not a writable directory"),
+        (["train.py", "--max_minutes", "-1"], "--max_minutes must be positive"),
     ]
     before = sorted(glob.glob(str(logs / "**"), recursive=True))
     for args, message in cases:
@@ -353,3 +371,75 @@ def test_shipped_policies_fit_the_environment(name):
     sess = ort.InferenceSession(base + ".onnx", providers=["CPUExecutionProvider"])
     out = sess.run(None, {sess.get_inputs()[0].name: np.zeros((3, OBS_DIM["cpg"]), np.float32)})[0]
     assert out.shape == (3, 15) and np.isfinite(out).all()
+
+
+# ------------------------------------------------------------------ reliability: seeding, resume, interruption
+
+
+def _train(logs, *args, timeout=900):
+    cmd = [sys.executable, "train.py", "--num_envs", "8", "--device", "cpu", "--terrain", "flat", "--log_dir", str(logs),
+           "--num_steps_per_env", "8", *args]  # fmt: skip
+    proc = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout)
+    assert proc.returncode == 0, proc.stdout[-2000:] + proc.stderr[-3000:]
+    return proc.stdout
+
+
+def _run_dirs(logs, experiment):
+    return sorted(glob.glob(str(logs / experiment / "*")))
+
+
+def _actor(path):
+    return torch.load(path, weights_only=False)["actor_state_dict"]
+
+
+def test_same_seed_same_first_iteration_on_cpu(tmp_path):
+    """Seeds reach torch, numpy and the env's resets: the same seed gives the same first update."""
+    for name, seed in (("a", "3"), ("b", "3"), ("c", "4")):
+        _train(tmp_path, "--max_iterations", "1", "--seed", seed, "--experiment", name)
+    a, b, c = (_actor(glob.glob(str(tmp_path / n / "*" / "model_0.pt"))[0]) for n in "abc")
+    assert all(torch.equal(a[k], b[k]) for k in a)
+    assert not all(torch.equal(a[k], c[k]) for k in a)
+
+
+def test_resume_continues_iterations_and_learning_rate(tmp_path):
+    """2 iterations + resume 2 numbers its iterations like 4 straight ones and keeps the adapted learning rate."""
+    _train(tmp_path, "--max_iterations", "2", "--experiment", "part")
+    (first,) = _run_dirs(tmp_path, "part")
+    ck = torch.load(first + "/model_1.pt", weights_only=False)
+    lr_saved = ck["optimizer_state_dict"]["param_groups"][0]["lr"]
+    time.sleep(1.1)  # run directories are named by the second
+    out = _train(tmp_path, "--max_iterations", "2", "--experiment", "part", "--resume", first + "/model_1.pt")
+    assert "continuing at iteration 2" in out
+    second = _run_dirs(tmp_path, "part")[1]
+    assert os.path.isfile(second + "/model_3.pt") and torch.load(second + "/model_3.pt", weights_only=False)["iter"] == 3
+    lr = read_scalars_lr(second)
+    assert sorted(lr) == [2, 3] and lr[2] == pytest.approx(lr_saved, rel=0.51)  # adaptive: at most one x1.5 step
+    _train(tmp_path, "--max_iterations", "4", "--experiment", "straight")
+    assert sorted(read_scalars_lr(_run_dirs(tmp_path, "straight")[0])) == [0, 1, 2, 3]
+
+
+def read_scalars_lr(run_dir):
+    from tensorboard.backend.event_processing.event_accumulator import EventAccumulator
+
+    acc = EventAccumulator(run_dir)
+    acc.Reload()
+    return {e.step: e.value for e in acc.Scalars("Loss/learning_rate")}
+
+
+def test_interrupt_saves_and_exports(tmp_path):
+    """SIGINT in the middle of training: a final checkpoint and the ONNX policy are written, exit status 0."""
+    cmd = [sys.executable, "train.py", "--num_envs", "8", "--device", "cpu", "--terrain", "flat", "--log_dir",
+           str(tmp_path), "--num_steps_per_env", "8", "--max_iterations", "100000"]  # fmt: skip
+    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    deadline = time.time() + 600
+    while not glob.glob(str(tmp_path / "*" / "*" / "model_0.pt")) and time.time() < deadline:
+        time.sleep(0.5)
+    time.sleep(2.0)
+    proc.send_signal(signal.SIGINT)
+    out, err = proc.communicate(timeout=600)
+    assert proc.returncode == 0, out[-2000:] + err[-3000:]
+    assert "stopped by SIGINT" in out
+    (run,) = glob.glob(str(tmp_path / "*" / "*"))
+    models = glob.glob(run + "/model_*.pt")
+    assert len(models) >= 2 and os.path.isfile(run + "/policy.onnx")
+    assert not glob.glob(run + "/*.tmp")  # atomic saves leave no temporary file
