@@ -3,6 +3,7 @@
     python train.py --num_envs 4096 --terrain rugged --max_iterations 300
     python train.py --preset paper --terrain complex --num_envs 1024
     python train.py --resume logs/hexnewton_cpg_rugged/2026-11-21_15-00-00/model_299.pt --max_iterations 100
+    torchrun --nproc_per_node=2 train.py --terrain complex --num_envs 4096     # 4096 envs on each of 2 GPUs
 
 Each run writes ``logs/<experiment>/<date_time>/``:
 - TensorBoard event files;
@@ -75,6 +76,41 @@ class TrainingStopped(Exception):
 
 def _stop(signum, frame):
     raise TrainingStopped(signal.Signals(signum).name)
+
+
+@dataclasses.dataclass(frozen=True)
+class Rank:
+    """This process's place in a ``torchrun`` job (rank 0 of 1 without one)."""
+
+    rank: int = 0
+    local_rank: int = 0
+    world_size: int = 1
+    device: str | None = None  # None: resolve --device as usual
+
+    @property
+    def is_main(self) -> bool:
+        return self.rank == 0
+
+    def seeds(self, seed: int, terrain_seed: int) -> tuple[int, int]:
+        """Each rank its own seed (actions, resets) and terrain layout; rank 0 keeps the given ones."""
+        return seed + self.rank, terrain_seed + self.rank
+
+
+def distributed_rank(environ: dict, device: str | None) -> Rank:
+    """Read torchrun's WORLD_SIZE / RANK / LOCAL_RANK. Each rank trains its own env batch on
+    ``cuda:LOCAL_RANK`` (rsl-rl's distributed mode: NCCL, gradients averaged, rank 0 logs and saves)."""
+    try:
+        world = int(environ.get("WORLD_SIZE", "1"))
+        rank, local = int(environ.get("RANK", "0")), int(environ.get("LOCAL_RANK", "0"))
+    except ValueError:
+        raise ValueError("WORLD_SIZE, RANK and LOCAL_RANK must be integers (set by torchrun)")
+    if world <= 1:
+        return Rank(device=device)
+    if not 0 <= rank < world or not 0 <= local < world:
+        raise ValueError(f"RANK {rank} / LOCAL_RANK {local} must lie in [0, WORLD_SIZE={world})")
+    if device is not None and not device.startswith("cuda"):
+        raise ValueError(f"distributed training runs on CUDA (rsl-rl uses NCCL), not on '{device}'")
+    return Rank(rank, local, world, f"cuda:{local}")
 
 
 def seed_everything(seed: int) -> None:
@@ -177,14 +213,18 @@ def main(argv: list[str] | None = None) -> int:
     from .env import make_env
     from .sim import resolve_device
 
-    device = resolve_device(args.device)
+    dist = distributed_rank(dict(os.environ), args.device)
+    if dist.world_size > 1 and args.max_minutes:
+        raise ValueError("--max_minutes would stop the ranks at different iterations: use --max_iterations")
+    device = resolve_device(dist.device or args.device)
     if args.num_envs is None:
         args.num_envs = 4096 if device.startswith("cuda") else 64
-    seed_everything(args.seed)
+    seed, terrain_seed = dist.seeds(args.seed, args.terrain_seed)
+    seed_everything(seed)
     cfg = HexConfig(
         sim=dataclasses.replace(SimConfig(), num_envs=args.num_envs, device=device),
-        terrain=TerrainConfig(name=args.terrain, seed=args.terrain_seed),
-        task=dataclasses.replace(TaskConfig(), seed=args.seed, goal_distance=args.goal_distance),
+        terrain=TerrainConfig(name=args.terrain, seed=terrain_seed),
+        task=dataclasses.replace(TaskConfig(), seed=seed, goal_distance=args.goal_distance),
         reward=dataclasses.replace(RewardConfig(), direction_deadband=args.direction_deadband),
     )
     env = make_env(cfg, args.action_mode)
@@ -194,15 +234,16 @@ def main(argv: list[str] | None = None) -> int:
     tcfg["save_interval"] = args.save_interval
     experiment = args.experiment or f"hexnewton_{args.action_mode}_{args.terrain}"
     run_dir = os.path.join(args.log_dir, experiment, datetime.datetime.now().strftime("%Y-%m-%d_%H-%M-%S"))
-    if os.path.exists(run_dir):
-        raise ValueError(f"{run_dir} exists: nothing is overwritten (start again in a second, or change --experiment)")
-    os.makedirs(run_dir)
     meta = {"action_mode": args.action_mode, "num_obs": env.num_obs, "num_actions": env.num_actions,
-            "preset": args.preset, "config": dataclasses.asdict(cfg)}  # fmt: skip
-    with open(os.path.join(run_dir, "config.json"), "w") as f:
-        json.dump({"hexnewton": meta, "train": tcfg}, f, indent=1, default=str)
+            "preset": args.preset, "config": dataclasses.asdict(cfg), "world_size": dist.world_size}  # fmt: skip
+    if dist.is_main:  # only rank 0 writes logs, checkpoints and the export
+        if os.path.exists(run_dir):
+            raise ValueError(f"{run_dir} exists: nothing is overwritten (start again in a second, or change --experiment)")
+        os.makedirs(run_dir)
+        with open(os.path.join(run_dir, "config.json"), "w") as f:
+            json.dump({"hexnewton": meta, "train": tcfg}, f, indent=1, default=str)
 
-    runner = OnPolicyRunner(env, copy.deepcopy(tcfg), log_dir=run_dir, device=device)
+    runner = OnPolicyRunner(env, copy.deepcopy(tcfg), log_dir=run_dir if dist.is_main else None, device=device)
     _save = runner.save
 
     def save(path: str, infos: dict | None = None) -> None:
@@ -217,7 +258,8 @@ def main(argv: list[str] | None = None) -> int:
         runner.current_learning_iteration += 1
         print(f"resumed from {args.resume}: continuing at iteration {runner.current_learning_iteration}, "
               f"learning rate {runner.alg.learning_rate:.2e}")
-    print(f"training {experiment}: {args.num_envs} envs on {device}, preset {args.preset}, logs in {run_dir}")
+    where = f"rank {dist.rank} of {dist.world_size}, " if dist.world_size > 1 else ""
+    print(f"training {experiment}: {where}{args.num_envs} envs on {device}, preset {args.preset}, logs in {run_dir}")
     t0 = time.time()
     handlers = {sig: signal.signal(sig, _stop) for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGALRM)}
     if args.max_minutes:
@@ -227,9 +269,10 @@ def main(argv: list[str] | None = None) -> int:
     except TrainingStopped as stop:  # save what was learnt; rsl-rl only saves at intervals and at the end
         signal.setitimer(signal.ITIMER_REAL, 0)
         it = runner.current_learning_iteration
-        print(f"stopped by {stop} after iteration {it}: saving model_{it}.pt")
-        runner.save(os.path.join(run_dir, f"model_{it}.pt"))
-        runner.logger.stop_logging_writer()
+        if dist.is_main:
+            print(f"stopped by {stop} after iteration {it}: saving model_{it}.pt")
+            runner.save(os.path.join(run_dir, f"model_{it}.pt"))
+            runner.logger.stop_logging_writer()
     finally:
         signal.setitimer(signal.ITIMER_REAL, 0)
         for sig, handler in handlers.items():
@@ -237,6 +280,8 @@ def main(argv: list[str] | None = None) -> int:
         if hasattr(runner.logger.writer, "flush"):
             runner.logger.writer.flush()  # TensorBoard otherwise writes every 120 s
     print(f"finished at iteration {runner.current_learning_iteration} after {time.time() - t0:.0f} s")
+    if not dist.is_main:
+        return 0
     stats = env.episode_stats()
     print("last episodes: " + ", ".join(f"{k} {v:.3f}" for k, v in stats.items()))
     onnx_path = os.path.join(run_dir, "policy.onnx")

@@ -443,3 +443,28 @@ def test_interrupt_saves_and_exports(tmp_path):
     models = glob.glob(run + "/model_*.pt")
     assert len(models) >= 2 and os.path.isfile(run + "/policy.onnx")
     assert not glob.glob(run + "/*.tmp")  # atomic saves leave no temporary file
+
+
+def test_torchrun_ranks_devices_and_seeds():
+    """torchrun's variables pick cuda:LOCAL_RANK and rank-offset seeds; a plain run is unchanged (no GPU needed)."""
+    from hexnewton.train import distributed_rank
+
+    assert distributed_rank({}, None).device is None and distributed_rank({}, "cpu").world_size == 1
+    r = distributed_rank({"WORLD_SIZE": "2", "RANK": "1", "LOCAL_RANK": "1"}, None)
+    assert (r.device, r.rank, r.world_size, r.is_main) == ("cuda:1", 1, 2, False)
+    assert r.seeds(7, 0) == (8, 1) and distributed_rank({}, None).seeds(7, 0) == (7, 0)
+    r0 = distributed_rank({"WORLD_SIZE": "2", "RANK": "0", "LOCAL_RANK": "0"}, "cuda")
+    assert r0.device == "cuda:0" and r0.is_main
+    r3 = distributed_rank({"WORLD_SIZE": "4", "RANK": "3", "LOCAL_RANK": "1"}, None)  # 2 nodes x 2 GPUs
+    assert r3.device == "cuda:1" and r3.rank == 3
+    for environ, device, message in (({"WORLD_SIZE": "2", "RANK": "2", "LOCAL_RANK": "0"}, None, "must lie in"),
+                                     ({"WORLD_SIZE": "2", "RANK": "1", "LOCAL_RANK": "1"}, "cpu", "runs on CUDA"),
+                                     ({"WORLD_SIZE": "two"}, None, "integers")):  # fmt: skip
+        with pytest.raises(ValueError, match=message):
+            distributed_rank(environ, device)
+    # the CLI: a CPU device under torchrun's variables is one line, exit 2
+    env = dict(os.environ, WORLD_SIZE="2", RANK="1", LOCAL_RANK="1")
+    proc = subprocess.run([sys.executable, "train.py", "--device", "cpu"], capture_output=True, text=True, env=env,
+                          timeout=300)  # fmt: skip
+    err = [line for line in proc.stderr.splitlines() if line.strip() and "Warp CUDA" not in line]
+    assert proc.returncode == 2 and len(err) == 1 and "runs on CUDA" in err[0], proc.stderr[-1500:]
