@@ -197,6 +197,8 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--save_interval", type=positive_int, default=50)
     p.add_argument("--max_minutes", type=float, default=None,
                    help="stop after this wall time (then save, export and evaluate as at the end)")
+    p.add_argument("--target_success", type=float, default=None,
+                   help="stop once this share of the last 1024 training episodes succeeded (time-to-skill)")
     p.add_argument("--goal_distance", type=float, default=TaskConfig.goal_distance)
     p.add_argument("--direction_deadband", type=float, default=RewardConfig.direction_deadband,
                    help="heading error [rad] below which the direction term is 0 (Table 1: pi/6; default 0)")
@@ -205,17 +207,20 @@ def main(argv: list[str] | None = None) -> int:
         raise ValueError(f"unknown preset '{args.preset}': choose one of {', '.join(PRESETS)}")
     if args.max_minutes is not None and not args.max_minutes > 0:
         raise ValueError("--max_minutes must be positive")
+    if args.target_success is not None and not 0 < args.target_success <= 1:
+        raise ValueError("--target_success must lie in (0, 1]")
     ckpt = load_checkpoint(args.resume) if args.resume else None  # fail before building anything
     check_log_dir(args.log_dir)
 
     from rsl_rl.runners import OnPolicyRunner
 
-    from .env import make_env
+    from .env import RING, make_env
     from .sim import resolve_device
 
     dist = distributed_rank(dict(os.environ), args.device)
-    if dist.world_size > 1 and args.max_minutes:
-        raise ValueError("--max_minutes would stop the ranks at different iterations: use --max_iterations")
+    if dist.world_size > 1 and (args.max_minutes or args.target_success):
+        raise ValueError("--max_minutes / --target_success would stop the ranks at different iterations: "
+                         "use --max_iterations")
     device = resolve_device(dist.device or args.device)
     if args.num_envs is None:
         args.num_envs = 4096 if device.startswith("cuda") else 64
@@ -252,6 +257,17 @@ def main(argv: list[str] | None = None) -> int:
         os.replace(path + ".tmp", path)
 
     runner.save = save
+    if args.target_success is not None:
+        _log = runner.logger.log
+
+        def log(*a, **k):
+            """After each iteration's log: stop once the ring of finished episodes is full and successful."""
+            _log(*a, **k)
+            stats = env.episode_stats()  # one small host read per iteration
+            if stats["episodes"] >= RING and stats["success_rate"] >= args.target_success:
+                raise TrainingStopped(f"target success {stats['success_rate']:.3f} >= {args.target_success}")
+
+        runner.logger.log = log
     if ckpt is not None:
         runner.load(args.resume, map_location=device)
         # rsl-rl stores the last finished iteration and would start again from it: continue after it instead
