@@ -56,8 +56,6 @@ def make_sb3_env(env):
     from stable_baselines3.common.vec_env import VecEnv, VecMonitor
 
     class Sb3VecEnv(VecEnv):
-        render_mode = None  # headless
-
         def __init__(self):
             obs_space = spaces.Box(-np.inf, np.inf, (env.num_obs,), np.float32)
             act_space = spaces.Box(-1.0, 1.0, (env.num_actions,), np.float32)
@@ -87,7 +85,8 @@ def make_sb3_env(env):
             env.close()
 
         def get_attr(self, attr_name, indices=None):
-            return [getattr(env, attr_name)] * len(list(self._get_indices(indices)))
+            value = None if attr_name == "render_mode" else getattr(env, attr_name)  # headless: no render mode
+            return [value] * len(list(self._get_indices(indices)))
 
         def set_attr(self, attr_name, value, indices=None):
             raise AttributeError("the hexnewton env has no per-robot attributes to set")

@@ -147,10 +147,8 @@ class Episode:
 def run_rounds(controller: str, checkpoint: str | None, terrain: str, rounds: int, device: str | None,
                max_steps: int, reset_yaw: float, progress: bool = True) -> Episode:  # fmt: skip
     """``rounds`` robots, one first episode each, with a deterministic controller on unseen seeds."""
-    import torch
-
     from .env import make_env
-    from .play import fixed_cpg_actions, load_policy
+    from .play import fixed_cpg_actions, load_policy, stepped
 
     mode = CONTROLLERS[controller]
     cfg = HexConfig(
@@ -170,25 +168,15 @@ def run_rounds(controller: str, checkpoint: str | None, terrain: str, rounds: in
         policy = load_policy(env, checkpoint, mode)
     pos, rpy, done, status, params = [], [], [], [], []
     finished = np.zeros(rounds, bool)
-    steps = range(max_steps)
-    if progress:
-        from rich.progress import track
-
-        steps = track(steps, description=f"{LABELS[controller]} on {terrain}", transient=True)
-    obs = env.get_observations()
-    with torch.inference_mode():
-        for _ in steps:
-            obs, _, _, _ = env.step(policy(obs))
-            st = env.status.numpy()
-            q = env.last_q.numpy()
-            pos.append(q[:, :2] - env.last_start.numpy())
-            rpy.append(env.rpy.numpy().copy())
-            done.append(st != 0)
-            status.append(st.copy())
-            params.append(env.last_params.numpy()[0].copy() if mode == "cpg" else np.full(len(PARAM_NAMES), np.nan))
-            finished |= st != 0
-            if finished.all():
-                break
+    for _, st, _, p, r in stepped(env, policy, max_steps, f"{LABELS[controller]} on {terrain}", progress):
+        pos.append(p[:, :2])
+        rpy.append(r)
+        done.append(st != 0)
+        status.append(st.copy())
+        params.append(env.last_params.numpy()[0].copy() if mode == "cpg" else np.full(len(PARAM_NAMES), np.nan))
+        finished |= st != 0
+        if finished.all():
+            break
     env.world.check_contacts()
     return Episode(np.stack(pos), np.stack(rpy), np.stack(done), np.stack(status), np.stack(params),
                    cfg.task.control_dt)  # fmt: skip

@@ -125,30 +125,38 @@ def fixed_cpg_actions(env) -> "torch.Tensor":  # noqa: F821
     return torch.tensor(a, dtype=torch.float32, device=env._obs_t.device).repeat(env.num_envs, 1)
 
 
-def rollout(env, policy, steps: int, recorder: Recorder | None = None, progress: bool = True) -> dict:
-    """Run ``policy(obs) -> actions`` for ``steps`` control steps; returns first-episode statistics."""
+def stepped(env, policy, steps: int, description: str, progress: bool = True):
+    """Run ``policy(obs) -> actions`` for up to ``steps`` control steps (deterministic, no gradients); yield
+    per step the host copies ``(k, status, q, pos, rpy)``: status codes (N,), the state before resets
+    (N, 25), base position relative to each env's start (N, 3) and roll/pitch/yaw (N, 3)."""
     import torch
 
+    it = range(steps)
+    if progress:
+        from rich.progress import track
+
+        it = track(it, description=description, transient=True)
+    obs = env.get_observations()
+    with torch.inference_mode():
+        for k in it:
+            obs, _, _, _ = env.step(policy(obs))
+            q = env.last_q.numpy()
+            pos = q[:, :3].copy()
+            pos[:, :2] -= env.last_start.numpy()
+            yield k, env.status.numpy(), q, pos, env.rpy.numpy().copy()
+
+
+def rollout(env, policy, steps: int, recorder: Recorder | None = None, progress: bool = True) -> dict:
+    """Run ``policy(obs) -> actions`` for ``steps`` control steps; returns first-episode statistics."""
     n = env.num_envs
     pos = np.zeros((steps, n, 3), np.float32)
     rpy = np.zeros((steps, n, 3), np.float32)
     done = np.zeros((steps, n), bool)
     status_log = np.zeros((steps, n), np.int32)
-    it = range(steps)
-    if progress:
-        from rich.progress import track
-
-        it = track(it, description=f"{env.cfg.terrain.name}", transient=True)
-    obs = env.get_observations()
-    with torch.inference_mode():
-        for k in it:
-            obs, _, _, _ = env.step(policy(obs))
-            status = env.status.numpy()
-            q, r = env.last_q.numpy(), env.rpy.numpy()
-            pos[k], rpy[k], done[k], status_log[k] = q[:, :3], r, status != 0, status
-            pos[k, :, :2] -= env.last_start.numpy()  # relative to each env's start
-            if recorder is not None:
-                recorder.add(env, (k + 1) * env.cfg.task.control_dt, q, r, status != 0)
+    for k, status, q, p, r in stepped(env, policy, steps, env.cfg.terrain.name, progress):
+        pos[k], rpy[k], done[k], status_log[k] = p, r, status != 0, status
+        if recorder is not None:
+            recorder.add(env, (k + 1) * env.cfg.task.control_dt, q, r, status != 0)
     env.world.check_contacts()
     return first_episode_stats(pos, rpy, done, status_log)
 
