@@ -377,8 +377,8 @@ def main(argv: list[str] | None = None) -> int:
     device = resolve_device(args.device)
     progress = not args.no_progress and sys.stderr.isatty()
     results: dict[str, dict[str, dict]] = {}
+    os.makedirs(out)
     t0 = time.perf_counter()
-    figures: dict[str, tuple[dict, dict]] = {}
     for terrain in args.terrains:
         episodes, metrics = {}, {}
         for ctrl in args.controllers:
@@ -391,22 +391,19 @@ def main(argv: list[str] | None = None) -> int:
             episodes[ctrl], metrics[ctrl] = ep, m
             print(f"{terrain:8s} {LABELS[ctrl]:8s} " + "  ".join(f"{d:g} m {_pct(s[f'success_{d:g}m'])}" for d in DISTANCES)
                   + f"  ({s['rounds']} rounds, {len(ep.done)} steps)", flush=True)  # fmt: skip
-        figures[terrain] = (episodes, metrics)
+        # figures now, so that only one terrain's trajectories are held at a time (1000 rounds x 7000 steps)
+        plot_terrain(os.path.join(out, f"fig_{terrain}.png"), terrain, episodes, metrics)
+        if terrain == args.terrains[0] and any(not np.isnan(ep.params).all() for ep in episodes.values()):
+            plot_params(os.path.join(out, "fig_params.png"), terrain, episodes)
     wall = time.perf_counter() - t0
     meta = {"device": device, "rounds": args.rounds, "max_steps": args.max_steps, "reset_yaw": args.reset_yaw,
             "terrain_seed": EVAL_TERRAIN_SEED, "reset_seed": EVAL_RESET_SEED,
             "unseen": "terrain seed and start poses differ from training (train.py: terrain seed 0, seed 1)",
             "wall_s": round(wall, 1)}  # fmt: skip
-    os.makedirs(out)
     with open(os.path.join(out, "results.json"), "w") as f:
         json.dump({"meta": meta, "results": results}, f, indent=1)
     with open(os.path.join(out, "report.md"), "w") as f:
         f.write(report_markdown(results, meta))
-    for terrain, (episodes, metrics) in figures.items():
-        plot_terrain(os.path.join(out, f"fig_{terrain}.png"), terrain, episodes, metrics)
-    first = args.terrains[0]
-    if any(not np.isnan(ep.params).all() for ep in figures[first][0].values()):
-        plot_params(os.path.join(out, "fig_params.png"), first, figures[first][0])
     if runs:
         plot_learning(os.path.join(out, "fig_learning.png"), runs)
     print(f"report in {out}/ (report.md, results.json, figures) after {wall:.0f} s")

@@ -129,10 +129,11 @@ def _nonfinite_envs(
 
 @wp.kernel
 def _zero_world_rows(mask: wp.array[wp.bool], values: wp.array2d[wp.float32]):
-    """values[w, :] = 0 for the worlds w selected by mask."""
-    w, i = wp.tid()
+    """values[w, :] = 0 for the worlds w selected by mask (one thread per world: most steps reset few)."""
+    w = wp.tid()
     if mask[w]:
-        values[w, i] = 0.0
+        for i in range(values.shape[1]):
+            values[w, i] = 0.0
 
 
 def as_mask(mask: np.ndarray | wp.array | None, buffer: wp.array) -> wp.array:
@@ -427,7 +428,7 @@ class World:
         # ... and so do the constraint rows (mujoco_warp fills only the non-zero Jacobian entries of a new row):
         # zero them, or a NaN left by a blow-up returns a few steps later
         for rows in self._efc_rows:
-            wp.launch(_zero_world_rows, dim=rows.shape, inputs=[m, rows], device=self.device)
+            wp.launch(_zero_world_rows, dim=self.num_envs, inputs=[m, rows], device=self.device)
 
     def reset_nonfinite(self) -> int:
         """Reset every env whose state holds NaN/Inf; returns how many (also counted in nonfinite_resets)."""
