@@ -109,11 +109,16 @@ class PipelineResult:
     memory_per_env_kb: float = float("nan")  # CUDA only
 
 
-def _used_device_memory(device: str) -> int:
+def _device_memory(device: str) -> int:
+    """Bytes this process holds on ``device``: Warp's memory pool plus torch's allocations. The previous
+    benchmark's env is collected first, so the next delta is not hidden in memory it left in a pool."""
+    import gc
+
     import torch
 
-    free, total = torch.cuda.mem_get_info(torch.device(device))
-    return total - free
+    gc.collect()
+    torch.cuda.empty_cache()
+    return wp.get_mempool_used_mem_current(device) + torch.cuda.memory_allocated(torch.device(device))
 
 
 def bench_env(terrain: str, num_envs: int, device: str, steps: int, seed: int = 0) -> PipelineResult:
@@ -151,9 +156,8 @@ def bench_train(terrain: str, num_envs: int, device: str, iterations: int, seed:
     from .train import seed_everything, train_cfg
 
     seed_everything(seed)
-    used0 = _used_device_memory(device) if device.startswith("cuda") else 0
-    if device.startswith("cuda"):
-        torch.cuda.reset_peak_memory_stats(device)
+    cuda = device.startswith("cuda")
+    used0 = _device_memory(device) if cuda else 0
     cfg = HexConfig(sim=replace(SimConfig(), num_envs=num_envs, device=device),
                     terrain=TerrainConfig(name=terrain, seed=seed))  # fmt: skip
     env = make_env(cfg)
@@ -167,8 +171,9 @@ def bench_train(terrain: str, num_envs: int, device: str, iterations: int, seed:
     wall = time.perf_counter() - t0
     rate = num_envs * tcfg["num_steps_per_env"] * iterations / wall
     mem = float("nan")
-    if device.startswith("cuda"):
-        mem = (_used_device_memory(device) - used0) / num_envs / 1024
+    if cuda:  # env, rollout storage, networks and optimizer (Warp pool + torch), after the timed iterations
+        mem = (wp.get_mempool_used_mem_current(device) + torch.cuda.memory_allocated(torch.device(device)) - used0)
+        mem /= num_envs * 1024
     return PipelineResult(terrain, num_envs, train_steps_per_s=rate, train_robot_s_per_s=rate * cfg.task.control_dt,
                           train_iteration_s=wall / iterations, memory_per_env_kb=mem)  # fmt: skip
 

@@ -135,6 +135,7 @@ class HexapodEnv(VecEnv):
         self._ring_t = wp.to_torch(self._ring)
         self._steps_t = wp.to_torch(self.episode_steps)
         self._nonfinite_t = wp.to_torch(self._nonfinite_total)
+        self._overflow_frames_t = torch.zeros(())  # frames with dropped contacts (host count)
 
         self._reset(None)
         self._observe()
@@ -164,6 +165,7 @@ class HexapodEnv(VecEnv):
         self.common_step_counter += 1
         if self.common_step_counter % 250 == 0:  # one host read every 250 steps: contact overflow never silent
             self.world.check_contacts()
+            self._overflow_frames_t.fill_(float(self.world.overflow_frames))
         extras = {"time_outs": self._time_out_t, "log": self._log()}
         return self.get_observations(), self._rew_t, self._done_t, extras
 
@@ -257,6 +259,7 @@ class HexapodEnv(VecEnv):
         log["Episode/distance_m"] = rates[5]
         log["Episode/length_steps"] = rates[6]
         log["Episode/nonfinite_resets_total"] = self._nonfinite_t[0].float()
+        log["Episode/contact_overflow_frames"] = self._overflow_frames_t
         return log
 
     def episode_stats(self) -> dict[str, float]:
@@ -265,7 +268,8 @@ class HexapodEnv(VecEnv):
         out = {f"{name}_rate": float(rates[k]) for k, name in enumerate(STATUS_NAMES[1:])}
         out.update(distance_m=float(rates[5]), length_steps=float(rates[6]),
                    episodes=int(min(int(self._cursor.numpy()[0]), RING)),
-                   nonfinite_resets_total=int(self._nonfinite_total.numpy()[0]))  # fmt: skip
+                   nonfinite_resets_total=int(self._nonfinite_total.numpy()[0]),
+                   contact_overflow_frames=int(self.world.overflow_frames))  # fmt: skip
         return out
 
     def close(self) -> None:

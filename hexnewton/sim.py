@@ -200,16 +200,17 @@ class OverflowReport:
         names = []
         b = self.bits
         if b & int(SolverMuJoCo.OverflowBits.CONTACT_PIPELINE):
-            names.append("collision pipeline contacts > rigid_contact_max")
+            names.append("collision pipeline contacts > rigid_contact_max (raise sim.contacts_per_env)")
         if b & int(SolverMuJoCo.OverflowBits.SOLVER_NCONMAX):
             names.append("contacts > MuJoCo nconmax (raise sim.contacts_per_env)")
         if b & 0xFFFF:
             names.append(f"mujoco_warp overflow flags 0x{b & 0xFFFF:x} (raise sim.constraints_per_env)")
         if b & OVERFLOW_TRIANGLE_PAIRS:
-            names.append("triangle-pair buffer (mesh terrain)")
+            names.append("triangle-pair buffer (raise sim.triangle_pairs_per_env)")
         if b & OVERFLOW_CONTACT_REDUCTION:
-            names.append("contact-reduction buffer")
-        return f"contact buffers overflowed in {self.worlds} world(s): " + "; ".join(names)
+            names.append("contact-reduction buffer (raise sim.contacts_per_env)")
+        return (f"contact buffers overflowed in {self.worlds} world(s), contacts were dropped: " + "; ".join(names)
+                + "; or lower sim.rigid_gap (fewer contact candidates)")
 
 
 class World:

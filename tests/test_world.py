@@ -76,7 +76,8 @@ def test_overflow_is_reported_never_silent():
     world.step(20)
     with pytest.warns(RuntimeWarning, match="overflowed"):
         report = world.check_contacts()
-    assert not report.ok and report.worlds == N
+    assert not report.ok and report.worlds == N and world.overflow_frames == 20
+    assert "raise sim." in report.describe() and "rigid_gap" in report.describe()  # the fix is in the warning
     world.step(5)
     with pytest.raises(ContactOverflowError, match="nconmax"):
         world.check_contacts(on_overflow="raise")

@@ -9,7 +9,9 @@
 # The first run compiles every kernel alone (2 iterations) so that the
 # concurrent runs load them from Warp's cache (SKIP_WARMUP=1 when the cache is warm). With EVAL_STEPS set,
 # each run's last checkpoint is then evaluated deterministically by play.py on its training terrain
-# (EVAL_ENVS robots, start yaw noise 0.2 rad as in training, an unseen terrain/reset seed).
+# (EVAL_ENVS robots, start yaw noise 0.2 rad as in training, an unseen terrain/reset seed), cut off after
+# EVAL_TIMEOUT_S seconds (default 120; 7000 steps of 1024 robots took longer than 70 s on an H200); the
+# training deadline leaves that much time. Results: $OUT/run_<name>.tgz and $OUT/eval_<name>.txt.
 # Used for RESULTS.md (issue 4) on the device tool's H100.
 set -u
 OUT=${OUT:-out}
@@ -23,7 +25,9 @@ if [ "${SKIP_WARMUP:-0}" != 1 ]; then
     > "$OUT/warmup.log" 2>&1 || { tail -40 "$OUT/warmup.log"; exit 1; }
   echo "warm-up (compile + 2 iterations): $((SECONDS - t)) s"
 fi
-left=$((DEADLINE - START - SECONDS - 45))   # 45 s for saving, ONNX export and packing
+# 45 s for saving, ONNX export and packing, plus the evaluation's time limit
+eval_s=0; [ -n "${EVAL_STEPS:-}" ] && eval_s=${EVAL_TIMEOUT_S:-120}
+left=$((DEADLINE - START - SECONDS - 45 - eval_s))
 minutes=$(python -c "print(max(0.5, $left / 60))")
 echo "training ${#@} runs concurrently for $minutes min"
 gpu_of() { case "$1" in *@*) echo "${1#*@}";; *) echo "${CUDA_VISIBLE_DEVICES:-0}";; esac; }
@@ -34,24 +38,25 @@ for spec in "$@"; do
 done
 wait
 last_of() { ls -v "$(ls -d "$OUT/logs/$1"/*/ | tail -1)"/model_*.pt | tail -1; }
-for spec in "$@"; do   # evaluations run at once, each on its run's GPU
-  name=${spec%%:*}; args=${spec#*:}; gpu=$(gpu_of "$name"); name=${name%@*}; last=$(last_of "$name")
-  echo "== $name: $(grep -E '^(trained|stopped|last episodes)' "$OUT/logs/$name.log" | tr '\n' ' ')"
-  if [ -n "${EVAL_STEPS:-}" ]; then
-    terrain=$(echo "$args" | sed -n 's/.*--terrain \([a-z]*\).*/\1/p')
-    CUDA_VISIBLE_DEVICES=$gpu python play.py --controller cpg_rl --checkpoint "$last" --terrain "${terrain:-flat}" \
-      --num_envs "${EVAL_ENVS:-1024}" --steps "$EVAL_STEPS" --reset_yaw 0.2 --seed 11 --no-progress 2>&1 \
-      | grep -A1 '^\[' > "$(dirname "$last")/eval.txt" &
-  fi
-done
-wait
+# pack and keep first: a device call that runs past its limit loses everything not yet under $OUT, and
+# $OUT itself is emptied by the next call (session 3 lost two checkpoints that way)
 for spec in "$@"; do
   name=${spec%%:*}; name=${name%@*}; last=$(last_of "$name"); run=$(dirname "$last")
-  [ -f "$run/eval.txt" ] && echo "== $name eval:" && cat "$run/eval.txt"
-  [ -n "${KEEP:-}" ] && mkdir -p "$KEEP" && cp "$last" "$KEEP/$name.pt"
+  echo "== $name: $(grep -E '^(trained|stopped|last episodes)' "$OUT/logs/$name.log" | tr '\n' ' ')"
+  if [ -n "${KEEP:-}" ]; then mkdir -p "$KEEP" && cp "$last" "$KEEP/$name.pt"; fi
   tar czf "$OUT/run_$name.tgz" -C "$OUT/logs" "$name.log" -C "$OUT/logs/$name" \
     "$(basename "$run")/config.json" "$(basename "$run")/policy.onnx" "$(basename "$run")/$(basename "$last")" \
-    $(cd "$OUT/logs/$name" && ls "$(basename "$run")"/eval.txt 2>/dev/null) \
     $(cd "$OUT/logs/$name" && ls "$(basename "$run")"/events.*)
 done
+if [ -n "${EVAL_STEPS:-}" ]; then   # evaluations run at once, each on its run's GPU, within EVAL_TIMEOUT_S
+  for spec in "$@"; do
+    name=${spec%%:*}; args=${spec#*:}; gpu=$(gpu_of "$name"); name=${name%@*}; last=$(last_of "$name")
+    terrain=$(echo "$args" | sed -n 's/.*--terrain \([a-z]*\).*/\1/p')
+    CUDA_VISIBLE_DEVICES=$gpu timeout "${EVAL_TIMEOUT_S:-120}" python play.py --controller cpg_rl --checkpoint "$last" \
+      --terrain "${terrain:-flat}" --num_envs "${EVAL_ENVS:-1024}" --steps "$EVAL_STEPS" --reset_yaw 0.2 --seed 11 \
+      --no-progress 2>&1 | grep -A1 '^\[' > "$OUT/eval_$name.txt" &
+  done
+  wait
+  for spec in "$@"; do name=${spec%%:*}; name=${name%@*}; echo "== $name eval:"; cat "$OUT/eval_$name.txt"; done
+fi
 rm -rf "$OUT/logs"
