@@ -106,6 +106,15 @@ class TerrainConfig:
     rugged_half_width: float = 2.0
     # resolution of the in-kernel height query grid [m] (must divide block_size and step_depth)
     query_resolution: float = 0.01
+    # ours: terrain curriculum (legged_gym style; issue 9), off at 0. With levels = L > 0 the terrain is L
+    # lanes side by side along y, each lane_width wide (replacing ``width``); lane k (0-based) is this
+    # terrain with its block heights and step rise scaled by (k + 1) / L, so the last lane is the terrain
+    # above. Robots move up a lane after reaching the goal and down one after walking less than half of it
+    # (kernels/curriculum.py). 3 m = 2 x TaskConfig.max_abs_y: a robot leaves the course as it leaves its lane.
+    levels: int = 0
+    lane_width: float = 3.0
+    # robots start evenly spread over levels 0 .. start_levels - 1 (legged_gym: max_init_terrain_level)
+    start_levels: int = 1
 
 
 @dataclass

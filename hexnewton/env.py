@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
 import torch
 import warp as wp
 from rsl_rl.env import VecEnv
@@ -34,6 +35,7 @@ from tensordict import TensorDict
 from .config import HexConfig
 from .controller import CPGController
 from .kernels.actions import joint_actions_kernel, scale_actions_kernel
+from .kernels.curriculum import curriculum_kernel, placement_kernel, start_levels
 from .kernels.observations import OBS_DIM, observations_kernel
 from .kernels.rewards import TERMS, rewards_kernel
 from .kernels.terminations import NONFINITE, STATUS_NAMES, TIMEOUT, episode_status_kernel
@@ -136,6 +138,15 @@ class HexapodEnv(VecEnv):
         self._steps_t = wp.to_torch(self.episode_steps)
         self._nonfinite_t = wp.to_torch(self._nonfinite_total)
         self._overflow_frames_t = torch.zeros(())  # frames with dropped contacts (host count)
+        self.level = None  # curriculum level per env (TerrainConfig.levels > 0)
+        if cfg.terrain.levels:
+            self.level = wp.array(start_levels(n, cfg.terrain.start_levels), dtype=wp.int32, device=dev)
+            self._level_t = wp.to_torch(self.level)
+            self._lane_offset = wp.array(world.spawn_xy[:, 1].astype(np.float32), device=dev)
+            wp.launch(placement_kernel, dim=n,
+                      inputs=[self.level, cfg.terrain.levels, cfg.terrain.lane_width, self._lane_offset,
+                              world.height_field, world.footprint, world.spawn_clearance],
+                      outputs=[world.spawn_xy_wp, world.spawn_z_wp], device=dev)  # fmt: skip
 
         self._reset(None)
         self._observe()
@@ -189,6 +200,8 @@ class HexapodEnv(VecEnv):
                   self._ring, self._cursor, self.obs, self.reward, self.done_u8, self.time_out]  # fmt: skip
         if self.controller is not None:
             arrays += [self.controller.params, self.controller.params_target, self.controller.state]
+        if self.level is not None:
+            arrays += [self.level, self.world.spawn_xy_wp, self.world.spawn_z_wp]
         return arrays
 
     def _control_step(self) -> None:
@@ -229,6 +242,15 @@ class HexapodEnv(VecEnv):
         if self.controller is not None:
             wp.copy(self.last_cpg_state, self.controller.state)
             wp.copy(self.last_params, self.controller.params)
+        if self.level is not None:  # finished envs change lanes before they are reset onto them
+            tc = self.cfg.terrain
+            wp.launch(
+                curriculum_kernel, dim=n,
+                inputs=[self.status, w.joint_q_wp, w.start_wp, t.goal_distance, tc.levels, tc.lane_width,
+                        self._lane_offset, w.height_field, w.footprint, w.spawn_clearance, t.seed + 7919,
+                        w.reset_counter],
+                outputs=[self.level, w.spawn_xy_wp, w.spawn_z_wp], device=dev,
+            )  # fmt: skip
         self._reset(self.done)
         self._observe()
 
@@ -260,6 +282,9 @@ class HexapodEnv(VecEnv):
         log["Episode/length_steps"] = rates[6]
         log["Episode/nonfinite_resets_total"] = self._nonfinite_t[0].float()
         log["Episode/contact_overflow_frames"] = self._overflow_frames_t
+        if self.level is not None:
+            log["Curriculum/mean_level"] = self._level_t.float().mean()
+            log["Curriculum/top_level_share"] = (self._level_t == self.cfg.terrain.levels - 1).float().mean()
         return log
 
     def episode_stats(self) -> dict[str, float]:
@@ -270,6 +295,8 @@ class HexapodEnv(VecEnv):
                    episodes=int(min(int(self._cursor.numpy()[0]), RING)),
                    nonfinite_resets_total=int(self._nonfinite_total.numpy()[0]),
                    contact_overflow_frames=int(self.world.overflow_frames))  # fmt: skip
+        if self.level is not None:
+            out["mean_level"] = float(self.level.numpy().mean())
         return out
 
     def close(self) -> None:

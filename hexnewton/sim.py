@@ -241,9 +241,10 @@ class World:
         self.spawn_xy = np.zeros((n, 2))
         if n > 1:
             self.spawn_xy[:, 1] = np.linspace(-sim.spawn_y_spread, sim.spawn_y_spread, n)
-        footprint = 0.5 * math.hypot(*cfg.robot.torso_size[:2]) + cfg.robot.hip_length + cfg.robot.femur_length
-        ground = max_terrain_height_np(self.terrain.grid, self.spawn_xy[:, 0], self.spawn_xy[:, 1], footprint)
-        self.spawn_z = ground + max(cfg.robot.spawn_height, stand_height(cfg.robot))
+        self.footprint = 0.5 * math.hypot(*cfg.robot.torso_size[:2]) + cfg.robot.hip_length + cfg.robot.femur_length
+        self.spawn_clearance = max(cfg.robot.spawn_height, stand_height(cfg.robot))
+        ground = max_terrain_height_np(self.terrain.grid, self.spawn_xy[:, 0], self.spawn_xy[:, 1], self.footprint)
+        self.spawn_z = ground + self.spawn_clearance
         nq = BASE_Q + NUM_JOINTS
         q = np.asarray(scene.joint_q, dtype=np.float32).reshape(n, nq)
         q[:, 0:2] = self.spawn_xy
@@ -297,7 +298,7 @@ class World:
         efc = self.solver.mjw_data.efc
         self._efc_rows = [a.reshape((n, -1)) for a in (efc.J, efc.D, efc.Jqvel, efc.aref, efc.force, efc.frictionloss,
                                                         efc.margin, efc.pos, efc.vel)]  # fmt: skip
-        self._reset_counter = wp.zeros(1, dtype=wp.int32, device=self.device)
+        self.reset_counter = wp.zeros(1, dtype=wp.int32, device=self.device)
         self._prev_x_scratch = wp.zeros(n, dtype=wp.float32, device=self.device)
         # one leg's standing pose and (hip, knee, ankle) limits, as kernels take them
         lower, upper = leg_bounds(cfg.robot)
@@ -415,12 +416,12 @@ class World:
             reset_envs_kernel,
             dim=self.num_envs,
             inputs=[m, self.spawn_xy_wp, self.spawn_z_wp, self.stand_pose, self.joint_lower, self.joint_upper,
-                    float(lateral), float(yaw), float(joint_noise), int(seed), self._reset_counter],  # fmt: skip
+                    float(lateral), float(yaw), float(joint_noise), int(seed), self.reset_counter],  # fmt: skip
             outputs=[self.joint_q_wp, self.joint_qd_wp, self.joint_target_wp, self.start_wp,
                      prev_x if prev_x is not None else self._prev_x_scratch],  # fmt: skip
             device=self.device,
         )
-        wp.launch(advance_counter_kernel, dim=1, inputs=[self._reset_counter], device=self.device)
+        wp.launch(advance_counter_kernel, dim=1, inputs=[self.reset_counter], device=self.device)
         newton.eval_fk(self.model, self.state_0.joint_q, self.state_0.joint_qd, self.state_0, mask=m)
         # MuJoCo's per-world warm start and applied forces survive a state reset: after a blow-up they would
         # poison the next step, so clear them for the reset worlds (the joint state was set above: flags 0)

@@ -200,6 +200,14 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--target_success", type=float, default=None,
                    help="stop once this share of the last 1024 training episodes succeeded (time-to-skill)")
     p.add_argument("--goal_distance", type=float, default=TaskConfig.goal_distance)
+    p.add_argument("--levels", type=int, default=TerrainConfig.levels,
+                   help="terrain curriculum: this many lanes of increasing difficulty, the last one the terrain "
+                        "itself (0: off)")  # fmt: skip
+    p.add_argument("--start_levels", type=int, default=TerrainConfig.start_levels,
+                   help="with --levels: robots start spread over the first this many lanes")
+    p.add_argument("--step_rise", type=float, default=TerrainConfig.step_rise, help="step height [m] (§3.1: 0.06)")
+    p.add_argument("--block_height_max", type=float, default=TerrainConfig.block_height_max,
+                   help="tallest rugged block [m] (§3.1: 0.06)")
     p.add_argument("--direction_deadband", type=float, default=RewardConfig.direction_deadband,
                    help="heading error [rad] below which the direction term is 0 (Table 1: pi/6; default 0)")
     args = p.parse_args(argv)
@@ -228,7 +236,8 @@ def main(argv: list[str] | None = None) -> int:
     seed_everything(seed)
     cfg = HexConfig(
         sim=dataclasses.replace(SimConfig(), num_envs=args.num_envs, device=device),
-        terrain=TerrainConfig(name=args.terrain, seed=terrain_seed),
+        terrain=TerrainConfig(name=args.terrain, seed=terrain_seed, levels=args.levels, start_levels=args.start_levels,
+                              step_rise=args.step_rise, block_height_max=args.block_height_max),
         task=dataclasses.replace(TaskConfig(), seed=seed, goal_distance=args.goal_distance),
         reward=dataclasses.replace(RewardConfig(), direction_deadband=args.direction_deadband),
     )

@@ -12,7 +12,7 @@ World frame: z up, the robot starts at the origin facing +x, features lie ahead 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -103,6 +103,14 @@ def validate_config(cfg: TerrainConfig) -> None:
     _multiple(cfg.x_max - cfg.x_min, res, "x_max - x_min", "query_resolution")
     _multiple(cfg.width, res, "width", "query_resolution")
     _multiple(cfg.width / 2, res, "width / 2", "query_resolution")
+    _require(int(cfg.levels) == cfg.levels and cfg.levels >= 0, f"levels must be an integer >= 0, got {cfg.levels!r}")
+    if cfg.levels:
+        _require(int(cfg.start_levels) == cfg.start_levels and 1 <= cfg.start_levels <= cfg.levels,
+                 f"start_levels must be an integer in [1, levels = {cfg.levels}], got {cfg.start_levels!r}")
+        _require(math.isfinite(cfg.lane_width) and cfg.lane_width > 0,
+                 f"lane_width must be positive, got {cfg.lane_width!r}")
+        validate_config(lane_config(cfg, cfg.levels - 1))
+        return
     _TERRAIN_CHECKS[cfg.name](cfg)
 
 
@@ -222,12 +230,32 @@ _BUILDERS = {"flat": _build_flat, "rugged": _build_rugged, "stepped": _build_ste
              "complex": _build_complex}
 
 
+def lane_config(cfg: TerrainConfig, level: int) -> TerrainConfig:
+    """The terrain of curriculum lane ``level``: ``cfg`` one lane wide, heights scaled by (level + 1) / levels,
+    its own block seed."""
+    scale = (level + 1) / cfg.levels
+    return replace(cfg, levels=0, width=cfg.lane_width, rugged_half_width=min(cfg.rugged_half_width, cfg.lane_width / 2),
+                   block_height_max=cfg.block_height_max * scale, step_rise=cfg.step_rise * scale,
+                   seed=cfg.seed * 1000 + level)  # fmt: skip
+
+
+def lane_center_y(cfg: TerrainConfig, level: int | np.ndarray) -> float | np.ndarray:
+    """y of curriculum lane ``level``'s centre line (lanes side by side, centred on y = 0)."""
+    return (np.asarray(level) + 0.5 - cfg.levels / 2) * cfg.lane_width
+
+
 def build_height_grid(cfg: TerrainConfig) -> HeightGrid:
-    """Height grid of terrain ``cfg.name`` over x in [x_min, x_max], |y| <= width / 2.
+    """Height grid of terrain ``cfg.name`` over x in [x_min, x_max], |y| <= width / 2 (with curriculum levels:
+    the lanes side by side, |y| <= levels * lane_width / 2).
 
     Raises ``ValueError`` for an unknown terrain name or invalid parameters.
     """
     validate_config(cfg)
+    if cfg.levels:
+        lanes = [build_height_grid(lane_config(cfg, k)) for k in range(cfg.levels)]
+        width = cfg.levels * cfg.lane_width
+        return HeightGrid(np.concatenate([g.heights for g in lanes], axis=1), float(cfg.x_min), -width / 2,
+                          float(cfg.query_resolution))  # fmt: skip
     grid = _empty_grid(cfg)
     heights = np.zeros(grid.heights.shape, dtype=np.float64)
     _BUILDERS[cfg.name](cfg, grid, heights)

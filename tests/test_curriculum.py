@@ -1,0 +1,122 @@
+"""Terrain curriculum: lanes of increasing difficulty, the level-update kernel against its NumPy reference,
+and an env whose robots move between lanes (CPU)."""
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+import torch
+import warp as wp
+
+from hexnewton.config import HexConfig, SimConfig, TaskConfig, TerrainConfig
+from hexnewton.env import make_env
+from hexnewton.kernels.curriculum import curriculum_kernel, curriculum_reference, placement_kernel, start_levels
+from hexnewton.kernels.terminations import NONFINITE, SUCCESS
+from hexnewton.terrain import build_height_grid, height_field_from_grid, max_terrain_height_np, terrain_height_np
+from hexnewton.terrain.heightmap import lane_center_y
+
+DEV = "cpu"
+
+
+def test_lanes_scale_the_terrain():
+    cfg = TerrainConfig(name="stepped", levels=4)
+    grid = build_height_grid(cfg)
+    assert grid.heights.shape[1] * grid.res == pytest.approx(4 * cfg.lane_width)
+    x = np.arange(0.0, 4.9, 0.01)
+    for k in range(4):
+        h = terrain_height_np(grid, x, np.full_like(x, lane_center_y(cfg, k)))
+        rises = np.diff(h)[np.diff(h) > 1e-6]
+        np.testing.assert_allclose(rises, cfg.step_rise * (k + 1) / 4, atol=1e-6)
+    # the last lane is the paper's staircase itself
+    paper = build_height_grid(TerrainConfig(name="stepped"))
+    np.testing.assert_array_equal(terrain_height_np(grid, x, np.full_like(x, lane_center_y(cfg, 3))),
+                                  terrain_height_np(paper, x, np.zeros_like(x)))  # fmt: skip
+    rugged = TerrainConfig(name="rugged", levels=3, lane_width=1.0)
+    g = build_height_grid(rugged)
+    for k in range(3):
+        y = lane_center_y(rugged, k) + np.linspace(-0.45, 0.45, 40)
+        h = terrain_height_np(g, np.full_like(y, 0.5)[:, None] + np.linspace(0, 2, 50)[None, :], y[:, None])
+        assert 0.5 * rugged.block_height_max * (k + 1) / 3 < h.max() <= rugged.block_height_max * (k + 1) / 3 + 1e-6
+
+
+@pytest.mark.parametrize("bad, message", [
+    ({"levels": -1}, "levels must be an integer >= 0"),
+    ({"levels": 3, "start_levels": 4}, "start_levels must be an integer in [1, levels = 3]"),
+    ({"levels": 3, "lane_width": 0.0}, "lane_width must be positive"),
+    ({"levels": 3, "lane_width": 1.005}, "width (1.005 m) must be a multiple of query_resolution"),
+])  # fmt: skip
+def test_bad_curriculum_config(bad, message):
+    with pytest.raises(ValueError) as err:
+        build_height_grid(TerrainConfig(name="rugged", **bad))
+    assert message in str(err.value)
+
+
+def test_curriculum_kernel_matches_reference():
+    rng = np.random.default_rng(0)
+    cfg = TerrainConfig(name="complex", levels=5, lane_width=1.0)
+    grid = build_height_grid(cfg)
+    hf = height_field_from_grid(grid, DEV)
+    n, levels, goal, footprint, clearance = 512, cfg.levels, 3.5, 0.28, 0.15
+    status = rng.integers(0, 6, n).astype(np.int32)
+    level = rng.integers(0, levels, n).astype(np.int32)
+    walked = rng.uniform(-0.5, 3.5, n)
+    start = np.stack([rng.uniform(-0.2, 0.2, n), rng.uniform(-2, 2, n)], axis=1).astype(np.float32)
+    q = np.zeros((n, 25), np.float32)
+    q[:, 0] = start[:, 0] + walked
+    offset = rng.uniform(-0.3, 0.3, n).astype(np.float32)
+    lane_in = np.full((n, 2), 9.0, np.float32)
+    arr = lambda a, dt=None: wp.array(a, dtype=dt, device=DEV) if dt else wp.array(a, device=DEV)  # noqa: E731
+    level_wp, lane_wp, z_wp = arr(level), arr(lane_in, wp.vec2), arr(np.full(n, 9.0, np.float32))
+    wp.launch(curriculum_kernel, dim=n,
+              inputs=[arr(status), arr(q), arr(start, wp.vec2), goal, levels, cfg.lane_width, arr(offset), hf,
+                      footprint, clearance, 3, arr(np.array([5], np.int32))],
+              outputs=[level_wp, lane_wp, z_wp], device=DEV)  # fmt: skip
+    got = level_wp.numpy()
+    top = (status == SUCCESS) & (level == levels - 1)
+    assert top.any() and np.all((got[top] >= 0) & (got[top] < levels))
+    want = curriculum_reference(status, q[:, 0].astype(np.float64) - start[:, 0], level, goal, levels, got)
+    np.testing.assert_array_equal(got, want)
+    moved = (status != 0) & (status != NONFINITE)
+    y = lane_center_y(cfg, got) + offset
+    np.testing.assert_allclose(lane_wp.numpy()[moved], np.stack([np.zeros(n), y], 1)[moved], atol=1e-5)
+    z = max_terrain_height_np(grid, np.zeros(n), y, footprint) + clearance
+    np.testing.assert_allclose(z_wp.numpy()[moved], z[moved], atol=1e-5)
+    assert np.all(lane_wp.numpy()[~moved] == 9.0) and np.all(z_wp.numpy()[~moved] == 9.0)  # untouched
+    # placement alone puts every env on its level's lane
+    wp.launch(placement_kernel, dim=n, inputs=[level_wp, levels, cfg.lane_width, arr(offset), hf, footprint, clearance],
+              outputs=[lane_wp, z_wp], device=DEV)  # fmt: skip
+    np.testing.assert_allclose(lane_wp.numpy()[:, 1], y, atol=1e-5)
+
+
+def test_start_levels_spread():
+    assert start_levels(8, 3).tolist() == [0, 0, 0, 1, 1, 1, 2, 2]
+    assert start_levels(5, 1).tolist() == [0] * 5
+
+
+def test_env_moves_robots_between_lanes():
+    """Robots start on their lanes; walking the (short) goal promotes them and the next episode starts one lane
+    over; the level is logged."""
+    cfg = HexConfig(sim=replace(SimConfig(), num_envs=6, device=DEV),
+                    terrain=TerrainConfig(name="complex", levels=4, start_levels=2),
+                    task=replace(TaskConfig(), goal_distance=1.0))  # fmt: skip
+    env = make_env(cfg)
+    lv0 = env.level.numpy().copy()
+    assert lv0.tolist() == [0, 0, 0, 1, 1, 1]
+    centre = lane_center_y(cfg.terrain, lv0)
+    assert np.all(np.abs(env.world.start_wp.numpy()[:, 1] - centre) <= cfg.sim.spawn_y_spread + cfg.task.reset_lateral + 1e-5)
+    act = torch.zeros(6, 15)  # mid-range CPG parameters walk ~1 m in a few seconds
+    promoted = np.zeros(6, bool)
+    for _ in range(300):
+        _, _, done, extras = env.step(act)
+        d = done.numpy().astype(bool)
+        if d.any():
+            success = env.status.numpy() == SUCCESS
+            assert np.all(env.level.numpy()[d & success] == np.minimum(lv0[d & success] + 1, 3))
+            promoted |= d & success
+            ys = env.world.start_wp.numpy()[:, 1]
+            lanes = lane_center_y(cfg.terrain, env.level.numpy())
+            assert np.all(np.abs(ys - lanes)[d] <= cfg.sim.spawn_y_spread + cfg.task.reset_lateral + 1e-5)
+            lv0 = env.level.numpy().copy()
+    assert promoted.sum() >= 3, "mid-range gaits should reach a 1 m goal on the easiest lanes"
+    assert float(extras["log"]["Curriculum/mean_level"]) == pytest.approx(env.level.numpy().mean())
+    assert env.episode_stats()["mean_level"] == pytest.approx(env.level.numpy().mean())
