@@ -265,3 +265,21 @@ class HexConfig:
     cpg: CPGConfig = field(default_factory=CPGConfig)
     task: TaskConfig = field(default_factory=TaskConfig)
     reward: RewardConfig = field(default_factory=RewardConfig)
+
+
+def config_from_dict(d: dict) -> HexConfig:
+    """Rebuild a :class:`HexConfig` from ``dataclasses.asdict`` output (e.g. a checkpoint's or config.json's
+    "config"); missing sections and fields keep their defaults, lists become tuples again, unknown keys are
+    ignored (configs written by older or newer versions still load)."""
+    import dataclasses
+
+    def build(cls, values: dict):
+        out = {}
+        for f in dataclasses.fields(cls):
+            if f.name in (values or {}):
+                v = values[f.name]
+                out[f.name] = tuple(tuple(x) if isinstance(x, list) else x for x in v) if isinstance(v, list) else v
+        return cls(**out)
+
+    sections = {f.name: f.default_factory for f in dataclasses.fields(HexConfig)}
+    return HexConfig(**{name: build(factory, (d or {}).get(name, {})) for name, factory in sections.items()})

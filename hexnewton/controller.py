@@ -23,14 +23,9 @@ from .config import CPGConfig, RobotConfig
 from .kernels.actions import scale_actions_kernel
 from .kernels.cpg import hopf_cpg_kernel
 from .kernels.mapping import mapping_kernel
+from .kernels.reference import initial_cpg_state
 from .robot import BASE_Q, leg_bounds
 from .sim import as_mask
-
-
-def initial_cpg_state(cfg: CPGConfig) -> tuple[float, float, float, float]:
-    """Both oscillators on the limit cycle, already locked: phase 0 and phase -theta."""
-    r = math.sqrt(cfg.mu)
-    return (r, 0.0, r * math.cos(-cfg.theta), r * math.sin(-cfg.theta))
 
 
 @wp.kernel
@@ -75,7 +70,7 @@ class CPGController:
         fixed = np.tile(np.asarray(cfg.fixed_params(), np.float32), (n, 1))
         self.params_target = wp.array(fixed, dtype=wp.float32, device=dev)
         self.params = wp.array(fixed, dtype=wp.float32, device=dev)
-        self.state = wp.array(np.tile(np.asarray(initial_cpg_state(cfg), np.float32), (n, 1)), device=dev)
+        self.state = wp.array(np.tile(np.asarray(initial_cpg_state(cfg.mu, cfg.theta), np.float32), (n, 1)), device=dev)
         self.dy = wp.zeros((n, 2), dtype=wp.float32, device=dev)
         self._actions = wp.zeros((n, self.num_params), dtype=wp.float32, device=dev)
         self._mask = wp.zeros(n, dtype=wp.bool, device=dev)
@@ -124,5 +119,5 @@ class CPGController:
         """Selected envs (all if None): oscillators back to the locked start, parameters at their targets."""
         m = as_mask(mask, self._mask)
         wp.launch(_reset_cpg, dim=self.num_envs,
-                  inputs=[m, wp.vec4(*initial_cpg_state(self.cfg)), self.params_target],
+                  inputs=[m, wp.vec4(*initial_cpg_state(self.cfg.mu, self.cfg.theta)), self.params_target],
                   outputs=[self.params, self.state, self.dy], device=self.device)  # fmt: skip

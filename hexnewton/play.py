@@ -118,7 +118,7 @@ def fixed_cpg_actions(env) -> "torch.Tensor":  # noqa: F821
     """The fixed baseline's parameters expressed as (constant) policy actions."""
     import torch
 
-    from .kernels.actions import params_to_actions
+    from .kernels.reference import params_to_actions
 
     lo, hi = env.cfg.cpg.param_ranges()
     a = np.clip(params_to_actions(env.cfg.cpg.fixed_params(), lo, hi), -1.0, 1.0)
@@ -170,8 +170,8 @@ def newest_checkpoint(log_dir: str, experiment: str) -> str:
     raise ValueError(f"no checkpoint under {os.path.join(log_dir, experiment)}: pass --checkpoint PATH")
 
 
-def load_policy(env, path: str, action_mode: str):
-    """Deterministic policy from an rsl-rl checkpoint, after checking it fits this environment."""
+def load_runner(env, path: str, action_mode: str):
+    """An rsl-rl runner holding the checkpoint's actor, after checking the checkpoint fits this environment."""
     import copy
 
     from rsl_rl.runners import OnPolicyRunner
@@ -185,7 +185,12 @@ def load_policy(env, path: str, action_mode: str):
     runner = OnPolicyRunner(env, copy.deepcopy(tcfg), log_dir=None, device=str(env._obs_t.device))
     # the actor alone: full training checkpoints and actor-only policy files (results/policies) both load
     runner.load(path, load_cfg={"actor": True}, map_location=str(env._obs_t.device))
-    return runner.get_inference_policy(device=str(env._obs_t.device))
+    return runner
+
+
+def load_policy(env, path: str, action_mode: str):
+    """Deterministic policy from an rsl-rl checkpoint, after checking it fits this environment."""
+    return load_runner(env, path, action_mode).get_inference_policy(device=str(env._obs_t.device))
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -8,7 +8,7 @@ import numpy as np
 import warp as wp
 
 from .config import LEG_NAMES, HexConfig
-from .controller import initial_cpg_state
+from .kernels.reference import initial_cpg_state
 from .robot import leg_bounds
 from .kernels.cpg import hopf_cpg_kernel
 from .kernels.mapping import mapping_kernel
@@ -22,7 +22,7 @@ def gait_trajectory(cfg: HexConfig, cycles: float = 2.0, device: str = "cpu"):
     c, r = cfg.cpg, cfg.robot
     dt = cfg.sim.frame_dt / cfg.sim.substeps
     params = wp.array(np.asarray([c.fixed_params()], np.float32), device=device)
-    state = wp.array(np.asarray([initial_cpg_state(c)], np.float32), device=device)
+    state = wp.array(np.asarray([initial_cpg_state(c.mu, c.theta)], np.float32), device=device)
     dy = wp.zeros((1, 2), dtype=wp.float32, device=device)
     targets = wp.zeros((1, 18), dtype=wp.float32, device=device)
     stand = wp.vec3(*r.stand_pose)

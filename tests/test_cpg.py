@@ -9,9 +9,16 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from hexnewton.config import CPGConfig
-from hexnewton.kernels.actions import params_to_actions, scale_actions_kernel, scale_actions_reference
-from hexnewton.kernels.cpg import hopf_cpg_kernel, hopf_cpg_reference
-from hexnewton.kernels.mapping import mapping_kernel, mapping_offsets_np, mapping_reference
+from hexnewton.kernels.actions import scale_actions_kernel
+from hexnewton.kernels.cpg import hopf_cpg_kernel
+from hexnewton.kernels.mapping import mapping_kernel
+from hexnewton.kernels.reference import (
+    hopf_cpg_reference,
+    mapping_offsets_np,
+    mapping_reference,
+    params_to_actions,
+    scale_actions_reference,
+)
 
 DEV = "cpu"
 CFG = CPGConfig()

@@ -16,7 +16,8 @@ from tensordict import TensorDict
 
 from hexnewton.config import HexConfig, RewardConfig, SimConfig, TaskConfig, TerrainConfig
 from hexnewton.env import make_env
-from hexnewton.kernels.actions import joint_actions_kernel, joint_actions_reference
+from hexnewton.kernels.actions import joint_actions_kernel
+from hexnewton.kernels.reference import joint_actions_reference
 from hexnewton.kernels.observations import OBS_LAYOUT, observations_kernel, observations_reference
 from hexnewton.kernels.resets import reset_bounds_reference
 from hexnewton.kernels.rewards import TERMS, rewards_kernel, rewards_reference

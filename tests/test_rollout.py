@@ -18,8 +18,8 @@ from hexnewton.kernels.terminations import (
     SUCCESS,
     episode_status_kernel,
     episode_status_np,
-    quat_to_rpy_np,
 )
+from hexnewton.kernels.reference import quat_to_rpy_np
 from hexnewton.env import make_env
 from hexnewton.play import fixed_cpg_actions, rollout
 from hexnewton.terrain import make_terrain, terrain_height_np

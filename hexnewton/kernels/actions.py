@@ -6,7 +6,6 @@ with the ranges of ``CPGConfig`` (omega in rad/s, amplitudes in rad). A non-fini
 to the middle of its range, so a diverged policy cannot poison the oscillators.
 """
 
-import numpy as np
 import warp as wp
 
 
@@ -29,20 +28,6 @@ def scale_actions_kernel(
     params_target[e, k] = action_to_range(actions[e, k], lower[k], upper[k])
 
 
-def scale_actions_reference(actions, lower, upper):
-    """Float64 reference of :func:`scale_actions_kernel`."""
-    a = np.asarray(actions, np.float64)
-    a = np.clip(np.where(np.isfinite(a), a, 0.0), -1.0, 1.0)
-    lo, hi = np.asarray(lower, np.float64), np.asarray(upper, np.float64)
-    return lo + 0.5 * (a + 1.0) * (hi - lo)
-
-
-def params_to_actions(params, lower, upper):
-    """Inverse of the scaling (for fixed physical parameters expressed as actions)."""
-    lo, hi = np.asarray(lower, np.float64), np.asarray(upper, np.float64)
-    return 2.0 * (np.asarray(params, np.float64) - lo) / (hi - lo) - 1.0
-
-
 @wp.kernel
 def joint_actions_kernel(
     actions: wp.array2d[wp.float32],
@@ -55,10 +40,3 @@ def joint_actions_kernel(
     e, j = wp.tid()
     k = j % 3
     targets[e, target_offset + j] = action_to_range(actions[e, j], lower[k], upper[k])
-
-
-def joint_actions_reference(actions, lower, upper):
-    """Float64 reference of :func:`joint_actions_kernel`: (N, 18) joint targets."""
-    lo = np.tile(np.asarray(lower, np.float64), 6)
-    hi = np.tile(np.asarray(upper, np.float64), 6)
-    return scale_actions_reference(actions, lo, hi)

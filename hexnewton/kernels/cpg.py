@@ -35,7 +35,6 @@ State layout per env: ``state[e] = (x0, y0, x1, y1)``. ``dy[e] = (dy0/dt, dy1/dt
 new state; the mapping function (Eq. 4) reads its sign.
 """
 
-import numpy as np
 import warp as wp
 
 
@@ -103,48 +102,3 @@ def hopf_cpg_kernel(
     d = hopf_rhs(s, omega, alpha, mu, delta, theta, duty, steepness)
     dy[e, 0] = d[1]
     dy[e, 1] = d[3]
-
-
-# ----------------------------------------------------------------------------------------------------
-# float64 NumPy reference
-# ----------------------------------------------------------------------------------------------------
-
-
-def hopf_rhs_np(s, omega, alpha, mu, delta, theta, duty, steepness):
-    """Float64 reference of :func:`hopf_rhs`; ``s`` is (N, 4), ``omega`` (N,)."""
-    s = np.asarray(s, np.float64)
-    omega = np.asarray(omega, np.float64)
-    x0, y0, x1, y1 = s.T
-
-    def blend(x):
-        z = np.clip(steepness * x / np.sqrt(mu), -60.0, 60.0)
-        return omega / (2 * (1 - duty)) / (1 + np.exp(-z)) + omega / (2 * duty) / (1 + np.exp(z))
-
-    g0, g1 = alpha * (mu - x0**2 - y0**2), alpha * (mu - x1**2 - y1**2)
-    w0, w1 = blend(x0), blend(x1)
-    c, sn = np.cos(theta), np.sin(theta)
-    return np.stack(
-        [
-            g0 * x0 - w0 * y0,
-            w0 * x0 + g0 * y0 + delta * (y1 * c + x1 * sn),
-            g1 * x1 - w1 * y1,
-            w1 * x1 + g1 * y1 + delta * (y0 * c - x0 * sn),
-        ],
-        axis=1,
-    )
-
-
-def hopf_cpg_reference(params_target, params, state, gain, alpha, mu, delta, theta, duty, steepness, dt):
-    """Float64 reference of :func:`hopf_cpg_kernel`: returns (params, state, dy)."""
-    params = np.asarray(params, np.float64)
-    params = params + gain * (np.asarray(params_target, np.float64) - params)
-    omega = np.sqrt(params[:, 0] ** 2 + 0.25 * delta**2)
-    s = np.asarray(state, np.float64)
-    args = (omega, alpha, mu, delta, theta, duty, steepness)
-    k1 = hopf_rhs_np(s, *args)
-    k2 = hopf_rhs_np(s + 0.5 * dt * k1, *args)
-    k3 = hopf_rhs_np(s + 0.5 * dt * k2, *args)
-    k4 = hopf_rhs_np(s + dt * k3, *args)
-    s = s + dt / 6.0 * (k1 + 2 * k2 + 2 * k3 + k4)
-    d = hopf_rhs_np(s, *args)
-    return params, s, d[:, [1, 3]]

@@ -22,7 +22,6 @@ L2, L3 that is ``oscillator = leg % 2``.
 Parameter layout per env (15): omega, A1_R, A1_L, A2[R1..L3], A3[R1..L3].
 """
 
-import numpy as np
 import warp as wp
 
 
@@ -52,22 +51,3 @@ def mapping_kernel(
         targets[e, col + 0] = wp.clamp(stand[0] + a1 * y, lower[0], upper[0])
         targets[e, col + 1] = wp.clamp(stand[1] + params[e, 3 + leg] * lift, lower[1], upper[1])
         targets[e, col + 2] = wp.clamp(stand[2] - params[e, 9 + leg] * lift, lower[2], upper[2])
-
-
-def mapping_offsets_np(state, dy, params, mu):
-    """Float64 Eq. 4 offsets (N, 6, 3) before the standing pose and clipping are applied."""
-    state = np.asarray(state, np.float64)
-    dy = np.asarray(dy, np.float64)
-    params = np.asarray(params, np.float64)
-    osc = np.arange(6) % 2
-    y = state[:, 2 * osc + 1] / np.sqrt(mu)  # (N, 6)
-    lift = np.where(dy[:, osc] >= 0.0, np.maximum(1.0 - y**2, 0.0), 0.0)
-    a1 = np.where(np.arange(6) < 3, params[:, 1:2], params[:, 2:3])
-    return np.stack([a1 * y, params[:, 3:9] * lift, -params[:, 9:15] * lift], axis=-1)
-
-
-def mapping_reference(state, dy, params, mu, stand, lower, upper):
-    """Float64 reference of :func:`mapping_kernel`: joint targets (N, 18)."""
-    out = mapping_offsets_np(state, dy, params, mu) + np.asarray(stand, np.float64)
-    out = np.clip(out, np.asarray(lower, np.float64), np.asarray(upper, np.float64))
-    return out.reshape(len(out), 18)

@@ -26,7 +26,8 @@ import numpy as np
 import warp as wp
 
 from ..terrain.query import HeightField, max_terrain_height, terrain_height
-from .terminations import quat_to_rpy, quat_to_rpy_np
+from .reference import quat_to_rpy_np
+from .terminations import quat_to_rpy
 
 H_HALF_EXTENT = 0.3  # ours: the square that "max height h" looks at: +-30 cm, about the legs' reach [m]
 OBS_DIM = {"cpg": 59, "joint": 44}

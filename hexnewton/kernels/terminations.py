@@ -17,6 +17,7 @@ import numpy as np
 import warp as wp
 
 from ..terrain.query import HeightField, terrain_height
+from .reference import quat_to_rpy_np
 
 RUNNING, FELL, OFF_COURSE, SUCCESS, TIMEOUT, NONFINITE = 0, 1, 2, 3, 4, 5
 STATUS_NAMES = ("running", "fell", "off_course", "success", "timeout", "nonfinite")
@@ -92,17 +93,6 @@ def episode_status_kernel(
 # ----------------------------------------------------------------------------------------------------
 # float64 NumPy references
 # ----------------------------------------------------------------------------------------------------
-
-
-def quat_to_rpy_np(q: np.ndarray) -> np.ndarray:
-    """Float64 reference of :func:`quat_to_rpy` for quaternions (..., 4) in (x, y, z, w) order."""
-    q = np.asarray(q, np.float64)
-    q = q / np.linalg.norm(q, axis=-1, keepdims=True)
-    x, y, z, w = np.moveaxis(q, -1, 0)
-    roll = np.arctan2(2 * (w * x + y * z), 1 - 2 * (x * x + y * y))
-    pitch = np.arcsin(np.clip(2 * (w * y - z * x), -1, 1))
-    yaw = np.arctan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
-    return np.stack([roll, pitch, yaw], axis=-1)
 
 
 def episode_status_np(joint_q, joint_qd, episode_steps, ground_height, start, goal_distance, goal_radius, min_height,

@@ -1,0 +1,178 @@
+"""The trained hierarchy on a robot's computer: NumPy + onnxruntime, no Warp, Newton or torch.
+
+A controller bundle (written by ``python -m hexnewton.export``) is a folder with:
+- ``policy.onnx``: the high level (observation normaliser included), one file, dynamic batch dimension;
+- ``controller.json``: the observation layout, the parameter ranges, the CPG and mapping constants, the
+  control and integration periods, the standing pose and joint limits;
+- ``check.npz``: a short simulator rollout (observations and the simulator's joint targets) that
+  ``python -m hexnewton.deploy BUNDLE`` replays to show this runtime reproduces the simulator here.
+
+Per control step (``control_dt``, 20 ms by default) :meth:`Controller.step` takes the robot's readings:
+- joint positions and velocities (18 each, order R1..L3 x hip, knee, ankle);
+- the base orientation quaternion (x, y, z, w);
+- the goal relative to the robot in its heading frame (:func:`target_in_heading_frame`);
+- the highest terrain within ±30 cm minus the ground under the robot (0 without a terrain sensor).
+
+It runs the policy, scales its 15 actions to (omega, A1, A2, A3), then integrates the two Hopf oscillators
+(Eq. 3, RK4) and applies the mapping function (Eq. 4) every ``substep_dt`` (2.5 ms by default), exactly as
+the simulator does. It returns the 18 joint position targets at the end of the step (all substeps' targets
+are in ``last_substep_targets``, for a servo loop faster than the control rate).
+The maths is the float64 reference of the simulator's kernels (``hexnewton.kernels.reference``).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import sys
+from argparse import ArgumentParser
+
+import numpy as np
+
+from .kernels.reference import (
+    hopf_cpg_reference,
+    initial_cpg_state,
+    mapping_reference,
+    quat_to_rpy_np,
+    scale_actions_reference,
+)
+
+FORMAT = "hexnewton-controller/1"
+
+
+def target_in_heading_frame(base_pos, base_quat, goal, goal_ground_z=None) -> np.ndarray:
+    """The goal relative to the robot, rotated by -yaw (x forward, y left); z is the goal's ground height minus
+    the base height (the robot's own base height if ``goal_ground_z`` is None, i.e. level ground). (N, 3)."""
+    pos, goal = np.atleast_2d(np.asarray(base_pos, np.float64)), np.atleast_2d(np.asarray(goal, np.float64))
+    yaw = quat_to_rpy_np(np.atleast_2d(base_quat))[:, 2]
+    dx, dy = goal[:, 0] - pos[:, 0], goal[:, 1] - pos[:, 1]
+    c, s = np.cos(yaw), np.sin(yaw)
+    gz = pos[:, 2] if goal_ground_z is None else np.broadcast_to(np.asarray(goal_ground_z, np.float64), dx.shape)
+    return np.stack([c * dx + s * dy, -s * dx + c * dy, gz - pos[:, 2]], axis=1)
+
+
+def load_spec(bundle: str) -> dict:
+    """The bundle's controller.json, checked for its format."""
+    path = os.path.join(bundle, "controller.json")
+    if not os.path.isfile(path):
+        raise ValueError(f"{bundle} is not a controller bundle (no controller.json)")
+    with open(path) as f:
+        spec = json.load(f)
+    if spec.get("format") != FORMAT:
+        raise ValueError(f"{path}: format {spec.get('format')!r}, expected {FORMAT!r}")
+    return spec
+
+
+class Controller:
+    """The exported CPG_RL hierarchy for ``num_robots`` robots (batched like the simulator)."""
+
+    def __init__(self, bundle: str, num_robots: int = 1, providers: list[str] | None = None):
+        import onnxruntime as ort
+
+        self.spec = spec = load_spec(bundle)
+        self.session = ort.InferenceSession(os.path.join(bundle, "policy.onnx"),
+                                            providers=providers or ["CPUExecutionProvider"])  # fmt: skip
+        self._input = self.session.get_inputs()[0].name
+        self.n = int(num_robots)
+        self.layout = {name: (a, b) for name, a, b in spec["obs_layout"]}
+        self.num_obs = int(spec["num_obs"])
+        self.lower, self.upper = np.asarray(spec["param_lower"]), np.asarray(spec["param_upper"])
+        c = spec["cpg"]
+        self.cpg = (c["alpha"], c["mu"], c["delta"], c["theta"], c["duty"], c["steepness"])
+        self.dt = float(spec["substep_dt"])
+        self.substeps = int(spec["substeps_per_control"])
+        self.gain = 1.0 if c["param_tau"] == 0 else 1.0 - math.exp(-self.dt / c["param_tau"])
+        self.stand, self.joint_lower, self.joint_upper = (np.asarray(spec[k]) for k in ("stand_pose", "joint_lower",
+                                                                                         "joint_upper"))  # fmt: skip
+        self.reset()
+
+    def reset(self, mask=None) -> None:
+        """Selected robots (all if None): oscillators at their locked start, parameters at the initial gait."""
+        m = np.ones(self.n, bool) if mask is None else np.asarray(mask, bool)
+        if not hasattr(self, "params"):
+            self.params = np.zeros((self.n, 15))
+            self.state = np.zeros((self.n, 4))
+            self.dy = np.zeros((self.n, 2))
+            self.last_substep_targets = np.zeros((self.substeps, self.n, 18))
+        self.params[m] = self.spec["initial_params"]
+        self.state[m] = initial_cpg_state(self.cpg[1], self.cpg[3])
+        self.dy[m] = 0.0
+
+    def observe(self, joint_pos, joint_vel, base_quat, target, max_height=0.0) -> np.ndarray:
+        """The policy's observation (N, num_obs), laid out as in training (``controller.json``)."""
+        obs = np.zeros((self.n, self.num_obs))
+        quat = np.asarray(base_quat, np.float64).reshape(self.n, 4)
+        h = np.asarray(max_height, np.float64)
+        h = h.reshape(self.n, 1) if h.size == self.n else np.full((self.n, 1), float(h))
+        parts = {
+            "joint_pos": np.asarray(joint_pos, np.float64).reshape(self.n, 18),
+            "joint_vel": np.asarray(joint_vel, np.float64).reshape(self.n, 18),
+            "target": np.asarray(target, np.float64).reshape(self.n, 3),
+            "omega": self.params[:, :1],
+            "amplitudes": self.params[:, 1:],
+            "quat": quat * np.where(quat[:, 3:4] < 0, -1.0, 1.0),
+            "max_height": h,
+        }
+        for name, (a, b) in self.layout.items():
+            obs[:, a:b] = parts[name]
+        return obs
+
+    def act(self, obs: np.ndarray) -> np.ndarray:
+        """The policy's deterministic actions (N, 15) for observations (N, num_obs)."""
+        return self.session.run(None, {self._input: np.asarray(obs, np.float32)})[0]
+
+    def advance(self, actions: np.ndarray) -> np.ndarray:
+        """Scale actions to the CPG parameters, then run ``substeps_per_control`` CPG + mapping substeps;
+        returns the last substep's joint targets (N, 18)."""
+        target = scale_actions_reference(actions, self.lower, self.upper)
+        for k in range(self.substeps):
+            self.params, self.state, self.dy = hopf_cpg_reference(target, self.params, self.state, self.gain, *self.cpg,
+                                                                  self.dt)  # fmt: skip
+            self.last_substep_targets[k] = mapping_reference(self.state, self.dy, self.params, self.cpg[1], self.stand,
+                                                             self.joint_lower, self.joint_upper)  # fmt: skip
+        return self.last_substep_targets[-1].copy()
+
+    def step(self, joint_pos, joint_vel, base_quat, target, max_height=0.0) -> np.ndarray:
+        """One control step: readings in, 18 joint position targets out (N, 18)."""
+        return self.advance(self.act(self.observe(joint_pos, joint_vel, base_quat, target, max_height)))
+
+
+def replay(bundle: str) -> dict:
+    """Replay the bundle's recorded simulator rollout; returns the largest differences from the simulator."""
+    load_spec(bundle)
+    rec = np.load(os.path.join(bundle, "check.npz"))
+    obs, sim_targets = rec["obs"], rec["targets"]  # (K, N, num_obs), (K, N, 18)
+    ctrl = Controller(bundle, num_robots=obs.shape[1])
+    lay = ctrl.layout
+    sl = lambda o, name: o[:, lay[name][0]:lay[name][1]]  # noqa: E731
+    err_obs = err_q = 0.0
+    for k in range(len(obs)):
+        o = obs[k]
+        mine = ctrl.observe(sl(o, "joint_pos"), sl(o, "joint_vel"), sl(o, "quat"), sl(o, "target"), sl(o, "max_height"))
+        err_obs = max(err_obs, float(np.abs(mine - o).max()))  # the CPG parameters were integrated here
+        q = ctrl.advance(ctrl.act(mine))
+        err_q = max(err_q, float(np.abs(q - sim_targets[k]).max()))
+    return {"steps": len(obs), "robots": obs.shape[1], "max_obs_diff": err_obs, "max_target_diff_rad": err_q}
+
+
+def main(argv: list[str] | None = None) -> int:
+    p = ArgumentParser(prog="python -m hexnewton.deploy",
+                       description="Check a controller bundle against its recorded simulator rollout.")  # fmt: skip
+    p.add_argument("bundle")
+    p.add_argument("--tolerance", type=float, default=1e-3, help="largest joint-target difference allowed [rad]")
+    args = p.parse_args(argv)
+    try:
+        r = replay(args.bundle)
+    except (ValueError, OSError, KeyError) as exc:
+        print(f"python -m hexnewton.deploy: error: {exc}", file=sys.stderr)
+        return 2
+    ok = r["max_target_diff_rad"] <= args.tolerance
+    print(f"{args.bundle}: {r['steps']} control steps x {r['robots']} robots replayed; joint targets differ from the "
+          f"simulator's by at most {r['max_target_diff_rad']:.2e} rad, observations by {r['max_obs_diff']:.2e} "
+          f"({'ok' if ok else 'FAILED'}, tolerance {args.tolerance:g} rad)")  # fmt: skip
+    return 0 if ok else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())

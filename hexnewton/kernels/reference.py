@@ -1,0 +1,109 @@
+"""Float64 NumPy references of the control kernels, free of Warp, Newton and torch.
+
+The kernel tests compare each Warp kernel with its reference here, and the deployment runtime
+(``hexnewton.deploy``) runs the same functions on the robot's computer: the Hopf oscillators (Eq. 3, RK4,
+``kernels/cpg.py``), the mapping function (Eq. 4, ``kernels/mapping.py``), the action scaling
+(``kernels/actions.py``) and the base quaternion's roll/pitch/yaw (``kernels/terminations.py``). Each
+kernel module's docstring explains the maths; this module only holds the NumPy versions.
+"""
+
+import math
+
+import numpy as np
+
+
+def initial_cpg_state(mu: float, theta: float) -> tuple[float, float, float, float]:
+    """Both oscillators on the limit cycle (radius sqrt(mu)), already locked: phase 0 and phase -theta."""
+    r = math.sqrt(mu)
+    return (r, 0.0, r * math.cos(-theta), r * math.sin(-theta))
+
+
+def hopf_rhs_np(s, omega, alpha, mu, delta, theta, duty, steepness):
+    """Float64 reference of :func:`hopf_rhs`; ``s`` is (N, 4), ``omega`` (N,)."""
+    s = np.asarray(s, np.float64)
+    omega = np.asarray(omega, np.float64)
+    x0, y0, x1, y1 = s.T
+
+    def blend(x):
+        z = np.clip(steepness * x / np.sqrt(mu), -60.0, 60.0)
+        return omega / (2 * (1 - duty)) / (1 + np.exp(-z)) + omega / (2 * duty) / (1 + np.exp(z))
+
+    g0, g1 = alpha * (mu - x0**2 - y0**2), alpha * (mu - x1**2 - y1**2)
+    w0, w1 = blend(x0), blend(x1)
+    c, sn = np.cos(theta), np.sin(theta)
+    return np.stack(
+        [
+            g0 * x0 - w0 * y0,
+            w0 * x0 + g0 * y0 + delta * (y1 * c + x1 * sn),
+            g1 * x1 - w1 * y1,
+            w1 * x1 + g1 * y1 + delta * (y0 * c - x0 * sn),
+        ],
+        axis=1,
+    )
+
+
+def hopf_cpg_reference(params_target, params, state, gain, alpha, mu, delta, theta, duty, steepness, dt):
+    """Float64 reference of :func:`hopf_cpg_kernel`: returns (params, state, dy)."""
+    params = np.asarray(params, np.float64)
+    params = params + gain * (np.asarray(params_target, np.float64) - params)
+    omega = np.sqrt(params[:, 0] ** 2 + 0.25 * delta**2)
+    s = np.asarray(state, np.float64)
+    args = (omega, alpha, mu, delta, theta, duty, steepness)
+    k1 = hopf_rhs_np(s, *args)
+    k2 = hopf_rhs_np(s + 0.5 * dt * k1, *args)
+    k3 = hopf_rhs_np(s + 0.5 * dt * k2, *args)
+    k4 = hopf_rhs_np(s + dt * k3, *args)
+    s = s + dt / 6.0 * (k1 + 2 * k2 + 2 * k3 + k4)
+    d = hopf_rhs_np(s, *args)
+    return params, s, d[:, [1, 3]]
+
+
+def mapping_offsets_np(state, dy, params, mu):
+    """Float64 Eq. 4 offsets (N, 6, 3) before the standing pose and clipping are applied."""
+    state = np.asarray(state, np.float64)
+    dy = np.asarray(dy, np.float64)
+    params = np.asarray(params, np.float64)
+    osc = np.arange(6) % 2
+    y = state[:, 2 * osc + 1] / np.sqrt(mu)  # (N, 6)
+    lift = np.where(dy[:, osc] >= 0.0, np.maximum(1.0 - y**2, 0.0), 0.0)
+    a1 = np.where(np.arange(6) < 3, params[:, 1:2], params[:, 2:3])
+    return np.stack([a1 * y, params[:, 3:9] * lift, -params[:, 9:15] * lift], axis=-1)
+
+
+def mapping_reference(state, dy, params, mu, stand, lower, upper):
+    """Float64 reference of :func:`mapping_kernel`: joint targets (N, 18)."""
+    out = mapping_offsets_np(state, dy, params, mu) + np.asarray(stand, np.float64)
+    out = np.clip(out, np.asarray(lower, np.float64), np.asarray(upper, np.float64))
+    return out.reshape(len(out), 18)
+
+
+def scale_actions_reference(actions, lower, upper):
+    """Float64 reference of :func:`scale_actions_kernel`."""
+    a = np.asarray(actions, np.float64)
+    a = np.clip(np.where(np.isfinite(a), a, 0.0), -1.0, 1.0)
+    lo, hi = np.asarray(lower, np.float64), np.asarray(upper, np.float64)
+    return lo + 0.5 * (a + 1.0) * (hi - lo)
+
+
+def params_to_actions(params, lower, upper):
+    """Inverse of the scaling (for fixed physical parameters expressed as actions)."""
+    lo, hi = np.asarray(lower, np.float64), np.asarray(upper, np.float64)
+    return 2.0 * (np.asarray(params, np.float64) - lo) / (hi - lo) - 1.0
+
+
+def joint_actions_reference(actions, lower, upper):
+    """Float64 reference of :func:`joint_actions_kernel`: (N, 18) joint targets."""
+    lo = np.tile(np.asarray(lower, np.float64), 6)
+    hi = np.tile(np.asarray(upper, np.float64), 6)
+    return scale_actions_reference(actions, lo, hi)
+
+
+def quat_to_rpy_np(q: np.ndarray) -> np.ndarray:
+    """Float64 reference of :func:`quat_to_rpy` for quaternions (..., 4) in (x, y, z, w) order."""
+    q = np.asarray(q, np.float64)
+    q = q / np.linalg.norm(q, axis=-1, keepdims=True)
+    x, y, z, w = np.moveaxis(q, -1, 0)
+    roll = np.arctan2(2 * (w * x + y * z), 1 - 2 * (x * x + y * y))
+    pitch = np.arcsin(np.clip(2 * (w * y - z * x), -1, 1))
+    yaw = np.arctan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
+    return np.stack([roll, pitch, yaw], axis=-1)

@@ -1,0 +1,92 @@
+"""Controller bundle export and the NumPy/onnxruntime runtime: it reproduces the simulator's joint targets for
+a recorded rollout, without Warp, Newton or torch."""
+
+import json
+import os
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+POLICY = os.path.join(ROOT, "results", "policies", "cpg_rl_flat.pt")
+BLOCKED = ("warp", "torch", "newton", "mujoco", "mujoco_warp", "rsl_rl", "tensordict")
+
+
+def _run(args, **kw):
+    return subprocess.run([sys.executable, *args], capture_output=True, text=True, timeout=900, cwd=ROOT, **kw)
+
+
+@pytest.fixture(scope="module")
+def bundle(tmp_path_factory):
+    out = tmp_path_factory.mktemp("deploy") / "bundle"
+    proc = _run(["-m", "hexnewton.export", "--checkpoint", POLICY, "--out", str(out), "--steps", "60", "--robots", "3"])
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    assert "reproduces the simulator's joint targets" in proc.stdout
+    return out
+
+
+def test_bundle_contents(bundle):
+    spec = json.loads((bundle / "controller.json").read_text())
+    assert spec["format"] == "hexnewton-controller/1" and spec["num_obs"] == 59 and spec["num_actions"] == 15
+    assert spec["substeps_per_control"] == 8 and spec["control_dt"] == pytest.approx(0.02)
+    assert [row[0] for row in spec["obs_layout"]] == ["joint_pos", "joint_vel", "target", "omega", "amplitudes", "quat",
+                                                      "max_height"]  # fmt: skip
+    rec = np.load(bundle / "check.npz")
+    assert rec["obs"].shape == (60, 3, 59) and rec["targets"].shape == (60, 3, 18)
+    import onnxruntime as ort
+
+    sess = ort.InferenceSession(str(bundle / "policy.onnx"), providers=["CPUExecutionProvider"])
+    assert sess.run(None, {sess.get_inputs()[0].name: rec["obs"][0]})[0].shape == (3, 15)  # dynamic batch
+
+
+def test_runtime_reproduces_the_simulator_without_warp_newton_or_torch(bundle):
+    code = (
+        "import sys, json\n"
+        f"for m in {BLOCKED!r}: sys.modules[m] = None  # importing any of them now fails\n"
+        "from hexnewton.deploy import replay\n"
+        f"print(json.dumps(replay({str(bundle)!r})))\n"
+    )
+    proc = _run(["-c", code])
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    r = json.loads(proc.stdout.strip().splitlines()[-1])
+    assert r["steps"] == 60 and r["robots"] == 3
+    assert r["max_target_diff_rad"] < 1e-4 and r["max_obs_diff"] < 1e-4
+    proc = _run(["-m", "hexnewton.deploy", str(bundle)])
+    assert proc.returncode == 0 and "(ok," in proc.stdout
+
+
+def test_runtime_step_by_step(bundle):
+    """The public per-step API: readings in, joint targets out, within the joint limits; the heading-frame helper."""
+    from hexnewton.deploy import Controller, target_in_heading_frame
+
+    ctrl = Controller(str(bundle), num_robots=2)
+    yaw = 0.3
+    quat = np.array([[0, 0, np.sin(yaw / 2), np.cos(yaw / 2)]] * 2)
+    target = target_in_heading_frame([[0.0, 0.0, 0.13]] * 2, quat, [[3.5, 0.0, 0.0]] * 2, goal_ground_z=0.0)
+    np.testing.assert_allclose(target[0], [3.5 * np.cos(yaw), -3.5 * np.sin(yaw), -0.13], atol=1e-12)
+    q = np.tile([0.0, 0.15, -0.15], 6)
+    for _ in range(5):
+        out = ctrl.step(np.tile(q, (2, 1)), np.zeros((2, 18)), quat, target)
+    lo, hi = np.tile(ctrl.joint_lower, 6), np.tile(ctrl.joint_upper, 6)
+    assert out.shape == (2, 18) and np.all(out >= lo - 1e-9) and np.all(out <= hi + 1e-9)
+    assert ctrl.last_substep_targets.shape == (8, 2, 18)
+    ctrl.reset(mask=[True, False])
+    np.testing.assert_allclose(ctrl.params[0], ctrl.spec["initial_params"])
+
+
+def test_bad_bundles_and_exports(bundle, tmp_path):
+    not_bundle = _run(["-m", "hexnewton.deploy", str(tmp_path)])
+    assert not_bundle.returncode == 2 and "not a controller bundle" in not_bundle.stderr
+    bad = tmp_path / "bad"
+    bad.mkdir()
+    (bad / "controller.json").write_text(json.dumps({"format": "something-else"}))
+    wrong = _run(["-m", "hexnewton.deploy", str(bad)])
+    assert wrong.returncode == 2 and "expected 'hexnewton-controller/1'" in wrong.stderr
+    exists = _run(["-m", "hexnewton.export", "--checkpoint", POLICY, "--out", str(bundle)])
+    err = [line for line in exists.stderr.splitlines() if line.strip() and "Warp CUDA" not in line]
+    assert exists.returncode == 2 and len(err) == 1 and "exists: nothing is overwritten" in err[0]
+    missing = _run(["-m", "hexnewton.export", "--checkpoint", str(tmp_path / "nope.pt"), "--out", str(tmp_path / "b")])
+    assert missing.returncode == 2 and "checkpoint not found" in missing.stderr
+    assert not (tmp_path / "b").exists()
