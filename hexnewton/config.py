@@ -258,6 +258,34 @@ class RewardConfig:
 
 
 @dataclass
+class RandomizationConfig:
+    """Domain randomisation for sim-to-real (issue 9; ours). Off by default and in the paper's setting.
+
+    Drawn once per env when the world is built (uniform in each range): foot-ground friction, base payload,
+    leg link masses, PD gains and effort limits. Every step: observation noise. Actions act one control step
+    late in a share of the envs (actuation latency). Every ``push_interval`` seconds: a push, a random
+    horizontal change of the base velocity."""
+
+    enabled: bool = False
+    friction: tuple[float, float] = (0.4, 1.2)  # friction coefficient of the robot's contacts (default 0.9)
+    payload: tuple[float, float] = (-0.2, 0.6)  # mass added to the torso [kg] (torso 1.6 kg)
+    link_mass_scale: tuple[float, float] = (0.8, 1.2)
+    kp_scale: tuple[float, float] = (0.8, 1.2)
+    kd_scale: tuple[float, float] = (0.8, 1.2)
+    effort_scale: tuple[float, float] = (0.8, 1.2)
+    latency_share: float = 0.5  # share of envs whose actions take effect one control step (20 ms) late
+    # uniform observation noise amplitudes: joint positions [rad], joint velocities [rad/s], target [m],
+    # quaternion components, max terrain height [m] (CPG parameters are the controller's own: no noise)
+    noise_joint_pos: float = 0.01
+    noise_joint_vel: float = 0.5
+    noise_target: float = 0.05
+    noise_quat: float = 0.02
+    noise_height: float = 0.01
+    push_interval: float = 6.0  # [s]
+    push_velocity: float = 0.3  # largest horizontal base velocity change [m/s]
+
+
+@dataclass
 class HexConfig:
     robot: RobotConfig = field(default_factory=RobotConfig)
     terrain: TerrainConfig = field(default_factory=TerrainConfig)
@@ -265,6 +293,7 @@ class HexConfig:
     cpg: CPGConfig = field(default_factory=CPGConfig)
     task: TaskConfig = field(default_factory=TaskConfig)
     reward: RewardConfig = field(default_factory=RewardConfig)
+    randomization: RandomizationConfig = field(default_factory=RandomizationConfig)
 
 
 def config_from_dict(d: dict) -> HexConfig:

@@ -36,7 +36,8 @@ from .config import HexConfig
 from .controller import CPGController
 from .kernels.actions import joint_actions_kernel, scale_actions_kernel
 from .kernels.curriculum import curriculum_kernel, placement_kernel, start_levels
-from .kernels.observations import OBS_DIM, observations_kernel
+from .kernels.observations import OBS_DIM, OBS_LAYOUT, observations_kernel
+from .kernels.randomization import delay_actions_kernel, observation_noise_kernel, push_kernel
 from .kernels.rewards import TERMS, rewards_kernel
 from .kernels.terminations import NONFINITE, STATUS_NAMES, TIMEOUT, episode_status_kernel
 from .robot import BASE_Q
@@ -148,6 +149,7 @@ class HexapodEnv(VecEnv):
                               world.height_field, world.footprint, world.spawn_clearance],
                       outputs=[world.spawn_xy_wp, world.spawn_z_wp], device=dev)  # fmt: skip
 
+        self._randomization_buffers()
         self._reset(None)
         self._observe()
         wp.synchronize_device(dev)
@@ -194,6 +196,25 @@ class HexapodEnv(VecEnv):
         # cannot be captured on torch's legacy default stream
         self.graph = capture_graph(self.device, self._control_step, self._state_arrays())
 
+    def _randomization_buffers(self) -> None:
+        """Per-step domain randomisation (``RandomizationConfig.enabled``): which envs act late, the previous
+        actions, the observation noise per column and the push period in control steps."""
+        rz, n, dev = self.cfg.randomization, self.num_envs, self.device
+        self.randomized = rz.enabled
+        if not rz.enabled:
+            return
+        rng = np.random.default_rng([self.cfg.task.seed, 0x1A7E])
+        self._late = wp.array(rng.random(n) < rz.latency_share, dtype=wp.bool, device=dev)
+        self._prev_actions = wp.zeros((n, self.num_actions), dtype=wp.float32, device=dev)
+        self._effective_actions = wp.zeros((n, self.num_actions), dtype=wp.float32, device=dev)
+        amp = {"joint_pos": rz.noise_joint_pos, "joint_vel": rz.noise_joint_vel, "target": rz.noise_target,
+               "quat": rz.noise_quat, "max_height": rz.noise_height}  # fmt: skip
+        noise = np.zeros(self.num_obs, np.float32)
+        for name, a, b in OBS_LAYOUT[self.action_mode]:
+            noise[a:b] = amp.get(name, 0.0)  # the CPG parameters are the controller's own: exact
+        self._obs_noise = wp.array(noise, device=dev)
+        self._push_steps = max(1, int(round(rz.push_interval / self.cfg.task.control_dt)))
+
     def _state_arrays(self) -> list[wp.array]:
         s = self.world.state_0
         arrays = [s.joint_q, s.joint_qd, s.body_q, s.body_qd, self.episode_steps, self.prev_x, self.world.start_wp,
@@ -202,17 +223,28 @@ class HexapodEnv(VecEnv):
             arrays += [self.controller.params, self.controller.params_target, self.controller.state]
         if self.level is not None:
             arrays += [self.level, self.world.spawn_xy_wp, self.world.spawn_z_wp]
+        if self.randomized:
+            arrays += [self._prev_actions]
         return arrays
 
     def _control_step(self) -> None:
         w, t, r, dev, n = self.world, self.cfg.task, self.cfg.reward, self.device, self.num_envs
+        actions = self.actions
+        if self.randomized:  # actuation latency and pushes
+            actions = self._effective_actions
+            wp.launch(delay_actions_kernel, dim=(n, self.num_actions), inputs=[self.actions, self._late],
+                      outputs=[self._prev_actions, actions], device=dev)  # fmt: skip
+            rz = self.cfg.randomization
+            wp.launch(push_kernel, dim=n, inputs=[self.episode_steps, self._push_steps, rz.push_velocity,
+                                                  t.seed + 104729, w.reset_counter],
+                      outputs=[w.joint_qd_wp], device=dev)  # fmt: skip
         if self.controller is not None:
             wp.launch(scale_actions_kernel, dim=(n, self.num_actions),
-                      inputs=[self.actions, self.controller.lower, self.controller.upper],
+                      inputs=[actions, self.controller.lower, self.controller.upper],
                       outputs=[self.controller.params_target], device=dev)  # fmt: skip
         else:
             wp.launch(joint_actions_kernel, dim=(n, self.num_actions),
-                      inputs=[self.actions, w.joint_lower, w.joint_upper, BASE_Q], outputs=[w.joint_target_wp],
+                      inputs=[actions, w.joint_lower, w.joint_upper, BASE_Q], outputs=[w.joint_target_wp],
                       device=dev)  # fmt: skip
         for _ in range(self.decimation):
             w.simulate_frame()
@@ -270,6 +302,10 @@ class HexapodEnv(VecEnv):
                     int(ctrl is not None)],
             outputs=[self.obs], device=self.device,
         )  # fmt: skip
+        if self.randomized:
+            wp.launch(observation_noise_kernel, dim=self.num_envs,
+                      inputs=[self._obs_noise, self.cfg.task.seed + 15485863, w.reset_counter], outputs=[self.obs],
+                      device=self.device)  # fmt: skip
 
     # ------------------------------------------------------------------ logging
     def _log(self) -> dict[str, torch.Tensor]:

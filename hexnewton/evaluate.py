@@ -43,7 +43,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from .cli import ArgumentParser, positive_int, run, terrain_name
-from .config import PARAM_NAMES, HexConfig, SimConfig, TaskConfig, TerrainConfig
+from .config import PARAM_NAMES, HexConfig, RandomizationConfig, SimConfig, TaskConfig, TerrainConfig
 from .kernels.terminations import FELL, NONFINITE, OFF_COURSE, STATUS_NAMES
 
 DISTANCES = (0.5, 1.0, 2.0, 3.0)  # Table 3's columns [m]
@@ -145,16 +145,19 @@ class Episode:
 
 
 def run_rounds(controller: str, checkpoint: str | None, terrain: str, rounds: int, device: str | None,
-               max_steps: int, reset_yaw: float, progress: bool = True) -> Episode:  # fmt: skip
-    """``rounds`` robots, one first episode each, with a deterministic controller on unseen seeds."""
+               max_steps: int, reset_yaw: float, progress: bool = True, randomize: bool = False,
+               step_rise: float = TerrainConfig.step_rise, goal_distance: float = TaskConfig.goal_distance) -> Episode:
+    """``rounds`` robots, one first episode each, with a deterministic controller on unseen seeds; with
+    ``randomize``, under perturbed conditions (``RandomizationConfig`` drawn with the evaluation seed)."""
     from .env import make_env
     from .play import fixed_cpg_actions, load_policy, stepped
 
     mode = CONTROLLERS[controller]
     cfg = HexConfig(
         sim=replace(SimConfig(), num_envs=rounds, device=device),
-        terrain=TerrainConfig(name=terrain, seed=EVAL_TERRAIN_SEED),
-        task=replace(TaskConfig(), seed=EVAL_RESET_SEED, reset_yaw=reset_yaw),
+        terrain=TerrainConfig(name=terrain, seed=EVAL_TERRAIN_SEED, step_rise=step_rise),
+        task=replace(TaskConfig(), seed=EVAL_RESET_SEED, reset_yaw=reset_yaw, goal_distance=goal_distance),
+        randomization=RandomizationConfig(enabled=randomize),
     )
     env = make_env(cfg, mode)
     if controller == "cpg":
@@ -195,24 +198,25 @@ def report_markdown(results: dict, meta: dict) -> str:
     """Table 3's shape (ours beside the paper's), then stability per terrain and controller."""
     lines = ["# hexnewton evaluation", ""]
     lines += [f"- {k}: {v}" for k, v in meta.items()]
+    distances = tuple(meta.get("distances", DISTANCES))
     lines += ["", "## Success rate at each distance (Table 3)", "",
-              "| terrain | method | " + " | ".join(f"{d:g} m" for d in DISTANCES) + " | paper (" +
-              " / ".join(f"{d:g}" for d in DISTANCES) + " m) |",
-              "|---|---|" + "---:|" * len(DISTANCES) + "---|"]  # fmt: skip
+              "| terrain | method | " + " | ".join(f"{d:g} m" for d in distances) + " | paper (" +
+              " / ".join(f"{d:g}" for d in distances) + " m) |",
+              "|---|---|" + "---:|" * len(distances) + "---|"]  # fmt: skip
     for terrain, by_ctrl in results.items():
         for ctrl, s in by_ctrl.items():
             paper = PAPER_TABLE3.get(terrain, {}).get(LABELS[ctrl])
             ref = " / ".join(f"{p}%" for p in paper) if paper else "—"
-            cells = " | ".join(_pct(s[f"success_{d:g}m"]) for d in DISTANCES)
+            cells = " | ".join(_pct(s[f"success_{d:g}m"]) for d in distances)
             lines.append(f"| {terrain} | {LABELS[ctrl]} | {cells} | {ref} |")
     lines += ["", "## Stability (§3.3; angles in degrees over every step of every round)", "",
               "| terrain | method | rounds | pitch mean / var / peak | roll mean / var / peak | Y dev. mean / max [m] "
-              "| time to 3 m [s] | ended |", "|---|---|---:|---|---|---|---:|---|"]  # fmt: skip
+              f"| time to {distances[-1]:g} m [s] | ended |", "|---|---|---:|---|---|---|---:|---|"]  # fmt: skip
     for terrain, by_ctrl in results.items():
         for ctrl, s in by_ctrl.items():
             ang = {n: " / ".join("—" if s[f"{n}_{k}"] is None else f"{s[f'{n}_{k}']:.2f}"
                                  for k in ("mean_deg", "var_deg2", "peak_deg")) for n in ("pitch", "roll")}  # fmt: skip
-            t3 = s["time_to_3m_s"]
+            t3 = s[f"time_to_{distances[-1]:g}m_s"]
             ended = ", ".join(f"{k} {v}" for k, v in s["ended"].items() if v)
             lines.append(f"| {terrain} | {LABELS[ctrl]} | {s['rounds']} | {ang['pitch']} | {ang['roll']} | "
                          f"{s['y_dev_mean_m']:.3f} / {s['y_dev_max_m']:.3f} | "
@@ -345,10 +349,21 @@ def main(argv: list[str] | None = None) -> int:
                    help="control steps per round (default: the episode limit)")  # fmt: skip
     p.add_argument("--reset_yaw", type=float, default=TaskConfig.reset_yaw, help="start yaw noise [rad]")
     p.add_argument("--runs", nargs="+", metavar="CTRL=RUN[,RUN]", help="training runs for Fig. 5a")
+    p.add_argument("--distances", nargs="+", type=float, default=list(DISTANCES),
+                   help="success distances [m] (Table 3: 0.5 1 2 3)")
+    p.add_argument("--goal_distance", type=float, default=TaskConfig.goal_distance,
+                   help="goal ahead of the start [m]; the largest distance needs goal_distance - 0.5 or more")
+    p.add_argument("--step_rise", type=float, default=TerrainConfig.step_rise, help="step height [m] (§3.1: 0.06)")
+    p.add_argument("--randomize", action="store_true",
+                   help="perturbed conditions: friction, payload, masses, gains, latency, noise, pushes")
     p.add_argument("--device", default=None)
     p.add_argument("--out", default=None, help="output directory (default eval/<date_time>); must not exist")
     p.add_argument("--no-progress", action="store_true")
     args = p.parse_args(argv)
+    distances = tuple(sorted(set(args.distances)))
+    if not all(0 < d <= args.goal_distance - TaskConfig.goal_radius + 1e-9 for d in distances):
+        raise ValueError(f"--distances must lie in (0, goal_distance - {TaskConfig.goal_radius:g}] = "
+                         f"(0, {args.goal_distance - TaskConfig.goal_radius:g}] m")  # fmt: skip
     checkpoints = _pairs(args.checkpoint, "--checkpoint")
     runs = _pairs(args.runs, "--runs")
     from .baselines import check_model_file
@@ -383,13 +398,14 @@ def main(argv: list[str] | None = None) -> int:
         episodes, metrics = {}, {}
         for ctrl in args.controllers:
             ck = None if ctrl == "cpg" else checkpoint_for(checkpoints, ctrl, terrain)
-            ep = run_rounds(ctrl, ck, terrain, args.rounds, device, args.max_steps, args.reset_yaw, progress)
-            m = round_metrics(ep.pos, ep.rpy, ep.done, ep.status, ep.dt)
-            s = summarize(m, ep.rpy)
+            ep = run_rounds(ctrl, ck, terrain, args.rounds, device, args.max_steps, args.reset_yaw, progress,
+                            args.randomize, args.step_rise, args.goal_distance)  # fmt: skip
+            m = round_metrics(ep.pos, ep.rpy, ep.done, ep.status, ep.dt, distances)
+            s = summarize(m, ep.rpy, distances)
             s["checkpoint"] = ck
             results.setdefault(terrain, {})[ctrl] = s
             episodes[ctrl], metrics[ctrl] = ep, m
-            print(f"{terrain:8s} {LABELS[ctrl]:8s} " + "  ".join(f"{d:g} m {_pct(s[f'success_{d:g}m'])}" for d in DISTANCES)
+            print(f"{terrain:8s} {LABELS[ctrl]:8s} " + "  ".join(f"{d:g} m {_pct(s[f'success_{d:g}m'])}" for d in distances)
                   + f"  ({s['rounds']} rounds, {len(ep.done)} steps)", flush=True)  # fmt: skip
         # figures now, so that only one terrain's trajectories are held at a time (1000 rounds x 7000 steps)
         plot_terrain(os.path.join(out, f"fig_{terrain}.png"), terrain, episodes, metrics)
@@ -397,6 +413,8 @@ def main(argv: list[str] | None = None) -> int:
             plot_params(os.path.join(out, "fig_params.png"), terrain, episodes)
     wall = time.perf_counter() - t0
     meta = {"device": device, "rounds": args.rounds, "max_steps": args.max_steps, "reset_yaw": args.reset_yaw,
+            "distances": list(distances), "goal_distance": args.goal_distance, "step_rise": args.step_rise,
+            "randomized": args.randomize,
             "terrain_seed": EVAL_TERRAIN_SEED, "reset_seed": EVAL_RESET_SEED,
             "unseen": "terrain seed and start poses differ from training (train.py: terrain seed 0, seed 1)",
             "wall_s": round(wall, 1)}  # fmt: skip

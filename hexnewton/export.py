@@ -21,7 +21,7 @@ from argparse import ArgumentParser
 import numpy as np
 
 from .cli import positive_int, run
-from .config import JOINT_NAMES, PARAM_NAMES, SimConfig, TaskConfig, TerrainConfig, config_from_dict
+from .config import JOINT_NAMES, PARAM_NAMES, RandomizationConfig, TaskConfig, TerrainConfig, config_from_dict
 from .deploy import FORMAT, replay
 
 
@@ -114,6 +114,7 @@ def main(argv: list[str] | None = None) -> int:
         sim=dataclasses.replace(cfg.sim, num_envs=args.robots, device="cpu"),
         terrain=TerrainConfig(name="flat"),
         task=dataclasses.replace(cfg.task, seed=12345, reset_yaw=TaskConfig.reset_yaw),
+        randomization=RandomizationConfig(),  # the check rollout is the nominal robot (no latency, no noise)
     )
     env = make_env(cfg, "cpg")
     runner = load_runner(env, args.checkpoint, "cpg")

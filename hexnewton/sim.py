@@ -311,7 +311,52 @@ class World:
         self.sim_time = 0.0
         self.graph = None
         self.controller: Callable[[World], None] | None = None
+        self.randomized: dict[str, np.ndarray] = {}
+        if cfg.randomization.enabled:
+            self.randomize(seed=cfg.task.seed)
         wp.synchronize_device(self.device)
+
+    def randomize(self, seed: int = 0) -> dict[str, np.ndarray]:
+        """Draw each env's physical properties from ``cfg.randomization`` (``RandomizationConfig``) and hand them
+        to MuJoCo: contact friction, torso payload, leg link masses, PD gains and effort limits. Returns (and
+        keeps in ``randomized``) the per-env draws."""
+        r, m, n = self.cfg.randomization, self.model, self.num_envs
+        rng = np.random.default_rng([seed, 0x5EED])
+        u = lambda lo_hi: rng.uniform(lo_hi[0], lo_hi[1], n)  # noqa: E731
+        draws = {"friction": u(r.friction), "payload": u(r.payload), "link_mass_scale": u(r.link_mass_scale),
+                 "kp_scale": u(r.kp_scale), "kd_scale": u(r.kd_scale), "effort_scale": u(r.effort_scale)}  # fmt: skip
+        # friction: MuJoCo combines two geoms' friction by max, so the shared ground takes the range's minimum
+        # and every robot shape its env's draw
+        shape_world = m.shape_world.numpy()
+        mu = m.shape_material_mu.numpy()
+        robot = shape_world >= 0
+        mu[robot] = draws["friction"][shape_world[robot]]
+        mu[~robot] = min(r.friction)
+        m.shape_material_mu.assign(mu)
+        # masses: bodies are laid out env by env, torso first; inertia scales with the mass
+        per_env = m.body_count // n
+        mass = m.body_mass.numpy().reshape(n, per_env)
+        inertia = m.body_inertia.numpy().reshape(n, per_env, 3, 3)
+        scale = np.ones((n, per_env))
+        scale[:, 0] = (mass[:, 0] + draws["payload"]) / mass[:, 0]
+        scale[:, 1:] = draws["link_mass_scale"][:, None]
+        mass = mass * scale
+        inertia = inertia * scale[:, :, None, None]
+        m.body_mass.assign(mass.reshape(-1).astype(np.float32))
+        m.body_inv_mass.assign(np.where(mass > 0, 1.0 / mass, 0.0).reshape(-1).astype(np.float32))
+        m.body_inertia.assign(inertia.reshape(-1, 3, 3).astype(np.float32))
+        m.body_inv_inertia.assign(np.linalg.inv(inertia.reshape(-1, 3, 3)).astype(np.float32))
+        # the 18 actuated joints of each env (after the 6 base dofs)
+        nd = m.joint_dof_count // n
+        for name, key in (("joint_target_ke", "kp_scale"), ("joint_target_kd", "kd_scale"),
+                          ("joint_effort_limit", "effort_scale")):  # fmt: skip
+            a = getattr(m, name).numpy().reshape(n, nd)
+            a[:, BASE_QD:] *= draws[key][:, None]
+            getattr(m, name).assign(a.reshape(-1))
+        self.solver.notify_model_changed(newton.ModelFlags.SHAPE_PROPERTIES | newton.ModelFlags.BODY_INERTIAL_PROPERTIES
+                                         | newton.ModelFlags.JOINT_DOF_PROPERTIES | newton.ModelFlags.ACTUATOR_PROPERTIES)
+        self.randomized = draws
+        return draws
 
     def set_controller(self, controller: Callable[[World], None] | None) -> None:
         """Launch ``controller(world)`` before every physics substep (inside the captured graph)."""

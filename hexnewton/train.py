@@ -37,7 +37,7 @@ import time
 import numpy as np
 
 from .cli import ArgumentParser, positive_int, run, terrain_name
-from .config import HexConfig, RewardConfig, SimConfig, TaskConfig, TerrainConfig
+from .config import HexConfig, RandomizationConfig, RewardConfig, SimConfig, TaskConfig, TerrainConfig
 
 PRESETS = ("default", "paper")
 
@@ -208,6 +208,9 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--step_rise", type=float, default=TerrainConfig.step_rise, help="step height [m] (§3.1: 0.06)")
     p.add_argument("--block_height_max", type=float, default=TerrainConfig.block_height_max,
                    help="tallest rugged block [m] (§3.1: 0.06)")
+    p.add_argument("--randomize", action="store_true",
+                   help="domain randomisation (RandomizationConfig): friction, payload, masses, gains, latency, "
+                        "observation noise, pushes")  # fmt: skip
     p.add_argument("--direction_deadband", type=float, default=RewardConfig.direction_deadband,
                    help="heading error [rad] below which the direction term is 0 (Table 1: pi/6; default 0)")
     args = p.parse_args(argv)
@@ -240,6 +243,7 @@ def main(argv: list[str] | None = None) -> int:
                               step_rise=args.step_rise, block_height_max=args.block_height_max),
         task=dataclasses.replace(TaskConfig(), seed=seed, goal_distance=args.goal_distance),
         reward=dataclasses.replace(RewardConfig(), direction_deadband=args.direction_deadband),
+        randomization=RandomizationConfig(enabled=args.randomize),
     )
     env = make_env(cfg, args.action_mode)
     if ckpt is not None:

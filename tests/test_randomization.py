@@ -1,0 +1,116 @@
+"""Domain randomisation: per-env physical draws reach MuJoCo; latency, observation noise and pushes against
+their NumPy references; a randomised env trains-ready (finite, captured) on CPU."""
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+import torch
+import warp as wp
+
+from hexnewton.config import HexConfig, RandomizationConfig, SimConfig, TaskConfig
+from hexnewton.env import make_env
+from hexnewton.kernels.observations import OBS_LAYOUT
+from hexnewton.kernels.randomization import (
+    delay_actions_kernel,
+    delay_actions_reference,
+    observation_noise_kernel,
+    push_kernel,
+    pushed_envs_reference,
+)
+from hexnewton.kernels.reference import scale_actions_reference
+
+DEV = "cpu"
+RZ = RandomizationConfig(enabled=True)
+
+
+def test_delay_actions_matches_reference():
+    rng = np.random.default_rng(0)
+    n, a = 64, 15
+    actions, prev = rng.uniform(-1, 1, (n, a)).astype(np.float32), rng.uniform(-1, 1, (n, a)).astype(np.float32)
+    late = rng.random(n) < 0.5
+    prev_wp, eff = wp.array(prev, device=DEV), wp.zeros((n, a), dtype=wp.float32, device=DEV)
+    wp.launch(delay_actions_kernel, dim=(n, a), inputs=[wp.array(actions, device=DEV), wp.array(late, dtype=wp.bool,
+              device=DEV)], outputs=[prev_wp, eff], device=DEV)  # fmt: skip
+    want_eff, want_prev = delay_actions_reference(actions, late, prev)
+    np.testing.assert_array_equal(eff.numpy(), want_eff.astype(np.float32))
+    np.testing.assert_array_equal(prev_wp.numpy(), want_prev.astype(np.float32))
+
+
+def test_observation_noise_bounds():
+    n = 256
+    layout = OBS_LAYOUT["cpg"]
+    amp = np.zeros(59, np.float32)
+    amp[0:18], amp[18:36] = RZ.noise_joint_pos, RZ.noise_joint_vel
+    obs = np.random.default_rng(1).normal(size=(n, 59)).astype(np.float32)
+    o = wp.array(obs, device=DEV)
+    wp.launch(observation_noise_kernel, dim=n, inputs=[wp.array(amp, device=DEV), 7, wp.array([3], dtype=wp.int32,
+              device=DEV)], outputs=[o], device=DEV)  # fmt: skip
+    d = o.numpy() - obs
+    assert np.all(np.abs(d) <= amp + 1e-6) and np.all(d[:, 36:] == 0.0)
+    assert np.abs(d[:, 18:36]).max() > 0.9 * RZ.noise_joint_vel and abs(d[:, 18:36].mean()) < 0.05
+    assert len(layout) == 7
+
+
+def test_push_kernel_matches_reference():
+    n, interval, v = 40, 5, 0.3
+    steps = np.arange(n, dtype=np.int32)
+    qd = np.zeros((n, 24), np.float32)
+    q = wp.array(qd, device=DEV)
+    wp.launch(push_kernel, dim=n, inputs=[wp.array(steps, device=DEV), interval, v, 3, wp.array([0], dtype=wp.int32,
+              device=DEV)], outputs=[q], device=DEV)  # fmt: skip
+    pushed = np.any(q.numpy()[:, :2] != 0, axis=1)
+    np.testing.assert_array_equal(pushed, pushed_envs_reference(steps, interval))
+    assert np.all(np.abs(q.numpy()[:, :2]) <= v) and np.all(q.numpy()[:, 2:] == 0)
+
+
+@pytest.fixture(scope="module")
+def pair():
+    cfg = HexConfig(sim=replace(SimConfig(), num_envs=8, device=DEV), task=replace(TaskConfig(), seed=3),
+                    randomization=replace(RZ, push_interval=0.1))  # fmt: skip
+    return make_env(cfg), make_env(replace(cfg, randomization=RandomizationConfig()))
+
+
+def test_physical_draws_reach_mujoco(pair):
+    env, _ = pair
+    d, m, n = env.world.randomized, env.world.solver.mjw_model, 8
+    for key, rng in (("friction", RZ.friction), ("payload", RZ.payload), ("kp_scale", RZ.kp_scale),
+                     ("effort_scale", RZ.effort_scale), ("link_mass_scale", RZ.link_mass_scale)):  # fmt: skip
+        assert d[key].shape == (n,) and np.all((d[key] >= rng[0]) & (d[key] <= rng[1])) and d[key].std() > 0
+    friction = m.geom_friction.numpy()[:, :, 0]  # (worlds, geoms): the ground (min of the range), then the robot
+    np.testing.assert_allclose(friction[:, 0], min(RZ.friction), rtol=1e-6)
+    np.testing.assert_allclose(friction[:, 1:].max(axis=1), d["friction"], rtol=1e-6)
+    torso = m.body_mass.numpy()[:, 1]
+    np.testing.assert_allclose(torso, 1.6 + d["payload"], rtol=1e-5)
+    kp = m.actuator_gainprm.numpy()[:, :, 0]
+    np.testing.assert_allclose(kp, 40.0 * d["kp_scale"][:, None] * np.ones((1, 18)), rtol=1e-5)
+    effort = m.jnt_actfrcrange.numpy()[:, 1:, 1]
+    np.testing.assert_allclose(effort, 3.5 * d["effort_scale"][:, None] * np.ones((1, 18)), rtol=1e-5)
+
+
+def test_randomised_env_steps(pair):
+    env, plain = pair
+    late = env._late.numpy()
+    a0, a1 = torch.full((8, 15), -0.5), torch.full((8, 15), 0.5)
+    env.step(a0)
+    plain.step(a0)
+    obs, rew, done, _ = env.step(a1)
+    plain.step(a1)
+    lo, hi = env.controller.lower.numpy(), env.controller.upper.numpy()
+    target = env.controller.params_target.numpy()
+    np.testing.assert_allclose(target[late], scale_actions_reference(a0.numpy()[late], lo, hi), rtol=1e-6)  # 20 ms late
+    np.testing.assert_allclose(target[~late], scale_actions_reference(a1.numpy()[~late], lo, hi), rtol=1e-6)
+    for _ in range(10):  # a push every 5 steps (push_interval 0.1 s)
+        obs, rew, done, _ = env.step(a1)
+        obs_plain, *_ = plain.step(a1)
+    assert torch.isfinite(obs["policy"]).all() and torch.isfinite(rew).all()
+    noise = (obs["policy"] - obs_plain["policy"]).abs()
+    assert float(noise[:, 18:36].max()) > 0  # noisy (and physically different) observations
+    assert float(noise[~late][:, 39:54].max()) < 1e-5  # the CPG parameters are the controller's own: exact
+
+
+def test_evaluation_under_perturbed_conditions():
+    from hexnewton.evaluate import run_rounds
+
+    ep = run_rounds("cpg", None, "flat", 3, DEV, 20, 0.0, progress=False, randomize=True, goal_distance=5.5)
+    assert ep.pos.shape == (20, 3, 2) and np.isfinite(ep.pos).all() and ep.pos[-1, :, 0].min() > 0
