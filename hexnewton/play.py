@@ -146,7 +146,7 @@ def stepped(env, policy, steps: int, description: str, progress: bool = True):
             yield k, env.status.numpy(), q, pos, env.rpy.numpy().copy()
 
 
-def rollout(env, policy, steps: int, recorder: Recorder | None = None, progress: bool = True) -> dict:
+def rollout(env, policy, steps: int, recorder=None, progress: bool = True) -> dict:
     """Run ``policy(obs) -> actions`` for ``steps`` control steps; returns first-episode statistics."""
     n = env.num_envs
     pos = np.zeros((steps, n, 3), np.float32)
@@ -155,8 +155,8 @@ def rollout(env, policy, steps: int, recorder: Recorder | None = None, progress:
     status_log = np.zeros((steps, n), np.int32)
     for k, status, q, p, r in stepped(env, policy, steps, env.cfg.terrain.name, progress):
         pos[k], rpy[k], done[k], status_log[k] = p, r, status != 0, status
-        if recorder is not None:
-            recorder.add(env, (k + 1) * env.cfg.task.control_dt, q, r, status != 0)
+        for rec in recorder if isinstance(recorder, (list, tuple)) else [recorder] * (recorder is not None):
+            rec.add(env, (k + 1) * env.cfg.task.control_dt, q, r, status != 0)
     env.world.check_contacts()
     return first_episode_stats(pos, rpy, done, status_log)
 
@@ -206,12 +206,19 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--reset_yaw", type=float, default=0.0,
                    help="start yaw noise [rad] (training uses 0.2; 0 starts every robot facing its goal)")
     p.add_argument("--record", metavar="PATH.npz", help="save the rollout (first terrain)")
+    p.add_argument("--video", metavar="PATH.mp4|.gif", help="render the first terrain's rollout headless (matplotlib)")
+    p.add_argument("--video_robots", type=positive_int, default=3, help="robots drawn in the video")
     p.add_argument("--plot", metavar="PATH.png", help="plot the six legs' joint targets over two gait cycles")
     p.add_argument("--no-progress", action="store_true")
     args = p.parse_args(argv)
     for path, ext in ((args.record, ".npz"), (args.plot, ".png")):
         if path:
             check_writable(path, ext)
+    if args.video:
+        from .video import check_video_path
+
+        check_video_path(args.video)
+        check_writable(args.video, os.path.splitext(args.video)[1])
     mode = CONTROLLERS[args.controller]
     if args.controller != "cpg" and args.checkpoint is None:
         args.checkpoint = newest_checkpoint(args.log_dir, f"hexnewton_{mode}_{args.terrain[0]}")
@@ -235,8 +242,14 @@ def main(argv: list[str] | None = None) -> int:
         else:
             policy = load_policy(env, args.checkpoint, mode)
         recorder = Recorder() if (args.record and i == 0) else None
+        video = None
+        if args.video and i == 0:
+            from .video import VideoRecorder
+
+            video = VideoRecorder(robots=args.video_robots)
         t0 = time.perf_counter()
-        stats = rollout(env, policy, args.steps, recorder, progress=not args.no_progress and sys.stderr.isatty())
+        stats = rollout(env, policy, args.steps, [r for r in (recorder, video) if r is not None],
+                        progress=not args.no_progress and sys.stderr.isatty())  # fmt: skip
         wall = time.perf_counter() - t0
         label = args.controller if args.controller == "cpg" else f"{args.controller} ({args.checkpoint})"
         print(f"[{label}] " + format_stats(terrain, stats, args.steps * cfg.task.control_dt)
@@ -244,6 +257,9 @@ def main(argv: list[str] | None = None) -> int:
         if recorder is not None:
             recorder.save(args.record)
             print(f"recorded {args.steps} steps x {args.num_envs} envs to {args.record}")
+        if video is not None:
+            video.save(args.video, title=f"{args.controller} on {terrain}")
+            print(f"video of {len(video.frames)} frames written to {args.video}")
     if args.plot:
         from .plotting import plot_gait
 

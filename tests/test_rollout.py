@@ -1,6 +1,7 @@
 """Episode ends (§2.4.4) in-kernel vs reference, fixed-CPG rollouts on CPU, and play.py's outputs."""
 
 import math
+import os
 import subprocess
 import sys
 
@@ -25,6 +26,7 @@ from hexnewton.play import fixed_cpg_actions, rollout
 from hexnewton.terrain import make_terrain, terrain_height_np
 from hexnewton.terrain.query import height_field_from_grid
 
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 TASK = TaskConfig()
 
 
@@ -183,3 +185,21 @@ def test_play_bad_input_is_one_line(args, message):
     assert proc.returncode == 2
     err = [line for line in proc.stderr.splitlines() if line.strip() and "Warp CUDA" not in line]
     assert len(err) == 1 and message in err[0], proc.stderr
+
+
+@pytest.mark.parametrize("ext", [".gif", ".mp4"])
+def test_headless_video(tmp_path, ext):
+    """play.py --video renders without a display (matplotlib; .mp4 through imageio-ffmpeg's ffmpeg)."""
+    out = tmp_path / f"walk{ext}"
+    proc = subprocess.run([sys.executable, "play.py", "--terrain", "stepped", "--num_envs", "2", "--steps", "12",
+                           "--device", "cpu", "--video", str(out), "--no-progress"], capture_output=True, text=True,
+                          timeout=600, cwd=ROOT)  # fmt: skip
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    assert "video of 6 frames" in proc.stdout and out.stat().st_size > 2000
+
+
+def test_video_bad_name_fails_before_simulating(tmp_path):
+    proc = subprocess.run([sys.executable, "play.py", "--video", str(tmp_path / "walk.avi"), "--device", "cpu"],
+                          capture_output=True, text=True, timeout=600, cwd=ROOT)  # fmt: skip
+    err = [line for line in proc.stderr.splitlines() if line.strip() and "Warp CUDA" not in line]
+    assert proc.returncode == 2 and len(err) == 1 and "a video must be a .mp4 or .gif file" in err[0]
