@@ -5,7 +5,11 @@ single captured graph (a CUDA graph on GPU, Warp's capture on CPU) of Warp kerne
 
     actions -> parameters (kernels/actions.py)  -> [CPG (cpg.py) + mapping (mapping.py) + physics] x substeps
             -> episode ends (terminations.py)   -> rewards (rewards.py) -> episode bookkeeping
-            -> randomised resets of finished envs (resets.py) -> observations (observations.py)
+            -> [curriculum lane change (curriculum.py)] -> randomised resets of finished envs (resets.py)
+            -> observations (observations.py)
+
+With ``RandomizationConfig.enabled`` the step also delays the actions of "late" envs, pushes bases and adds
+observation noise (kernels/randomization.py); the per-env physical draws are ``World.randomize``.
 
 torch sees every buffer zero-copy (``wp.to_torch``), and nothing goes back to the host inside a step.
 Finished envs auto-reset. ``extras["time_outs"]`` marks time-limit ends. ``extras["log"]`` carries:
@@ -14,7 +18,9 @@ Finished envs auto-reset. ``extras["time_outs"]`` marks time-limit ends. ``extra
   finished episodes;
 - ``Episode/nonfinite_resets_total``: how many blown-up envs (NaN/Inf or runaway state, ``kernels/terminations``)
   were reset since the env was built. Their reward stays finite (0 if the position itself is not) and their
-  observation comes from the fresh start, so training never sees a NaN.
+  observation comes from the fresh start, so training never sees a NaN;
+- ``Episode/contact_overflow_frames``: frames with dropped contacts so far (checked every 250 steps);
+- with a curriculum, ``Curriculum/mean_level`` and ``Curriculum/top_level_share``.
 
 Action modes:
 - ``cpg`` (15 actions): omega, A1[2], A2[6], A3[6], each scaled to its range (the paper's CPG_RL);
@@ -138,7 +144,7 @@ class HexapodEnv(VecEnv):
         self._ring_t = wp.to_torch(self._ring)
         self._steps_t = wp.to_torch(self.episode_steps)
         self._nonfinite_t = wp.to_torch(self._nonfinite_total)
-        self._overflow_frames_t = torch.zeros(())  # frames with dropped contacts (host count)
+        self._overflow_frames_t = torch.zeros((), device=self._obs_t.device)  # frames with dropped contacts
         self.level = None  # curriculum level per env (TerrainConfig.levels > 0)
         if cfg.terrain.levels:
             self.level = wp.array(start_levels(n, cfg.terrain.start_levels), dtype=wp.int32, device=dev)
