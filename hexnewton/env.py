@@ -58,6 +58,7 @@ def _bookkeeping(
     status: wp.array[wp.int32],
     joint_q: wp.array2d[wp.float32],
     start: wp.array[wp.vec2],
+    level: wp.array[wp.int32],
     steps: wp.array[wp.int32],
     done: wp.array[wp.bool],
     done_u8: wp.array[wp.uint8],
@@ -66,8 +67,8 @@ def _bookkeeping(
     ring: wp.array2d[wp.float32],
     nonfinite_total: wp.array[wp.int32],
 ):
-    """Done flags and step counters; each finished episode writes (status one-hot, distance, length) to the ring;
-    blown-up envs are counted in ``nonfinite_total``."""
+    """Done flags and step counters; each finished episode writes (status one-hot, distance, length, curriculum
+    level) to the ring; blown-up envs are counted in ``nonfinite_total``."""
     e = wp.tid()
     st = status[e]
     d = st != 0
@@ -89,6 +90,7 @@ def _bookkeeping(
             dist = joint_q[e, 0] - start[e][0]
         ring[slot, 5] = dist
         ring[slot, 6] = float(steps[e] + 1)
+        ring[slot, 7] = float(level[e])
         steps[e] = 0
     else:
         steps[e] = steps[e] + 1
@@ -132,7 +134,9 @@ class HexapodEnv(VecEnv):
         self.last_cpg_state, self.last_params = z(n, 4), z(n, 15)
         self._cursor = z(1, dtype=wp.int32)
         self._nonfinite_total = z(1, dtype=wp.int32)  # blown-up envs reset since the env was built
-        self._ring = wp.full((RING, 7), float("nan"), dtype=wp.float32, device=dev)
+        # finished episodes: status one-hot (5), distance, length, curriculum level
+        self._ring = wp.full((RING, 8), float("nan"), dtype=wp.float32, device=dev)
+        self._no_level = z(n, dtype=wp.int32)
 
         # torch views (zero-copy)
         self._obs_t = wp.to_torch(self.obs)
@@ -271,7 +275,7 @@ class HexapodEnv(VecEnv):
         )  # fmt: skip
         wp.launch(
             _bookkeeping, dim=n,
-            inputs=[self.status, w.joint_q_wp, w.start_wp],
+            inputs=[self.status, w.joint_q_wp, w.start_wp, self.level if self.level is not None else self._no_level],
             outputs=[self.episode_steps, self.done, self.done_u8, self.time_out, self._cursor, self._ring,
                      self._nonfinite_total], device=dev,
         )  # fmt: skip
@@ -327,7 +331,15 @@ class HexapodEnv(VecEnv):
         if self.level is not None:
             log["Curriculum/mean_level"] = self._level_t.float().mean()
             log["Curriculum/top_level_share"] = (self._level_t == self.cfg.terrain.levels - 1).float().mean()
+            log["Curriculum/top_level_success_rate"] = self._top_level_success()[0]
         return log
+
+    def _top_level_success(self) -> tuple[torch.Tensor, torch.Tensor]:
+        """(success rate, episode count) of the ring's episodes played on the last curriculum level (no host
+        sync: masks and sums, nan while there is none)."""
+        top = self._ring_t[:, 7] == self.cfg.terrain.levels - 1
+        count = top.sum()
+        return (top & (self._ring_t[:, 2] == 1.0)).sum() / count, count
 
     def episode_stats(self) -> dict[str, float]:
         """Host copy of the logged episode rates (syncs; for reports, not for the training loop)."""
@@ -338,7 +350,9 @@ class HexapodEnv(VecEnv):
                    nonfinite_resets_total=int(self._nonfinite_total.numpy()[0]),
                    contact_overflow_frames=int(self.world.overflow_frames))  # fmt: skip
         if self.level is not None:
-            out["mean_level"] = float(self.level.numpy().mean())
+            rate, count = self._top_level_success()
+            out.update(mean_level=float(self.level.numpy().mean()), top_level_success_rate=float(rate),
+                       top_level_episodes=int(count))  # fmt: skip
         return out
 
     def close(self) -> None:

@@ -198,7 +198,8 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--max_minutes", type=float, default=None,
                    help="stop after this wall time (then save, export and evaluate as at the end)")
     p.add_argument("--target_success", type=float, default=None,
-                   help="stop once this share of the last 1024 training episodes succeeded (time-to-skill)")
+                   help="stop once this share of the last 1024 training episodes succeeded (time-to-skill; with "
+                        "--levels: of those, at least 256, played on the last level)")
     p.add_argument("--goal_distance", type=float, default=TaskConfig.goal_distance)
     p.add_argument("--levels", type=int, default=TerrainConfig.levels,
                    help="terrain curriculum: this many lanes of increasing difficulty, the last one the terrain "
@@ -277,7 +278,11 @@ def main(argv: list[str] | None = None) -> int:
             """After each iteration's log: stop once the ring of finished episodes is full and successful."""
             _log(*a, **k)
             stats = env.episode_stats()  # one small host read per iteration
-            if stats["episodes"] >= RING and stats["success_rate"] >= args.target_success:
+            if args.levels:  # a curriculum's easy lanes do not count: the last lane is the terrain itself
+                if stats["top_level_episodes"] >= RING // 4 and stats["top_level_success_rate"] >= args.target_success:
+                    raise TrainingStopped(f"target success on the last level {stats['top_level_success_rate']:.3f} "
+                                          f">= {args.target_success}")  # fmt: skip
+            elif stats["episodes"] >= RING and stats["success_rate"] >= args.target_success:
                 raise TrainingStopped(f"target success {stats['success_rate']:.3f} >= {args.target_success}")
 
         runner.logger.log = log

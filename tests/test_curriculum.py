@@ -119,4 +119,12 @@ def test_env_moves_robots_between_lanes():
             lv0 = env.level.numpy().copy()
     assert promoted.sum() >= 3, "mid-range gaits should reach a 1 m goal on the easiest lanes"
     assert float(extras["log"]["Curriculum/mean_level"]) == pytest.approx(env.level.numpy().mean())
-    assert env.episode_stats()["mean_level"] == pytest.approx(env.level.numpy().mean())
+    stats = env.episode_stats()
+    assert stats["mean_level"] == pytest.approx(env.level.numpy().mean())
+    # the ring remembers each finished episode's level: the last level's success rate (time-to-skill) is its own
+    ring = env._ring.numpy()
+    played = ring[~np.isnan(ring[:, 7])]
+    top = played[:, 7] == 3
+    assert stats["top_level_episodes"] == top.sum() and set(np.unique(played[:, 7])) <= {0, 1, 2, 3}
+    if top.any():
+        assert stats["top_level_success_rate"] == pytest.approx(played[top, 2].mean())

@@ -471,11 +471,13 @@ def test_torchrun_ranks_devices_and_seeds():
     assert proc.returncode == 2 and len(err) == 1 and "runs on CUDA" in err[0], proc.stderr[-1500:]
 
 
-def test_target_success_stops_training(tmp_path):
+@pytest.mark.parametrize("curriculum", [(), ("--levels", "2", "--start_levels", "2")])
+def test_target_success_stops_training(tmp_path, curriculum):
     """--target_success (time-to-skill): with the goal 5 cm beyond reach every episode succeeds at once, so
-    training stops as soon as 1024 episodes have finished, then saves and exports."""
+    training stops as soon as 1024 episodes have finished (with a curriculum: 256 on its last level), then saves
+    and exports."""
     out = _train(tmp_path, "--goal_distance", "0.55", "--target_success", "0.9", "--max_iterations", "100000",
-                 "--num_envs", "32")  # fmt: skip
-    assert "stopped by target success" in out
+                 "--num_envs", "32", *curriculum)  # fmt: skip
+    assert ("stopped by target success on the last level" if curriculum else "stopped by target success") in out
     (run,) = glob.glob(str(tmp_path / "*" / "*"))
     assert os.path.isfile(run + "/policy.onnx") and len(glob.glob(run + "/model_*.pt")) >= 2
