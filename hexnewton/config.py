@@ -193,7 +193,11 @@ class CPGConfig:
     # ours: ranges of the 15 parameters; an action a in [-1, 1] maps to lo + (a + 1) / 2 * (hi - lo)
     omega_range: tuple[float, float] = (math.pi, 5.0 * math.pi)  # 0.5 - 2.5 Hz
     a1_range: tuple[float, float] = (0.0, 0.5)  # hip; the hip limit is pi/6 = 0.52 about the pose's 0
-    a2_range: tuple[float, float] = (0.0, 0.8)  # knee lift
+    # knee lift; 0.15 + 1.3 stays inside the knee limit pi/2. Eq. 4 lowers the foot as it reaches forward, so
+    # a 6 cm step needs more lift than its height: fixed gaits with A2 <= 0.8 stop at the first or second
+    # step, with A2 = 1.1 they climb 12 steps (CPU sweep, RESULTS.md). Policies trained with (0, 0.8) keep
+    # their ranges: play, evaluate, export and --resume read them from the checkpoint.
+    a2_range: tuple[float, float] = (0.0, 1.3)
     a3_range: tuple[float, float] = (0.0, 0.8)  # ankle tuck; 0.15 + 0.8 < pi/3 keeps it inside the limit
     # ours: the fixed-parameter "CPG" baseline (§3.3), tuned to walk straight on flat ground
     fixed_omega: float = 3.0 * math.pi  # 1.5 Hz

@@ -43,7 +43,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from .cli import ArgumentParser, positive_int, run, terrain_name
-from .config import PARAM_NAMES, HexConfig, RandomizationConfig, SimConfig, TaskConfig, TerrainConfig
+from .config import PARAM_NAMES, CPGConfig, HexConfig, RandomizationConfig, SimConfig, TaskConfig, TerrainConfig
 from .kernels.terminations import FELL, NONFINITE, OFF_COURSE, STATUS_NAMES
 
 DISTANCES = (0.5, 1.0, 2.0, 3.0)  # Table 3's columns [m]
@@ -152,12 +152,16 @@ def run_rounds(controller: str, checkpoint: str | None, terrain: str, rounds: in
     from .env import make_env
     from .play import fixed_cpg_actions, load_policy, stepped
 
+    from .train import load_checkpoint, trained_cpg
+
     mode = CONTROLLERS[controller]
+    cpg = trained_cpg(load_checkpoint(checkpoint)) if controller in ("cpg_rl", "joint") else CPGConfig()
     cfg = HexConfig(
         sim=replace(SimConfig(), num_envs=rounds, device=device),
         terrain=TerrainConfig(name=terrain, seed=EVAL_TERRAIN_SEED, step_rise=step_rise),
         task=replace(TaskConfig(), seed=EVAL_RESET_SEED, reset_yaw=reset_yaw, goal_distance=goal_distance),
         randomization=RandomizationConfig(enabled=randomize),
+        cpg=cpg,  # the policy's own parameter ranges
     )
     env = make_env(cfg, mode)
     if controller == "cpg":

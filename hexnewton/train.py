@@ -37,7 +37,16 @@ import time
 import numpy as np
 
 from .cli import ArgumentParser, positive_int, run, terrain_name
-from .config import HexConfig, RandomizationConfig, RewardConfig, SimConfig, TaskConfig, TerrainConfig
+from .config import (
+    CPGConfig,
+    HexConfig,
+    RandomizationConfig,
+    RewardConfig,
+    SimConfig,
+    TaskConfig,
+    TerrainConfig,
+    config_from_dict,
+)
 
 PRESETS = ("default", "paper")
 
@@ -166,6 +175,14 @@ def load_checkpoint(path: str, map_location: str = "cpu") -> dict:
     return ckpt
 
 
+def trained_cpg(ckpt: dict | None) -> CPGConfig:
+    """The CPG configuration a checkpoint was trained with (its parameter ranges give the actions their meaning);
+    the defaults for no checkpoint or one without hexnewton metadata."""
+    infos = (ckpt or {}).get("infos")
+    cfg = (infos.get("hexnewton") or {}).get("config") if isinstance(infos, dict) else None
+    return config_from_dict(cfg).cpg if cfg else CPGConfig()
+
+
 def check_compatible(ckpt: dict, path: str, num_obs: int, num_actions: int, action_mode: str) -> None:
     meta = ckpt.get("infos") or {}
     meta = meta.get("hexnewton", {}) if isinstance(meta, dict) else {}
@@ -245,6 +262,7 @@ def main(argv: list[str] | None = None) -> int:
         task=dataclasses.replace(TaskConfig(), seed=seed, goal_distance=args.goal_distance),
         reward=dataclasses.replace(RewardConfig(), direction_deadband=args.direction_deadband),
         randomization=RandomizationConfig(enabled=args.randomize),
+        cpg=trained_cpg(ckpt),  # a resumed run keeps the parameter ranges it was trained with
     )
     env = make_env(cfg, args.action_mode)
     if ckpt is not None:

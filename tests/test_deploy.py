@@ -90,3 +90,16 @@ def test_bad_bundles_and_exports(bundle, tmp_path):
     missing = _run(["-m", "hexnewton.export", "--checkpoint", str(tmp_path / "nope.pt"), "--out", str(tmp_path / "b")])
     assert missing.returncode == 2 and "checkpoint not found" in missing.stderr
     assert not (tmp_path / "b").exists()
+
+
+def test_policies_keep_their_trained_parameter_ranges():
+    """A checkpoint's actions mean what they meant in training: play, evaluate, export and --resume take the CPG
+    ranges from the checkpoint, not from today's defaults."""
+    from hexnewton.config import CPGConfig
+    from hexnewton.train import load_checkpoint, trained_cpg
+
+    assert trained_cpg(load_checkpoint(POLICY)).a2_range == (0.0, 0.8)  # trained before the range was widened
+    assert CPGConfig().a2_range == (0.0, 1.3)
+    assert trained_cpg(None) == CPGConfig() and trained_cpg({"infos": None}) == CPGConfig()
+    spec = json.loads(open(os.path.join(ROOT, "results", "controllers", "cpg_rl_flat", "controller.json")).read())
+    assert spec["param_upper"][3] == 0.8  # the shipped bundle carries the policy's own ranges
