@@ -178,6 +178,35 @@ def bench_train(terrain: str, num_envs: int, device: str, iterations: int, seed:
                           train_iteration_s=wall / iterations, memory_per_env_kb=mem)  # fmt: skip
 
 
+def is_out_of_memory(exc: BaseException) -> bool:
+    """Warp, torch and MuJoCo Warp report a failed device allocation in different words."""
+    text = f"{type(exc).__name__} {exc}".lower()
+    return isinstance(exc, MemoryError) or "out of memory" in text or "failed to allocate" in text
+
+
+def largest_that_fits(terrain: str, start: int, device: str, frames: int, sim: SimConfig,
+                      limit: int = 1 << 20) -> list[BenchResult]:  # fmt: skip
+    """Sim-only results at 2x, 4x, ... ``start`` envs until an allocation fails (or ``limit``); the last one
+    is the largest env count that fits on ``device``."""
+    import gc
+
+    out, n = [], start
+    while n * 2 <= limit:
+        n *= 2
+        try:
+            out.append(bench_one(terrain, n, device, frames, sim))
+        except Exception as exc:
+            if not is_out_of_memory(exc):
+                raise
+            print(f"{terrain:8s} N={n:6d} does not fit: {str(exc).splitlines()[0][:100]}", flush=True)
+            break
+        finally:
+            gc.collect()
+        r = out[-1]
+        print(f"{terrain:8s} N={n:6d} sim   {r.robot_s_per_s:12,.0f} robot-s/s (fits)", flush=True)
+    return out
+
+
 def pipeline_table(sim_results: list[BenchResult], results: list[PipelineResult]) -> str:
     """Sim, env-step and training throughput side by side (robot-s/s) with their ratios to sim-only."""
     sim = {(r.terrain, r.num_envs): r.robot_s_per_s for r in sim_results}
@@ -245,6 +274,8 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--mode", nargs="+", choices=["sim", "env", "train"], default=["sim", "env", "train"])
     p.add_argument("--env_steps", type=positive_int, default=None, help="timed env steps (default 200 GPU, 25 CPU)")
     p.add_argument("--train_iterations", type=positive_int, default=None, help="timed PPO iterations (default 10 GPU, 2 CPU)")
+    p.add_argument("--largest", action="store_true",
+                   help="sim-only: double the largest --num_envs until the device runs out of memory")
     p.add_argument("--append", metavar="PATH", help="append the markdown table to this file")
     p.add_argument("--json", metavar="PATH", help="write the raw results as JSON")
     args = p.parse_args(argv)
@@ -281,6 +312,8 @@ def main(argv: list[str] | None = None) -> int:
                     print(f"{terrain:8s} N={n:6d} train {t.train_robot_s_per_s:12,.0f} robot-s/s  "
                           f"({t.train_steps_per_s:,.0f} env-steps/s, {t.train_iteration_s:.2f} s/iteration)", flush=True)  # fmt: skip
                 pipeline.append(pr)
+        if args.largest:
+            results += largest_that_fits(terrain, max(envs), device, frames, sim)
     md = table(results, sim, command) if results else (
         f"### Throughput, {datetime.date.today().isoformat()}, {device_name(device)}, git {git_rev()}\n\n`{command}`\n\n")
     if pipeline:

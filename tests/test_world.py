@@ -176,3 +176,25 @@ def test_bench_reports_sim_env_and_training(tmp_path):
     assert pipe["env_robot_s_per_s"] == pytest.approx(pipe["env_steps_per_s"] * 0.02)
     text = md.read_text()
     assert "| flat | 4 |" in text and "env / sim" in text and "training / sim" in text
+
+
+def test_bench_largest_that_fits(monkeypatch):
+    """--largest doubles the env count until an allocation fails; other errors are not swallowed."""
+    from hexnewton import bench
+
+    def fake(terrain, n, device, frames, sim):
+        if n > 16:
+            raise RuntimeError(f"Warp error: Failed to allocate {n * 10**9} bytes on device 'cuda:0'")
+        return bench.BenchResult(terrain=terrain, num_envs=n, **{k: 0 for k in FIELDS})
+
+    FIELDS = [f for f in bench.BenchResult.__dataclass_fields__ if f not in ("terrain", "num_envs")]
+    monkeypatch.setattr(bench, "bench_one", fake)
+    assert [r.num_envs for r in bench.largest_that_fits("flat", 4, "cuda:0", 5, SimConfig())] == [8, 16]
+    assert bench.is_out_of_memory(MemoryError()) and bench.is_out_of_memory(RuntimeError("CUDA out of memory"))
+
+    def broken(*a):
+        raise RuntimeError("kernel launch failed")
+
+    monkeypatch.setattr(bench, "bench_one", broken)
+    with pytest.raises(RuntimeError, match="kernel launch failed"):
+        bench.largest_that_fits("flat", 4, "cuda:0", 5, SimConfig())
