@@ -147,18 +147,29 @@ def stepped(env, policy, steps: int, description: str, progress: bool = True):
 
 
 def rollout(env, policy, steps: int, recorder=None, progress: bool = True) -> dict:
-    """Run ``policy(obs) -> actions`` for ``steps`` control steps; returns first-episode statistics."""
+    """Run ``policy(obs) -> actions`` for up to ``steps`` control steps; returns first-episode statistics.
+    ``recorder``: one recorder or a list (each gets every step). Without one, the rollout ends as soon as every
+    env's first episode has (the statistics cover nothing else)."""
     n = env.num_envs
+    recorders = list(recorder) if isinstance(recorder, (list, tuple)) else [recorder] * (recorder is not None)
     pos = np.zeros((steps, n, 3), np.float32)
     rpy = np.zeros((steps, n, 3), np.float32)
     done = np.zeros((steps, n), bool)
     status_log = np.zeros((steps, n), np.int32)
+    ended = np.zeros(n, bool)
+    last = steps
     for k, status, q, p, r in stepped(env, policy, steps, env.cfg.terrain.name, progress):
         pos[k], rpy[k], done[k], status_log[k] = p, r, status != 0, status
-        for rec in recorder if isinstance(recorder, (list, tuple)) else [recorder] * (recorder is not None):
+        for rec in recorders:
             rec.add(env, (k + 1) * env.cfg.task.control_dt, q, r, status != 0)
+        ended |= status != 0
+        if not recorders and ended.all():
+            last = k + 1
+            break
     env.world.check_contacts()
-    return first_episode_stats(pos, rpy, done, status_log)
+    stats = first_episode_stats(pos[:last], rpy[:last], done[:last], status_log[:last])
+    stats["control_s"] = last * env.cfg.task.control_dt
+    return stats
 
 
 def newest_checkpoint(log_dir: str, experiment: str) -> str:
@@ -254,7 +265,7 @@ def main(argv: list[str] | None = None) -> int:
                         progress=not args.no_progress and sys.stderr.isatty())  # fmt: skip
         wall = time.perf_counter() - t0
         label = args.controller if args.controller == "cpg" else f"{args.controller} ({args.checkpoint})"
-        print(f"[{label}] " + format_stats(terrain, stats, args.steps * cfg.task.control_dt)
+        print(f"[{label}] " + format_stats(terrain, stats, stats["control_s"])
               + f"  [{wall:.1f} s wall, {env.device}]")  # fmt: skip
         if recorder is not None:
             recorder.save(args.record)
