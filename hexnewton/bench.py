@@ -26,6 +26,7 @@ import os
 import platform
 import subprocess
 import sys
+import tempfile
 import time
 from dataclasses import asdict, dataclass, replace
 
@@ -162,7 +163,9 @@ def bench_train(terrain: str, num_envs: int, device: str, iterations: int, seed:
                     terrain=TerrainConfig(name=terrain, seed=seed))  # fmt: skip
     env = make_env(cfg)
     tcfg = train_cfg("default", num_envs)
-    runner = OnPolicyRunner(env, copy.deepcopy(tcfg), log_dir=None, device=device)
+    # a TensorBoard writer as in train.py: rsl-rl's logger only does its per-step bookkeeping with one
+    logs = tempfile.TemporaryDirectory(prefix="hexnewton-bench-")
+    runner = OnPolicyRunner(env, copy.deepcopy(tcfg), log_dir=logs.name, device=device)
     runner.learn(1)  # capture, kernel loading, optimizer state
     wp.synchronize_device(env.device)
     t0 = time.perf_counter()
@@ -176,6 +179,53 @@ def bench_train(terrain: str, num_envs: int, device: str, iterations: int, seed:
         mem /= num_envs * 1024
     return PipelineResult(terrain, num_envs, train_steps_per_s=rate, train_robot_s_per_s=rate * cfg.task.control_dt,
                           train_iteration_s=wall / iterations, memory_per_env_kb=mem)  # fmt: skip
+
+
+PHASES = (("env.step", "env", "step"), ("policy act", "alg", "act"), ("storage", "alg", "process_env_step"),
+          ("logger", "logger", "process_env_step"), ("returns", "alg", "compute_returns"), ("PPO update", "alg", "update"))
+
+
+def profile_train(terrain: str, num_envs: int, device: str, iterations: int, seed: int = 0) -> dict[str, float]:
+    """Where a training iteration's time goes: each rsl-rl phase timed with a device sync around it (so the
+    total exceeds an unprofiled iteration's). Returns seconds per iteration per phase, plus "other"."""
+    import copy
+
+    from rsl_rl.runners import OnPolicyRunner
+
+    from .env import make_env
+    from .train import seed_everything, train_cfg
+
+    seed_everything(seed)
+    cfg = HexConfig(sim=replace(SimConfig(), num_envs=num_envs, device=device),
+                    terrain=TerrainConfig(name=terrain, seed=seed))  # fmt: skip
+    env = make_env(cfg)
+    logs = tempfile.TemporaryDirectory(prefix="hexnewton-bench-")
+    runner = OnPolicyRunner(env, copy.deepcopy(train_cfg("default", num_envs)), log_dir=logs.name, device=device)
+    runner.learn(1)
+    spent = {name: 0.0 for name, _, _ in PHASES}
+
+    def timed(name, fn):
+        def wrapper(*a, **k):
+            wp.synchronize_device(env.device)
+            t0 = time.perf_counter()
+            out = fn(*a, **k)
+            wp.synchronize_device(env.device)
+            spent[name] += time.perf_counter() - t0
+            return out
+
+        return wrapper
+
+    owners = {"env": env, "alg": runner.alg, "logger": runner.logger}
+    for name, owner, method in PHASES:
+        setattr(owners[owner], method, timed(name, getattr(owners[owner], method)))
+    wp.synchronize_device(env.device)
+    t0 = time.perf_counter()
+    runner.learn(iterations)
+    wp.synchronize_device(env.device)
+    total = time.perf_counter() - t0
+    out = {name: v / iterations for name, v in spent.items()}
+    out["other"] = total / iterations - sum(out.values())
+    return out
 
 
 def is_out_of_memory(exc: BaseException) -> bool:
@@ -274,6 +324,9 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--mode", nargs="+", choices=["sim", "env", "train"], default=["sim", "env", "train"])
     p.add_argument("--env_steps", type=positive_int, default=None, help="timed env steps (default 200 GPU, 25 CPU)")
     p.add_argument("--train_iterations", type=positive_int, default=None, help="timed PPO iterations (default 10 GPU, 2 CPU)")
+    p.add_argument("--profile", action="store_true",
+                   help="with train mode: time each phase of an iteration (env step, policy, storage, logger, "
+                        "returns, PPO update)")  # fmt: skip
     p.add_argument("--largest", action="store_true",
                    help="sim-only: double the largest --num_envs until the device runs out of memory")
     p.add_argument("--append", metavar="PATH", help="append the markdown table to this file")
@@ -287,7 +340,7 @@ def main(argv: list[str] | None = None) -> int:
     sim = replace(SimConfig(), substeps=args.substeps, iterations=args.iterations, ls_iterations=args.ls_iterations,
                   frame_dt=args.frame_dt)  # fmt: skip
     command = "python -m hexnewton.bench " + " ".join(sys.argv[1:] if argv is None else argv)
-    results, pipeline = [], []
+    results, pipeline, profiles = [], [], []
     env_steps = args.env_steps or (200 if gpu else 25)
     iterations = args.train_iterations or (10 if gpu else 2)
     for terrain in args.terrain:
@@ -311,6 +364,12 @@ def main(argv: list[str] | None = None) -> int:
                         setattr(pr, k, getattr(t, k))
                     print(f"{terrain:8s} N={n:6d} train {t.train_robot_s_per_s:12,.0f} robot-s/s  "
                           f"({t.train_steps_per_s:,.0f} env-steps/s, {t.train_iteration_s:.2f} s/iteration)", flush=True)  # fmt: skip
+                    if args.profile:
+                        prof = profile_train(terrain, n, device, iterations)
+                        profiles.append({"terrain": terrain, "num_envs": n, **prof})
+                        total = sum(prof.values())
+                        print(f"{terrain:8s} N={n:6d} profile (synced, {total:.3f} s/iteration): " + ", ".join(
+                            f"{k} {v * 1e3:.1f} ms ({v / total:.0%})" for k, v in prof.items()), flush=True)  # fmt: skip
                 pipeline.append(pr)
         if args.largest:
             results += largest_that_fits(terrain, max(envs), device, frames, sim)
@@ -318,6 +377,12 @@ def main(argv: list[str] | None = None) -> int:
         f"### Throughput, {datetime.date.today().isoformat()}, {device_name(device)}, git {git_rev()}\n\n`{command}`\n\n")
     if pipeline:
         md += "\n" + pipeline_table(results, pipeline)
+    if profiles:
+        md += "\n| terrain | envs | " + " | ".join(name for name, _, _ in PHASES) + " | other |\n"
+        md += "|---|---:|" + "---:|" * (len(PHASES) + 1) + "\n"
+        for pr in profiles:
+            md += f"| {pr['terrain']} | {pr['num_envs']} | " + " | ".join(
+                f"{pr[name] * 1e3:.1f} ms" for name in [p[0] for p in PHASES] + ["other"]) + " |\n"  # fmt: skip
     print()
     print(md)
     if args.append:
@@ -325,7 +390,8 @@ def main(argv: list[str] | None = None) -> int:
             f.write("\n" + md)
     if args.json:
         with open(args.json, "w") as f:
-            json.dump({"sim": [asdict(r) for r in results], "pipeline": [asdict(r) for r in pipeline]}, f, indent=1)
+            json.dump({"sim": [asdict(r) for r in results], "pipeline": [asdict(r) for r in pipeline],
+                       "profile": profiles}, f, indent=1)  # fmt: skip
     return 0
 
 
