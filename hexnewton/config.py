@@ -300,6 +300,15 @@ class HexConfig:
     randomization: RandomizationConfig = field(default_factory=RandomizationConfig)
 
 
+def terrain_for_goal(terrain: TerrainConfig, goal_distance: float) -> TerrainConfig:
+    """``terrain`` with its patch reaching at least 1 m beyond a goal ``goal_distance`` ahead (x_max on a 0.5 m
+    grid; the default 5 m patch holds the paper's 3.5 m goal)."""
+    from dataclasses import replace
+
+    need = math.ceil(2.0 * (goal_distance + 1.0)) / 2.0
+    return terrain if need <= terrain.x_max else replace(terrain, x_max=need)
+
+
 def config_from_dict(d: dict) -> HexConfig:
     """Rebuild a :class:`HexConfig` from ``dataclasses.asdict`` output (e.g. a checkpoint's or config.json's
     "config"); missing sections and fields keep their defaults, lists become tuples again, unknown keys are

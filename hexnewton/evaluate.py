@@ -43,7 +43,16 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from .cli import ArgumentParser, positive_int, run, terrain_name
-from .config import PARAM_NAMES, CPGConfig, HexConfig, RandomizationConfig, SimConfig, TaskConfig, TerrainConfig
+from .config import (
+    PARAM_NAMES,
+    CPGConfig,
+    HexConfig,
+    RandomizationConfig,
+    SimConfig,
+    TaskConfig,
+    TerrainConfig,
+    terrain_for_goal,
+)
 from .kernels.terminations import FELL, NONFINITE, OFF_COURSE, STATUS_NAMES
 
 DISTANCES = (0.5, 1.0, 2.0, 3.0)  # Table 3's columns [m]
@@ -158,7 +167,7 @@ def run_rounds(controller: str, checkpoint: str | None, terrain: str, rounds: in
     cpg = trained_cpg(load_checkpoint(checkpoint)) if controller in ("cpg_rl", "joint") else CPGConfig()
     cfg = HexConfig(
         sim=replace(SimConfig(), num_envs=rounds, device=device),
-        terrain=TerrainConfig(name=terrain, seed=EVAL_TERRAIN_SEED, step_rise=step_rise),
+        terrain=terrain_for_goal(TerrainConfig(name=terrain, seed=EVAL_TERRAIN_SEED, step_rise=step_rise), goal_distance),
         task=replace(TaskConfig(), seed=EVAL_RESET_SEED, reset_yaw=reset_yaw, goal_distance=goal_distance),
         randomization=RandomizationConfig(enabled=randomize),
         cpg=cpg,  # the policy's own parameter ranges

@@ -46,6 +46,7 @@ from .config import (
     TaskConfig,
     TerrainConfig,
     config_from_dict,
+    terrain_for_goal,
 )
 
 PRESETS = ("default", "paper")
@@ -260,8 +261,9 @@ def main(argv: list[str] | None = None) -> int:
     seed_everything(seed)
     cfg = HexConfig(
         sim=dataclasses.replace(SimConfig(), num_envs=args.num_envs, device=device),
-        terrain=TerrainConfig(name=args.terrain, seed=terrain_seed, levels=args.levels, start_levels=args.start_levels,
-                              step_rise=args.step_rise, block_height_max=args.block_height_max),
+        terrain=terrain_for_goal(TerrainConfig(name=args.terrain, seed=terrain_seed, levels=args.levels,
+                                               start_levels=args.start_levels, step_rise=args.step_rise,
+                                               block_height_max=args.block_height_max), args.goal_distance),
         task=dataclasses.replace(TaskConfig(), seed=seed, goal_distance=args.goal_distance),
         reward=dataclasses.replace(RewardConfig(), direction_deadband=args.direction_deadband),
         randomization=RandomizationConfig(enabled=args.randomize),

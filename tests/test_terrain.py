@@ -348,3 +348,14 @@ def test_add_to_builder_and_finalize() -> None:
     wmesh = wp.Mesh(points=wp.array(terrain.mesh.vertices, dtype=wp.vec3, device=DEVICE),
                     indices=wp.array(terrain.mesh.indices, dtype=wp.int32, device=DEVICE))
     assert not sdf_contact.compute_mesh_boundary_flags(wmesh).any()
+
+
+def test_patch_reaches_beyond_the_goal():
+    """A goal farther than the paper's 3.5 m (issue 9: 5 m walked) gets ground 1 m beyond it."""
+    from hexnewton.config import terrain_for_goal
+
+    base = TerrainConfig(name="complex")
+    assert terrain_for_goal(base, 3.5) is base
+    far = terrain_for_goal(base, 5.5)
+    assert far.x_max == 6.5 and build_height_grid(far).x1 == pytest.approx(6.5)
+    assert terrain_for_goal(base, 6.2).x_max == 7.5
