@@ -20,7 +20,7 @@ import sys
 from .cli import ArgumentParser, run
 
 TAGS = ("Episode/success_rate", "Episode/distance_m", "Train/mean_reward", "Episode/fell_rate",
-        "Episode/off_course_rate")  # fmt: skip
+        "Episode/off_course_rate", "Curriculum/mean_level", "Curriculum/top_level_success_rate")  # fmt: skip
 # Stable-Baselines3 runs (hexnewton.baselines) log the mean episode return against env-steps
 SB3_ALIASES = {"rollout/ep_rew_mean": "Train/mean_reward"}
 X_AXES = {"iteration": "iteration", "env_steps": "env-steps", "wall_time": "wall time [min]"}
