@@ -56,8 +56,13 @@ class BenchResult:
     upright_frac: float
 
 
+def _config(terrain: str, num_envs: int, device: str, seed: int, sim: SimConfig | None = None) -> HexConfig:
+    return HexConfig(sim=replace(sim or SimConfig(), num_envs=num_envs, device=device),
+                     terrain=TerrainConfig(name=terrain, seed=seed))  # fmt: skip
+
+
 def bench_one(terrain: str, num_envs: int, device: str, frames: int, sim: SimConfig, seed: int = 0) -> BenchResult:
-    cfg = HexConfig(sim=replace(sim, num_envs=num_envs, device=device), terrain=TerrainConfig(name=terrain, seed=seed))
+    cfg = _config(terrain, num_envs, device, seed, sim)
     t0 = time.perf_counter()
     world = World(cfg)
     rng = np.random.default_rng(seed)
@@ -128,8 +133,7 @@ def bench_env(terrain: str, num_envs: int, device: str, steps: int, seed: int = 
 
     from .env import make_env
 
-    cfg = HexConfig(sim=replace(SimConfig(), num_envs=num_envs, device=device),
-                    terrain=TerrainConfig(name=terrain, seed=seed))  # fmt: skip
+    cfg = _config(terrain, num_envs, device, seed)
     env = make_env(cfg)
     gen = torch.Generator(device=env._obs_t.device).manual_seed(seed)
     actions = torch.rand((8, num_envs, env.num_actions), generator=gen, device=env._obs_t.device) * 2 - 1
@@ -146,8 +150,16 @@ def bench_env(terrain: str, num_envs: int, device: str, steps: int, seed: int = 
     return PipelineResult(terrain, num_envs, env_steps_per_s=rate, env_robot_s_per_s=rate * cfg.task.control_dt)
 
 
-def bench_train(terrain: str, num_envs: int, device: str, iterations: int, seed: int = 0) -> PipelineResult:
-    """``iterations`` timed PPO iterations (preset ``default``) after one untimed warm-up iteration."""
+PHASES = (("env.step", "env", "step"), ("policy act", "alg", "act"), ("storage", "alg", "process_env_step"),
+          ("logger", "logger", "process_env_step"), ("returns", "alg", "compute_returns"), ("PPO update", "alg", "update"))
+
+
+def bench_train(terrain: str, num_envs: int, device: str, iterations: int, seed: int = 0,
+                profile: bool = False) -> tuple[PipelineResult, dict[str, float] | None]:  # fmt: skip
+    """``iterations`` timed PPO iterations (preset ``default``) after one untimed warm-up iteration.
+
+    With ``profile``, the same runner then trains ``iterations`` more with a device sync around each rsl-rl
+    phase (so their total exceeds an unprofiled iteration's): seconds per iteration per phase, plus "other"."""
     import copy
 
     import torch
@@ -159,49 +171,23 @@ def bench_train(terrain: str, num_envs: int, device: str, iterations: int, seed:
     seed_everything(seed)
     cuda = device.startswith("cuda")
     used0 = _device_memory(device) if cuda else 0
-    cfg = HexConfig(sim=replace(SimConfig(), num_envs=num_envs, device=device),
-                    terrain=TerrainConfig(name=terrain, seed=seed))  # fmt: skip
+    cfg = _config(terrain, num_envs, device, seed)
     env = make_env(cfg)
     tcfg = train_cfg("default", num_envs)
     # a TensorBoard writer as in train.py: rsl-rl's logger only does its per-step bookkeeping with one
     logs = tempfile.TemporaryDirectory(prefix="hexnewton-bench-")
     runner = OnPolicyRunner(env, copy.deepcopy(tcfg), log_dir=logs.name, device=device)
     runner.learn(1)  # capture, kernel loading, optimizer state
-    wp.synchronize_device(env.device)
-    t0 = time.perf_counter()
-    runner.learn(iterations)
-    wp.synchronize_device(env.device)
-    wall = time.perf_counter() - t0
+    wall = _timed_learn(runner, env, iterations)
     rate = num_envs * tcfg["num_steps_per_env"] * iterations / wall
     mem = float("nan")
     if cuda:  # env, rollout storage, networks and optimizer (Warp pool + torch), after the timed iterations
         mem = (wp.get_mempool_used_mem_current(device) + torch.cuda.memory_allocated(torch.device(device)) - used0)
         mem /= num_envs * 1024
-    return PipelineResult(terrain, num_envs, train_steps_per_s=rate, train_robot_s_per_s=rate * cfg.task.control_dt,
-                          train_iteration_s=wall / iterations, memory_per_env_kb=mem)  # fmt: skip
-
-
-PHASES = (("env.step", "env", "step"), ("policy act", "alg", "act"), ("storage", "alg", "process_env_step"),
-          ("logger", "logger", "process_env_step"), ("returns", "alg", "compute_returns"), ("PPO update", "alg", "update"))
-
-
-def profile_train(terrain: str, num_envs: int, device: str, iterations: int, seed: int = 0) -> dict[str, float]:
-    """Where a training iteration's time goes: each rsl-rl phase timed with a device sync around it (so the
-    total exceeds an unprofiled iteration's). Returns seconds per iteration per phase, plus "other"."""
-    import copy
-
-    from rsl_rl.runners import OnPolicyRunner
-
-    from .env import make_env
-    from .train import seed_everything, train_cfg
-
-    seed_everything(seed)
-    cfg = HexConfig(sim=replace(SimConfig(), num_envs=num_envs, device=device),
-                    terrain=TerrainConfig(name=terrain, seed=seed))  # fmt: skip
-    env = make_env(cfg)
-    logs = tempfile.TemporaryDirectory(prefix="hexnewton-bench-")
-    runner = OnPolicyRunner(env, copy.deepcopy(train_cfg("default", num_envs)), log_dir=logs.name, device=device)
-    runner.learn(1)
+    result = PipelineResult(terrain, num_envs, train_steps_per_s=rate, train_robot_s_per_s=rate * cfg.task.control_dt,
+                            train_iteration_s=wall / iterations, memory_per_env_kb=mem)  # fmt: skip
+    if not profile:
+        return result, None
     spent = {name: 0.0 for name, _, _ in PHASES}
 
     def timed(name, fn):
@@ -218,14 +204,19 @@ def profile_train(terrain: str, num_envs: int, device: str, iterations: int, see
     owners = {"env": env, "alg": runner.alg, "logger": runner.logger}
     for name, owner, method in PHASES:
         setattr(owners[owner], method, timed(name, getattr(owners[owner], method)))
+    total = _timed_learn(runner, env, iterations)
+    phases = {name: v / iterations for name, v in spent.items()}
+    phases["other"] = total / iterations - sum(phases.values())
+    return result, phases
+
+
+def _timed_learn(runner, env, iterations: int) -> float:
+    """Wall time of ``iterations`` more PPO iterations, the device idle before and after."""
     wp.synchronize_device(env.device)
     t0 = time.perf_counter()
     runner.learn(iterations)
     wp.synchronize_device(env.device)
-    total = time.perf_counter() - t0
-    out = {name: v / iterations for name, v in spent.items()}
-    out["other"] = total / iterations - sum(out.values())
-    return out
+    return time.perf_counter() - t0
 
 
 def is_out_of_memory(exc: BaseException) -> bool:
@@ -359,13 +350,12 @@ def main(argv: list[str] | None = None) -> int:
                     print(f"{terrain:8s} N={n:6d} env   {e.env_robot_s_per_s:12,.0f} robot-s/s  "
                           f"({e.env_steps_per_s:,.0f} env-steps/s)", flush=True)  # fmt: skip
                 if "train" in args.mode:
-                    t = bench_train(terrain, n, device, iterations)
+                    t, prof = bench_train(terrain, n, device, iterations, profile=args.profile)
                     for k in ("train_steps_per_s", "train_robot_s_per_s", "train_iteration_s", "memory_per_env_kb"):
                         setattr(pr, k, getattr(t, k))
                     print(f"{terrain:8s} N={n:6d} train {t.train_robot_s_per_s:12,.0f} robot-s/s  "
                           f"({t.train_steps_per_s:,.0f} env-steps/s, {t.train_iteration_s:.2f} s/iteration)", flush=True)  # fmt: skip
-                    if args.profile:
-                        prof = profile_train(terrain, n, device, iterations)
+                    if prof is not None:
                         profiles.append({"terrain": terrain, "num_envs": n, **prof})
                         total = sum(prof.values())
                         print(f"{terrain:8s} N={n:6d} profile (synced, {total:.3f} s/iteration): " + ", ".join(

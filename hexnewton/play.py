@@ -146,12 +146,11 @@ def stepped(env, policy, steps: int, description: str, progress: bool = True):
             yield k, env.status.numpy(), q, pos, env.rpy.numpy().copy()
 
 
-def rollout(env, policy, steps: int, recorder=None, progress: bool = True) -> dict:
+def rollout(env, policy, steps: int, recorders: tuple = (), progress: bool = True) -> dict:
     """Run ``policy(obs) -> actions`` for up to ``steps`` control steps; returns first-episode statistics.
-    ``recorder``: one recorder or a list (each gets every step). Without one, the rollout ends as soon as every
-    env's first episode has (the statistics cover nothing else)."""
+    Each of ``recorders`` gets every step. Without recorders, the rollout ends as soon as every env's first
+    episode has (the statistics cover nothing else)."""
     n = env.num_envs
-    recorders = list(recorder) if isinstance(recorder, (list, tuple)) else [recorder] * (recorder is not None)
     pos = np.zeros((steps, n, 3), np.float32)
     rpy = np.zeros((steps, n, 3), np.float32)
     done = np.zeros((steps, n), bool)
@@ -261,7 +260,7 @@ def main(argv: list[str] | None = None) -> int:
 
             video = VideoRecorder(robots=args.video_robots)
         t0 = time.perf_counter()
-        stats = rollout(env, policy, args.steps, [r for r in (recorder, video) if r is not None],
+        stats = rollout(env, policy, args.steps, tuple(r for r in (recorder, video) if r is not None),
                         progress=not args.no_progress and sys.stderr.isatty())  # fmt: skip
         wall = time.perf_counter() - t0
         label = args.controller if args.controller == "cpg" else f"{args.controller} ({args.checkpoint})"
