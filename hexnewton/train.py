@@ -84,11 +84,44 @@ def train_cfg(preset: str, num_envs: int, num_steps_per_env: int = 24) -> dict:
 
 
 class TrainingStopped(Exception):
-    """Raised by the signal handler (Ctrl-C, SIGTERM, or the --max_minutes alarm) to end training cleanly."""
+    """Raised by the signal handler (Ctrl-C, SIGTERM) or at the end of an iteration (--max_minutes,
+    --target_success) to end training cleanly."""
 
 
 def _stop(signum, frame):
     raise TrainingStopped(signal.Signals(signum).name)
+
+
+def stop_reason(time_up: bool, stats: dict, target: float | None, levels: int, reduce=None) -> str | None:
+    """Why training should stop after this iteration (None: go on), decided at the iteration boundary so that
+    every rank of a torchrun job stops at the same iteration. ``reduce`` sums a list over the ranks.
+
+    With ``target``: the success rate over the last episodes of all ranks (a full ring of RING per rank; with a
+    curriculum, at least RING // 4 per rank on the last level, which is the terrain itself)."""
+    from .env import RING
+
+    key, need = ("top_level_", RING // 4) if levels else ("", RING)
+    n = float(stats[f"{key}episodes"])
+    values = [float(time_up), stats[f"{key}success_rate"] * n, n, 1.0]
+    time_up, successes, n, ranks = reduce(values) if reduce else values
+    if time_up:
+        return "the --max_minutes limit"
+    if target is not None and n >= need * ranks and successes / n >= target:
+        where = " on the last level" if levels else ""
+        return f"target success{where} {successes / n:.3f} >= {target}"
+    return None
+
+
+def _sum_over_ranks(device: str):
+    import torch
+    import torch.distributed as td
+
+    def reduce(values: list[float]) -> list[float]:
+        t = torch.tensor(values, dtype=torch.float64, device=device)
+        td.all_reduce(t)  # NCCL: one small collective per iteration
+        return t.tolist()
+
+    return reduce
 
 
 @dataclasses.dataclass(frozen=True)
@@ -251,9 +284,6 @@ def main(argv: list[str] | None = None) -> int:
     from .sim import resolve_device
 
     dist = distributed_rank(dict(os.environ), args.device)
-    if dist.world_size > 1 and (args.max_minutes or args.target_success):
-        raise ValueError("--max_minutes / --target_success would stop the ranks at different iterations: "
-                         "use --max_iterations")
     device = resolve_device(dist.device or args.device)
     if args.num_envs is None:
         args.num_envs = 4096 if device.startswith("cuda") else 64
@@ -294,19 +324,18 @@ def main(argv: list[str] | None = None) -> int:
         os.replace(path + ".tmp", path)
 
     runner.save = save
-    if args.target_success is not None:
+    time_up = [False]  # set by the --max_minutes alarm, acted on at the end of the iteration
+    if args.max_minutes or args.target_success is not None:
         _log = runner.logger.log
+        reduce = _sum_over_ranks(device) if dist.world_size > 1 else None
 
         def log(*a, **k):
-            """After each iteration's log: stop once the ring of finished episodes is full and successful."""
+            """After each iteration's log: stop (every rank at once) on the time limit or the target success."""
             _log(*a, **k)
             stats = env.episode_stats()  # one small host read per iteration
-            if args.levels:  # a curriculum's easy lanes do not count: the last lane is the terrain itself
-                if stats["top_level_episodes"] >= RING // 4 and stats["top_level_success_rate"] >= args.target_success:
-                    raise TrainingStopped(f"target success on the last level {stats['top_level_success_rate']:.3f} "
-                                          f">= {args.target_success}")  # fmt: skip
-            elif stats["episodes"] >= RING and stats["success_rate"] >= args.target_success:
-                raise TrainingStopped(f"target success {stats['success_rate']:.3f} >= {args.target_success}")
+            reason = stop_reason(time_up[0], stats, args.target_success, args.levels, reduce)
+            if reason:
+                raise TrainingStopped(reason)
 
         runner.logger.log = log
     if ckpt is not None:
@@ -318,7 +347,8 @@ def main(argv: list[str] | None = None) -> int:
     where = f"rank {dist.rank} of {dist.world_size}, " if dist.world_size > 1 else ""
     print(f"training {experiment}: {where}{args.num_envs} envs on {device}, preset {args.preset}, logs in {run_dir}")
     t0 = time.time()
-    handlers = {sig: signal.signal(sig, _stop) for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGALRM)}
+    handlers = {sig: signal.signal(sig, _stop) for sig in (signal.SIGINT, signal.SIGTERM)}
+    handlers[signal.SIGALRM] = signal.signal(signal.SIGALRM, lambda signum, frame: time_up.__setitem__(0, True))
     if args.max_minutes:
         signal.setitimer(signal.ITIMER_REAL, 60.0 * args.max_minutes)
     try:

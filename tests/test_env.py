@@ -471,6 +471,29 @@ def test_torchrun_ranks_devices_and_seeds():
     assert proc.returncode == 2 and len(err) == 1 and "runs on CUDA" in err[0], proc.stderr[-1500:]
 
 
+def test_stop_reason_is_one_decision_for_all_ranks():
+    """--max_minutes / --target_success under torchrun: every rank reaches the same decision from the sums over
+    the ranks (here a fake two-rank sum), so no rank leaves the others waiting in a collective."""
+    from hexnewton.env import RING
+    from hexnewton.train import stop_reason
+
+    full = {"episodes": RING, "success_rate": 0.96, "top_level_episodes": RING // 4, "top_level_success_rate": 0.5}
+    assert stop_reason(False, full, 0.95, 0) == "target success 0.960 >= 0.95"
+    assert stop_reason(False, full, 0.95, 10) is None  # a curriculum counts the last level only
+    assert stop_reason(False, dict(full, episodes=RING - 1), 0.95, 0) is None  # ring not full yet
+    assert stop_reason(True, full, None, 0) == "the --max_minutes limit"
+    assert stop_reason(False, full, None, 0) is None
+    other = {"episodes": RING, "success_rate": 0.90, "top_level_episodes": RING // 4, "top_level_success_rate": 1.0}
+    sent = []
+    stop_reason(False, other, None, 0, reduce=lambda v: sent.append(v) or v)  # what the other rank contributes
+    plus_other = lambda v: [a + b for a, b in zip(v, sent[0], strict=True)]  # noqa: E731
+    assert stop_reason(False, full, 0.95, 0, plus_other) is None  # (0.96 + 0.90) / 2 < 0.95
+    assert stop_reason(False, full, 0.92, 0, plus_other) == "target success 0.930 >= 0.92"
+    assert stop_reason(False, other, 0.95, 10) == "target success on the last level 1.000 >= 0.95"
+    time_up_elsewhere = lambda v: [a + b for a, b in zip(v, [1.0, 0.0, 0.0, 1.0], strict=True)]  # noqa: E731
+    assert stop_reason(False, full, 0.95, 0, time_up_elsewhere) == "the --max_minutes limit"
+
+
 @pytest.mark.parametrize("curriculum", [(), ("--levels", "2", "--start_levels", "2")])
 def test_target_success_stops_training(tmp_path, curriculum):
     """--target_success (time-to-skill): with the goal 5 cm beyond reach every episode succeeds at once, so
@@ -481,3 +504,11 @@ def test_target_success_stops_training(tmp_path, curriculum):
     assert ("stopped by target success on the last level" if curriculum else "stopped by target success") in out
     (run,) = glob.glob(str(tmp_path / "*" / "*"))
     assert os.path.isfile(run + "/policy.onnx") and len(glob.glob(run + "/model_*.pt")) >= 2
+
+
+def test_max_minutes_stops_at_an_iteration_boundary(tmp_path):
+    """--max_minutes: the alarm is acted on at the end of an iteration (as under torchrun), then save and export."""
+    out = _train(tmp_path, "--max_minutes", "0.001", "--max_iterations", "100000", "--num_envs", "8")
+    assert "stopped by the --max_minutes limit after iteration 0" in out
+    (run,) = glob.glob(str(tmp_path / "*" / "*"))
+    assert os.path.isfile(run + "/policy.onnx") and os.path.isfile(run + "/model_0.pt")
