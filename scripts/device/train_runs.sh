@@ -4,8 +4,10 @@
 #
 #   DEADLINE_S=540 bash scripts/device/train_runs.sh "flat:--terrain flat" "rugged:--terrain rugged" ...
 #
-# Each argument is NAME[@GPU]:TRAIN_ARGS (@GPU pins the run to that GPU of a multi-GPU machine). With KEEP set,
-# each run's last checkpoint is also copied to $KEEP/<name>.pt for later calls on the same warm machine.
+# Each argument is NAME[@GPU]:TRAIN_ARGS (@GPU pins the run to that GPU of a multi-GPU machine; @0,1 runs it
+# data-parallel on those GPUs through torchrun, whose ranks stop together on --max_minutes). With KEEP set,
+# each run's last checkpoint and train log are also copied to $KEEP/<name>.pt / .log for later calls on the same
+# warm machine.
 # The first run compiles every kernel alone (2 iterations) so that the
 # concurrent runs load them from Warp's cache (SKIP_WARMUP=1 when the cache is warm). With EVAL_STEPS set,
 # each run's last checkpoint is then evaluated deterministically by play.py on its training terrain
@@ -14,6 +16,7 @@
 # training deadline leaves that much time. Results: $OUT/run_<name>.tgz and $OUT/eval_<name>.txt.
 # Used for RESULTS.md (issue 4) on the device tool's H100.
 set -u
+export NCCL_NVLS_ENABLE=0 TORCH_SYMM_MEM_DISABLE_MULTICAST=1 NVSHMEM_DISABLE_NVLS=1   # device docs: no NVLink multicast
 OUT=${OUT:-out}
 START=${START_S:-0}            # seconds already spent in this call before the script started
 DEADLINE=${DEADLINE_S:-540}    # end training this many seconds into the call
@@ -33,7 +36,9 @@ echo "training ${#@} runs concurrently for $minutes min"
 gpu_of() { case "$1" in *@*) echo "${1#*@}";; *) echo "${CUDA_VISIBLE_DEVICES:-0}";; esac; }
 for spec in "$@"; do
   name=${spec%%:*}; args=${spec#*:}; gpu=$(gpu_of "$name"); name=${name%@*}
-  CUDA_VISIBLE_DEVICES=$gpu python train.py $args --max_iterations 100000 --max_minutes "$minutes" --save_interval 100 \
+  launch="python"; n=$(echo "$gpu" | tr ',' '\n' | wc -l)
+  [ "$n" -gt 1 ] && launch="torchrun --standalone --nproc_per_node=$n"
+  CUDA_VISIBLE_DEVICES=$gpu $launch train.py $args --max_iterations 100000 --max_minutes "$minutes" --save_interval 100 \
     --log_dir "$OUT/logs" --experiment "$name" > "$OUT/logs/$name.log" 2>&1 &
 done
 wait
@@ -43,7 +48,7 @@ last_of() { ls -v "$(ls -d "$OUT/logs/$1"/*/ | tail -1)"/model_*.pt | tail -1; }
 for spec in "$@"; do
   name=${spec%%:*}; name=${name%@*}; last=$(last_of "$name"); run=$(dirname "$last")
   echo "== $name: $(grep -E '^(trained|stopped|last episodes)' "$OUT/logs/$name.log" | tr '\n' ' ')"
-  if [ -n "${KEEP:-}" ]; then mkdir -p "$KEEP" && cp "$last" "$KEEP/$name.pt"; fi
+  if [ -n "${KEEP:-}" ]; then mkdir -p "$KEEP" && cp "$last" "$KEEP/$name.pt" && cp "$OUT/logs/$name.log" "$KEEP/"; fi
   tar czf "$OUT/run_$name.tgz" -C "$OUT/logs" "$name.log" -C "$OUT/logs/$name" \
     "$(basename "$run")/config.json" "$(basename "$run")/policy.onnx" "$(basename "$run")/$(basename "$last")" \
     $(cd "$OUT/logs/$name" && ls "$(basename "$run")"/events.*)
@@ -52,7 +57,7 @@ if [ -n "${EVAL_STEPS:-}" ]; then   # evaluations run at once, each on its run's
   for spec in "$@"; do
     name=${spec%%:*}; args=${spec#*:}; gpu=$(gpu_of "$name"); name=${name%@*}; last=$(last_of "$name")
     terrain=$(echo "$args" | sed -n 's/.*--terrain \([a-z]*\).*/\1/p')
-    CUDA_VISIBLE_DEVICES=$gpu timeout "${EVAL_TIMEOUT_S:-120}" python play.py --controller cpg_rl --checkpoint "$last" \
+    CUDA_VISIBLE_DEVICES=${gpu%%,*} timeout "${EVAL_TIMEOUT_S:-120}" python play.py --controller cpg_rl --checkpoint "$last" \
       --terrain "${terrain:-flat}" --num_envs "${EVAL_ENVS:-1024}" --steps "$EVAL_STEPS" --reset_yaw 0.2 --seed 11 \
       --no-progress 2>&1 | grep -A1 '^\[' > "$OUT/eval_$name.txt" &
   done

@@ -1,0 +1,51 @@
+#!/bin/bash
+# Session 4's two working calls on one nvidia-h200-x4 lease (after the three chunk calls of pack.sh), kept as the
+# record of what ran. Call 4 also installs (.dw3) and unpacks the precompiled kernel cache (precompile.py).
+#
+#   bash scripts/device/session4.sh train     # call 4: four curriculum runs from scratch, one per GPU
+#   bash scripts/device/session4.sh continue  # call 5: continue them (or, if complex_cur met its target, the same
+#                                             # run from scratch on GPUs 0+1 through torchrun), then evaluate
+set -u
+OUT=${OUT:-out}
+KEEP=/root/keep
+export KEEP PYTHONUNBUFFERED=1
+CUR="--levels 10 --start_levels 3 --seed 1"
+MORE="--levels 10 --start_levels 10 --seed 2"   # a resumed run starts spread over every lane, not at the bottom
+case "${1:-}" in
+train)
+  SKIP_WARMUP=1 DEADLINE_S=${DEADLINE_S:-540} bash scripts/device/train_runs.sh \
+    "complex_cur@0:--terrain complex $CUR --target_success 0.95" \
+    "complex_cur_dr@1:--terrain complex $CUR --randomize" \
+    "rugged_cur@2:--terrain rugged $CUR" \
+    "complex_cur8@3:--terrain complex $CUR --step_rise 0.08 --goal_distance 5.5"
+  ;;
+continue)
+  train_s=${TRAIN_S:-300}
+  if grep -q "stopped by target success" "$KEEP/complex_cur.log"; then   # issue 8: time-to-skill on 2 GPUs
+    first="complex_cur_2gpu@0,1:--terrain complex $CUR --target_success 0.95"
+    second=""
+  else
+    first="complex_cur_b@0:--terrain complex $MORE --resume $KEEP/complex_cur.pt"
+    second="complex_cur_dr_b@1:--terrain complex $MORE --randomize --resume $KEEP/complex_cur_dr.pt"
+  fi
+  SKIP_WARMUP=1 DEADLINE_S=$train_s bash scripts/device/train_runs.sh "$first" ${second:+"$second"} \
+    "rugged_cur_b@2:--terrain rugged $MORE --resume $KEEP/rugged_cur.pt" \
+    "complex_cur8_b@3:--terrain complex $MORE --step_rise 0.08 --goal_distance 5.5 --resume $KEEP/complex_cur8.pt"
+  pick() { if [ -f "$KEEP/$1_b.pt" ]; then echo "$KEEP/$1_b.pt"; else echo "$KEEP/$1.pt"; fi; }
+  C=$(pick complex_cur); D=$(pick complex_cur_dr); R=$(pick rugged_cur); C8=$(pick complex_cur8)
+  far="--goal_distance 5.5 --distances 1 3 5"
+  EVAL_TIMEOUT_S=${EVAL_TIMEOUT_S:-210} bash scripts/device/eval_jobs.sh \
+    "complex25@0:--controllers cpg_rl --checkpoint cpg_rl=$C --terrains complex --rounds 25" \
+    "complex1000@0:--controllers cpg_rl --checkpoint cpg_rl=$C --terrains complex --rounds 1000" \
+    "stepped25@1:--controllers cpg_rl --checkpoint cpg_rl=$C --terrains stepped --rounds 25" \
+    "stepped1000@1:--controllers cpg_rl --checkpoint cpg_rl=$C --terrains stepped --rounds 1000" \
+    "stepped1000_c8@1:--controllers cpg_rl --checkpoint cpg_rl=$C8 --terrains stepped --rounds 1000" \
+    "rugged25@2:--controllers cpg_rl --checkpoint cpg_rl=$R --terrains rugged --rounds 25" \
+    "rugged1000@2:--controllers cpg_rl --checkpoint cpg_rl=$R --terrains rugged --rounds 1000" \
+    "far1000_c8@3:--controllers cpg_rl --checkpoint cpg_rl=$C8 --terrains complex --rounds 1000 $far" \
+    "far8cm1000_c8@3:--controllers cpg_rl --checkpoint cpg_rl=$C8 --terrains complex --rounds 1000 $far --step_rise 0.08" \
+    "perturbed1000@3:--controllers cpg_rl --checkpoint cpg_rl=$C --terrains complex --rounds 1000 --randomize" \
+    "perturbed1000_dr@2:--controllers cpg_rl --checkpoint cpg_rl=$D --terrains complex --rounds 1000 --randomize"
+  ;;
+*) echo "usage: session4.sh train|continue" >&2; exit 2 ;;
+esac
