@@ -266,6 +266,9 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--randomize", action="store_true",
                    help="domain randomisation (RandomizationConfig): friction, payload, masses, gains, latency, "
                         "observation noise, pushes")  # fmt: skip
+    p.add_argument("--a2_range", type=float, nargs=2, metavar=("LO", "HI"), default=None,
+                   help="knee-lift range [rad] of new runs (default CPGConfig.a2_range; a floor such as 0.9 starts "
+                        "PPO from a high-stepping gait, action 0 = the middle of the range)")  # fmt: skip
     p.add_argument("--direction_deadband", type=float, default=RewardConfig.direction_deadband,
                    help="heading error [rad] below which the direction term is 0 (Table 1: pi/6; default 0)")
     args = p.parse_args(argv)
@@ -275,6 +278,12 @@ def main(argv: list[str] | None = None) -> int:
         raise ValueError("--max_minutes must be positive")
     if args.target_success is not None and not 0 < args.target_success <= 1:
         raise ValueError("--target_success must lie in (0, 1]")
+    if args.a2_range is not None:
+        lo, hi = args.a2_range
+        if not 0 <= lo < hi <= CPGConfig.a2_range[1]:
+            raise ValueError(f"--a2_range must satisfy 0 <= LO < HI <= {CPGConfig.a2_range[1]} (the knee limit)")
+        if args.resume:
+            raise ValueError("--a2_range is for new runs: a resumed run keeps the ranges it was trained with")
     ckpt = load_checkpoint(args.resume) if args.resume else None  # fail before building anything
     check_log_dir(args.log_dir)
 
@@ -297,7 +306,8 @@ def main(argv: list[str] | None = None) -> int:
         task=dataclasses.replace(TaskConfig(), seed=seed, goal_distance=args.goal_distance),
         reward=dataclasses.replace(RewardConfig(), direction_deadband=args.direction_deadband),
         randomization=RandomizationConfig(enabled=args.randomize),
-        cpg=trained_cpg(ckpt),  # a resumed run keeps the parameter ranges it was trained with
+        # a resumed run keeps the parameter ranges it was trained with
+        cpg=trained_cpg(ckpt) if args.a2_range is None else CPGConfig(a2_range=tuple(args.a2_range)),
     )
     env = make_env(cfg, args.action_mode)
     if ckpt is not None:

@@ -314,6 +314,8 @@ def test_bad_checkpoints_are_one_line_errors(trained, tmp_path):
         (["train.py", "--terrain", "moon"], "unknown terrain 'moon'"),
         (["train.py", "--log_dir", str(a_file / "sub")], "not a writable directory"),
         (["train.py", "--max_minutes", "-1"], "--max_minutes must be positive"),
+        (["train.py", "--a2_range", "1.0", "0.5"], "--a2_range must satisfy"),
+        (["train.py", "--a2_range", "0.9", "1.3", "--resume", str(corrupt)], "--a2_range is for new runs"),
     ]
     before = sorted(glob.glob(str(logs / "**"), recursive=True))
     for args, message in cases:

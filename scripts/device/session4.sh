@@ -47,5 +47,29 @@ continue)
     "perturbed1000@3:--controllers cpg_rl --checkpoint cpg_rl=$C --terrains complex --rounds 1000 --randomize" \
     "perturbed1000_dr@2:--controllers cpg_rl --checkpoint cpg_rl=$D --terrains complex --rounds 1000 --randomize"
   ;;
-*) echo "usage: session4.sh train|continue" >&2; exit 2 ;;
+retrain)   # second lease: a knee-lift floor (--a2_range 0.9 1.3), with and without the curriculum
+  HI="--a2_range 0.9 1.3 --seed 1"
+  SKIP_WARMUP=1 DEADLINE_S=${DEADLINE_S:-520} bash scripts/device/train_runs.sh \
+    "complex_hi_cur@0:--terrain complex $HI --levels 10 --start_levels 3 --target_success 0.95" \
+    "complex_hi@1:--terrain complex $HI" \
+    "rugged_hi_cur@2:--terrain rugged $HI --levels 10 --start_levels 3" \
+    "rugged_hi@3:--terrain rugged $HI"
+  ;;
+evaluate)  # the retrained runs on their terrains; the first lease's plain and randomised policies, perturbed
+  ev() { echo "$1:--controllers cpg_rl --checkpoint cpg_rl=$2 --terrains $3 --rounds $4 ${5:-}"; }
+  S=runs/s4ck
+  EVAL_TIMEOUT_S=${EVAL_TIMEOUT_S:-170} bash scripts/device/eval_jobs.sh \
+    "$(ev complex_hi_cur@0 $KEEP/complex_hi_cur.pt complex 1000)" \
+    "$(ev stepped_hi_cur@0 $KEEP/complex_hi_cur.pt stepped 1000)" \
+    "$(ev far_hi_cur@0 $KEEP/complex_hi_cur.pt complex 1000 "--goal_distance 5.5 --distances 1 3 5")" \
+    "$(ev complex_hi@1 $KEEP/complex_hi.pt complex 1000)" \
+    "$(ev stepped_hi@1 $KEEP/complex_hi.pt stepped 1000)" \
+    "$(ev rugged_hi_cur@2 $KEEP/rugged_hi_cur.pt rugged 1000)" \
+    "$(ev rugged_plain_s4@2 $S/complex_cur.pt rugged 1000)" \
+    "$(ev rugged_perturbed_s4@2 $S/complex_cur.pt rugged 1000 --randomize)" \
+    "$(ev rugged_hi@3 $KEEP/rugged_hi.pt rugged 1000)" \
+    "$(ev rugged_plain_s4_dr@3 $S/complex_cur_dr.pt rugged 1000)" \
+    "$(ev rugged_perturbed_s4_dr@3 $S/complex_cur_dr.pt rugged 1000 --randomize)"
+  ;;
+*) echo "usage: session4.sh train|continue|retrain|evaluate" >&2; exit 2 ;;
 esac
