@@ -259,6 +259,9 @@ class RewardConfig:
     stability_penalty: float = 100.0  # Table 1: r_s = -100, weight 1
     forward_penalty: float = 0.3  # Table 1: r_f = -0.3, weight 1
     goal_bonus: float = 100.0  # ours: see kernels/rewards.py
+    # ours: paid once on leaving the course (§2.4.4 (2)); without it PPO walks off the course when stuck at a
+    # step (kernels/rewards.py). 0 restores the paper's reward.
+    off_course_penalty: float = 100.0
 
 
 @dataclass

@@ -271,6 +271,8 @@ def main(argv: list[str] | None = None) -> int:
                         "PPO from a high-stepping gait, action 0 = the middle of the range)")  # fmt: skip
     p.add_argument("--direction_deadband", type=float, default=RewardConfig.direction_deadband,
                    help="heading error [rad] below which the direction term is 0 (Table 1: pi/6; default 0)")
+    p.add_argument("--off_course_penalty", type=float, default=RewardConfig.off_course_penalty,
+                   help="paid once on leaving the course (ours; 0: the paper's reward, see kernels/rewards.py)")
     args = p.parse_args(argv)
     if args.preset not in PRESETS:
         raise ValueError(f"unknown preset '{args.preset}': choose one of {', '.join(PRESETS)}")
@@ -304,7 +306,8 @@ def main(argv: list[str] | None = None) -> int:
                                                start_levels=args.start_levels, step_rise=args.step_rise,
                                                block_height_max=args.block_height_max), args.goal_distance),
         task=dataclasses.replace(TaskConfig(), seed=seed, goal_distance=args.goal_distance),
-        reward=dataclasses.replace(RewardConfig(), direction_deadband=args.direction_deadband),
+        reward=dataclasses.replace(RewardConfig(), direction_deadband=args.direction_deadband,
+                                   off_course_penalty=args.off_course_penalty),
         randomization=RandomizationConfig(enabled=args.randomize),
         # a resumed run keeps the parameter ranges it was trained with
         cpg=trained_cpg(ckpt) if args.a2_range is None else CPGConfig(a2_range=tuple(args.a2_range)),

@@ -21,7 +21,7 @@ from hexnewton.kernels.reference import joint_actions_reference
 from hexnewton.kernels.observations import OBS_LAYOUT, observations_kernel, observations_reference
 from hexnewton.kernels.resets import reset_bounds_reference
 from hexnewton.kernels.rewards import TERMS, rewards_kernel, rewards_reference
-from hexnewton.kernels.terminations import FELL, NONFINITE, SUCCESS, TIMEOUT
+from hexnewton.kernels.terminations import FELL, NONFINITE, OFF_COURSE, SUCCESS, TIMEOUT
 from hexnewton.terrain import make_terrain, max_terrain_height_np, terrain_height_np
 from hexnewton.terrain.query import height_field_from_grid
 
@@ -126,18 +126,18 @@ def test_joint_actions_kernel_matches_reference():
 
 def _reward_args(q, rpy, status, start, prev_x, dt=TASK.control_dt, deadband=REW.direction_deadband):
     return (TASK.goal_distance, TASK.goal_radius, REW.w_height, REW.w_direction, REW.w_distance,
-            deadband, REW.stability_penalty, REW.forward_penalty, REW.goal_bonus, dt)  # fmt: skip
+            deadband, REW.stability_penalty, REW.forward_penalty, REW.goal_bonus, REW.off_course_penalty, dt)  # fmt: skip
 
 
 def _run_rewards(grid, q, rpy, status, start, prev_x, dt=TASK.control_dt, deadband=REW.direction_deadband):
     n = len(q)
     hf = height_field_from_grid(grid, DEV)
-    px, rew, terms = wp.array(prev_x.astype(np.float32), device=DEV), wp.zeros(n, device=DEV), wp.zeros((n, 6), device=DEV)
+    px, rew, terms = wp.array(prev_x.astype(np.float32), device=DEV), wp.zeros(n, device=DEV), wp.zeros((n, len(TERMS)), device=DEV)
     f = lambda a, **k: wp.array(np.asarray(a, np.float32), device=DEV, **k)  # noqa: E731
     wp.launch(rewards_kernel, dim=n,
               inputs=[f(q), f(rpy), wp.array(np.asarray(status, np.int32), device=DEV), hf, f(start, dtype=wp.vec2),
                       TASK.goal_distance, TASK.goal_radius, REW.w_height, REW.w_direction, REW.w_distance,
-                      deadband, REW.stability_penalty, REW.forward_penalty, REW.goal_bonus, dt],
+                      deadband, REW.stability_penalty, REW.forward_penalty, REW.goal_bonus, REW.off_course_penalty, dt],
               outputs=[px, rew, terms], device=DEV)  # fmt: skip
     return rew.numpy(), terms.numpy(), px.numpy()
 
@@ -168,25 +168,27 @@ def test_reward_kernel_matches_reference_on_random_states():
 def test_reward_terms_on_hand_made_states():
     grid = make_terrain(TerrainConfig(name="flat")).grid
     # 0: upright at 0.13 m, facing the goal, 1 cm progress in a 20 ms step, 3 m from the goal
-    # 1: fallen (status), tilted 40 deg, no progress; 2: reached the goal; 3: facing backward
-    q = np.zeros((4, 25))
-    q[:, 2] = [0.13, 0.04, 0.13, 0.13]
-    q[:, 0] = [0.5, 0.5, 3.2, 0.5]
-    rpy = np.array([[0, 0, 0], [0.7, 0, 0], [0, 0, 0], [0, 0, math.pi]])
-    status = np.array([0, FELL, SUCCESS, 0])
-    prev_x = q[:, 0] - np.array([0.01, 0.0, 0.01, 0.01])
-    _, terms, _ = _run_rewards(grid, q, rpy, status, np.zeros((4, 2)), prev_x)
+    # 1: fallen (status), tilted 40 deg, no progress; 2: reached the goal; 3: facing backward;
+    # 4: left the course (status), stuck (no progress)
+    q = np.zeros((5, 25))
+    q[:, 2] = [0.13, 0.04, 0.13, 0.13, 0.13]
+    q[:, 0] = [0.5, 0.5, 3.2, 0.5, 0.5]
+    rpy = np.array([[0, 0, 0], [0.7, 0, 0], [0, 0, 0], [0, 0, math.pi], [0, 0, 0]])
+    status = np.array([0, FELL, SUCCESS, 0, OFF_COURSE])
+    prev_x = q[:, 0] - np.array([0.01, 0.0, 0.01, 0.01, 0.0])
+    _, terms, _ = _run_rewards(grid, q, rpy, status, np.zeros((5, 2)), prev_x)
     t = dict(zip(TERMS, terms.T))
-    np.testing.assert_allclose(t["height"], [0.02, 0.0, 0.02, 0.02], atol=1e-6)  # z - 0.11 when z > 0.12
+    np.testing.assert_allclose(t["height"], [0.02, 0.0, 0.02, 0.02, 0.02], atol=1e-6)  # z - 0.11 when z > 0.12
     np.testing.assert_allclose(t["distance"][0], math.exp(-(3.0 - 0.5)), rtol=1e-5)  # exp(-(d_n - d_t))
-    np.testing.assert_allclose(t["stability"], [0, -100, 0, 0])
-    np.testing.assert_allclose(t["forward"], [0, -0.3, 0, 0])
-    np.testing.assert_allclose(t["goal"], [0, 0, 100, 0])
-    np.testing.assert_allclose(t["direction"], [0, 0, 0, -2.0], atol=1e-6)  # default dead band 0
+    np.testing.assert_allclose(t["stability"], [0, -100, 0, 0, 0])
+    np.testing.assert_allclose(t["forward"], [0, -0.3, 0, 0, -0.3])
+    np.testing.assert_allclose(t["goal"], [0, 0, 100, 0, 0])
+    np.testing.assert_allclose(t["off_course"], [0, 0, 0, 0, -100])  # ours: leaving the course costs a fall
+    np.testing.assert_allclose(t["direction"], [0, 0, 0, -2.0, 0], atol=1e-6)  # default dead band 0
     # Table 1's dead band: a 20 deg heading error is free inside +-30 deg, and costs cos(20 deg) - 1 without it
     rpy[0, 2] = math.radians(20)
     for deadband, expect in ((math.pi / 6, 0.0), (0.0, math.cos(math.radians(20)) - 1)):
-        _, terms, _ = _run_rewards(grid, q, rpy, status, np.zeros((4, 2)), prev_x, deadband=deadband)
+        _, terms, _ = _run_rewards(grid, q, rpy, status, np.zeros((5, 2)), prev_x, deadband=deadband)
         assert terms[0, TERMS.index("direction")] == pytest.approx(expect, abs=1e-6)
 
 

@@ -1,6 +1,6 @@
 """The paper's reward, Table 1 and Eq. 5, one kernel for every env.
 
-    R_t = w_h r_h + w_d r_d + w_theta r_theta + r_f + r_s   (Eq. 5)   + r_goal (ours)
+    R_t = w_h r_h + w_d r_d + w_theta r_theta + r_f + r_s   (Eq. 5)   + r_goal + r_off (ours)
 
 The paper leaves the weights, the direction condition and its step length unstated. Our choices follow.
 
@@ -26,6 +26,11 @@ not scaled.
   0.1 m/s along +x (the start-to-goal direction), i.e. 2 mm per 20 ms step.
 - r_goal (ours), +100 when the goal is reached. The episode ends there, so without a bonus the paper's
   rewards would pay more for lingering just outside the goal radius than for entering it.
+- r_off (ours), -100 once when the robot leaves the course (|y - y_start| > 1.5 m, §2.4.4 (2)), as much as
+  a fall. Table 1 fines falls but not leaving the course, and a robot stuck at a step earns about -0.07 per
+  step (r_f = -0.3 against r_d ~ 0.2 two metres from the goal). Without r_off, PPO learnt to end such
+  episodes by walking sideways off the course: on complex terrain 98 % of the training episodes ended off
+  course (session 4, RESULTS.md). With gamma = 0.99 the discounted cost of lingering is ~ -7, far above -100.
 
 Weights (ours, marked in ``RewardConfig``): w_h = 1, w_d = 1, w_theta = 1.
 """
@@ -34,11 +39,11 @@ import numpy as np
 import warp as wp
 
 from ..terrain.query import HeightField, terrain_height
-from .terminations import FELL, SUCCESS
+from .terminations import FELL, OFF_COURSE, SUCCESS
 
 REF_DT = 0.02
 FORWARD_MIN_SPEED = 0.1
-TERMS = ("height", "direction", "distance", "stability", "forward", "goal")
+TERMS = ("height", "direction", "distance", "stability", "forward", "goal", "off_course")
 
 
 @wp.kernel
@@ -57,6 +62,7 @@ def rewards_kernel(
     stability_penalty: float,
     forward_penalty: float,
     goal_bonus: float,
+    off_course_penalty: float,
     control_dt: float,
     prev_x: wp.array[wp.float32],
     reward: wp.array[wp.float32],
@@ -70,7 +76,7 @@ def rewards_kernel(
     st = status[e]
     if not (wp.isfinite(px) and wp.isfinite(py) and wp.isfinite(z)):
         # a blown-up env (reset and counted by the caller): no reward signal from garbage
-        for k in range(6):
+        for k in range(7):
             terms[e, k] = 0.0
         reward[e] = 0.0
         prev_x[e] = 0.0
@@ -92,6 +98,9 @@ def rewards_kernel(
     r_g = float(0.0)
     if st == SUCCESS:
         r_g = goal_bonus
+    r_off = float(0.0)
+    if st == OFF_COURSE:
+        r_off = -off_course_penalty
     t0 = w_height * r_h * scale
     t1 = w_direction * r_dir * scale
     t2 = w_distance * r_d * scale
@@ -103,16 +112,17 @@ def rewards_kernel(
     terms[e, 3] = t3
     terms[e, 4] = t4
     terms[e, 5] = r_g
-    reward[e] = t0 + t1 + t2 + t3 + t4 + r_g
+    terms[e, 6] = r_off
+    reward[e] = t0 + t1 + t2 + t3 + t4 + r_g + r_off
     prev_x[e] = px
 
 
 def rewards_reference(joint_q, rpy, status, ground, start, prev_x, goal_distance, goal_radius, w_height, w_direction,
                       w_distance, direction_deadband, stability_penalty, forward_penalty, goal_bonus,
-                      control_dt):  # fmt: skip
+                      off_course_penalty, control_dt):  # fmt: skip
     """Float64 reference of :func:`rewards_kernel` (finite states); ``ground`` (N,) is the terrain under the base.
 
-    Returns (reward (N,), terms (N, 6))."""
+    Returns (reward (N,), terms (N, 7))."""
     jq, rpy = np.asarray(joint_q, np.float64), np.asarray(rpy, np.float64)
     start = np.asarray(start, np.float64)
     scale = control_dt / REF_DT
@@ -125,6 +135,7 @@ def rewards_reference(joint_q, rpy, status, ground, start, prev_x, goal_distance
     r_s = np.where((z < 0.05) | tilted | (np.asarray(status) == FELL), -stability_penalty, 0.0)
     r_f = np.where(jq[:, 0] - np.asarray(prev_x, np.float64) < FORWARD_MIN_SPEED * control_dt, -forward_penalty, 0.0)
     r_g = np.where(np.asarray(status) == SUCCESS, goal_bonus, 0.0)
+    r_off = np.where(np.asarray(status) == OFF_COURSE, -off_course_penalty, 0.0)
     terms = np.stack([w_height * r_h * scale, w_direction * r_dir * scale, w_distance * r_d * scale, r_s * scale,
-                      r_f * scale, r_g], axis=1)  # fmt: skip
+                      r_f * scale, r_g, r_off], axis=1)  # fmt: skip
     return terms.sum(axis=1), terms
