@@ -291,7 +291,7 @@ def main(argv: list[str] | None = None) -> int:
 
     from rsl_rl.runners import OnPolicyRunner
 
-    from .env import RING, make_env
+    from .env import make_env
     from .sim import resolve_device
 
     dist = distributed_rank(dict(os.environ), args.device)
