@@ -1,10 +1,13 @@
 #!/bin/bash
-# Session 4's two working calls on one nvidia-h200-x4 lease (after the three chunk calls of pack.sh), kept as the
-# record of what ran. Call 4 also installs (.dw3) and unpacks the precompiled kernel cache (precompile.py).
+# Session 4's device calls on two nvidia-h200-x4 leases (each after the three chunk calls of pack.sh), kept as
+# the record of what ran (RESULTS.md, session 4). The first call of each lease also installs (.dw3) and unpacks
+# the precompiled kernel cache (precompile.py).
 #
-#   bash scripts/device/session4.sh train     # call 4: four curriculum runs from scratch, one per GPU
-#   bash scripts/device/session4.sh continue  # call 5: continue them (or, if complex_cur met its target, the same
-#                                             # run from scratch on GPUs 0+1 through torchrun), then evaluate
+#   bash scripts/device/session4.sh train     # lease 1: four curriculum runs from scratch, one per GPU
+#   bash scripts/device/session4.sh retrain   # lease 2: the same with a knee-lift floor, +- curriculum
+#   bash scripts/device/session4.sh evaluate  # lease 2: 1000-round evaluations (too many for 165 s: see README)
+#   bash scripts/device/session4.sh continue  # planned for lease 1 but not run: its results called for the
+#                                             # retrain instead (resumes, or torchrun if complex_cur met 95 %)
 set -u
 OUT=${OUT:-out}
 KEEP=/root/keep
