@@ -4,8 +4,10 @@
 # the precompiled kernel cache (precompile.py).
 #
 #   bash scripts/device/session4.sh train     # lease 1: four curriculum runs from scratch, one per GPU
+#   bash scripts/device/session4.sh evaluate1 # lease 1: 1000-round evaluations of those runs
 #   bash scripts/device/session4.sh retrain   # lease 2: the same with a knee-lift floor, +- curriculum
 #   bash scripts/device/session4.sh evaluate  # lease 2: 1000-round evaluations (too many for 165 s: see README)
+#   bash scripts/device/session4.sh evaluate2 # lease 2: the rugged ones again, one per GPU
 #   bash scripts/device/session4.sh continue  # planned for lease 1 but not run: its results called for the
 #                                             # retrain instead (resumes, or torchrun if complex_cur met 95 %)
 set -u
@@ -60,7 +62,7 @@ retrain)   # second lease: a knee-lift floor (--a2_range 0.9 1.3), with and with
   ;;
 evaluate)  # the retrained runs on their terrains; the first lease's plain and randomised policies, perturbed
   ev() { echo "$1:--controllers cpg_rl --checkpoint cpg_rl=$2 --terrains $3 --rounds $4 ${5:-}"; }
-  S=runs/s4ck
+  S=/root/s4ck   # carried in a call of its own and copied there
   EVAL_TIMEOUT_S=${EVAL_TIMEOUT_S:-170} bash scripts/device/eval_jobs.sh \
     "$(ev complex_hi_cur@0 $KEEP/complex_hi_cur.pt complex 1000)" \
     "$(ev stepped_hi_cur@0 $KEEP/complex_hi_cur.pt stepped 1000)" \
@@ -74,5 +76,17 @@ evaluate)  # the retrained runs on their terrains; the first lease's plain and r
     "$(ev rugged_plain_s4_dr@3 $S/complex_cur_dr.pt rugged 1000)" \
     "$(ev rugged_perturbed_s4_dr@3 $S/complex_cur_dr.pt rugged 1000 --randomize)"
   ;;
-*) echo "usage: session4.sh train|continue|retrain|evaluate" >&2; exit 2 ;;
+evaluate1)  # lease 1, after `train` (what ran instead of `continue`)
+  ev() { echo "$1:--controllers cpg_rl --checkpoint cpg_rl=$KEEP/$2.pt --terrains $3 --rounds 1000 ${4:-}"; }
+  EVAL_TIMEOUT_S=170 bash scripts/device/eval_jobs.sh "$(ev c@0 complex_cur complex)" \
+    "$(ev dr@1 complex_cur_dr complex)" "$(ev r@2 rugged_cur rugged)" "$(ev c8@3 complex_cur8 stepped)" \
+    "$(ev c_st@0 complex_cur stepped)"
+  ;;
+evaluate2)  # lease 2, after `evaluate`: the rugged jobs that had timed out, one per GPU
+  ev() { echo "$1:--controllers cpg_rl --checkpoint cpg_rl=$2 --terrains rugged --rounds 1000 ${3:-}"; }
+  EVAL_TIMEOUT_S=150 EVALS=/root/ev2 bash scripts/device/eval_jobs.sh "$(ev rugged_hi_cur@0 $KEEP/rugged_hi_cur.pt)" \
+    "$(ev rugged_hi@1 $KEEP/rugged_hi.pt)" "$(ev rugged_perturbed_s4@2 /root/s4ck/complex_cur.pt --randomize)" \
+    "$(ev rugged_perturbed_s4_dr@3 /root/s4ck/complex_cur_dr.pt --randomize)"
+  ;;
+*) echo "usage: session4.sh train|continue|evaluate1|retrain|evaluate|evaluate2" >&2; exit 2 ;;
 esac
