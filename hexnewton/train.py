@@ -95,14 +95,15 @@ def _stop(signum, frame):
 def stop_reason(time_up: bool, stats: dict, target: float | None, levels: int, reduce=None) -> str | None:
     """Why training should stop after this iteration (None: go on), decided at the iteration boundary so that
     every rank of a torchrun job stops at the same iteration. ``reduce`` sums a list over the ranks.
+    ``stats`` (``env.episode_stats()``) is read only when there is a ``target``.
 
     With ``target``: the success rate over the last episodes of all ranks (a full ring of RING per rank; with a
     curriculum, at least RING // 4 per rank on the last level, which is the terrain itself)."""
     from .env import RING
 
     key, need = ("top_level_", RING // 4) if levels else ("", RING)
-    n = float(stats[f"{key}episodes"])
-    values = [float(time_up), stats[f"{key}success_rate"] * n, n, 1.0]
+    n = float(stats[f"{key}episodes"]) if target is not None else 0.0
+    values = [float(time_up), stats[f"{key}success_rate"] * n if n else 0.0, n, 1.0]
     time_up, successes, n, ranks = reduce(values) if reduce else values
     if time_up:
         return "the --max_minutes limit"
@@ -345,7 +346,8 @@ def main(argv: list[str] | None = None) -> int:
         def log(*a, **k):
             """After each iteration's log: stop (every rank at once) on the time limit or the target success."""
             _log(*a, **k)
-            stats = env.episode_stats()  # one small host read per iteration
+            # the ring's statistics only for a target (a few small host reads per iteration)
+            stats = env.episode_stats() if args.target_success is not None else {}
             reason = stop_reason(time_up[0], stats, args.target_success, args.levels, reduce)
             if reason:
                 raise TrainingStopped(reason)

@@ -490,7 +490,7 @@ def test_stop_reason_is_one_decision_for_all_ranks():
     assert stop_reason(False, full, None, 0) is None
     other = {"episodes": RING, "success_rate": 0.90, "top_level_episodes": RING // 4, "top_level_success_rate": 1.0}
     sent = []
-    stop_reason(False, other, None, 0, reduce=lambda v: sent.append(v) or v)  # what the other rank contributes
+    stop_reason(False, other, 0.9, 0, reduce=lambda v: sent.append(v) or v)  # what the other rank contributes
     plus_other = lambda v: [a + b for a, b in zip(v, sent[0], strict=True)]  # noqa: E731
     assert stop_reason(False, full, 0.95, 0, plus_other) is None  # (0.96 + 0.90) / 2 < 0.95
     assert stop_reason(False, full, 0.92, 0, plus_other) == "target success 0.930 >= 0.92"
