@@ -256,9 +256,12 @@ class RewardConfig:
     # to correct start-yaw errors below 30° (H100, flat, 150 iterations: 32/64 vs 63/64 reach the goal from
     # ±0.2 rad start yaw, RESULTS.md).
     direction_deadband: float = 0.0
+    # ours: Table 1's D is the start-to-goal vector; True takes it from the robot to the goal, so the direction
+    # term steers back toward a goal the robot has drifted away from (kernels/rewards.py). False: the paper's.
+    direction_to_goal: bool = True
     stability_penalty: float = 100.0  # Table 1: r_s = -100, weight 1
     forward_penalty: float = 0.3  # Table 1: r_f = -0.3, weight 1
-    goal_bonus: float = 100.0  # ours: see kernels/rewards.py
+    goal_bonus: float = 300.0  # ours: > w_d / (1 - gamma) = 100, what lingering by the goal is worth (kernels/rewards.py)
     # ours: paid once on leaving the course (§2.4.4 (2)); without it PPO walks off the course when stuck at a
     # step (kernels/rewards.py). 0 restores the paper's reward.
     off_course_penalty: float = 100.0

@@ -272,6 +272,10 @@ def main(argv: list[str] | None = None) -> int:
                         "PPO from a high-stepping gait, action 0 = the middle of the range)")  # fmt: skip
     p.add_argument("--direction_deadband", type=float, default=RewardConfig.direction_deadband,
                    help="heading error [rad] below which the direction term is 0 (Table 1: pi/6; default 0)")
+    p.add_argument("--direction_from_start", action="store_true",
+                   help="direction term along the start-to-goal vector (Table 1's D) instead of robot-to-goal (ours)")
+    p.add_argument("--goal_bonus", type=float, default=RewardConfig.goal_bonus,
+                   help="paid once on reaching the goal (ours; see kernels/rewards.py)")
     p.add_argument("--off_course_penalty", type=float, default=RewardConfig.off_course_penalty,
                    help="paid once on leaving the course (ours; 0: the paper's reward, see kernels/rewards.py)")
     args = p.parse_args(argv)
@@ -308,6 +312,7 @@ def main(argv: list[str] | None = None) -> int:
                                                block_height_max=args.block_height_max), args.goal_distance),
         task=dataclasses.replace(TaskConfig(), seed=seed, goal_distance=args.goal_distance),
         reward=dataclasses.replace(RewardConfig(), direction_deadband=args.direction_deadband,
+                                   direction_to_goal=not args.direction_from_start, goal_bonus=args.goal_bonus,
                                    off_course_penalty=args.off_course_penalty),
         randomization=RandomizationConfig(enabled=args.randomize),
         # a resumed run keeps the parameter ranges it was trained with

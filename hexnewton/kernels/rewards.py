@@ -13,8 +13,10 @@ not scaled.
 - r_theta (direction), "(cos θ, sin θ) · D / ||D||, condition θ > π/6". Taken literally, a term paid only
   outside the ±30° cone would be largest just outside it. We therefore read the condition as "heading error
   beyond π/6" and pay min(0, (cos θ, sin θ) · D̂ - cos(π/6)) (π/6 is ``RewardConfig.direction_deadband``).
-  That is 0 inside the cone and falls continuously to -1 - cos(π/6) = -1.87 when walking backward. D is the
-  start-to-goal vector.
+  That is 0 inside the cone and falls continuously to -1 - cos(π/6) = -1.87 when walking backward. The paper's
+  D is the start-to-goal vector; ours (``RewardConfig.direction_to_goal``) is the robot-to-goal vector. With
+  the start-to-goal D, a robot that has drifted sideways is paid for walking parallel to the goal line and
+  past the goal circle (session 5: 94 % of a complex run's episodes walked past the goal and off the course).
   The default dead band is 0 (ours, ``RewardConfig``): inside Table 1's ±30° cone nothing asks the policy to
   correct a heading error, and the goal circle (0.5 m at 3.5 m) allows only ~8°.
 - r_d (distance), "exp(-(d_n - d_t))": d_n is the distance to the goal and d_t the goal radius, so
@@ -24,8 +26,11 @@ not scaled.
 - r_f (forward), "-0.3 if x_r - x_pr < 0.01", weight 1. The paper's step is unstated. 1 cm per 20 ms would
   be 0.5 m/s, twice what the fixed CPG walks. We read the threshold as a speed, ``FORWARD_MIN_SPEED`` =
   0.1 m/s along +x (the start-to-goal direction), i.e. 2 mm per 20 ms step.
-- r_goal (ours), +100 when the goal is reached. The episode ends there, so without a bonus the paper's
-  rewards would pay more for lingering just outside the goal radius than for entering it.
+- r_goal (ours), +300 when the goal is reached. The episode ends there, so without a bonus the paper's
+  rewards would pay more for lingering just outside the goal radius than for entering it. The bonus must
+  beat what lingering is worth: r_d is ~1 at the circle's edge, so with gamma = 0.99 walking past it is worth
+  up to w_d / (1 - gamma) = 100. A bonus of 100 (sessions 2-4) made missing and entering the circle equal,
+  and the session-5 runs stopped aiming (RESULTS.md); 300 makes entering worth three times as much.
 - r_off (ours), -100 once when the robot leaves the course (|y - y_start| > 1.5 m, §2.4.4 (2)), as much as
   a fall. Table 1 fines falls but not leaving the course, and a robot stuck at a step earns about -0.07 per
   step (r_f = -0.3 against r_d ~ 0.2 two metres from the goal). Without r_off, PPO learnt to end such
@@ -59,6 +64,7 @@ def rewards_kernel(
     w_direction: float,
     w_distance: float,
     direction_deadband: float,
+    direction_to_goal: int,
     stability_penalty: float,
     forward_penalty: float,
     goal_bonus: float,
@@ -84,9 +90,13 @@ def rewards_kernel(
     r_h = float(0.0)
     if z > 0.12:
         r_h = z - 0.11
-    # start-to-goal direction D is +x, so (cos θ, sin θ) . D / |D| = cos(yaw)
-    r_dir = wp.min(0.0, wp.cos(rpy[e, 2]) - wp.cos(direction_deadband))
-    d_n = wp.length(wp.vec2(px, py) - start[e] - wp.vec2(goal_distance, 0.0))
+    to_goal = start[e] + wp.vec2(goal_distance, 0.0) - wp.vec2(px, py)
+    # the start-to-goal direction D is +x, so (cos θ, sin θ) . D / |D| = cos(yaw); ours: D from the robot
+    bearing = float(0.0)
+    if direction_to_goal != 0:
+        bearing = wp.atan2(to_goal[1], to_goal[0])
+    r_dir = wp.min(0.0, wp.cos(rpy[e, 2] - bearing) - wp.cos(direction_deadband))
+    d_n = wp.length(to_goal)
     r_d = wp.exp(-(d_n - goal_radius))
     tilted = wp.abs(rpy[e, 0]) > wp.pi / 6.0 or wp.abs(rpy[e, 1]) > wp.pi / 6.0
     r_s = float(0.0)
@@ -118,8 +128,8 @@ def rewards_kernel(
 
 
 def rewards_reference(joint_q, rpy, status, ground, start, prev_x, goal_distance, goal_radius, w_height, w_direction,
-                      w_distance, direction_deadband, stability_penalty, forward_penalty, goal_bonus,
-                      off_course_penalty, control_dt):  # fmt: skip
+                      w_distance, direction_deadband, direction_to_goal, stability_penalty, forward_penalty,
+                      goal_bonus, off_course_penalty, control_dt):  # fmt: skip
     """Float64 reference of :func:`rewards_kernel` (finite states); ``ground`` (N,) is the terrain under the base.
 
     Returns (reward (N,), terms (N, 7))."""
@@ -128,8 +138,10 @@ def rewards_reference(joint_q, rpy, status, ground, start, prev_x, goal_distance
     scale = control_dt / REF_DT
     z = jq[:, 2] - ground
     r_h = np.where(z > 0.12, z - 0.11, 0.0)
-    r_dir = np.minimum(0.0, np.cos(rpy[:, 2]) - np.cos(direction_deadband))
-    d_n = np.hypot(jq[:, 0] - start[:, 0] - goal_distance, jq[:, 1] - start[:, 1])
+    gx, gy = start[:, 0] + goal_distance - jq[:, 0], start[:, 1] - jq[:, 1]
+    bearing = np.arctan2(gy, gx) if direction_to_goal else 0.0
+    r_dir = np.minimum(0.0, np.cos(rpy[:, 2] - bearing) - np.cos(direction_deadband))
+    d_n = np.hypot(gx, gy)
     r_d = np.exp(-(d_n - goal_radius))
     tilted = (np.abs(rpy[:, 0]) > np.pi / 6) | (np.abs(rpy[:, 1]) > np.pi / 6)
     r_s = np.where((z < 0.05) | tilted | (np.asarray(status) == FELL), -stability_penalty, 0.0)
