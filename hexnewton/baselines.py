@@ -113,8 +113,8 @@ def sb3_kwargs(algo: str, num_envs: int, gradient_steps: int, learning_starts: i
     return kw
 
 
-def load_sb3_policy(env, path: str, algo: str):
-    """Deterministic ``policy(obs TensorDict) -> actions`` from an SB3 ``model.zip``."""
+def load_sb3_policy(env, path: str, algo: str, deterministic: bool = True):
+    """``policy(obs TensorDict) -> actions`` from an SB3 ``model.zip`` (its mean action when ``deterministic``)."""
     import torch
 
     model = _algo_class(algo).load(path, device="cpu")
@@ -124,7 +124,7 @@ def load_sb3_policy(env, path: str, algo: str):
     device = env._obs_t.device
 
     def policy(obs):
-        actions, _ = model.predict(obs["policy"].cpu().numpy(), deterministic=True)
+        actions, _ = model.predict(obs["policy"].cpu().numpy(), deterministic=deterministic)
         return torch.as_tensor(actions, dtype=torch.float32, device=device)
 
     return policy

@@ -7,7 +7,8 @@
 
 Protocol. A round is one robot walking toward the target 3.5 m ahead, from its own start pose, until its
 first episode ends (goal, fall, off course) or the episode limit (``TaskConfig.max_episode_steps``,
-7000 steps = 140 s). R rounds run as R robots in parallel; a deterministic policy acts in every round.
+7000 steps = 140 s). R rounds run as R robots in parallel; a deterministic policy acts in every round
+(``--stochastic``: it samples its actions from its Gaussian as in training; see RESULTS.md, session 5).
 The robots use terrain seed ``EVAL_TERRAIN_SEED`` and reset seed ``EVAL_RESET_SEED``. Training uses
 ``train.py --terrain_seed 0 --seed 1`` by default, so both the ground and the start poses (lane,
 ±0.1 m, ±0.2 rad yaw, ±0.05 rad joints) are unseen.
@@ -155,9 +156,12 @@ class Episode:
 
 def run_rounds(controller: str, checkpoint: str | None, terrain: str, rounds: int, device: str | None,
                max_steps: int, reset_yaw: float, progress: bool = True, randomize: bool = False,
-               step_rise: float = TerrainConfig.step_rise, goal_distance: float = TaskConfig.goal_distance) -> Episode:
+               step_rise: float = TerrainConfig.step_rise, goal_distance: float = TaskConfig.goal_distance,
+               stochastic: bool = False) -> Episode:
     """``rounds`` robots, one first episode each, with a deterministic controller on unseen seeds; with
-    ``randomize``, under perturbed conditions (``RandomizationConfig`` drawn with the evaluation seed)."""
+    ``randomize``, under perturbed conditions (``RandomizationConfig`` drawn with the evaluation seed); with
+    ``stochastic``, a learnt policy samples its actions from its Gaussian as in training (torch seeded with the
+    evaluation seed)."""
     from .env import make_env
     from .play import fixed_cpg_actions, load_policy, stepped
 
@@ -179,9 +183,13 @@ def run_rounds(controller: str, checkpoint: str | None, terrain: str, rounds: in
     elif controller in SB3:
         from .baselines import load_sb3_policy
 
-        policy = load_sb3_policy(env, checkpoint, SB3[controller])
+        policy = load_sb3_policy(env, checkpoint, SB3[controller], deterministic=not stochastic)
     else:
-        policy = load_policy(env, checkpoint, mode)
+        policy = load_policy(env, checkpoint, mode, stochastic)
+    if stochastic:
+        import torch
+
+        torch.manual_seed(EVAL_RESET_SEED)
     pos, rpy, done, status, params = [], [], [], [], []
     finished = np.zeros(rounds, bool)
     for _, st, _, p, r in stepped(env, policy, max_steps, f"{LABELS[controller]} on {terrain}", progress):
@@ -369,6 +377,8 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--step_rise", type=float, default=TerrainConfig.step_rise, help="step height [m] (§3.1: 0.06)")
     p.add_argument("--randomize", action="store_true",
                    help="perturbed conditions: friction, payload, masses, gains, latency, noise, pushes")
+    p.add_argument("--stochastic", action="store_true",
+                   help="learnt policies sample their actions as in training (default: the mean action)")
     p.add_argument("--device", default=None)
     p.add_argument("--out", default=None, help="output directory (default eval/<date_time>); must not exist")
     p.add_argument("--no-progress", action="store_true")
@@ -412,7 +422,7 @@ def main(argv: list[str] | None = None) -> int:
         for ctrl in args.controllers:
             ck = None if ctrl == "cpg" else checkpoint_for(checkpoints, ctrl, terrain)
             ep = run_rounds(ctrl, ck, terrain, args.rounds, device, args.max_steps, args.reset_yaw, progress,
-                            args.randomize, args.step_rise, args.goal_distance)  # fmt: skip
+                            args.randomize, args.step_rise, args.goal_distance, args.stochastic)  # fmt: skip
             m = round_metrics(ep.pos, ep.rpy, ep.done, ep.status, ep.dt, distances)
             s = summarize(m, ep.rpy, distances)
             s["checkpoint"] = ck
@@ -427,7 +437,7 @@ def main(argv: list[str] | None = None) -> int:
     wall = time.perf_counter() - t0
     meta = {"device": device, "rounds": args.rounds, "max_steps": args.max_steps, "reset_yaw": args.reset_yaw,
             "distances": list(distances), "goal_distance": args.goal_distance, "step_rise": args.step_rise,
-            "randomized": args.randomize,
+            "randomized": args.randomize, "actions": "sampled" if args.stochastic else "mean",
             "terrain_seed": EVAL_TERRAIN_SEED, "reset_seed": EVAL_RESET_SEED,
             "unseen": "terrain seed and start poses differ from training (train.py: terrain seed 0, seed 1)",
             "wall_s": round(wall, 1)}  # fmt: skip

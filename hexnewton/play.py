@@ -198,9 +198,13 @@ def load_runner(env, path: str, action_mode: str):
     return runner
 
 
-def load_policy(env, path: str, action_mode: str):
-    """Deterministic policy from an rsl-rl checkpoint, after checking it fits this environment."""
-    return load_runner(env, path, action_mode).get_inference_policy(device=str(env._obs_t.device))
+def load_policy(env, path: str, action_mode: str, stochastic: bool = False):
+    """Policy from an rsl-rl checkpoint, after checking it fits this environment: its mean action, or with
+    ``stochastic`` an action sampled from its Gaussian as in training."""
+    policy = load_runner(env, path, action_mode).get_inference_policy(device=str(env._obs_t.device))
+    if stochastic:
+        return lambda obs: policy(obs, stochastic_output=True)
+    return policy
 
 
 def main(argv: list[str] | None = None) -> int:

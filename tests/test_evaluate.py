@@ -113,6 +113,19 @@ def test_report_on_a_tiny_run(tmp_path):
     assert sorted(os.listdir(out)) == before and not (tmp_path / "x").exists()
 
 
+def test_stochastic_rounds_are_seeded_and_sample_around_the_mean():
+    """``--stochastic``: the policy samples its actions (trajectories differ from the mean action's), and the
+    same evaluation seed gives the same rounds."""
+    from hexnewton.evaluate import run_rounds
+
+    policy = os.path.join(ROOT, "results", "policies", "cpg_rl_flat.pt")
+    run = lambda stochastic: run_rounds("cpg_rl", policy, "flat", 2, "cpu", 30, 0.2, False, stochastic=stochastic)  # noqa: E731
+    mean, a, b = run(False), run(True), run(True)
+    np.testing.assert_array_equal(a.pos, b.pos)
+    np.testing.assert_array_equal(a.params, b.params)
+    assert np.abs(a.params - mean.params).max() > 1e-3
+
+
 @pytest.mark.parametrize("algo", ["sac", "td3", "a2c"])
 def test_sb3_baseline_trains_and_evaluates(algo, tmp_path):
     """A few SB3 updates on 4 envs write a model.zip that the evaluation loads as a controller."""
