@@ -6,6 +6,7 @@
 #   bash scripts/device/session5.sh train_a   # lease 1: with the off-course penalty; found the missed-goal problem
 #   bash scripts/device/session5.sh train     # lease 2: goal bonus 300 and the robot-to-goal direction term
 #   bash scripts/device/session5.sh evaluate  # lease 2: 1000-round evaluations, Table 3 (25 rounds) and the bench
+#   bash scripts/device/session5.sh evaluate2 # lease 3: the same policies with sampled actions (--stochastic)
 set -u
 OUT=${OUT:-out}
 KEEP=/root/keep
@@ -47,5 +48,14 @@ evaluate)
   wait
   tail -5 "$OUT/bench.log"
   ;;
-*) echo "usage: session5.sh train_a|train|evaluate" >&2; exit 2;;
+evaluate2)   # lease 3: the policies' sampled actions (evaluate --stochastic); runs/ck2 = actor-only copies of KEEP
+  ev() { echo "--controllers cpg_rl --checkpoint cpg_rl=/root/ck2/$1.pt --terrains $2 --rounds 1000 --stochastic ${3:-}"; }
+  EVAL_TIMEOUT_S=${EVAL_TIMEOUT_S:-200} bash scripts/device/eval_jobs.sh \
+    "s_complex@0:$(ev complex_dr complex)" \
+    "s_stepped@1:$(ev complex_dr stepped)" \
+    "s_rugged@2:$(ev complex_dr rugged)" \
+    "s_plain_perturbed@2:$(ev complex complex --randomize)" \
+    "s_dr_perturbed@3:$(ev complex_dr complex --randomize)"
+  ;;
+*) echo "usage: session5.sh train_a|train|evaluate|evaluate2" >&2; exit 2;;
 esac
