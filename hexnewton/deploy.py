@@ -13,7 +13,8 @@ Per control step (``control_dt``, 20 ms by default) :meth:`Controller.step` take
 - the goal relative to the robot in its heading frame (:func:`target_in_heading_frame`);
 - the highest terrain within ±30 cm minus the ground under the robot (0 without a terrain sensor).
 
-It runs the policy, scales its 15 actions to (omega, A1, A2, A3), then integrates the two Hopf oscillators
+It runs the policy (its mean action; with ``stochastic=True`` an action sampled from the trained Gaussian, as
+in training: the session-5 step-climbing policy needs the sampling, RESULTS.md), scales its 15 actions to (omega, A1, A2, A3), then integrates the two Hopf oscillators
 (Eq. 3, RK4) and applies the mapping function (Eq. 4) every ``substep_dt`` (2.5 ms by default), exactly as
 the simulator does. It returns the 18 joint position targets at the end of the step (all substeps' targets
 are in ``last_substep_targets``, for a servo loop faster than the control rate).
@@ -67,7 +68,8 @@ def load_spec(bundle: str) -> dict:
 class Controller:
     """The exported CPG_RL hierarchy for ``num_robots`` robots (batched like the simulator)."""
 
-    def __init__(self, bundle: str, num_robots: int = 1, providers: list[str] | None = None):
+    def __init__(self, bundle: str, num_robots: int = 1, providers: list[str] | None = None,
+                 stochastic: bool = False, seed: int | None = None):
         import onnxruntime as ort
 
         self.spec = spec = load_spec(bundle)
@@ -83,6 +85,11 @@ class Controller:
         self.dt = float(spec["substep_dt"])
         self.substeps = int(spec["substeps_per_control"])
         self.gain = 1.0 if c["param_tau"] == 0 else 1.0 - math.exp(-self.dt / c["param_tau"])
+        if stochastic and "action_std" not in spec:
+            raise ValueError(f"{bundle}: controller.json has no action_std (exported before sampled actions)")
+        self.stochastic = stochastic
+        self.action_std = np.asarray(spec.get("action_std", np.zeros(spec["num_actions"])), np.float64)
+        self.rng = np.random.default_rng(seed)
         self.stand, self.joint_lower, self.joint_upper = (np.asarray(spec[k]) for k in ("stand_pose", "joint_lower",
                                                                                          "joint_upper"))  # fmt: skip
         self.reset()
@@ -119,8 +126,11 @@ class Controller:
         return obs
 
     def act(self, obs: np.ndarray) -> np.ndarray:
-        """The policy's deterministic actions (N, 15) for observations (N, num_obs)."""
-        return self.session.run(None, {self._input: np.asarray(obs, np.float32)})[0]
+        """The policy's actions (N, 15) for observations (N, num_obs): the mean, or sampled around it."""
+        mean = self.session.run(None, {self._input: np.asarray(obs, np.float32)})[0]
+        if not self.stochastic:
+            return mean
+        return mean + self.action_std * self.rng.standard_normal(mean.shape)
 
     def advance(self, actions: np.ndarray) -> np.ndarray:
         """Scale actions to the CPG parameters, then run ``substeps_per_control`` CPG + mapping substeps;

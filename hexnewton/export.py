@@ -33,8 +33,8 @@ def _sha256(path: str) -> str:
     return h.hexdigest()
 
 
-def controller_spec(env, checkpoint: str) -> dict:
-    """controller.json for ``env``'s configuration."""
+def controller_spec(env, checkpoint: str, action_std: list[float]) -> dict:
+    """controller.json for ``env``'s configuration; ``action_std`` is the policy's Gaussian standard deviation."""
     from .kernels.observations import H_HALF_EXTENT, OBS_LAYOUT
     from .robot import leg_bounds
     from .bench import git_rev
@@ -59,6 +59,8 @@ def controller_spec(env, checkpoint: str) -> dict:
         "param_lower": list(lo),
         "param_upper": list(hi),
         "initial_params": list(cfg.cpg.fixed_params()),
+        # the trained Gaussian's standard deviation per action: Controller(stochastic=True) samples as in training
+        "action_std": [float(v) for v in action_std],
         "cpg": {k: getattr(cfg.cpg, k) for k in ("alpha", "mu", "delta", "theta", "duty", "steepness", "param_tau")},
         "control_dt": cfg.task.control_dt,
         "substep_dt": sub_dt,
@@ -121,8 +123,10 @@ def main(argv: list[str] | None = None) -> int:
     obs, targets = record(env, runner.get_inference_policy(device="cpu"), args.steps)
     os.makedirs(args.out)
     err = export_onnx(runner.alg.get_policy(), env.num_obs, os.path.join(args.out, "policy.onnx"))
+    dist = runner.alg.get_policy().distribution
+    std = dist.std_param if hasattr(dist, "std_param") else dist.log_std_param.exp()
     with open(os.path.join(args.out, "controller.json"), "w") as f:
-        json.dump(controller_spec(env, args.checkpoint), f, indent=1)
+        json.dump(controller_spec(env, args.checkpoint, std.detach().cpu().tolist()), f, indent=1)
     np.savez_compressed(os.path.join(args.out, "check.npz"), obs=obs, targets=targets)
     r = replay(args.out)
     print(f"wrote {args.out}: policy.onnx (onnxruntime vs torch {err:.1e}), controller.json, check.npz "

@@ -76,6 +76,21 @@ def test_runtime_step_by_step(bundle):
     np.testing.assert_allclose(ctrl.params[0], ctrl.spec["initial_params"])
 
 
+def test_sampled_actions_follow_the_trained_gaussian(bundle):
+    """``stochastic=True``: actions scatter around the mean with the exported std, reproducibly for one seed."""
+    from hexnewton.deploy import Controller
+
+    obs = np.load(bundle / "check.npz")["obs"][0]
+    std = np.asarray(json.loads((bundle / "controller.json").read_text())["action_std"])
+    assert std.shape == (15,) and np.all(std > 0)
+    mean = Controller(str(bundle), num_robots=3).act(obs)
+    a, b = (Controller(str(bundle), num_robots=3, stochastic=True, seed=7) for _ in range(2))
+    draws = np.stack([a.act(obs) for _ in range(2000)])
+    np.testing.assert_array_equal(draws[0], b.act(obs))
+    np.testing.assert_allclose(draws.mean(axis=0), mean, atol=0.1)
+    np.testing.assert_allclose(draws.std(axis=0), np.broadcast_to(std, mean.shape), rtol=0.1)
+
+
 def test_bad_bundles_and_exports(bundle, tmp_path):
     not_bundle = _run(["-m", "hexnewton.deploy", str(tmp_path)])
     assert not_bundle.returncode == 2 and "not a controller bundle" in not_bundle.stderr
