@@ -222,6 +222,9 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--record", metavar="PATH.npz", help="save the rollout (first terrain)")
     p.add_argument("--video", metavar="PATH.mp4|.gif", help="render the first terrain's rollout headless (matplotlib)")
     p.add_argument("--video_robots", type=positive_int, default=3, help="robots drawn in the video")
+    p.add_argument("--video_speed", type=positive_int, default=1, help="video playback speed (x real time)")
+    p.add_argument("--stochastic", action="store_true",
+                   help="cpg_rl / joint: sample actions from the policy's Gaussian as in training (default: the mean)")
     p.add_argument("--plot", metavar="PATH.png", help="plot the six legs' joint targets over two gait cycles")
     p.add_argument("--no-progress", action="store_true")
     args = p.parse_args(argv)
@@ -256,13 +259,17 @@ def main(argv: list[str] | None = None) -> int:
             actions = fixed_cpg_actions(env)
             policy = lambda obs: actions  # noqa: E731
         else:
-            policy = load_policy(env, args.checkpoint, mode)
+            policy = load_policy(env, args.checkpoint, mode, args.stochastic)
+            if args.stochastic:
+                import torch
+
+                torch.manual_seed(args.seed)
         recorder = Recorder() if (args.record and i == 0) else None
         video = None
         if args.video and i == 0:
             from .video import VideoRecorder
 
-            video = VideoRecorder(robots=args.video_robots)
+            video = VideoRecorder(robots=args.video_robots, speed=args.video_speed)
         t0 = time.perf_counter()
         stats = rollout(env, policy, args.steps, tuple(r for r in (recorder, video) if r is not None),
                         progress=not args.no_progress and sys.stderr.isatty())  # fmt: skip

@@ -51,10 +51,10 @@ _EDGES = [(0, 1), (2, 3), (4, 5), (6, 7), (0, 2), (1, 3), (4, 6), (5, 7), (0, 4)
 
 class VideoRecorder:
     """Collects the body poses of the first ``robots`` envs every ``stride`` control steps (``rollout`` calls
-    :meth:`add`), then :meth:`save` renders them."""
+    :meth:`add`), then :meth:`save` renders them, ``speed`` times faster than real time."""
 
-    def __init__(self, robots: int = 4, stride: int = 2):
-        self.robots, self.stride = robots, stride
+    def __init__(self, robots: int = 4, stride: int = 2, speed: int = 1):
+        self.robots, self.stride, self.speed = robots, stride * speed, speed
         self.frames: list[np.ndarray] = []
         self.times: list[float] = []
         self._k = 0
@@ -74,7 +74,7 @@ class VideoRecorder:
             raise ValueError("no frames recorded")
         env = self.env
         cfg = env.cfg
-        fps = 1.0 / (self.stride * cfg.task.control_dt)
+        fps = self.speed / (self.stride * cfg.task.control_dt)
         render(path, np.stack(self.frames), np.asarray(self.times), env.world.terrain.grid, cfg.robot.torso_size,
                cfg.robot.tibia_length, fps, title)  # fmt: skip
 
