@@ -28,6 +28,7 @@ import copy
 import dataclasses
 import datetime
 import json
+import math
 import os
 import random
 import signal
@@ -52,8 +53,9 @@ from .config import (
 PRESETS = ("default", "paper")
 
 
-def train_cfg(preset: str, num_envs: int, num_steps_per_env: int = 24) -> dict:
-    """rsl-rl-lib 5.5.1 runner configuration for ``preset``."""
+def train_cfg(preset: str, num_envs: int, num_steps_per_env: int = 24, action_std: float | None = None) -> dict:
+    """rsl-rl-lib 5.5.1 runner configuration for ``preset``; ``action_std`` fixes the policy's Gaussian std (not
+    learnt) instead of starting from the preset's and learning it."""
     if preset not in PRESETS:
         raise ValueError(f"unknown preset '{preset}': choose one of {', '.join(PRESETS)}")
     samples = num_envs * num_steps_per_env
@@ -77,10 +79,23 @@ def train_cfg(preset: str, num_envs: int, num_steps_per_env: int = 24) -> dict:
         # observations and rewards in-kernel (a blown-up env is reset and counted: kernels/terminations.py,
         # tested by injecting NaN/Inf), so the check only stalls the GPU
         "check_for_nan": False,
-        "actor": dict(model, distribution_cfg={"class_name": "GaussianDistribution", "init_std": std}),
+        "actor": dict(model, distribution_cfg={"class_name": "GaussianDistribution", "init_std": action_std or std,
+                                               "learn_std": action_std is None}),
         "critic": dict(model),
         "algorithm": algorithm,
     }
+
+
+def fix_action_std(policy, std: float) -> None:
+    """Set the Gaussian's std of every action to ``std`` (rsl-rl's scalar or log parameterisation)."""
+    import torch
+
+    dist = policy.distribution
+    with torch.no_grad():
+        if hasattr(dist, "std_param"):
+            dist.std_param.fill_(std)
+        else:
+            dist.log_std_param.fill_(math.log(std))
 
 
 class TrainingStopped(Exception):
@@ -272,6 +287,9 @@ def main(argv: list[str] | None = None) -> int:
                         "PPO from a high-stepping gait, action 0 = the middle of the range)")  # fmt: skip
     p.add_argument("--direction_deadband", type=float, default=RewardConfig.direction_deadband,
                    help="heading error [rad] below which the direction term is 0 (Table 1: pi/6; default 0)")
+    p.add_argument("--action_std", type=float, default=None,
+                   help="fix the policy's action std (not learnt; also on --resume) so that its mean action learns "
+                        "to do what its noise did (default: learnt, from the preset's initial std)")
     p.add_argument("--direction_from_start", action="store_true",
                    help="direction term along the start-to-goal vector (Table 1's D) instead of robot-to-goal (ours)")
     p.add_argument("--goal_bonus", type=float, default=RewardConfig.goal_bonus,
@@ -283,6 +301,8 @@ def main(argv: list[str] | None = None) -> int:
         raise ValueError(f"unknown preset '{args.preset}': choose one of {', '.join(PRESETS)}")
     if args.max_minutes is not None and not args.max_minutes > 0:
         raise ValueError("--max_minutes must be positive")
+    if args.action_std is not None and not args.action_std > 0:
+        raise ValueError("--action_std must be positive")
     if args.target_success is not None and not 0 < args.target_success <= 1:
         raise ValueError("--target_success must lie in (0, 1]")
     if args.a2_range is not None:
@@ -321,7 +341,7 @@ def main(argv: list[str] | None = None) -> int:
     env = make_env(cfg, args.action_mode)
     if ckpt is not None:
         check_compatible(ckpt, args.resume, env.num_obs, env.num_actions, args.action_mode)
-    tcfg = train_cfg(args.preset, args.num_envs, args.num_steps_per_env)
+    tcfg = train_cfg(args.preset, args.num_envs, args.num_steps_per_env, args.action_std)
     tcfg["save_interval"] = args.save_interval
     experiment = args.experiment or f"hexnewton_{args.action_mode}_{args.terrain}"
     run_dir = os.path.join(args.log_dir, experiment, datetime.datetime.now().strftime("%Y-%m-%d_%H-%M-%S"))
@@ -362,6 +382,8 @@ def main(argv: list[str] | None = None) -> int:
         runner.load(args.resume, map_location=device)
         # rsl-rl stores the last finished iteration and would start again from it: continue after it instead
         runner.current_learning_iteration += 1
+        if args.action_std is not None:  # the checkpoint brought its own std: fix ours
+            fix_action_std(runner.alg.get_policy(), args.action_std)
         print(f"resumed from {args.resume}: continuing at iteration {runner.current_learning_iteration}, "
               f"learning rate {runner.alg.learning_rate:.2e}")
     where = f"rank {dist.rank} of {dist.world_size}, " if dist.world_size > 1 else ""

@@ -325,6 +325,7 @@ def test_bad_checkpoints_are_one_line_errors(trained, tmp_path):
         (["train.py", "--terrain", "moon"], "unknown terrain 'moon'"),
         (["train.py", "--log_dir", str(a_file / "sub")], "not a writable directory"),
         (["train.py", "--max_minutes", "-1"], "--max_minutes must be positive"),
+        (["train.py", "--action_std", "0"], "--action_std must be positive"),
         (["train.py", "--a2_range", "1.0", "0.5"], "--a2_range must satisfy"),
         (["train.py", "--a2_range", "0.9", "1.3", "--resume", str(corrupt)], "--a2_range is for new runs"),
     ]
@@ -422,10 +423,15 @@ def test_resume_continues_iterations_and_learning_rate(tmp_path):
     ck = torch.load(first + "/model_1.pt", weights_only=False)
     lr_saved = ck["optimizer_state_dict"]["param_groups"][0]["lr"]
     time.sleep(1.1)  # run directories are named by the second
-    out = _train(tmp_path, "--max_iterations", "2", "--experiment", "part", "--resume", first + "/model_1.pt")
+    out = _train(tmp_path, "--max_iterations", "2", "--experiment", "part", "--resume", first + "/model_1.pt",
+                 "--action_std", "0.2")  # fmt: skip
     assert "continuing at iteration 2" in out
     second = _run_dirs(tmp_path, "part")[1]
     assert os.path.isfile(second + "/model_3.pt") and torch.load(second + "/model_3.pt", weights_only=False)["iter"] == 3
+    # --action_std replaced the checkpoint's learnt std and held it fixed through training
+    std = torch.load(second + "/model_3.pt", weights_only=False)["actor_state_dict"]["distribution.std_param"]
+    assert ck["actor_state_dict"]["distribution.std_param"].sub(0.2).abs().max() > 1e-3
+    torch.testing.assert_close(std, torch.full_like(std, 0.2))
     lr = read_scalars_lr(second)
     assert sorted(lr) == [2, 3] and lr[2] == pytest.approx(lr_saved, rel=0.51)  # adaptive: at most one x1.5 step
     _train(tmp_path, "--max_iterations", "4", "--experiment", "straight")
