@@ -104,7 +104,7 @@ def main(argv: list[str] | None = None) -> int:
         raise ValueError(f"{args.out} exists: nothing is overwritten")
     from .env import make_env
     from .play import load_runner
-    from .train import export_onnx, load_checkpoint
+    from .train import action_std, export_onnx, load_checkpoint
 
     meta = (load_checkpoint(args.checkpoint).get("infos") or {}).get("hexnewton", {})
     if meta.get("action_mode", "cpg") != "cpg":
@@ -123,10 +123,8 @@ def main(argv: list[str] | None = None) -> int:
     obs, targets = record(env, runner.get_inference_policy(device="cpu"), args.steps)
     os.makedirs(args.out)
     err = export_onnx(runner.alg.get_policy(), env.num_obs, os.path.join(args.out, "policy.onnx"))
-    dist = runner.alg.get_policy().distribution
-    std = dist.std_param if hasattr(dist, "std_param") else dist.log_std_param.exp()
     with open(os.path.join(args.out, "controller.json"), "w") as f:
-        json.dump(controller_spec(env, args.checkpoint, std.detach().cpu().tolist()), f, indent=1)
+        json.dump(controller_spec(env, args.checkpoint, action_std(runner.alg.get_policy())), f, indent=1)
     np.savez_compressed(os.path.join(args.out, "check.npz"), obs=obs, targets=targets)
     r = replay(args.out)
     print(f"wrote {args.out}: policy.onnx (onnxruntime vs torch {err:.1e}), controller.json, check.npz "

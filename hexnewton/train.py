@@ -86,6 +86,13 @@ def train_cfg(preset: str, num_envs: int, num_steps_per_env: int = 24, action_st
     }
 
 
+def action_std(policy) -> list[float]:
+    """The Gaussian's std of each action (rsl-rl's scalar or log parameterisation)."""
+    dist = policy.distribution
+    std = dist.std_param if hasattr(dist, "std_param") else dist.log_std_param.exp()
+    return std.detach().cpu().tolist()
+
+
 def fix_action_std(policy, std: float) -> None:
     """Set the Gaussian's std of every action to ``std`` (rsl-rl's scalar or log parameterisation)."""
     import torch
