@@ -294,6 +294,9 @@ def main(argv: list[str] | None = None) -> int:
                         "PPO from a high-stepping gait, action 0 = the middle of the range)")  # fmt: skip
     p.add_argument("--direction_deadband", type=float, default=RewardConfig.direction_deadband,
                    help="heading error [rad] below which the direction term is 0 (Table 1: pi/6; default 0)")
+    p.add_argument("--frame_dt", type=float, default=SimConfig.frame_dt,
+                   help="physics frame [s], collision once per frame (must divide the 20 ms control step)")
+    p.add_argument("--substeps", type=positive_int, default=SimConfig.substeps, help="MuJoCo steps per frame")
     p.add_argument("--action_std", type=float, default=None,
                    help="fix the policy's action std (not learnt; also on --resume) so that its mean action learns "
                         "to do what its noise did (default: learnt, from the preset's initial std)")
@@ -333,7 +336,8 @@ def main(argv: list[str] | None = None) -> int:
     seed, terrain_seed = dist.seeds(args.seed, args.terrain_seed)
     seed_everything(seed)
     cfg = HexConfig(
-        sim=dataclasses.replace(SimConfig(), num_envs=args.num_envs, device=device),
+        sim=dataclasses.replace(SimConfig(), num_envs=args.num_envs, device=device, frame_dt=args.frame_dt,
+                                substeps=args.substeps),
         terrain=terrain_for_goal(TerrainConfig(name=args.terrain, seed=terrain_seed, levels=args.levels,
                                                start_levels=args.start_levels, step_rise=args.step_rise,
                                                block_height_max=args.block_height_max), args.goal_distance),

@@ -326,6 +326,7 @@ def test_bad_checkpoints_are_one_line_errors(trained, tmp_path):
         (["train.py", "--log_dir", str(a_file / "sub")], "not a writable directory"),
         (["train.py", "--max_minutes", "-1"], "--max_minutes must be positive"),
         (["train.py", "--action_std", "0"], "--action_std must be positive"),
+        (["train.py", "--frame_dt", "0.015"], "must be a positive multiple of sim.frame_dt"),
         (["train.py", "--a2_range", "1.0", "0.5"], "--a2_range must satisfy"),
         (["train.py", "--a2_range", "0.9", "1.3", "--resume", str(corrupt)], "--a2_range is for new runs"),
     ]
