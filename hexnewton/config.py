@@ -261,7 +261,8 @@ class RewardConfig:
     direction_to_goal: bool = True
     stability_penalty: float = 100.0  # Table 1: r_s = -100, weight 1
     forward_penalty: float = 0.3  # Table 1: r_f = -0.3, weight 1
-    goal_bonus: float = 300.0  # ours: > w_d / (1 - gamma) = 100, what lingering by the goal is worth (kernels/rewards.py)
+    # ours: more than w_d / (1 - gamma) = 100, what lingering by the goal is worth (kernels/rewards.py)
+    goal_bonus: float = 300.0
     # ours: paid once on leaving the course (§2.4.4 (2)); without it PPO walks off the course when stuck at a
     # step (kernels/rewards.py). 0 restores the paper's reward.
     off_course_penalty: float = 100.0

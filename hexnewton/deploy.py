@@ -15,9 +15,10 @@ Per control step (``control_dt``, 20 ms by default) :meth:`Controller.step` take
 
 It runs the policy (its mean action; with ``stochastic=True`` an action sampled from the trained Gaussian, as
 in training: the session-5 step-climbing policy needs the sampling, RESULTS.md), scales its 15 actions to
-(omega, A1, A2, A3), then integrates the two Hopf oscillators (Eq. 3, RK4) and applies the mapping function (Eq. 4) every ``substep_dt`` (2.5 ms by default), exactly as
-the simulator does. It returns the 18 joint position targets at the end of the step (all substeps' targets
-are in ``last_substep_targets``, for a servo loop faster than the control rate).
+(omega, A1, A2, A3), then integrates the two Hopf oscillators (Eq. 3, RK4) and applies the mapping function
+(Eq. 4) every ``substep_dt`` (2.5 ms by default), exactly as the simulator does. It returns the 18 joint
+position targets at the end of the step (all substeps' targets are in ``last_substep_targets``, for a servo
+loop faster than the control rate).
 The maths is the float64 reference of the simulator's kernels (``hexnewton.kernels.reference``).
 """
 

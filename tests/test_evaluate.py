@@ -119,8 +119,8 @@ def test_stochastic_rounds_are_seeded_and_sample_around_the_mean():
     from hexnewton.evaluate import run_rounds
 
     policy = os.path.join(ROOT, "results", "policies", "cpg_rl_flat.pt")
-    run = lambda stochastic: run_rounds("cpg_rl", policy, "flat", 2, "cpu", 30, 0.2, False, stochastic=stochastic)  # noqa: E731
-    mean, a, b = run(False), run(True), run(True)
+    mean, a, b = (run_rounds("cpg_rl", policy, "flat", 2, "cpu", 30, 0.2, False, stochastic=stochastic)
+                  for stochastic in (False, True, True))
     np.testing.assert_array_equal(a.pos, b.pos)
     np.testing.assert_array_equal(a.params, b.params)
     assert np.abs(a.params - mean.params).max() > 1e-3
