@@ -1,6 +1,7 @@
 """The paper's hierarchical baselines SAC-CPG, TD3-CPG and A2C-CPG: Stable-Baselines3 on the same batched env.
 
     python -m hexnewton.baselines --algo sac --terrain rugged --num_envs 256 --total_steps 2000000
+    python -m hexnewton.baselines --algo a2c --terrain complex --num_envs 4096 --total_steps 10**9 --max_minutes 8
     python -m hexnewton.evaluate --controllers cpg_rl sac_cpg --checkpoint cpg_rl=A.pt sac_cpg=logs/.../model.zip
 
 The paper trained every algorithm with Stable-Baselines3 (§3.1) and "the same hyper-parameters" (Table 2):
@@ -28,6 +29,7 @@ import datetime
 import json
 import os
 import sys
+import time
 import zipfile
 
 import numpy as np
@@ -100,6 +102,23 @@ def make_sb3_env(env):
     return VecMonitor(Sb3VecEnv())
 
 
+def time_limit_callback(minutes: float):
+    """An SB3 callback that ends ``learn`` (which then returns normally, so the model is saved) after ``minutes``
+    of wall time."""
+    import time
+
+    from stable_baselines3.common.callbacks import BaseCallback
+
+    class TimeLimit(BaseCallback):
+        def _on_training_start(self) -> None:
+            self.deadline = time.monotonic() + 60.0 * minutes
+
+        def _on_step(self) -> bool:
+            return time.monotonic() < self.deadline
+
+    return TimeLimit()
+
+
 def sb3_kwargs(algo: str, num_envs: int, gradient_steps: int, learning_starts: int, buffer_size: int) -> dict:
     """Constructor arguments: Table 2 plus SB3's defaults and the two batching choices above."""
     import torch
@@ -151,7 +170,10 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--learning_starts", type=int, default=10_000, help="SAC/TD3: env-steps before learning")
     p.add_argument("--buffer_size", type=positive_int, default=1_000_000, help="SAC/TD3 replay buffer")
     p.add_argument("--log_dir", default="logs")
+    p.add_argument("--max_minutes", type=float, default=None, help="end training (and save) after this wall time")
     args = p.parse_args(argv)
+    if args.max_minutes is not None and args.max_minutes <= 0:
+        raise ValueError("--max_minutes must be positive")
     algo_cls = _algo_class(args.algo)
     from stable_baselines3.common.logger import configure
 
@@ -180,7 +202,10 @@ def main(argv: list[str] | None = None) -> int:
     model = algo_cls("MlpPolicy", venv, seed=args.seed, device=device, verbose=0, **kw)
     model.set_logger(configure(run_dir, ["tensorboard"]))
     print(f"training {LABELS[args.algo]}: {args.num_envs} envs on {device}, {args.total_steps} env-steps, logs in {run_dir}")
-    model.learn(total_timesteps=args.total_steps, progress_bar=sys.stderr.isatty())
+    callback = time_limit_callback(args.max_minutes) if args.max_minutes else None
+    t0 = time.perf_counter()
+    model.learn(total_timesteps=args.total_steps, callback=callback, progress_bar=sys.stderr.isatty())
+    print(f"trained {model.num_timesteps} env-steps in {time.perf_counter() - t0:.0f} s")
     path = os.path.join(run_dir, "model.zip")
     model.save(path + ".tmp.zip")
     os.replace(path + ".tmp.zip", path)

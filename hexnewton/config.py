@@ -307,6 +307,14 @@ class HexConfig:
     randomization: RandomizationConfig = field(default_factory=RandomizationConfig)
 
 
+def control_decimation(control_dt: float, frame_dt: float) -> int:
+    """Physics frames per control step; ValueError unless ``control_dt`` is a positive multiple of ``frame_dt``."""
+    ratio = control_dt / frame_dt if frame_dt > 0 else 0.0
+    if control_dt <= 0 or ratio < 0.5 or abs(ratio - round(ratio)) > 1e-6:
+        raise ValueError(f"task.control_dt ({control_dt}) must be a positive multiple of sim.frame_dt ({frame_dt})")
+    return int(round(ratio))
+
+
 def terrain_for_goal(terrain: TerrainConfig, goal_distance: float) -> TerrainConfig:
     """``terrain`` with its patch reaching at least 1 m beyond a goal ``goal_distance`` ahead (x_max on a 0.5 m
     grid; the default 5 m patch holds the paper's 3.5 m goal)."""

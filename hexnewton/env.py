@@ -38,7 +38,7 @@ import warp as wp
 from rsl_rl.env import VecEnv
 from tensordict import TensorDict
 
-from .config import HexConfig
+from .config import HexConfig, control_decimation
 from .controller import CPGController
 from .kernels.actions import joint_actions_kernel, scale_actions_kernel
 from .kernels.curriculum import curriculum_kernel, placement_kernel, start_levels
@@ -106,12 +106,7 @@ class HexapodEnv(VecEnv):
         self.action_mode = action_mode
         self.world = world = World(cfg)
         task = cfg.task
-        ratio = task.control_dt / world.frame_dt
-        if task.control_dt <= 0 or abs(ratio - round(ratio)) > 1e-6:
-            raise HexnewtonError(
-                f"task.control_dt ({task.control_dt}) must be a positive multiple of sim.frame_dt ({world.frame_dt})"
-            )
-        self.decimation = int(round(ratio))
+        self.decimation = control_decimation(task.control_dt, world.frame_dt)
         self.num_envs = n = world.num_envs
         self.num_actions = ACTION_MODES[action_mode]
         self.num_obs = OBS_DIM[action_mode]

@@ -46,12 +46,11 @@ import numpy as np
 from .cli import ArgumentParser, positive_int, run, terrain_name
 from .config import (
     PARAM_NAMES,
-    CPGConfig,
     HexConfig,
     RandomizationConfig,
-    SimConfig,
     TaskConfig,
     TerrainConfig,
+    control_decimation,
     terrain_for_goal,
 )
 from .kernels.terminations import FELL, NONFINITE, OFF_COURSE, STATUS_NAMES
@@ -157,24 +156,25 @@ class Episode:
 def run_rounds(controller: str, checkpoint: str | None, terrain: str, rounds: int, device: str | None,
                max_steps: int, reset_yaw: float, progress: bool = True, randomize: bool = False,
                step_rise: float = TerrainConfig.step_rise, goal_distance: float = TaskConfig.goal_distance,
-               stochastic: bool = False) -> Episode:
+               stochastic: bool = False, physics: dict | None = None) -> Episode:
     """``rounds`` robots, one first episode each, with a deterministic controller on unseen seeds; with
     ``randomize``, under perturbed conditions (``RandomizationConfig`` drawn with the evaluation seed); with
     ``stochastic``, a learnt policy samples its actions from its Gaussian as in training (torch seeded with the
-    evaluation seed)."""
+    evaluation seed). The physics (frame and substeps) is the policy's own, from its checkpoint, unless
+    ``physics`` overrides fields of ``SimConfig``."""
     from .env import make_env
     from .play import fixed_cpg_actions, load_policy, stepped
 
-    from .train import load_checkpoint, trained_cpg
+    from .train import load_checkpoint, trained_config
 
     mode = CONTROLLERS[controller]
-    cpg = trained_cpg(load_checkpoint(checkpoint)) if controller in ("cpg_rl", "joint") else CPGConfig()
+    trained = trained_config(load_checkpoint(checkpoint)) if controller in ("cpg_rl", "joint") else HexConfig()
     cfg = HexConfig(
-        sim=replace(SimConfig(), num_envs=rounds, device=device),
+        sim=replace(trained.sim, num_envs=rounds, device=device, **(physics or {})),
         terrain=terrain_for_goal(TerrainConfig(name=terrain, seed=EVAL_TERRAIN_SEED, step_rise=step_rise), goal_distance),
         task=replace(TaskConfig(), seed=EVAL_RESET_SEED, reset_yaw=reset_yaw, goal_distance=goal_distance),
         randomization=RandomizationConfig(enabled=randomize),
-        cpg=cpg,  # the policy's own parameter ranges
+        cpg=trained.cpg,  # the policy's own parameter ranges
     )
     env = make_env(cfg, mode)
     if controller == "cpg":
@@ -379,6 +379,9 @@ def main(argv: list[str] | None = None) -> int:
                    help="perturbed conditions: friction, payload, masses, gains, latency, noise, pushes")
     p.add_argument("--stochastic", action="store_true",
                    help="learnt policies sample their actions as in training (default: the mean action)")
+    p.add_argument("--frame_dt", type=float, default=None,
+                   help="physics frame [s] (default: the policy's own, from its checkpoint; 0.01 for cpg)")
+    p.add_argument("--substeps", type=positive_int, default=None, help="MuJoCo steps per frame (default: as --frame_dt)")
     p.add_argument("--device", default=None)
     p.add_argument("--out", default=None, help="output directory (default eval/<date_time>); must not exist")
     p.add_argument("--no-progress", action="store_true")
@@ -403,6 +406,9 @@ def main(argv: list[str] | None = None) -> int:
     for spec in runs.values():
         if "Train/mean_reward" not in read_curve(spec, "env_steps"):
             raise ValueError(f"no mean episode reward logged under {spec}")
+    physics = {k: v for k, v in (("frame_dt", args.frame_dt), ("substeps", args.substeps)) if v is not None}
+    if args.frame_dt is not None:
+        control_decimation(TaskConfig.control_dt, args.frame_dt)
     out = args.out or os.path.join("eval", datetime.datetime.now().strftime("%Y-%m-%d_%H-%M-%S"))
     if os.path.exists(out):
         raise ValueError(f"{out} exists: choose a new --out (nothing is overwritten)")
@@ -422,7 +428,7 @@ def main(argv: list[str] | None = None) -> int:
         for ctrl in args.controllers:
             ck = None if ctrl == "cpg" else checkpoint_for(checkpoints, ctrl, terrain)
             ep = run_rounds(ctrl, ck, terrain, args.rounds, device, args.max_steps, args.reset_yaw, progress,
-                            args.randomize, args.step_rise, args.goal_distance, args.stochastic)  # fmt: skip
+                            args.randomize, args.step_rise, args.goal_distance, args.stochastic, physics)  # fmt: skip
             m = round_metrics(ep.pos, ep.rpy, ep.done, ep.status, ep.dt, distances)
             s = summarize(m, ep.rpy, distances)
             s["checkpoint"] = ck
@@ -438,6 +444,7 @@ def main(argv: list[str] | None = None) -> int:
     meta = {"device": device, "rounds": args.rounds, "max_steps": args.max_steps, "reset_yaw": args.reset_yaw,
             "distances": list(distances), "goal_distance": args.goal_distance, "step_rise": args.step_rise,
             "randomized": args.randomize, "actions": "sampled" if args.stochastic else "mean",
+            "physics": physics or "each policy's own (checkpoint)",
             "terrain_seed": EVAL_TERRAIN_SEED, "reset_seed": EVAL_RESET_SEED,
             "unseen": "terrain seed and start poses differ from training (train.py: terrain seed 0, seed 1)",
             "wall_s": round(wall, 1)}  # fmt: skip

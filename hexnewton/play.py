@@ -28,7 +28,7 @@ from dataclasses import replace
 import numpy as np
 
 from .cli import ArgumentParser, positive_int, run, terrain_name
-from .config import JOINT_NAMES, TERRAINS, CPGConfig, HexConfig, SimConfig, TaskConfig, TerrainConfig
+from .config import JOINT_NAMES, TERRAINS, HexConfig, TaskConfig, TerrainConfig
 from .kernels.terminations import STATUS_NAMES
 
 CONTROLLERS = {"cpg": "cpg", "cpg_rl": "cpg", "joint": "joint"}  # controller -> env action mode
@@ -239,20 +239,20 @@ def main(argv: list[str] | None = None) -> int:
     mode = CONTROLLERS[args.controller]
     if args.controller != "cpg" and args.checkpoint is None:
         args.checkpoint = newest_checkpoint(args.log_dir, f"hexnewton_{mode}_{args.terrain[0]}")
-    cpg = CPGConfig()
+    trained = HexConfig()
     if args.checkpoint:
-        from .train import load_checkpoint, trained_cpg
+        from .train import load_checkpoint, trained_config
 
-        cpg = trained_cpg(load_checkpoint(args.checkpoint))  # fails before building a world
+        trained = trained_config(load_checkpoint(args.checkpoint))  # fails before building a world
 
     from .env import make_env
 
     for i, terrain in enumerate(args.terrain):
         cfg = HexConfig(
-            sim=replace(SimConfig(), num_envs=args.num_envs, device=args.device),
+            sim=replace(trained.sim, num_envs=args.num_envs, device=args.device),  # the policy's own physics
             terrain=TerrainConfig(name=terrain, seed=args.seed),
             task=replace(TaskConfig(), seed=args.seed, reset_yaw=args.reset_yaw),
-            cpg=cpg,  # the policy's own parameter ranges
+            cpg=trained.cpg,  # the policy's own parameter ranges
         )
         env = make_env(cfg, mode)
         if args.controller == "cpg":

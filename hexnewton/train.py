@@ -235,12 +235,18 @@ def load_checkpoint(path: str, map_location: str = "cpu") -> dict:
     return ckpt
 
 
-def trained_cpg(ckpt: dict | None) -> CPGConfig:
-    """The CPG configuration a checkpoint was trained with (its parameter ranges give the actions their meaning);
-    the defaults for no checkpoint or one without hexnewton metadata."""
+def trained_config(ckpt: dict | None) -> HexConfig:
+    """The configuration a checkpoint was trained with; the defaults for no checkpoint or one without hexnewton
+    metadata. Its ``cpg`` parameter ranges give the actions their meaning, its ``sim`` is the physics (frame and
+    substeps) the policy learnt under."""
     infos = (ckpt or {}).get("infos")
     cfg = (infos.get("hexnewton") or {}).get("config") if isinstance(infos, dict) else None
-    return config_from_dict(cfg).cpg if cfg else CPGConfig()
+    return config_from_dict(cfg) if cfg else HexConfig()
+
+
+def trained_cpg(ckpt: dict | None) -> CPGConfig:
+    """The CPG configuration a checkpoint was trained with (``trained_config(ckpt).cpg``)."""
+    return trained_config(ckpt).cpg
 
 
 def check_compatible(ckpt: dict, path: str, num_obs: int, num_actions: int, action_mode: str) -> None:

@@ -104,6 +104,7 @@ def test_report_on_a_tiny_run(tmp_path):
         (["--controllers", "cpg_rl", "--checkpoint", "cpg_rl=/nope.pt", "--out", str(tmp_path / "x")], "not found"),
         (["--checkpoint", "cpg_rl", "--out", str(tmp_path / "x")], "NAME=PATH"),
         (["--rounds", "0"], "positive"),
+        (["--controllers", "cpg", "--frame_dt", "0.015", "--out", str(tmp_path / "x")], "positive multiple of sim.frame_dt"),
     ]
     for args, message in cases:
         p = subprocess.run([sys.executable, "-m", "hexnewton.evaluate", *args, "--device", "cpu"], capture_output=True,
@@ -126,14 +127,42 @@ def test_stochastic_rounds_are_seeded_and_sample_around_the_mean():
     assert np.abs(a.params - mean.params).max() > 1e-3
 
 
+def test_rounds_run_under_the_policys_own_physics(tmp_path, monkeypatch):
+    """A policy trained under other physics (train.py --frame_dt/--substeps) is evaluated under it, unless
+    ``physics`` overrides it; the fixed CPG runs under the defaults."""
+    import torch
+
+    import hexnewton.env
+    from hexnewton.config import SimConfig
+    from hexnewton.evaluate import run_rounds
+    from hexnewton.train import load_checkpoint, trained_config
+
+    ckpt = load_checkpoint(os.path.join(ROOT, "results", "policies", "cpg_rl_flat.pt"))
+    ckpt["infos"]["hexnewton"]["config"]["sim"].update(frame_dt=0.02, substeps=3)
+    path = str(tmp_path / "fast.pt")
+    torch.save(ckpt, path)
+    assert (trained_config(ckpt).sim.frame_dt, trained_config(ckpt).sim.substeps) == (0.02, 3)
+    seen, make_env = [], hexnewton.env.make_env
+    monkeypatch.setattr(hexnewton.env, "make_env", lambda cfg, mode="cpg": seen.append(cfg.sim) or make_env(cfg, mode))
+    run_rounds("cpg_rl", path, "flat", 2, "cpu", 3, 0.2, False)
+    run_rounds("cpg_rl", path, "flat", 2, "cpu", 3, 0.2, False, physics={"frame_dt": 0.01, "substeps": 4})
+    run_rounds("cpg", None, "flat", 2, "cpu", 3, 0.2, False)
+    assert [(s.frame_dt, s.substeps, s.num_envs) for s in seen] == [(0.02, 3, 2), (0.01, 4, 2),
+                                                                      (SimConfig.frame_dt, SimConfig.substeps, 2)]
+
+
 @pytest.mark.parametrize("algo", ["sac", "td3", "a2c"])
 def test_sb3_baseline_trains_and_evaluates(algo, tmp_path):
-    """A few SB3 updates on 4 envs write a model.zip that the evaluation loads as a controller."""
+    """A few SB3 updates on 4 envs write a model.zip that the evaluation loads as a controller. A2C ends on
+    --max_minutes long before its --total_steps, and still saves."""
     logs = tmp_path / "logs"
-    train = [sys.executable, "-m", "hexnewton.baselines", "--algo", algo, "--num_envs", "4", "--total_steps", "48",
+    steps = ["--total_steps", "100000000", "--max_minutes", "0.02"] if algo == "a2c" else ["--total_steps", "48"]
+    train = [sys.executable, "-m", "hexnewton.baselines", "--algo", algo, "--num_envs", "4", *steps,
              "--learning_starts", "8", "--gradient_steps", "1", "--device", "cpu", "--log_dir", str(logs)]  # fmt: skip
     proc = subprocess.run(train, capture_output=True, text=True, timeout=600, cwd=ROOT)
     assert proc.returncode == 0, proc.stderr[-3000:]
+    trained = int(proc.stdout.split("trained ")[1].split()[0])
+    assert 0 < trained < 100000000 if algo == "a2c" else trained >= 48
     (model,) = logs.glob(f"hexnewton_{algo}_cpg_flat/*/model.zip")
     cfg = json.loads((model.parent / "config.json").read_text())
     assert cfg["hexnewton"]["sb3"]["learning_rate"] == 1e-4 and cfg["hexnewton"]["net_arch"] == [256] * 4  # Table 2
