@@ -127,13 +127,14 @@ def _device_memory(device: str) -> int:
     return wp.get_mempool_used_mem_current(device) + torch.cuda.memory_allocated(torch.device(device))
 
 
-def bench_env(terrain: str, num_envs: int, device: str, steps: int, seed: int = 0) -> PipelineResult:
+def bench_env(terrain: str, num_envs: int, device: str, steps: int, seed: int = 0,
+              sim: SimConfig | None = None) -> PipelineResult:
     """``steps`` timed ``HexapodEnv.step`` calls with uniform random actions (drawn before the timing)."""
     import torch
 
     from .env import make_env
 
-    cfg = _config(terrain, num_envs, device, seed)
+    cfg = _config(terrain, num_envs, device, seed, sim)
     env = make_env(cfg)
     gen = torch.Generator(device=env._obs_t.device).manual_seed(seed)
     actions = torch.rand((8, num_envs, env.num_actions), generator=gen, device=env._obs_t.device) * 2 - 1
@@ -154,8 +155,8 @@ PHASES = (("env.step", "env", "step"), ("policy act", "alg", "act"), ("storage",
           ("logger", "logger", "process_env_step"), ("returns", "alg", "compute_returns"), ("PPO update", "alg", "update"))
 
 
-def bench_train(terrain: str, num_envs: int, device: str, iterations: int, seed: int = 0,
-                profile: bool = False) -> tuple[PipelineResult, dict[str, float] | None]:  # fmt: skip
+def bench_train(terrain: str, num_envs: int, device: str, iterations: int, seed: int = 0, profile: bool = False,
+                sim: SimConfig | None = None) -> tuple[PipelineResult, dict[str, float] | None]:  # fmt: skip
     """``iterations`` timed PPO iterations (preset ``default``) after one untimed warm-up iteration.
 
     With ``profile``, the same runner then trains ``iterations`` more with a device sync around each rsl-rl
@@ -171,7 +172,7 @@ def bench_train(terrain: str, num_envs: int, device: str, iterations: int, seed:
     seed_everything(seed)
     cuda = device.startswith("cuda")
     used0 = _device_memory(device) if cuda else 0
-    cfg = _config(terrain, num_envs, device, seed)
+    cfg = _config(terrain, num_envs, device, seed, sim)
     env = make_env(cfg)
     tcfg = train_cfg("default", num_envs)
     # a TensorBoard writer as in train.py: rsl-rl's logger only does its per-step bookkeeping with one
@@ -345,12 +346,12 @@ def main(argv: list[str] | None = None) -> int:
             if "env" in args.mode or "train" in args.mode:
                 pr = PipelineResult(terrain, n)
                 if "env" in args.mode:
-                    e = bench_env(terrain, n, device, env_steps)
+                    e = bench_env(terrain, n, device, env_steps, sim=sim)
                     pr.env_steps_per_s, pr.env_robot_s_per_s = e.env_steps_per_s, e.env_robot_s_per_s
                     print(f"{terrain:8s} N={n:6d} env   {e.env_robot_s_per_s:12,.0f} robot-s/s  "
                           f"({e.env_steps_per_s:,.0f} env-steps/s)", flush=True)  # fmt: skip
                 if "train" in args.mode:
-                    t, prof = bench_train(terrain, n, device, iterations, profile=args.profile)
+                    t, prof = bench_train(terrain, n, device, iterations, profile=args.profile, sim=sim)
                     for k in ("train_steps_per_s", "train_robot_s_per_s", "train_iteration_s", "memory_per_env_kb"):
                         setattr(pr, k, getattr(t, k))
                     print(f"{terrain:8s} N={n:6d} train {t.train_robot_s_per_s:12,.0f} robot-s/s  "

@@ -162,13 +162,15 @@ def test_precompile_finds_every_step_module():
 
 
 def test_bench_reports_sim_env_and_training(tmp_path):
-    """One tiny run of every benchmark mode: JSON numbers and the appended Markdown table."""
+    """One tiny run of every benchmark mode under non-default physics: JSON numbers and the appended Markdown
+    table."""
     import json
 
     out, md = tmp_path / "b.json", tmp_path / "B.md"
     proc = subprocess.run([sys.executable, "-m", "hexnewton.bench", "--device", "cpu", "--terrain", "flat", "--num_envs",
                            "4", "--frames", "5", "--env_steps", "3", "--train_iterations", "1", "--json", str(out),
-                           "--append", str(md), "--profile"], capture_output=True, text=True, timeout=600)  # fmt: skip
+                           "--append", str(md), "--profile", "--frame_dt", "0.02", "--substeps", "3"],
+                          capture_output=True, text=True, timeout=600)  # fmt: skip
     assert proc.returncode == 0, proc.stderr[-2000:]
     res = json.loads(out.read_text())
     (sim,), (pipe,) = res["sim"], res["pipeline"]
@@ -176,6 +178,7 @@ def test_bench_reports_sim_env_and_training(tmp_path):
     assert pipe["env_robot_s_per_s"] == pytest.approx(pipe["env_steps_per_s"] * 0.02)
     text = md.read_text()
     assert "| flat | 4 |" in text and "env / sim" in text and "training / sim" in text
+    assert "frame 20 ms = 3 x 6.66667 ms" in text  # one physics setting for all three modes
     (prof,) = res["profile"]  # where an iteration's time goes
     assert prof["env.step"] > 0 and prof["PPO update"] > 0 and prof["logger"] > 0 and "| PPO update |" in text
 
