@@ -7,7 +7,7 @@
 # Each argument is NAME[@GPU]:TRAIN_ARGS (@GPU pins the run to that GPU of a multi-GPU machine; @0,1 runs it
 # data-parallel on those GPUs through torchrun, whose ranks stop together on --max_minutes). With KEEP set,
 # each run's last checkpoint and train log are also copied to $KEEP/<name>.pt / .log for later calls on the same
-# warm machine.
+# warm machine (KEEP_ALL=1: every saved checkpoint too, in $KEEP/<name>/).
 # The first run compiles every kernel alone (2 iterations) so that the
 # concurrent runs load them from Warp's cache (SKIP_WARMUP=1 when the cache is warm). With EVAL_STEPS set,
 # each run's last checkpoint is then evaluated deterministically by play.py on its training terrain
@@ -49,6 +49,8 @@ for spec in "$@"; do
   name=${spec%%:*}; name=${name%@*}; last=$(last_of "$name"); run=$(dirname "$last")
   echo "== $name: $(grep -E '^(trained|stopped|last episodes)' "$OUT/logs/$name.log" | tr '\n' ' ')"
   if [ -n "${KEEP:-}" ]; then mkdir -p "$KEEP" && cp "$last" "$KEEP/$name.pt" && cp "$OUT/logs/$name.log" "$KEEP/"; fi
+  # KEEP_ALL=1: every saved checkpoint as well, for evaluating the curve (time-to-skill) in a later call
+  if [ -n "${KEEP:-}" ] && [ "${KEEP_ALL:-0}" = 1 ]; then mkdir -p "$KEEP/$name" && cp "$run"/model_*.pt "$KEEP/$name/"; fi
   tar czf "$OUT/run_$name.tgz" -C "$OUT/logs" "$name.log" -C "$OUT/logs/$name" \
     "$(basename "$run")/config.json" "$(basename "$run")/policy.onnx" "$(basename "$run")/$(basename "$last")" \
     $(cd "$OUT/logs/$name" && ls "$(basename "$run")"/events.*)
