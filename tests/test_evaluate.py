@@ -151,6 +151,19 @@ def test_rounds_run_under_the_policys_own_physics(tmp_path, monkeypatch):
                                                                       (SimConfig.frame_dt, SimConfig.substeps, 2)]
 
 
+def test_shipped_complex_policy_climbs_steps_under_its_20ms_physics():
+    """The shipped complex policy (trained under a 20 ms frame = 4 x 5 ms) climbs the 6 cm risers on the CPU as
+    on the GPU: 8 unseen rounds, sampled actions, 20 s. Steps climbable is one of issue 6's stability checks
+    for that physics; the fixed CPG stands at the first riser (x = 0.5 m)."""
+    from hexnewton.evaluate import run_rounds
+    from hexnewton.kernels.terminations import FELL
+
+    policy = os.path.join(ROOT, "results", "policies", "cpg_rl_complex.pt")
+    ep = run_rounds("cpg_rl", policy, "stepped", 8, "cpu", 1000, 0.2, False, stochastic=True)
+    assert ep.dt == pytest.approx(0.02) and not (ep.status == FELL).any()
+    assert (ep.pos[:, :, 0].max(axis=0) > 0.8).sum() >= 6  # the torso is past the second riser (0.75 m)
+
+
 @pytest.mark.parametrize("algo", ["sac", "td3", "a2c"])
 def test_sb3_baseline_trains_and_evaluates(algo, tmp_path):
     """A few SB3 updates on 4 envs write a model.zip that the evaluation loads as a controller. A2C ends on

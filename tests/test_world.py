@@ -26,9 +26,15 @@ def _upright(q: np.ndarray) -> np.ndarray:
     return 1.0 - 2.0 * (q[:, 3] ** 2 + q[:, 4] ** 2)
 
 
+# the default physics (10 ms frame = 4 x 2.5 ms) and the 20 ms frame = 4 x 5 ms the shipped complex policy was
+# trained under (BENCHMARKS.md, issue 6): both must pass the stability checks
+PHYSICS = [pytest.param({}, id="10ms"), pytest.param({"frame_dt": 0.02, "substeps": 4}, id="20ms")]
+
+
+@pytest.mark.parametrize("physics", PHYSICS)
 @pytest.mark.parametrize("terrain", TERRAINS)
-def test_stands_two_seconds(terrain):
-    world = _world(terrain)
+def test_stands_two_seconds(terrain, physics):
+    world = _world(terrain, **physics)
     frames = int(round(2.0 / world.frame_dt))
     lowest = np.full(N, np.inf)
     for _ in range(10):
@@ -46,8 +52,9 @@ def test_stands_two_seconds(terrain):
         np.testing.assert_allclose(q[:, 2], stand_height(world.cfg.robot), atol=0.01)
 
 
-def test_tripod_walks_forward_on_flat():
-    world = _world("flat")
+@pytest.mark.parametrize("physics", PHYSICS)
+def test_tripod_walks_forward_on_flat(physics):
+    world = _world("flat", **physics)
     world.set_controller(CPGController(world))  # the fixed tripod: 1.5 Hz, hip 0.3, knee 0.5, ankle 0.5
     x0 = world.base_pos().copy()
     world.step(int(3.0 / world.frame_dt))
