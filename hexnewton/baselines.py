@@ -105,8 +105,6 @@ def make_sb3_env(env):
 def time_limit_callback(minutes: float):
     """An SB3 callback that ends ``learn`` (which then returns normally, so the model is saved) after ``minutes``
     of wall time."""
-    import time
-
     from stable_baselines3.common.callbacks import BaseCallback
 
     class TimeLimit(BaseCallback):

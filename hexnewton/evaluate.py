@@ -381,7 +381,8 @@ def main(argv: list[str] | None = None) -> int:
                    help="learnt policies sample their actions as in training (default: the mean action)")
     p.add_argument("--frame_dt", type=float, default=None,
                    help="physics frame [s] (default: the policy's own, from its checkpoint; 0.01 for cpg)")
-    p.add_argument("--substeps", type=positive_int, default=None, help="MuJoCo steps per frame (default: as --frame_dt)")
+    p.add_argument("--substeps", type=positive_int, default=None,
+                   help="MuJoCo steps per frame (default: as --frame_dt)")
     p.add_argument("--device", default=None)
     p.add_argument("--out", default=None, help="output directory (default eval/<date_time>); must not exist")
     p.add_argument("--no-progress", action="store_true")
@@ -428,7 +429,8 @@ def main(argv: list[str] | None = None) -> int:
         for ctrl in args.controllers:
             ck = None if ctrl == "cpg" else checkpoint_for(checkpoints, ctrl, terrain)
             ep = run_rounds(ctrl, ck, terrain, args.rounds, device, args.max_steps, args.reset_yaw, progress,
-                            args.randomize, args.step_rise, args.goal_distance, args.stochastic, physics)  # fmt: skip
+                            args.randomize, args.step_rise, args.goal_distance, args.stochastic,
+                            physics)  # fmt: skip
             m = round_metrics(ep.pos, ep.rpy, ep.done, ep.status, ep.dt, distances)
             s = summarize(m, ep.rpy, distances)
             s["checkpoint"] = ck

@@ -104,7 +104,7 @@ def test_report_on_a_tiny_run(tmp_path):
         (["--controllers", "cpg_rl", "--checkpoint", "cpg_rl=/nope.pt", "--out", str(tmp_path / "x")], "not found"),
         (["--checkpoint", "cpg_rl", "--out", str(tmp_path / "x")], "NAME=PATH"),
         (["--rounds", "0"], "positive"),
-        (["--controllers", "cpg", "--frame_dt", "0.015", "--out", str(tmp_path / "x")], "positive multiple of sim.frame_dt"),
+        (["--controllers", "cpg", "--frame_dt", "0.015", "--out", str(tmp_path / "x")], "positive multiple of"),
     ]
     for args, message in cases:
         p = subprocess.run([sys.executable, "-m", "hexnewton.evaluate", *args, "--device", "cpu"], capture_output=True,
@@ -157,10 +157,13 @@ def test_shipped_complex_policy_climbs_steps_under_its_20ms_physics():
     for that physics; the fixed CPG stands at the first riser (x = 0.5 m)."""
     from hexnewton.evaluate import run_rounds
     from hexnewton.kernels.terminations import FELL
+    from hexnewton.train import load_checkpoint, trained_config
 
     policy = os.path.join(ROOT, "results", "policies", "cpg_rl_complex.pt")
+    sim = trained_config(load_checkpoint(policy)).sim
+    assert (sim.frame_dt, sim.substeps) == (0.02, 4)
     ep = run_rounds("cpg_rl", policy, "stepped", 8, "cpu", 1000, 0.2, False, stochastic=True)
-    assert ep.dt == pytest.approx(0.02) and not (ep.status == FELL).any()
+    assert not (ep.status == FELL).any()
     assert (ep.pos[:, :, 0].max(axis=0) > 0.8).sum() >= 6  # the torso is past the second riser (0.75 m)
 
 

@@ -50,7 +50,9 @@ for spec in "$@"; do
   echo "== $name: $(grep -E '^(trained|stopped|last episodes)' "$OUT/logs/$name.log" | tr '\n' ' ')"
   if [ -n "${KEEP:-}" ]; then mkdir -p "$KEEP" && cp "$last" "$KEEP/$name.pt" && cp "$OUT/logs/$name.log" "$KEEP/"; fi
   # KEEP_ALL=1: every saved checkpoint as well, for evaluating the curve (time-to-skill) in a later call
-  if [ -n "${KEEP:-}" ] && [ "${KEEP_ALL:-0}" = 1 ]; then mkdir -p "$KEEP/$name" && cp "$run"/model_*.pt "$KEEP/$name/"; fi
+  if [ -n "${KEEP:-}" ] && [ "${KEEP_ALL:-0}" = 1 ]; then
+    mkdir -p "$KEEP/$name" && cp "$run"/model_*.pt "$KEEP/$name/"
+  fi
   tar czf "$OUT/run_$name.tgz" -C "$OUT/logs" "$name.log" -C "$OUT/logs/$name" \
     "$(basename "$run")/config.json" "$(basename "$run")/policy.onnx" "$(basename "$run")/$(basename "$last")" \
     $(cd "$OUT/logs/$name" && ls "$(basename "$run")"/events.*)
