@@ -11,7 +11,11 @@ single captured graph (a CUDA graph on GPU, Warp's capture on CPU) of Warp kerne
 With ``RandomizationConfig.enabled`` the step also delays the actions of "late" envs, pushes bases and adds
 observation noise (kernels/randomization.py); the per-env physical draws are ``World.randomize``.
 
-torch sees every buffer zero-copy (``wp.to_torch``), and nothing goes back to the host inside a step.
+torch sees every buffer zero-copy (``wp.to_torch``), and nothing goes back to the host inside a step. What
+``step`` and ``get_observations`` return are device copies of those buffers, made after the graph: rsl-rl keeps
+the observation an action was computed from until after the next ``step`` (its storage copies it only in
+``process_env_step``), so a view would hand it the next observation instead (session 6 found this: the stored
+observations were one step late, and the adaptive learning rate sat at its 1e-5 floor).
 Finished envs auto-reset. ``extras["time_outs"]`` marks time-limit ends. ``extras["log"]`` carries:
 - the mean of each reward term;
 - success, fall, off-course, timeout and non-finite rates, with distance and length, over the last 1024
@@ -172,7 +176,8 @@ class HexapodEnv(VecEnv):
         self._steps_t.copy_(value.to(self._steps_t.dtype))
 
     def get_observations(self) -> TensorDict:
-        return TensorDict({"policy": self._obs_t}, batch_size=[self.num_envs], device=self._obs_t.device)
+        """A copy of the current observations (device to device), which the next ``step`` leaves untouched."""
+        return TensorDict({"policy": self._obs_t.clone()}, batch_size=[self.num_envs], device=self._obs_t.device)
 
     def step(self, actions: torch.Tensor) -> tuple[TensorDict, torch.Tensor, torch.Tensor, dict]:
         # torch writes the actions on its (legacy default) stream; Warp's own streams are blocking streams, so
@@ -184,8 +189,8 @@ class HexapodEnv(VecEnv):
         if self.common_step_counter % 250 == 0:  # one host read every 250 steps: contact overflow never silent
             self.world.check_contacts()
             self._overflow_frames_t.fill_(float(self.world.overflow_frames))
-        extras = {"time_outs": self._time_out_t, "log": self._log()}
-        return self.get_observations(), self._rew_t, self._done_t, extras
+        extras = {"time_outs": self._time_out_t.clone(), "log": self._log()}
+        return self.get_observations(), self._rew_t.clone(), self._done_t.clone(), extras
 
     # ------------------------------------------------------------------ the control step
     def _launch(self) -> None:

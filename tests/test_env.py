@@ -57,6 +57,39 @@ def test_vecenv_api(env):
     assert np.array_equal(env.episode_steps.numpy(), env.episode_length_buf.numpy())
 
 
+def test_returned_tensors_outlive_the_next_step(env):
+    """``step`` returns copies: the observation an action was computed from is still intact after the next step,
+    as rsl-rl needs (it stores that observation only in ``process_env_step``, after ``env.step``)."""
+    obs = env.get_observations()["policy"]
+    kept = obs.clone()
+    out = env.step(torch.zeros(6, 15))
+    kept2 = [t.clone() for t in (out[0]["policy"], out[1], out[2], out[3]["time_outs"])]
+    env.step(torch.ones(6, 15))
+    assert torch.equal(obs, kept) and not torch.equal(obs, env.get_observations()["policy"])
+    for t, k in zip((out[0]["policy"], out[1], out[2], out[3]["time_outs"]), kept2):
+        assert torch.equal(t, k)
+
+
+def test_ppo_stores_the_observation_each_action_was_taken_from():
+    """Before its first optimizer step, PPO recomputes the stored actions' Gaussians from the stored observations:
+    they must equal the ones the actions were sampled from (KL 0). With observations one step late (as before
+    session 6) the KL was ~0.04-0.2, and rsl-rl's adaptive schedule held the learning rate at its 1e-5 floor."""
+    import copy
+    import tempfile
+
+    from rsl_rl.runners import OnPolicyRunner
+
+    from hexnewton.train import train_cfg
+
+    env = make_env(_cfg("flat", 8))
+    tcfg = train_cfg("default", 8, num_steps_per_env=8)
+    runner = OnPolicyRunner(env, copy.deepcopy(tcfg), log_dir=tempfile.mkdtemp(prefix="hexnewton-kl-"), device=DEV)
+    kls, kl = [], runner.alg.actor.get_kl_divergence
+    runner.alg.actor.get_kl_divergence = lambda old, new: kls.append(float(kl(old, new).mean())) or kl(old, new)
+    runner.learn(1)
+    assert len(kls) == 20 and kls[0] < 1e-10, kls[:3]
+
+
 @pytest.mark.parametrize("where", ["velocity", "runaway", "joint angle"])
 def test_blown_up_env_is_reset_counted_and_isolated(where):
     """Corrupt one env's state: it ends as nonfinite, is reset and counted; observations and rewards stay
