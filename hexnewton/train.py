@@ -244,11 +244,6 @@ def trained_config(ckpt: dict | None) -> HexConfig:
     return config_from_dict(cfg) if cfg else HexConfig()
 
 
-def trained_cpg(ckpt: dict | None) -> CPGConfig:
-    """The CPG configuration a checkpoint was trained with (``trained_config(ckpt).cpg``)."""
-    return trained_config(ckpt).cpg
-
-
 def check_compatible(ckpt: dict, path: str, num_obs: int, num_actions: int, action_mode: str) -> None:
     meta = ckpt.get("infos") or {}
     meta = meta.get("hexnewton", {}) if isinstance(meta, dict) else {}
@@ -300,9 +295,11 @@ def main(argv: list[str] | None = None) -> int:
                         "PPO from a high-stepping gait, action 0 = the middle of the range)")  # fmt: skip
     p.add_argument("--direction_deadband", type=float, default=RewardConfig.direction_deadband,
                    help="heading error [rad] below which the direction term is 0 (Table 1: pi/6; default 0)")
-    p.add_argument("--frame_dt", type=float, default=SimConfig.frame_dt,
-                   help="physics frame [s], collision once per frame (must divide the 20 ms control step)")
-    p.add_argument("--substeps", type=positive_int, default=SimConfig.substeps, help="MuJoCo steps per frame")
+    p.add_argument("--frame_dt", type=float, default=None,
+                   help="physics frame [s], collision once per frame (must divide the 20 ms control step; default "
+                        f"{SimConfig.frame_dt}, or the resumed checkpoint's)")
+    p.add_argument("--substeps", type=positive_int, default=None,
+                   help=f"MuJoCo steps per frame (default {SimConfig.substeps}, or the resumed checkpoint's)")
     p.add_argument("--action_std", type=float, default=None,
                    help="fix the policy's action std (not learnt; also on --resume) so that its mean action learns "
                         "to do what its noise did (default: learnt, from the preset's initial std)")
@@ -341,9 +338,10 @@ def main(argv: list[str] | None = None) -> int:
         args.num_envs = 4096 if device.startswith("cuda") else 64
     seed, terrain_seed = dist.seeds(args.seed, args.terrain_seed)
     seed_everything(seed)
+    trained = trained_config(ckpt)  # a resumed run keeps its physics and parameter ranges unless told otherwise
+    physics = {k: v for k, v in (("frame_dt", args.frame_dt), ("substeps", args.substeps)) if v is not None}
     cfg = HexConfig(
-        sim=dataclasses.replace(SimConfig(), num_envs=args.num_envs, device=device, frame_dt=args.frame_dt,
-                                substeps=args.substeps),
+        sim=dataclasses.replace(trained.sim, num_envs=args.num_envs, device=device, **physics),
         terrain=terrain_for_goal(TerrainConfig(name=args.terrain, seed=terrain_seed, levels=args.levels,
                                                start_levels=args.start_levels, step_rise=args.step_rise,
                                                block_height_max=args.block_height_max), args.goal_distance),
@@ -352,8 +350,7 @@ def main(argv: list[str] | None = None) -> int:
                                    direction_to_goal=not args.direction_from_start, goal_bonus=args.goal_bonus,
                                    off_course_penalty=args.off_course_penalty),
         randomization=RandomizationConfig(enabled=args.randomize),
-        # a resumed run keeps the parameter ranges it was trained with
-        cpg=trained_cpg(ckpt) if args.a2_range is None else CPGConfig(a2_range=tuple(args.a2_range)),
+        cpg=trained.cpg if args.a2_range is None else CPGConfig(a2_range=tuple(args.a2_range)),
     )
     env = make_env(cfg, args.action_mode)
     if ckpt is not None:

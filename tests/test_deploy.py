@@ -111,10 +111,10 @@ def test_policies_keep_their_trained_parameter_ranges():
     """A checkpoint's actions mean what they meant in training: play, evaluate, export and --resume take the CPG
     ranges from the checkpoint, not from today's defaults."""
     from hexnewton.config import CPGConfig
-    from hexnewton.train import load_checkpoint, trained_cpg
+    from hexnewton.train import load_checkpoint, trained_config
 
-    assert trained_cpg(load_checkpoint(POLICY)).a2_range == (0.0, 0.8)  # trained before the range was widened
+    assert trained_config(load_checkpoint(POLICY)).cpg.a2_range == (0.0, 0.8)  # trained before the range was widened
     assert CPGConfig().a2_range == (0.0, 1.3)
-    assert trained_cpg(None) == CPGConfig() and trained_cpg({"infos": None}) == CPGConfig()
+    assert trained_config(None).cpg == CPGConfig() and trained_config({"infos": None}).cpg == CPGConfig()
     spec = json.loads(open(os.path.join(ROOT, "results", "controllers", "cpg_rl_flat", "controller.json")).read())
     assert spec["param_upper"][3] == 0.8  # the shipped bundle carries the policy's own ranges

@@ -1,6 +1,7 @@
 """The rsl-rl VecEnv: API conformance, reward / observation / reset kernels vs NumPy, train.py -> play.py."""
 
 import glob
+import json
 import math
 import os
 import re
@@ -451,8 +452,9 @@ def test_same_seed_same_first_iteration_on_cpu(tmp_path):
 
 
 def test_resume_continues_iterations_and_learning_rate(tmp_path):
-    """2 iterations + resume 2 numbers its iterations like 4 straight ones and keeps the adapted learning rate."""
-    _train(tmp_path, "--max_iterations", "2", "--experiment", "part")
+    """2 iterations + resume 2 numbers its iterations like 4 straight ones and keeps the adapted learning rate and
+    the physics it was trained under."""
+    _train(tmp_path, "--max_iterations", "2", "--experiment", "part", "--frame_dt", "0.02", "--substeps", "2")
     (first,) = _run_dirs(tmp_path, "part")
     ck = torch.load(first + "/model_1.pt", weights_only=False)
     lr_saved = ck["optimizer_state_dict"]["param_groups"][0]["lr"]
@@ -462,6 +464,8 @@ def test_resume_continues_iterations_and_learning_rate(tmp_path):
     assert "continuing at iteration 2" in out
     second = _run_dirs(tmp_path, "part")[1]
     assert os.path.isfile(second + "/model_3.pt") and torch.load(second + "/model_3.pt", weights_only=False)["iter"] == 3
+    sim = json.loads(open(second + "/config.json").read())["hexnewton"]["config"]["sim"]
+    assert (sim["frame_dt"], sim["substeps"]) == (0.02, 2)  # from the checkpoint: no --frame_dt on the resume
     # --action_std replaced the checkpoint's learnt std and held it fixed through training
     std = torch.load(second + "/model_3.pt", weights_only=False)["actor_state_dict"]["distribution.std_param"]
     assert ck["actor_state_dict"]["distribution.std_param"].sub(0.2).abs().max() > 1e-3
