@@ -37,6 +37,7 @@ from .cli import ArgumentParser, positive_int, run, terrain_name
 from .config import TERRAINS, HexConfig, SimConfig, TerrainConfig
 from .controller import CPGController
 from .sim import World, resolve_device
+from .train import add_update_args, update_kwargs
 
 
 @dataclass
@@ -156,8 +157,10 @@ PHASES = (("env.step", "env", "step"), ("policy act", "alg", "act"), ("storage",
 
 
 def bench_train(terrain: str, num_envs: int, device: str, iterations: int, seed: int = 0, profile: bool = False,
-                sim: SimConfig | None = None) -> tuple[PipelineResult, dict[str, float] | None]:  # fmt: skip
-    """``iterations`` timed PPO iterations (preset ``default``) after one untimed warm-up iteration.
+                sim: SimConfig | None = None, update: dict | None = None,
+                ) -> tuple[PipelineResult, dict[str, float] | None]:  # fmt: skip
+    """``iterations`` timed PPO iterations (preset ``default``, with ``update``: :func:`train.train_cfg`'s PPO-update
+    options) after one untimed warm-up iteration (two with ``torch.compile``, whose first update compiles).
 
     With ``profile``, the same runner then trains ``iterations`` more with a device sync around each rsl-rl
     phase (so their total exceeds an unprofiled iteration's): seconds per iteration per phase, plus "other"."""
@@ -174,11 +177,11 @@ def bench_train(terrain: str, num_envs: int, device: str, iterations: int, seed:
     used0 = _device_memory(device) if cuda else 0
     cfg = _config(terrain, num_envs, device, seed, sim)
     env = make_env(cfg)
-    tcfg = train_cfg("default", num_envs)
+    tcfg = train_cfg("default", num_envs, **(update or {}))
     # a TensorBoard writer as in train.py: rsl-rl's logger only does its per-step bookkeeping with one
     logs = tempfile.TemporaryDirectory(prefix="hexnewton-bench-")
     runner = OnPolicyRunner(env, copy.deepcopy(tcfg), log_dir=logs.name, device=device)
-    runner.learn(1)  # capture, kernel loading, optimizer state
+    runner.learn(2 if tcfg["torch_compile_mode"] else 1)  # capture, kernel loading, optimizer state, compile
     wall = _timed_learn(runner, env, iterations)
     rate = num_envs * tcfg["num_steps_per_env"] * iterations / wall
     mem = float("nan")
@@ -321,6 +324,7 @@ def main(argv: list[str] | None = None) -> int:
                         "returns, PPO update)")  # fmt: skip
     p.add_argument("--largest", action="store_true",
                    help="sim-only: double the largest --num_envs until the device runs out of memory")
+    add_update_args(p)  # train mode: the PPO update's options, as train.py's
     p.add_argument("--append", metavar="PATH", help="append the markdown table to this file")
     p.add_argument("--json", metavar="PATH", help="write the raw results as JSON")
     args = p.parse_args(argv)
@@ -351,7 +355,8 @@ def main(argv: list[str] | None = None) -> int:
                     print(f"{terrain:8s} N={n:6d} env   {e.env_robot_s_per_s:12,.0f} robot-s/s  "
                           f"({e.env_steps_per_s:,.0f} env-steps/s)", flush=True)  # fmt: skip
                 if "train" in args.mode:
-                    t, prof = bench_train(terrain, n, device, iterations, profile=args.profile, sim=sim)
+                    t, prof = bench_train(terrain, n, device, iterations, profile=args.profile, sim=sim,
+                                          update=update_kwargs(args))
                     for k in ("train_steps_per_s", "train_robot_s_per_s", "train_iteration_s", "memory_per_env_kb"):
                         setattr(pr, k, getattr(t, k))
                     print(f"{terrain:8s} N={n:6d} train {t.train_robot_s_per_s:12,.0f} robot-s/s  "

@@ -53,9 +53,14 @@ from .config import (
 PRESETS = ("default", "paper")
 
 
-def train_cfg(preset: str, num_envs: int, num_steps_per_env: int = 24, action_std: float | None = None) -> dict:
+def train_cfg(preset: str, num_envs: int, num_steps_per_env: int = 24, action_std: float | None = None,
+              num_mini_batches: int | None = None, num_learning_epochs: int | None = None,
+              torch_compile: str | None = None, mixed_precision: bool = False) -> dict:
     """rsl-rl-lib 5.5.1 runner configuration for ``preset``; ``action_std`` fixes the policy's Gaussian std (not
-    learnt) instead of starting from the preset's and learning it."""
+    learnt) instead of starting from the preset's and learning it. ``num_mini_batches`` / ``num_learning_epochs``
+    override the preset's; ``torch_compile`` (a ``torch.compile`` mode rsl-rl accepts: ``default`` or
+    ``max-autotune-no-cudagraphs``) compiles the actor and critic; ``mixed_precision`` runs the PPO update's
+    forward pass and losses under bfloat16 autocast (rsl-rl's ``use_mixed_precision``)."""
     if preset not in PRESETS:
         raise ValueError(f"unknown preset '{preset}': choose one of {', '.join(PRESETS)}")
     samples = num_envs * num_steps_per_env
@@ -68,7 +73,11 @@ def train_cfg(preset: str, num_envs: int, num_steps_per_env: int = 24, action_st
         algorithm = dict(learning_rate=1.0e-3, schedule="adaptive", desired_kl=0.01, gamma=0.99, lam=0.95,
                          clip_param=0.2, num_learning_epochs=5, num_mini_batches=4)  # fmt: skip
     algorithm.update(class_name="PPO", value_loss_coef=1.0, use_clipped_value_loss=True, entropy_coef=0.005,
-                     max_grad_norm=1.0)  # fmt: skip
+                     max_grad_norm=1.0, use_mixed_precision=mixed_precision)  # fmt: skip
+    if num_mini_batches is not None:
+        algorithm["num_mini_batches"] = num_mini_batches
+    if num_learning_epochs is not None:
+        algorithm["num_learning_epochs"] = num_learning_epochs
     model = dict(class_name="MLPModel", hidden_dims=hidden, activation=act, obs_normalization=True)
     return {
         "num_steps_per_env": num_steps_per_env,
@@ -83,7 +92,27 @@ def train_cfg(preset: str, num_envs: int, num_steps_per_env: int = 24, action_st
                                                "learn_std": action_std is None}),
         "critic": dict(model),
         "algorithm": algorithm,
+        "torch_compile_mode": torch_compile,
     }
+
+
+COMPILE_MODES = ("default", "max-autotune-no-cudagraphs")  # rsl-rl rejects the CUDA-graph modes
+
+
+def add_update_args(p) -> None:
+    """The PPO-update options shared by ``train.py`` and ``hexnewton.bench`` (see :func:`train_cfg`)."""
+    p.add_argument("--num_mini_batches", type=positive_int, default=None, help="default: the preset's (4)")
+    p.add_argument("--num_learning_epochs", type=positive_int, default=None, help="default: the preset's (5)")
+    p.add_argument("--torch_compile", choices=COMPILE_MODES, default=None,
+                   help="torch.compile the actor and critic (rsl-rl's torch_compile_mode; default off)")
+    p.add_argument("--mixed_precision", action="store_true",
+                   help="bfloat16 autocast in the PPO update (rsl-rl's use_mixed_precision)")
+
+
+def update_kwargs(args) -> dict:
+    """:func:`train_cfg`'s keyword arguments from :func:`add_update_args`' options."""
+    return dict(num_mini_batches=args.num_mini_batches, num_learning_epochs=args.num_learning_epochs,
+                torch_compile=args.torch_compile, mixed_precision=args.mixed_precision)
 
 
 def action_std(policy) -> list[float]:
@@ -309,6 +338,7 @@ def main(argv: list[str] | None = None) -> int:
                    help="paid once on reaching the goal (ours; see kernels/rewards.py)")
     p.add_argument("--off_course_penalty", type=float, default=RewardConfig.off_course_penalty,
                    help="paid once on leaving the course (ours; 0: the paper's reward, see kernels/rewards.py)")
+    add_update_args(p)
     args = p.parse_args(argv)
     if args.preset not in PRESETS:
         raise ValueError(f"unknown preset '{args.preset}': choose one of {', '.join(PRESETS)}")
@@ -355,7 +385,8 @@ def main(argv: list[str] | None = None) -> int:
     env = make_env(cfg, args.action_mode)
     if ckpt is not None:
         check_compatible(ckpt, args.resume, env.num_obs, env.num_actions, args.action_mode)
-    tcfg = train_cfg(args.preset, args.num_envs, args.num_steps_per_env, args.action_std)
+    tcfg = train_cfg(args.preset, args.num_envs, args.num_steps_per_env, args.action_std,
+                     **update_kwargs(args))
     tcfg["save_interval"] = args.save_interval
     experiment = args.experiment or f"hexnewton_{args.action_mode}_{args.terrain}"
     run_dir = os.path.join(args.log_dir, experiment, datetime.datetime.now().strftime("%Y-%m-%d_%H-%M-%S"))

@@ -91,6 +91,30 @@ def test_ppo_stores_the_observation_each_action_was_taken_from():
     assert len(kls) == 20 and kls[0] < 1e-10, kls[:3]
 
 
+def test_ppo_update_options_reach_rsl_rl():
+    """train.py / bench's update options (issue 6): fewer mini-batches and epochs, torch.compile and bfloat16
+    autocast are rsl-rl's own; the runner must train with them (here on the CPU, inductor's C++ backend)."""
+    import copy
+    import tempfile
+
+    from rsl_rl.runners import OnPolicyRunner
+
+    from hexnewton.train import train_cfg
+
+    env = make_env(_cfg("flat", 8))
+    tcfg = train_cfg("default", 8, num_steps_per_env=8, num_mini_batches=2, num_learning_epochs=3,
+                     torch_compile="default", mixed_precision=True)  # fmt: skip
+    runner = OnPolicyRunner(env, copy.deepcopy(tcfg), log_dir=tempfile.mkdtemp(prefix="hexnewton-up-"), device=DEV)
+    alg = runner.alg
+    assert alg.use_mixed_precision and alg.actor is not alg.get_policy()  # compiled wrapper; raw module exported
+    batches = []
+    gen = alg.storage.mini_batch_generator
+    alg.storage.mini_batch_generator = lambda n, e: batches.append((n, e)) or gen(n, e)
+    runner.learn(1)
+    assert batches == [(2, 3)]
+    assert all(torch.isfinite(p).all() for p in alg.get_policy().parameters())
+
+
 @pytest.mark.parametrize("where", ["velocity", "runaway", "joint angle"])
 def test_blown_up_env_is_reset_counted_and_isolated(where):
     """Corrupt one env's state: it ends as nonfinite, is reset and counted; observations and rewards stay
