@@ -21,7 +21,8 @@ train)
   # GPU 3, issue 6: the training / sim-only ratio at 4096 envs with rsl-rl's update options (same PPO maths:
   # torch.compile, bfloat16 autocast; changed maths: 2 mini-batches of 49,152 samples instead of 4)
   ( export CUDA_VISIBLE_DEVICES=3
-    b() { timeout -k 5 "$1" python -m hexnewton.bench --num_envs 4096 --terrain complex "${@:2}" $F --profile \
+    b() { local t=$(( ${DEADLINE_S:-570} - ${START_S:-20} - SECONDS )); [ "$t" -gt "$1" ] && t=$1; [ "$t" -gt 30 ] || return
+          timeout -k 5 "$t" python -m hexnewton.bench --num_envs 4096 --terrain complex "${@:2}" $F --profile \
             --append "$OUT/BENCHMARKS.md" >> "$OUT/bench.log" 2>&1; echo "bench ${*:2}: exit $?" >> "$OUT/bench.log"; }
     b 150 --mode sim env train
     b 120 --mode train --mixed_precision
