@@ -191,7 +191,7 @@ def load_runner(env, path: str, action_mode: str):
     ckpt = load_checkpoint(path)
     check_compatible(ckpt, path, env.num_obs, env.num_actions, action_mode)
     meta = (ckpt.get("infos") or {}).get("hexnewton", {})
-    tcfg = train_cfg(meta.get("preset", "default"), env.num_envs)
+    tcfg = train_cfg(meta.get("preset", "default"), env.num_envs, std_max=meta.get("std_max"))
     runner = OnPolicyRunner(env, copy.deepcopy(tcfg), log_dir=None, device=str(env._obs_t.device))
     # the actor alone: full training checkpoints and actor-only policy files (results/policies) both load
     runner.load(path, load_cfg={"actor": True}, map_location=str(env._obs_t.device))

@@ -55,12 +55,15 @@ PRESETS = ("default", "paper")
 
 def train_cfg(preset: str, num_envs: int, num_steps_per_env: int = 24, action_std: float | None = None,
               num_mini_batches: int | None = None, num_learning_epochs: int | None = None,
-              torch_compile: str | None = None, mixed_precision: bool = False) -> dict:
+              torch_compile: str | None = None, mixed_precision: bool = False, std_max: float | None = None) -> dict:
     """rsl-rl-lib 5.5.1 runner configuration for ``preset``; ``action_std`` fixes the policy's Gaussian std (not
     learnt) instead of starting from the preset's and learning it. ``num_mini_batches`` / ``num_learning_epochs``
     override the preset's; ``torch_compile`` (a ``torch.compile`` mode rsl-rl accepts: ``default`` or
     ``max-autotune-no-cudagraphs``) compiles the actor and critic; ``mixed_precision`` runs the PPO update's
-    forward pass and losses under bfloat16 autocast (rsl-rl's ``use_mixed_precision``)."""
+    forward pass and losses under bfloat16 autocast (rsl-rl's ``use_mixed_precision``). ``std_max`` caps the learnt
+    std (rsl-rl's ``std_range``): actions are clipped to [-1, 1] and low-pass filtered into the CPG parameters, so a
+    wider Gaussian only changes the filtered parameter's mean, and the entropy bonus grew the std to 1.7-5.8 in
+    session 7's runs."""
     if preset not in PRESETS:
         raise ValueError(f"unknown preset '{preset}': choose one of {', '.join(PRESETS)}")
     samples = num_envs * num_steps_per_env
@@ -89,7 +92,8 @@ def train_cfg(preset: str, num_envs: int, num_steps_per_env: int = 24, action_st
         # tested by injecting NaN/Inf), so the check only stalls the GPU
         "check_for_nan": False,
         "actor": dict(model, distribution_cfg={"class_name": "GaussianDistribution", "init_std": action_std or std,
-                                               "learn_std": action_std is None}),
+                                               "learn_std": action_std is None,
+                                               "std_range": (1e-6, std_max or 1e6)}),  # rsl-rl's default range
         "critic": dict(model),
         "algorithm": algorithm,
         "torch_compile_mode": torch_compile,
@@ -116,10 +120,10 @@ def update_kwargs(args) -> dict:
 
 
 def action_std(policy) -> list[float]:
-    """The Gaussian's std of each action (rsl-rl's scalar or log parameterisation)."""
+    """The Gaussian's std of each action (rsl-rl's scalar or log parameterisation, clamped to its range)."""
     dist = policy.distribution
     std = dist.std_param if hasattr(dist, "std_param") else dist.log_std_param.exp()
-    return std.detach().cpu().tolist()
+    return std.detach().clamp(*dist.std_range).cpu().tolist()
 
 
 def fix_action_std(policy, std: float) -> None:
@@ -332,6 +336,8 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--action_std", type=float, default=None,
                    help="fix the policy's action std (not learnt; also on --resume) so that its mean action learns "
                         "to do what its noise did (default: learnt, from the preset's initial std)")
+    p.add_argument("--std_max", type=float, default=None,
+                   help="cap the learnt action std (default: uncapped; see train_cfg)")
     p.add_argument("--direction_from_start", action="store_true",
                    help="direction term along the start-to-goal vector (Table 1's D) instead of robot-to-goal (ours)")
     p.add_argument("--goal_bonus", type=float, default=RewardConfig.goal_bonus,
@@ -346,6 +352,8 @@ def main(argv: list[str] | None = None) -> int:
         raise ValueError("--max_minutes must be positive")
     if args.action_std is not None and not args.action_std > 0:
         raise ValueError("--action_std must be positive")
+    if args.std_max is not None and not args.std_max > 0:
+        raise ValueError("--std_max must be positive")
     if args.target_success is not None and not 0 < args.target_success <= 1:
         raise ValueError("--target_success must lie in (0, 1]")
     if args.a2_range is not None:
@@ -385,13 +393,16 @@ def main(argv: list[str] | None = None) -> int:
     env = make_env(cfg, args.action_mode)
     if ckpt is not None:
         check_compatible(ckpt, args.resume, env.num_obs, env.num_actions, args.action_mode)
+    if ckpt is not None and args.std_max is None:  # a resumed run keeps its cap
+        args.std_max = (ckpt.get("infos") or {}).get("hexnewton", {}).get("std_max")
     tcfg = train_cfg(args.preset, args.num_envs, args.num_steps_per_env, args.action_std,
-                     **update_kwargs(args))
+                     std_max=args.std_max, **update_kwargs(args))
     tcfg["save_interval"] = args.save_interval
     experiment = args.experiment or f"hexnewton_{args.action_mode}_{args.terrain}"
     run_dir = os.path.join(args.log_dir, experiment, datetime.datetime.now().strftime("%Y-%m-%d_%H-%M-%S"))
     meta = {"action_mode": args.action_mode, "num_obs": env.num_obs, "num_actions": env.num_actions,
-            "preset": args.preset, "config": dataclasses.asdict(cfg), "world_size": dist.world_size}  # fmt: skip
+            "preset": args.preset, "config": dataclasses.asdict(cfg), "world_size": dist.world_size,
+            "std_max": args.std_max}  # fmt: skip
     if dist.is_main:  # only rank 0 writes logs, checkpoints and the export
         if os.path.exists(run_dir):
             raise ValueError(f"{run_dir} exists: nothing is overwritten (start again in a second, or change --experiment)")

@@ -115,6 +115,25 @@ def test_ppo_update_options_reach_rsl_rl():
     assert all(torch.isfinite(p).all() for p in alg.get_policy().parameters())
 
 
+def test_std_max_caps_the_sampling_std():
+    """--std_max: rsl-rl's std_range clamps the Gaussian in training, and action_std (export, deploy bundle) reports
+    the clamped value, not the raw parameter."""
+    import copy
+
+    from rsl_rl.runners import OnPolicyRunner
+
+    from hexnewton.train import action_std, train_cfg
+
+    env = make_env(_cfg("flat", 8))
+    runner = OnPolicyRunner(env, copy.deepcopy(train_cfg("default", 8, std_max=0.3)), log_dir=None, device=DEV)
+    policy = runner.alg.get_policy()
+    with torch.no_grad():
+        policy.distribution.std_param.fill_(5.0)
+    policy(env.get_observations(), stochastic_output=True)
+    assert torch.allclose(policy.distribution.std, torch.full((8, 15), 0.3))
+    assert action_std(policy) == pytest.approx([0.3] * 15)
+
+
 @pytest.mark.parametrize("where", ["velocity", "runaway", "joint angle"])
 def test_blown_up_env_is_reset_counted_and_isolated(where):
     """Corrupt one env's state: it ends as nonfinite, is reset and counted; observations and rewards stay

@@ -5,8 +5,8 @@
 # (session 6's fix: each action stored with its own observation).
 #
 #   bash scripts/device/session7.sh train    # time-to-skill, 5 m and 8 cm runs from scratch; PPO-update bench
-#   bash scripts/device/session7.sh train2   # 2 x 2048 torchrun and a faster-update run; evaluations of `train`
-#   bash scripts/device/session7.sh table3   # Table 3 (25 rounds) on the GPU machine; evaluations of `train2`
+#   bash scripts/device/session7.sh train2   # 2 x 2048 torchrun, a faster-update run, 5 m / 8 cm with a std cap
+#   bash scripts/device/session7.sh table3   # Table 3 (25 rounds) on the GPU machine; 1000-round evaluations
 set -u
 OUT=${OUT:-out}
 KEEP=/root/keep
@@ -40,34 +40,35 @@ train)
   grep -E "robot-s/s|exit|rror" "$OUT/bench.log" | tail -40
   ;;
 train2)
-  # issue 8: 2 x 2048 envs through torchrun (the same samples per update as one GPU's 4096); issue 6: the recipe with
-  # the faster update (UPDATE, chosen from train's bench); evaluations of train's runs on GPU 3
-  KEEP_ALL=1 SKIP_WARMUP=1 START_S=0 DEADLINE_S=${DEADLINE_S:-480} bash scripts/device/train_runs.sh \
+  # a new lease: train's last checkpoints (actor-only copies, runs/ck7) came with the install call into $KEEP.
+  # issue 8: 2 x 2048 envs through torchrun (the same samples per update as one GPU's 4096); issue 6: the recipe
+  # with the fastest update of train's bench (2 mini-batches, 4 epochs); issue 9: 5 m and 8 cm with the std capped
+  # (train's runs grew it to 3.9 and 5.8), both on GPU 3
+  KEEP_ALL=1 SKIP_WARMUP=1 START_S=0 DEADLINE_S=${DEADLINE_S:-450} bash scripts/device/train_runs.sh \
     "g2x2048@0,1:$C --seed 1 --target_success 0.97 --num_envs 2048" \
-    "fastup@2:$C --seed 1 --target_success 0.97 ${UPDATE:---torch_compile default --mixed_precision}" &
-  EVALS=/root/evals_t1 EVAL_TIMEOUT_S=${EVAL_TIMEOUT_S:-400} bash scripts/device/eval_jobs.sh \
-    "tts7_last@3:$(ev $KEEP/tts7.pt complex)" \
-    "tts7_m1@3:$(R=500 ev "$(nth_last tts7 2)" complex)" \
-    "m5_last@3:$(ev $KEEP/m5.pt complex "$G5")" \
-    "s8_stepped@3:$(ev $KEEP/s8.pt stepped '--step_rise 0.08')" \
-    "s8_complex@3:$(ev $KEEP/s8.pt complex '--step_rise 0.08')"
-  wait
+    "fastup@2:$C --seed 1 --target_success 0.97 ${UPDATE:---num_mini_batches 2 --num_learning_epochs 4}" \
+    "m5cap@3:$C --seed 2 --goal_distance 5.5 --std_max 1.0" \
+    "s8cap@3:$C --seed 3 --step_rise 0.08 --std_max 1.0"
   ls "$KEEP"/*/ > "$OUT/kept.txt" 2>&1
   ;;
 table3)
-  # issue 5: Table 3 on the GPU machine, one terrain per GPU (CPG_RL = $POLICY, SB3 models carried in runs/sb3m);
-  # GPU 3: the evaluations of train2's runs
+  # issue 5: Table 3 on the GPU machine (CPG_RL = $POLICY, the SB3 models carried in runs/sb3m): rugged and stepped
+  # on GPU 0, complex on GPU 1; the 1000-round evaluations of train's and train2's runs on GPUs 1-3
   S=runs/sb3m
-  for t in rugged:0 stepped:1 complex:2; do
+  for t in rugged:0 stepped:0 complex:1; do
     ( CUDA_VISIBLE_DEVICES=${t#*:} timeout -k 10 "${T3_S:-420}" python -m hexnewton.evaluate \
         --controllers cpg cpg_rl sac_cpg td3_cpg a2c_cpg --checkpoint cpg_rl="${POLICY:-$KEEP/tts7.pt}" \
         sac_cpg=$S/sac.zip td3_cpg=$S/td3.zip a2c_cpg=$S/a2c.zip --terrains "${t%:*}" --rounds 25 --stochastic \
         --out "/root/t3/${t%:*}" --no-progress > "/root/t3_${t%:*}.log" 2>&1; echo "exit $?" >> "/root/t3_${t%:*}.log" ) &
   done
-  EVALS=/root/evals_t2 EVAL_TIMEOUT_S=${EVAL_TIMEOUT_S:-360} bash scripts/device/eval_jobs.sh \
-    "g2_last@3:$(ev $KEEP/g2x2048.pt complex)" \
-    "g2_m1@3:$(R=500 ev "$(nth_last g2x2048 2)" complex)" \
-    "fastup_last@3:$(ev $KEEP/fastup.pt complex)"
+  EVALS=/root/evals_e EVAL_TIMEOUT_S=${EVAL_TIMEOUT_S:-400} bash scripts/device/eval_jobs.sh \
+    "tts7@1:$(ev $KEEP/tts7.pt complex)" \
+    "m5@2:$(ev $KEEP/m5.pt complex "$G5")" \
+    "m5cap@2:$(ev $KEEP/m5cap.pt complex "$G5")" \
+    "s8@3:$(ev $KEEP/s8.pt stepped '--step_rise 0.08')" \
+    "s8cap@3:$(ev $KEEP/s8cap.pt stepped '--step_rise 0.08')" \
+    "g2x2048@1:$(ev $KEEP/g2x2048.pt complex)" \
+    "fastup@2:$(ev $KEEP/fastup.pt complex)"
   wait
   tar czf "$OUT/table3.tgz" -C /root t3 t3_rugged.log t3_stepped.log t3_complex.log
   for t in rugged stepped complex; do tail -1 /root/t3_$t.log; grep -E '^\| '$t' \|' /root/t3/$t/report.md | head -6; done
