@@ -66,11 +66,24 @@ def load_spec(bundle: str) -> dict:
     return spec
 
 
+def expected_clipped_action(mean, std) -> np.ndarray:
+    """E[clip(a, -1, 1)] for a ~ N(mean, std^2), per action, in float64: the action a sampled policy asks of the CPG
+    on average (the clipped actions are low-pass filtered into its parameters). A deterministic action for policies
+    whose learnt std is wide, where the mean action is not what the policy does on average (RESULTS.md, session 7)."""
+    mean = np.asarray(mean, np.float64)
+    std = np.maximum(np.asarray(std, np.float64), 1e-12)
+    erf = np.vectorize(math.erf, otypes=[np.float64])
+    a, b = (-1.0 - mean) / std, (1.0 - mean) / std
+    cdf_a, cdf_b = 0.5 * (1.0 + erf(a / math.sqrt(2.0))), 0.5 * (1.0 + erf(b / math.sqrt(2.0)))
+    pdf_a, pdf_b = np.exp(-0.5 * a * a) / math.sqrt(2 * math.pi), np.exp(-0.5 * b * b) / math.sqrt(2 * math.pi)
+    return -cdf_a + (1.0 - cdf_b) + mean * (cdf_b - cdf_a) - std * (pdf_b - pdf_a)
+
+
 class Controller:
     """The exported CPG_RL hierarchy for ``num_robots`` robots (batched like the simulator)."""
 
     def __init__(self, bundle: str, num_robots: int = 1, providers: list[str] | None = None,
-                 stochastic: bool = False, seed: int | None = None):
+                 stochastic: bool = False, seed: int | None = None, expected: bool = False):
         import onnxruntime as ort
 
         self.spec = spec = load_spec(bundle)
@@ -86,9 +99,11 @@ class Controller:
         self.dt = float(spec["substep_dt"])
         self.substeps = int(spec["substeps_per_control"])
         self.gain = 1.0 if c["param_tau"] == 0 else 1.0 - math.exp(-self.dt / c["param_tau"])
-        if stochastic and "action_std" not in spec:
+        if stochastic and expected:
+            raise ValueError("choose sampled (stochastic) or expected actions, not both")
+        if (stochastic or expected) and "action_std" not in spec:
             raise ValueError(f"{bundle}: controller.json has no action_std (exported before sampled actions)")
-        self.stochastic = stochastic
+        self.stochastic, self.expected = stochastic, expected
         self.action_std = np.asarray(spec.get("action_std", np.zeros(spec["num_actions"])), np.float64)
         self.rng = np.random.default_rng(seed)
         self.stand, self.joint_lower, self.joint_upper = (np.asarray(spec[k]) for k in ("stand_pose", "joint_lower",
@@ -127,8 +142,11 @@ class Controller:
         return obs
 
     def act(self, obs: np.ndarray) -> np.ndarray:
-        """The policy's actions (N, 15) for observations (N, num_obs): the mean, or sampled around it."""
+        """The policy's actions (N, 15) for observations (N, num_obs): the mean, sampled around it, or the expected
+        clipped action (:func:`expected_clipped_action`)."""
         mean = self.session.run(None, {self._input: np.asarray(obs, np.float32)})[0]
+        if self.expected:
+            return expected_clipped_action(mean, self.action_std)
         if not self.stochastic:
             return mean
         return mean + self.action_std * self.rng.standard_normal(mean.shape)

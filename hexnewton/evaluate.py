@@ -156,11 +156,11 @@ class Episode:
 def run_rounds(controller: str, checkpoint: str | None, terrain: str, rounds: int, device: str | None,
                max_steps: int, reset_yaw: float, progress: bool = True, randomize: bool = False,
                step_rise: float = TerrainConfig.step_rise, goal_distance: float = TaskConfig.goal_distance,
-               stochastic: bool = False, physics: dict | None = None) -> Episode:
+               stochastic: bool = False, physics: dict | None = None, expected: bool = False) -> Episode:
     """``rounds`` robots, one first episode each, with a deterministic controller on unseen seeds; with
     ``randomize``, under perturbed conditions (``RandomizationConfig`` drawn with the evaluation seed); with
     ``stochastic``, a learnt policy samples its actions from its Gaussian as in training (torch seeded with the
-    evaluation seed). The physics (frame and substeps) is the policy's own, from its checkpoint, unless
+    evaluation seed); with ``expected``, the expected clipped action of that Gaussian. The physics (frame and substeps) is the policy's own, from its checkpoint, unless
     ``physics`` overrides fields of ``SimConfig``."""
     from .env import make_env
     from .play import fixed_cpg_actions, load_policy, stepped
@@ -185,7 +185,7 @@ def run_rounds(controller: str, checkpoint: str | None, terrain: str, rounds: in
 
         policy = load_sb3_policy(env, checkpoint, SB3[controller], deterministic=not stochastic)
     else:
-        policy = load_policy(env, checkpoint, mode, stochastic)
+        policy = load_policy(env, checkpoint, mode, stochastic, expected)
     if stochastic:
         import torch
 
@@ -379,6 +379,9 @@ def main(argv: list[str] | None = None) -> int:
                    help="perturbed conditions: friction, payload, masses, gains, latency, noise, pushes")
     p.add_argument("--stochastic", action="store_true",
                    help="learnt policies sample their actions as in training (default: the mean action)")
+    p.add_argument("--expected", action="store_true",
+                   help="learnt policies take the expected clipped action E[clip(a, -1, 1)] of their Gaussian "
+                        "(deterministic; SB3 models: their deterministic action)")
     p.add_argument("--frame_dt", type=float, default=None,
                    help="physics frame [s] (default: the policy's own, from its checkpoint; 0.01 for cpg)")
     p.add_argument("--substeps", type=positive_int, default=None,
@@ -387,6 +390,8 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--out", default=None, help="output directory (default eval/<date_time>); must not exist")
     p.add_argument("--no-progress", action="store_true")
     args = p.parse_args(argv)
+    if args.stochastic and args.expected:
+        raise ValueError("choose sampled (--stochastic) or expected (--expected) actions, not both")
     distances = tuple(sorted(set(args.distances)))
     if not all(0 < d <= args.goal_distance - TaskConfig.goal_radius + 1e-9 for d in distances):
         raise ValueError(f"--distances must lie in (0, goal_distance - {TaskConfig.goal_radius:g}] = "
@@ -430,7 +435,7 @@ def main(argv: list[str] | None = None) -> int:
             ck = None if ctrl == "cpg" else checkpoint_for(checkpoints, ctrl, terrain)
             ep = run_rounds(ctrl, ck, terrain, args.rounds, device, args.max_steps, args.reset_yaw, progress,
                             args.randomize, args.step_rise, args.goal_distance, args.stochastic,
-                            physics)  # fmt: skip
+                            physics, args.expected)  # fmt: skip
             m = round_metrics(ep.pos, ep.rpy, ep.done, ep.status, ep.dt, distances)
             s = summarize(m, ep.rpy, distances)
             s["checkpoint"] = ck
@@ -445,7 +450,8 @@ def main(argv: list[str] | None = None) -> int:
     wall = time.perf_counter() - t0
     meta = {"device": device, "rounds": args.rounds, "max_steps": args.max_steps, "reset_yaw": args.reset_yaw,
             "distances": list(distances), "goal_distance": args.goal_distance, "step_rise": args.step_rise,
-            "randomized": args.randomize, "actions": "sampled" if args.stochastic else "mean",
+            "randomized": args.randomize,
+            "actions": "sampled" if args.stochastic else "expected" if args.expected else "mean",
             "physics": physics or "each policy's own (checkpoint)",
             "terrain_seed": EVAL_TERRAIN_SEED, "reset_seed": EVAL_RESET_SEED,
             "unseen": "terrain seed and start poses differ from training (train.py: terrain seed 0, seed 1)",

@@ -198,12 +198,36 @@ def load_runner(env, path: str, action_mode: str):
     return runner
 
 
-def load_policy(env, path: str, action_mode: str, stochastic: bool = False):
-    """Policy from an rsl-rl checkpoint, after checking it fits this environment: its mean action, or with
-    ``stochastic`` an action sampled from its Gaussian as in training."""
-    policy = load_runner(env, path, action_mode).get_inference_policy(device=str(env._obs_t.device))
+def expected_clipped_action(mean, std):
+    """Torch twin of :func:`hexnewton.deploy.expected_clipped_action` (its float64 NumPy reference):
+    E[clip(a, -1, 1)] for a ~ N(mean, std^2)."""
+    import torch
+
+    std = std.clamp_min(1e-12)
+    a, b = (-1.0 - mean) / std, (1.0 - mean) / std
+    cdf_a, cdf_b = torch.special.ndtr(a), torch.special.ndtr(b)
+    pdf_a, pdf_b = torch.exp(-0.5 * a * a) / math.sqrt(2 * math.pi), torch.exp(-0.5 * b * b) / math.sqrt(2 * math.pi)
+    return -cdf_a + (1.0 - cdf_b) + mean * (cdf_b - cdf_a) - std * (pdf_b - pdf_a)
+
+
+def load_policy(env, path: str, action_mode: str, stochastic: bool = False, expected: bool = False):
+    """Policy from an rsl-rl checkpoint, after checking it fits this environment: its mean action, with
+    ``stochastic`` an action sampled from its Gaussian as in training, with ``expected`` the expected clipped
+    action E[clip(a, -1, 1)] (deterministic; what the sampled policy asks of the CPG on average)."""
+    import torch
+
+    from .train import action_std
+
+    if stochastic and expected:
+        raise ValueError("choose sampled (--stochastic) or expected (--expected) actions, not both")
+    runner = load_runner(env, path, action_mode)
+    device = str(env._obs_t.device)
+    policy = runner.get_inference_policy(device=device)
     if stochastic:
         return lambda obs: policy(obs, stochastic_output=True)
+    if expected:
+        std = torch.tensor(action_std(runner.alg.get_policy()), device=device)
+        return lambda obs: expected_clipped_action(policy(obs), std)
     return policy
 
 
@@ -225,9 +249,13 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--video_speed", type=positive_int, default=1, help="video playback speed (x real time)")
     p.add_argument("--stochastic", action="store_true",
                    help="cpg_rl / joint: sample actions from the policy's Gaussian as in training (default: the mean)")
+    p.add_argument("--expected", action="store_true",
+                   help="cpg_rl / joint: the expected clipped action E[clip(a, -1, 1)] of the Gaussian (deterministic)")
     p.add_argument("--plot", metavar="PATH.png", help="plot the six legs' joint targets over two gait cycles")
     p.add_argument("--no-progress", action="store_true")
     args = p.parse_args(argv)
+    if args.stochastic and args.expected:
+        raise ValueError("choose sampled (--stochastic) or expected (--expected) actions, not both")
     for path, ext in ((args.record, ".npz"), (args.plot, ".png")):
         if path:
             check_writable(path, ext)
@@ -259,7 +287,7 @@ def main(argv: list[str] | None = None) -> int:
             actions = fixed_cpg_actions(env)
             policy = lambda obs: actions  # noqa: E731
         else:
-            policy = load_policy(env, args.checkpoint, mode, args.stochastic)
+            policy = load_policy(env, args.checkpoint, mode, args.stochastic, args.expected)
             if args.stochastic:
                 import torch
 

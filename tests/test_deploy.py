@@ -91,6 +91,56 @@ def test_sampled_actions_follow_the_trained_gaussian(bundle):
     np.testing.assert_allclose(draws.std(axis=0), np.broadcast_to(std, mean.shape), rtol=0.1)
 
 
+def test_expected_clipped_action_matches_its_reference_and_monte_carlo():
+    """E[clip(a, -1, 1)], a ~ N(mean, std^2): the torch twin (play.py, used in evaluation) against the float64 NumPy
+    reference (deploy.py, the robot runtime) on random inputs, the reference against sampling, and its limits."""
+    import torch
+
+    from hexnewton.deploy import expected_clipped_action
+    from hexnewton.play import expected_clipped_action as expected_torch
+
+    rng = np.random.default_rng(0)
+    mean, std = rng.uniform(-4, 4, (64, 15)), rng.uniform(0.01, 6.0, 15)
+    ref = expected_clipped_action(mean, std)
+    got = expected_torch(torch.tensor(mean, dtype=torch.float32), torch.tensor(std, dtype=torch.float32)).numpy()
+    np.testing.assert_allclose(got, ref, atol=2e-6)
+    assert np.all(np.abs(ref) <= 1)
+    m, s = mean[0], std
+    draws = np.clip(m + s * rng.standard_normal((200_000, 15)), -1, 1)
+    np.testing.assert_allclose(draws.mean(axis=0), expected_clipped_action(m, s), atol=0.01)
+    np.testing.assert_allclose(expected_clipped_action(mean, np.full(15, 1e-9)), np.clip(mean, -1, 1), atol=1e-9)
+    np.testing.assert_allclose(expected_clipped_action(0.0, 3.0), 0.0, atol=1e-12)  # symmetric
+
+
+def test_expected_actions_in_the_runtime_and_the_simulator(bundle):
+    """``expected=True`` in the runtime and ``--expected`` in play/evaluate apply the same formula to the same mean,
+    with the exported std; it cannot be combined with sampling."""
+    import dataclasses
+
+    import torch
+
+    from hexnewton.deploy import Controller, expected_clipped_action
+    from hexnewton.env import make_env
+    from hexnewton.play import load_policy
+    from hexnewton.train import load_checkpoint, trained_config
+
+    obs = np.load(bundle / "check.npz")["obs"][0]
+    std = np.asarray(json.loads((bundle / "controller.json").read_text())["action_std"])
+    mean = Controller(str(bundle), num_robots=3).act(obs)
+    np.testing.assert_allclose(Controller(str(bundle), num_robots=3, expected=True).act(obs),
+                               expected_clipped_action(mean, std), atol=1e-12)  # fmt: skip
+    with pytest.raises(ValueError, match="not both"):
+        Controller(str(bundle), stochastic=True, expected=True)
+    cfg = trained_config(load_checkpoint(POLICY))
+    cfg = dataclasses.replace(cfg, sim=dataclasses.replace(cfg.sim, num_envs=3, device="cpu"))
+    env = make_env(cfg)
+    policy = load_policy(env, POLICY, "cpg", expected=True)
+    with torch.no_grad():
+        got = policy(env.get_observations()).numpy()
+        mu = load_policy(env, POLICY, "cpg")(env.get_observations()).numpy()
+    np.testing.assert_allclose(got, expected_clipped_action(mu, std), atol=1e-5)
+
+
 def test_bad_bundles_and_exports(bundle, tmp_path):
     not_bundle = _run(["-m", "hexnewton.deploy", str(tmp_path)])
     assert not_bundle.returncode == 2 and "not a controller bundle" in not_bundle.stderr
