@@ -160,8 +160,8 @@ def run_rounds(controller: str, checkpoint: str | None, terrain: str, rounds: in
     """``rounds`` robots, one first episode each, with a deterministic controller on unseen seeds; with
     ``randomize``, under perturbed conditions (``RandomizationConfig`` drawn with the evaluation seed); with
     ``stochastic``, a learnt policy samples its actions from its Gaussian as in training (torch seeded with the
-    evaluation seed); with ``expected``, the expected clipped action of that Gaussian. The physics (frame and substeps) is the policy's own, from its checkpoint, unless
-    ``physics`` overrides fields of ``SimConfig``."""
+    evaluation seed); with ``expected``, the expected clipped action of that Gaussian. The physics (frame and
+    substeps) is the policy's own, from its checkpoint, unless ``physics`` overrides fields of ``SimConfig``."""
     from .env import make_env
     from .play import fixed_cpg_actions, load_policy, stepped
 
