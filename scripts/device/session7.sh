@@ -54,7 +54,10 @@ train2)
 table3)
   # issue 5: Table 3 on the GPU machine (CPG_RL = $POLICY, the SB3 models carried in runs/sb3m): rugged and stepped
   # on GPU 0, complex on GPU 1; the 1000-round evaluations of train's and train2's runs on GPUs 1-3
+  # (as run, this call lacked the mkdir and every Table-3 job failed at once; a second call, one terrain per GPU with
+  # 280 s each, ran out of time after the CPG and CPG_RL rows: 25 robots are launch-bound on the GPU. RESULTS.md)
   S=runs/sb3m
+  mkdir -p /root/t3
   for t in rugged:0 stepped:0 complex:1; do
     ( CUDA_VISIBLE_DEVICES=${t#*:} timeout -k 10 "${T3_S:-420}" python -m hexnewton.evaluate \
         --controllers cpg cpg_rl sac_cpg td3_cpg a2c_cpg --checkpoint cpg_rl="${POLICY:-$KEEP/tts7.pt}" \
