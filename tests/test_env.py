@@ -102,7 +102,7 @@ def test_ppo_update_options_reach_rsl_rl():
     from hexnewton.train import train_cfg
 
     env = make_env(_cfg("flat", 8))
-    tcfg = train_cfg("default", 8, num_steps_per_env=8, num_mini_batches=2, num_learning_epochs=3,
+    tcfg = train_cfg("default", 8, num_steps_per_env=8, num_mini_batches=3, num_learning_epochs=3,
                      torch_compile="default", mixed_precision=True)  # fmt: skip
     runner = OnPolicyRunner(env, copy.deepcopy(tcfg), log_dir=tempfile.mkdtemp(prefix="hexnewton-up-"), device=DEV)
     alg = runner.alg
@@ -111,7 +111,7 @@ def test_ppo_update_options_reach_rsl_rl():
     gen = alg.storage.mini_batch_generator
     alg.storage.mini_batch_generator = lambda n, e: batches.append((n, e)) or gen(n, e)
     runner.learn(1)
-    assert batches == [(2, 3)]
+    assert batches == [(3, 3)]  # not the preset's 2 x 4
     assert all(torch.isfinite(p).all() for p in alg.get_policy().parameters())
 
 
