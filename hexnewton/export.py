@@ -104,9 +104,9 @@ def main(argv: list[str] | None = None) -> int:
         raise ValueError(f"{args.out} exists: nothing is overwritten")
     from .env import make_env
     from .play import load_runner
-    from .train import action_std, export_onnx, load_checkpoint
+    from .train import action_std, checkpoint_meta, export_onnx, load_checkpoint
 
-    meta = (load_checkpoint(args.checkpoint).get("infos") or {}).get("hexnewton", {})
+    meta = checkpoint_meta(load_checkpoint(args.checkpoint))
     if meta.get("action_mode", "cpg") != "cpg":
         raise ValueError(f"{args.checkpoint} is a '{meta['action_mode']}' policy: a bundle carries the CPG hierarchy "
                          "(a joint-mode policy's policy.onnx from train.py is its whole controller)")  # fmt: skip

@@ -186,11 +186,11 @@ def load_runner(env, path: str, action_mode: str):
 
     from rsl_rl.runners import OnPolicyRunner
 
-    from .train import check_compatible, load_checkpoint, train_cfg
+    from .train import check_compatible, checkpoint_meta, load_checkpoint, train_cfg
 
     ckpt = load_checkpoint(path)
     check_compatible(ckpt, path, env.num_obs, env.num_actions, action_mode)
-    meta = (ckpt.get("infos") or {}).get("hexnewton", {})
+    meta = checkpoint_meta(ckpt)
     tcfg = train_cfg(meta.get("preset", "default"), env.num_envs, std_max=meta.get("std_max"))
     runner = OnPolicyRunner(env, copy.deepcopy(tcfg), log_dir=None, device=str(env._obs_t.device))
     # the actor alone: full training checkpoints and actor-only policy files (results/policies) both load

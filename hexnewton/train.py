@@ -270,19 +270,23 @@ def load_checkpoint(path: str, map_location: str = "cpu") -> dict:
     return ckpt
 
 
+def checkpoint_meta(ckpt: dict | None) -> dict:
+    """The hexnewton metadata train.py saves with a checkpoint ({} for none, or for a checkpoint without it)."""
+    infos = (ckpt or {}).get("infos")
+    meta = infos.get("hexnewton") if isinstance(infos, dict) else None
+    return meta if isinstance(meta, dict) else {}
+
+
 def trained_config(ckpt: dict | None) -> HexConfig:
     """The configuration a checkpoint was trained with; the defaults for no checkpoint or one without hexnewton
     metadata. Its ``cpg`` parameter ranges give the actions their meaning, its ``sim`` is the physics (frame and
     substeps) the policy learnt under."""
-    infos = (ckpt or {}).get("infos")
-    cfg = (infos.get("hexnewton") or {}).get("config") if isinstance(infos, dict) else None
+    cfg = checkpoint_meta(ckpt).get("config")
     return config_from_dict(cfg) if cfg else HexConfig()
 
 
 def check_compatible(ckpt: dict, path: str, num_obs: int, num_actions: int, action_mode: str) -> None:
-    meta = ckpt.get("infos") or {}
-    meta = meta.get("hexnewton", {}) if isinstance(meta, dict) else {}
-    mode = meta.get("action_mode")
+    mode = checkpoint_meta(ckpt).get("action_mode")
     if mode is not None and mode != action_mode:
         raise ValueError(f"{path} was trained with action mode '{mode}', not '{action_mode}'")
     for key, value in ckpt["actor_state_dict"].items():
@@ -396,7 +400,7 @@ def main(argv: list[str] | None = None) -> int:
     if ckpt is not None:
         check_compatible(ckpt, args.resume, env.num_obs, env.num_actions, args.action_mode)
     if ckpt is not None and args.std_max is None:  # a resumed run keeps its cap
-        args.std_max = (ckpt.get("infos") or {}).get("hexnewton", {}).get("std_max")
+        args.std_max = checkpoint_meta(ckpt).get("std_max")
     tcfg = train_cfg(args.preset, args.num_envs, args.num_steps_per_env, args.action_std,
                      std_max=args.std_max, **update_kwargs(args))
     tcfg["save_interval"] = args.save_interval
