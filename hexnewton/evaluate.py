@@ -377,11 +377,12 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--step_rise", type=float, default=TerrainConfig.step_rise, help="step height [m] (§3.1: 0.06)")
     p.add_argument("--randomize", action="store_true",
                    help="perturbed conditions: friction, payload, masses, gains, latency, noise, pushes")
-    p.add_argument("--stochastic", action="store_true",
-                   help="learnt policies sample their actions as in training (default: the mean action)")
-    p.add_argument("--expected", action="store_true",
-                   help="learnt policies take the expected clipped action E[clip(a, -1, 1)] of their Gaussian "
-                        "(deterministic; SB3 models: their deterministic action)")
+    actions = p.add_mutually_exclusive_group()
+    actions.add_argument("--stochastic", action="store_true",
+                         help="learnt policies sample their actions as in training (default: the mean action)")
+    actions.add_argument("--expected", action="store_true",
+                         help="learnt policies take the expected clipped action E[clip(a, -1, 1)] of their Gaussian "
+                              "(deterministic; SB3 models: their deterministic action)")
     p.add_argument("--frame_dt", type=float, default=None,
                    help="physics frame [s] (default: the policy's own, from its checkpoint; 0.01 for cpg)")
     p.add_argument("--substeps", type=positive_int, default=None,
@@ -390,8 +391,6 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--out", default=None, help="output directory (default eval/<date_time>); must not exist")
     p.add_argument("--no-progress", action="store_true")
     args = p.parse_args(argv)
-    if args.stochastic and args.expected:
-        raise ValueError("choose sampled (--stochastic) or expected (--expected) actions, not both")
     distances = tuple(sorted(set(args.distances)))
     if not all(0 < d <= args.goal_distance - TaskConfig.goal_radius + 1e-9 for d in distances):
         raise ValueError(f"--distances must lie in (0, goal_distance - {TaskConfig.goal_radius:g}] = "

@@ -247,15 +247,16 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--video", metavar="PATH.mp4|.gif", help="render the first terrain's rollout headless (matplotlib)")
     p.add_argument("--video_robots", type=positive_int, default=3, help="robots drawn in the video")
     p.add_argument("--video_speed", type=positive_int, default=1, help="video playback speed (x real time)")
-    p.add_argument("--stochastic", action="store_true",
-                   help="cpg_rl / joint: sample actions from the policy's Gaussian as in training (default: the mean)")
-    p.add_argument("--expected", action="store_true",
-                   help="cpg_rl / joint: the expected clipped action E[clip(a, -1, 1)] of the Gaussian (deterministic)")
+    actions = p.add_mutually_exclusive_group()
+    actions.add_argument("--stochastic", action="store_true",
+                         help="cpg_rl / joint: sample actions from the policy's Gaussian as in training "
+                              "(default: the mean)")
+    actions.add_argument("--expected", action="store_true",
+                         help="cpg_rl / joint: the expected clipped action E[clip(a, -1, 1)] of the Gaussian "
+                              "(deterministic)")
     p.add_argument("--plot", metavar="PATH.png", help="plot the six legs' joint targets over two gait cycles")
     p.add_argument("--no-progress", action="store_true")
     args = p.parse_args(argv)
-    if args.stochastic and args.expected:
-        raise ValueError("choose sampled (--stochastic) or expected (--expected) actions, not both")
     for path, ext in ((args.record, ".npz"), (args.plot, ".png")):
         if path:
             check_writable(path, ext)

@@ -105,6 +105,7 @@ def test_report_on_a_tiny_run(tmp_path):
         (["--checkpoint", "cpg_rl", "--out", str(tmp_path / "x")], "NAME=PATH"),
         (["--rounds", "0"], "positive"),
         (["--controllers", "cpg", "--frame_dt", "0.015", "--out", str(tmp_path / "x")], "positive multiple of"),
+        (["--stochastic", "--expected", "--out", str(tmp_path / "x")], "not allowed with argument --stochastic"),
     ]
     for args, message in cases:
         p = subprocess.run([sys.executable, "-m", "hexnewton.evaluate", *args, "--device", "cpu"], capture_output=True,
