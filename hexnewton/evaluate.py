@@ -9,7 +9,8 @@ Protocol. A round is one robot walking toward the target 3.5 m ahead, from its o
 first episode ends (goal, fall, off course) or the episode limit (``TaskConfig.max_episode_steps``,
 7000 steps = 140 s). R rounds run as R robots in parallel; a deterministic policy acts in every round
 (``--stochastic``: it samples its actions from its Gaussian as in training; see RESULTS.md, session 5).
-The robots use terrain seed ``EVAL_TERRAIN_SEED`` and reset seed ``EVAL_RESET_SEED``. Training uses
+The robots use terrain seed ``EVAL_TERRAIN_SEED`` and reset seed ``EVAL_RESET_SEED`` (``--seed S``: S and S + 1000,
+a validation set for choosing among checkpoints before the one test-set report). Training uses
 ``train.py --terrain_seed 0 --seed 1`` by default, so both the ground and the start poses (lane,
 ±0.1 m, ±0.2 rad yaw, ±0.05 rad joints) are unseen.
 
@@ -58,6 +59,7 @@ from .kernels.terminations import FELL, NONFINITE, OFF_COURSE, STATUS_NAMES
 DISTANCES = (0.5, 1.0, 2.0, 3.0)  # Table 3's columns [m]
 EVAL_TERRAIN_SEED = 1000
 EVAL_RESET_SEED = 2000
+START_SEED_OFFSET = EVAL_RESET_SEED - EVAL_TERRAIN_SEED  # --seed S: terrain seed S, start seed S + 1000
 # controller -> env action mode; *_cpg are the Stable-Baselines3 baselines (hexnewton.baselines)
 CONTROLLERS = {"cpg": "cpg", "cpg_rl": "cpg", "joint": "joint", "sac_cpg": "cpg", "td3_cpg": "cpg", "a2c_cpg": "cpg"}
 LABELS = {"cpg": "CPG", "cpg_rl": "CPG_RL", "joint": "pure DRL", "sac_cpg": "SAC-CPG", "td3_cpg": "TD3-CPG",
@@ -156,12 +158,14 @@ class Episode:
 def run_rounds(controller: str, checkpoint: str | None, terrain: str, rounds: int, device: str | None,
                max_steps: int, reset_yaw: float, progress: bool = True, randomize: bool = False,
                step_rise: float = TerrainConfig.step_rise, goal_distance: float = TaskConfig.goal_distance,
-               stochastic: bool = False, physics: dict | None = None, expected: bool = False) -> Episode:
+               stochastic: bool = False, physics: dict | None = None, expected: bool = False,
+               seed: int = EVAL_TERRAIN_SEED) -> Episode:
     """``rounds`` robots, one first episode each, with a deterministic controller on unseen seeds; with
     ``randomize``, under perturbed conditions (``RandomizationConfig`` drawn with the evaluation seed); with
     ``stochastic``, a learnt policy samples its actions from its Gaussian as in training (torch seeded with the
     evaluation seed); with ``expected``, the expected clipped action of that Gaussian. The physics (frame and
-    substeps) is the policy's own, from its checkpoint, unless ``physics`` overrides fields of ``SimConfig``."""
+    substeps) is the policy's own, from its checkpoint, unless ``physics`` overrides fields of ``SimConfig``. ``seed``
+    is the terrain seed; the start poses (and sampled actions) use ``seed + START_SEED_OFFSET``."""
     from .env import make_env
     from .play import fixed_cpg_actions, load_policy, stepped
 
@@ -171,8 +175,8 @@ def run_rounds(controller: str, checkpoint: str | None, terrain: str, rounds: in
     trained = trained_config(load_checkpoint(checkpoint)) if controller in ("cpg_rl", "joint") else HexConfig()
     cfg = HexConfig(
         sim=replace(trained.sim, num_envs=rounds, device=device, **(physics or {})),
-        terrain=terrain_for_goal(TerrainConfig(name=terrain, seed=EVAL_TERRAIN_SEED, step_rise=step_rise), goal_distance),
-        task=replace(TaskConfig(), seed=EVAL_RESET_SEED, reset_yaw=reset_yaw, goal_distance=goal_distance),
+        terrain=terrain_for_goal(TerrainConfig(name=terrain, seed=seed, step_rise=step_rise), goal_distance),
+        task=replace(TaskConfig(), seed=seed + START_SEED_OFFSET, reset_yaw=reset_yaw, goal_distance=goal_distance),
         randomization=RandomizationConfig(enabled=randomize),
         cpg=trained.cpg,  # the policy's own parameter ranges
     )
@@ -189,7 +193,7 @@ def run_rounds(controller: str, checkpoint: str | None, terrain: str, rounds: in
     if stochastic:
         import torch
 
-        torch.manual_seed(EVAL_RESET_SEED)
+        torch.manual_seed(seed + START_SEED_OFFSET)
     pos, rpy, done, status, params = [], [], [], [], []
     finished = np.zeros(rounds, bool)
     for _, st, _, p, r in stepped(env, policy, max_steps, f"{LABELS[controller]} on {terrain}", progress):
@@ -387,6 +391,9 @@ def main(argv: list[str] | None = None) -> int:
                    help="physics frame [s] (default: the policy's own, from its checkpoint; 0.01 for cpg)")
     p.add_argument("--substeps", type=positive_int, default=None,
                    help="MuJoCo steps per frame (default: as --frame_dt)")
+    p.add_argument("--seed", type=int, default=EVAL_TERRAIN_SEED,
+                   help=f"terrain seed S, start poses from seed S + {START_SEED_OFFSET} (default {EVAL_TERRAIN_SEED}: "
+                        "the test set). Choose checkpoints on another S (a validation set), report on the default")
     p.add_argument("--device", default=None)
     p.add_argument("--out", default=None, help="output directory (default eval/<date_time>); must not exist")
     p.add_argument("--no-progress", action="store_true")
@@ -434,7 +441,7 @@ def main(argv: list[str] | None = None) -> int:
             ck = None if ctrl == "cpg" else checkpoint_for(checkpoints, ctrl, terrain)
             ep = run_rounds(ctrl, ck, terrain, args.rounds, device, args.max_steps, args.reset_yaw, progress,
                             args.randomize, args.step_rise, args.goal_distance, args.stochastic,
-                            physics, args.expected)  # fmt: skip
+                            physics, args.expected, args.seed)  # fmt: skip
             m = round_metrics(ep.pos, ep.rpy, ep.done, ep.status, ep.dt, distances)
             s = summarize(m, ep.rpy, distances)
             s["checkpoint"] = ck
@@ -452,7 +459,7 @@ def main(argv: list[str] | None = None) -> int:
             "randomized": args.randomize,
             "actions": "sampled" if args.stochastic else "expected" if args.expected else "mean",
             "physics": physics or "each policy's own (checkpoint)",
-            "terrain_seed": EVAL_TERRAIN_SEED, "reset_seed": EVAL_RESET_SEED,
+            "terrain_seed": args.seed, "reset_seed": args.seed + START_SEED_OFFSET,
             "unseen": "terrain seed and start poses differ from training (train.py: terrain seed 0, seed 1)",
             "wall_s": round(wall, 1)}  # fmt: skip
     with open(os.path.join(out, "results.json"), "w") as f:

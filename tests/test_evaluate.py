@@ -117,7 +117,7 @@ def test_report_on_a_tiny_run(tmp_path):
 
 def test_stochastic_rounds_are_seeded_and_sample_around_the_mean():
     """``--stochastic``: the policy samples its actions (trajectories differ from the mean action's), and the
-    same evaluation seed gives the same rounds."""
+    same evaluation seed gives the same rounds; another seed (``--seed``, a validation set) other rounds."""
     from hexnewton.evaluate import run_rounds
 
     policy = os.path.join(ROOT, "results", "policies", "cpg_rl_flat.pt")
@@ -126,6 +126,8 @@ def test_stochastic_rounds_are_seeded_and_sample_around_the_mean():
     np.testing.assert_array_equal(a.pos, b.pos)
     np.testing.assert_array_equal(a.params, b.params)
     assert np.abs(a.params - mean.params).max() > 1e-3
+    other = run_rounds("cpg_rl", policy, "flat", 2, "cpu", 30, 0.2, False, stochastic=True, seed=3000)
+    assert np.abs(other.rpy[0, :, 2] - a.rpy[0, :, 2]).max() > 1e-2  # other start headings
 
 
 def test_rounds_run_under_the_policys_own_physics(tmp_path, monkeypatch):
