@@ -260,6 +260,7 @@ class RewardConfig:
     # term steers back toward a goal the robot has drifted away from (kernels/rewards.py). False: the paper's.
     direction_to_goal: bool = True
     stability_penalty: float = 100.0  # Table 1: r_s = -100, weight 1
+    stability_tilt: float = math.pi / 6  # Table 1: r_s while |roll| or |pitch| > pi/6 [rad] (kernels/rewards.py)
     forward_penalty: float = 0.3  # Table 1: r_f = -0.3, weight 1
     # ours: more than w_d / (1 - gamma) = 100, what lingering by the goal is worth (kernels/rewards.py)
     goal_bonus: float = 300.0

@@ -269,7 +269,8 @@ class HexapodEnv(VecEnv):
             rewards_kernel, dim=n,
             inputs=[w.joint_q_wp, self.rpy, self.status, w.height_field, w.start_wp, t.goal_distance, t.goal_radius,
                     r.w_height, r.w_direction, r.w_distance, r.direction_deadband, int(r.direction_to_goal),
-                    r.stability_penalty, r.forward_penalty, r.goal_bonus, r.off_course_penalty, t.control_dt],
+                    r.stability_penalty, r.stability_tilt, r.forward_penalty, r.goal_bonus, r.off_course_penalty,
+                    t.control_dt],
             outputs=[self.prev_x, self.reward, self.terms], device=dev,
         )  # fmt: skip
         wp.launch(

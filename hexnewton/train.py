@@ -350,6 +350,9 @@ def main(argv: list[str] | None = None) -> int:
                    help="paid once on reaching the goal (ours; see kernels/rewards.py)")
     p.add_argument("--off_course_penalty", type=float, default=RewardConfig.off_course_penalty,
                    help="paid once on leaving the course (ours; 0: the paper's reward, see kernels/rewards.py)")
+    p.add_argument("--stability_tilt", type=float, default=RewardConfig.stability_tilt,
+                   help="roll / pitch [rad] beyond which r_s fines every step (Table 1: pi/6; 8 cm stairs pitch the "
+                        "torso ~25 deg, see kernels/rewards.py)")
     add_update_args(p)
     args = p.parse_args(argv)
     if args.preset not in PRESETS:
@@ -358,6 +361,8 @@ def main(argv: list[str] | None = None) -> int:
         raise ValueError("--max_minutes must be positive")
     if args.action_std is not None and not args.action_std > 0:
         raise ValueError("--action_std must be positive")
+    if not 0 < args.stability_tilt < math.pi / 2:
+        raise ValueError("--stability_tilt must lie in (0, pi/2) rad")
     if args.std_max is not None and not args.std_max > 0:
         raise ValueError("--std_max must be positive")
     if args.target_success is not None and not 0 < args.target_success <= 1:
@@ -392,7 +397,7 @@ def main(argv: list[str] | None = None) -> int:
         task=dataclasses.replace(TaskConfig(), seed=seed, goal_distance=args.goal_distance),
         reward=dataclasses.replace(RewardConfig(), direction_deadband=args.direction_deadband,
                                    direction_to_goal=not args.direction_from_start, goal_bonus=args.goal_bonus,
-                                   off_course_penalty=args.off_course_penalty),
+                                   off_course_penalty=args.off_course_penalty, stability_tilt=args.stability_tilt),
         randomization=RandomizationConfig(enabled=args.randomize),
         cpg=trained.cpg if args.a2_range is None else CPGConfig(a2_range=tuple(args.a2_range)),
     )

@@ -202,20 +202,22 @@ def test_joint_actions_kernel_matches_reference():
 # ------------------------------------------------------------------ rewards (Table 1, Eq. 5)
 
 
-def _reward_args(dt=TASK.control_dt, deadband=REW.direction_deadband, to_goal=REW.direction_to_goal):
+def _reward_args(dt=TASK.control_dt, deadband=REW.direction_deadband, to_goal=REW.direction_to_goal,
+                 tilt=REW.stability_tilt):  # fmt: skip
     return (TASK.goal_distance, TASK.goal_radius, REW.w_height, REW.w_direction, REW.w_distance, deadband,
-            int(to_goal), REW.stability_penalty, REW.forward_penalty, REW.goal_bonus, REW.off_course_penalty, dt)  # fmt: skip
+            int(to_goal), REW.stability_penalty, tilt, REW.forward_penalty, REW.goal_bonus,
+            REW.off_course_penalty, dt)  # fmt: skip
 
 
 def _run_rewards(grid, q, rpy, status, start, prev_x, dt=TASK.control_dt, deadband=REW.direction_deadband,
-                 to_goal=REW.direction_to_goal):  # fmt: skip
+                 to_goal=REW.direction_to_goal, tilt=REW.stability_tilt):  # fmt: skip
     n = len(q)
     hf = height_field_from_grid(grid, DEV)
     px, rew, terms = wp.array(prev_x.astype(np.float32), device=DEV), wp.zeros(n, device=DEV), wp.zeros((n, len(TERMS)), device=DEV)
     f = lambda a, **k: wp.array(np.asarray(a, np.float32), device=DEV, **k)  # noqa: E731
     wp.launch(rewards_kernel, dim=n,
               inputs=[f(q), f(rpy), wp.array(np.asarray(status, np.int32), device=DEV), hf, f(start, dtype=wp.vec2),
-                      *_reward_args(dt, deadband, to_goal)],
+                      *_reward_args(dt, deadband, to_goal, tilt)],
               outputs=[px, rew, terms], device=DEV)  # fmt: skip
     return rew.numpy(), terms.numpy(), px.numpy()
 
@@ -233,12 +235,13 @@ def test_reward_kernel_matches_reference_on_random_states():
     status = rng.integers(0, 5, n)
     start = rng.uniform(-0.2, 0.2, (n, 2))
     prev_x = q[:, 0] - rng.uniform(-0.01, 0.01, n)
-    # ours, and Table 1's dead band and start-to-goal direction
-    for dt, deadband, to_goal in ((0.02, 0.0, True), (0.04, 0.0, True), (0.02, math.pi / 6, False)):
-        rew, terms, px = _run_rewards(grid, q, rpy, status, start, prev_x, dt, deadband, to_goal)
+    # ours, Table 1's dead band and start-to-goal direction, and a wider stability tilt (--stability_tilt)
+    for dt, deadband, to_goal, tilt in ((0.02, 0.0, True, REW.stability_tilt), (0.04, 0.0, True, REW.stability_tilt),
+                                        (0.02, math.pi / 6, False, REW.stability_tilt), (0.02, 0.0, True, 0.8)):
+        rew, terms, px = _run_rewards(grid, q, rpy, status, start, prev_x, dt, deadband, to_goal, tilt)
         ref_rew, ref_terms = rewards_reference(q.astype(np.float32), rpy.astype(np.float32), status, ground,
                                                start.astype(np.float32), prev_x.astype(np.float32),
-                                               *_reward_args(dt, deadband, to_goal))  # fmt: skip
+                                               *_reward_args(dt, deadband, to_goal, tilt))  # fmt: skip
         np.testing.assert_allclose(terms, ref_terms, rtol=1e-4, atol=1e-4)
         np.testing.assert_allclose(rew, ref_rew, rtol=1e-4, atol=1e-3)
         np.testing.assert_allclose(px, q[:, 0], atol=1e-6)
@@ -260,6 +263,12 @@ def test_reward_terms_on_hand_made_states():
     np.testing.assert_allclose(t["height"], [0.02, 0.0, 0.02, 0.02, 0.02], atol=1e-6)  # z - 0.11 when z > 0.12
     np.testing.assert_allclose(t["distance"][0], math.exp(-(3.0 - 0.5)), rtol=1e-5)  # exp(-(d_n - d_t))
     np.testing.assert_allclose(t["stability"], [0, -100, 0, 0, 0])
+    # pitched 35 deg nose-up (an 8 cm staircase): fined under Table 1's pi/6, free under --stability_tilt 0.8
+    rpy[0, 1] = -math.radians(35)
+    for tilt, expect in ((math.pi / 6, -100.0), (0.8, 0.0)):
+        _, terms, _ = _run_rewards(grid, q, rpy, status, np.zeros((5, 2)), prev_x, tilt=tilt)
+        assert terms[0, TERMS.index("stability")] == pytest.approx(expect)
+    rpy[0, 1] = 0.0
     np.testing.assert_allclose(t["forward"], [0, -0.3, 0, 0, -0.3])
     np.testing.assert_allclose(t["goal"], [0, 0, 300, 0, 0])  # ours: more than lingering by the goal is worth
     np.testing.assert_allclose(t["off_course"], [0, 0, 0, 0, -100])  # ours: leaving the course costs a fall

@@ -22,7 +22,10 @@ not scaled.
 - r_d (distance), "exp(-(d_n - d_t))": d_n is the distance to the goal and d_t the goal radius, so
   r_d = 1 on reaching the goal.
 - r_s (stability), "-100 if z_r < 0.05 or |θ_y| > π/6 or |θ_x| > π/6", weight 1. Paid per (20 ms) step while
-  the condition holds. A fall (z < 0.05, or tilt > π/3) ends the episode at that step.
+  the condition holds. A fall (z < 0.05, or tilt > π/3) ends the episode at that step. The π/6 is
+  ``RewardConfig.stability_tilt`` (``train.py --stability_tilt``): climbing 8 cm stairs pitches this robot's
+  torso by 25° on average (its stance pose is fixed, so the body follows the feet: front feet one or two steps
+  above the rear ones), and a -100 fine on every step beyond 30° makes falling cheaper than climbing.
 - r_f (forward), "-0.3 if x_r - x_pr < 0.01", weight 1. The paper's step is unstated. 1 cm per 20 ms would
   be 0.5 m/s, twice what the fixed CPG walks. We read the threshold as a speed, ``FORWARD_MIN_SPEED`` =
   0.1 m/s along +x (the start-to-goal direction), i.e. 2 mm per 20 ms step.
@@ -66,6 +69,7 @@ def rewards_kernel(
     direction_deadband: float,
     direction_to_goal: int,
     stability_penalty: float,
+    stability_tilt: float,
     forward_penalty: float,
     goal_bonus: float,
     off_course_penalty: float,
@@ -98,7 +102,7 @@ def rewards_kernel(
     r_dir = wp.min(0.0, wp.cos(rpy[e, 2] - bearing) - wp.cos(direction_deadband))
     d_n = wp.length(to_goal)
     r_d = wp.exp(-(d_n - goal_radius))
-    tilted = wp.abs(rpy[e, 0]) > wp.pi / 6.0 or wp.abs(rpy[e, 1]) > wp.pi / 6.0
+    tilted = wp.abs(rpy[e, 0]) > stability_tilt or wp.abs(rpy[e, 1]) > stability_tilt
     r_s = float(0.0)
     if z < 0.05 or tilted or st == FELL:
         r_s = -stability_penalty
@@ -128,8 +132,8 @@ def rewards_kernel(
 
 
 def rewards_reference(joint_q, rpy, status, ground, start, prev_x, goal_distance, goal_radius, w_height, w_direction,
-                      w_distance, direction_deadband, direction_to_goal, stability_penalty, forward_penalty,
-                      goal_bonus, off_course_penalty, control_dt):  # fmt: skip
+                      w_distance, direction_deadband, direction_to_goal, stability_penalty, stability_tilt,
+                      forward_penalty, goal_bonus, off_course_penalty, control_dt):  # fmt: skip
     """Float64 reference of :func:`rewards_kernel` (finite states); ``ground`` (N,) is the terrain under the base.
 
     Returns (reward (N,), terms (N, 7))."""
@@ -143,7 +147,7 @@ def rewards_reference(joint_q, rpy, status, ground, start, prev_x, goal_distance
     r_dir = np.minimum(0.0, np.cos(rpy[:, 2] - bearing) - np.cos(direction_deadband))
     d_n = np.hypot(gx, gy)
     r_d = np.exp(-(d_n - goal_radius))
-    tilted = (np.abs(rpy[:, 0]) > np.pi / 6) | (np.abs(rpy[:, 1]) > np.pi / 6)
+    tilted = (np.abs(rpy[:, 0]) > stability_tilt) | (np.abs(rpy[:, 1]) > stability_tilt)
     r_s = np.where((z < 0.05) | tilted | (np.asarray(status) == FELL), -stability_penalty, 0.0)
     r_f = np.where(jq[:, 0] - np.asarray(prev_x, np.float64) < FORWARD_MIN_SPEED * control_dt, -forward_penalty, 0.0)
     r_g = np.where(np.asarray(status) == SUCCESS, goal_bonus, 0.0)
