@@ -58,5 +58,19 @@ train2)
   KEEP_ALL=1 SKIP_WARMUP=1 START_S=0 DEADLINE_S=${TRAIN_S:-400} bash scripts/device/train_runs.sh "${specs[@]}"
   EVAL_TIMEOUT_S=$(( ${DEADLINE_S:-590} - SECONDS )) evaluate_all 2
   ;;
-*) echo "usage: session8.sh train|evaluate|train2" >&2; exit 2;;
+train3)
+  # st8a2 resumed on three seeds until TRAIN_S; 1000 validation rounds (evaluate --seed 3000) pick one, whose
+  # 1000 test rounds (sampled and expected actions) are the report
+  KEEP_ALL=1 SKIP_WARMUP=1 START_S=0 DEADLINE_S=${TRAIN_S:-300} bash scripts/device/train_runs.sh \
+    "st8a3s23@0:${S8/--a2_range 0.9 1.3 /} --seed 23 --stability_tilt 0.8 --resume $(last st8a2)" \
+    "st8a3s33@1:${S8/--a2_range 0.9 1.3 /} --seed 33 --stability_tilt 0.8 --resume $(last st8a2)" \
+    "st8a3s43@2:${S8/--a2_range 0.9 1.3 /} --seed 43 --stability_tilt 0.8 --resume $(last st8a2)"
+  jobs=(); for r in st8a3s23@0 st8a3s33@1 st8a3s43@2; do jobs+=("val_$r:$(ev st8 "$KEEP/${r%@*}.pt") --seed 3000"); done
+  EVALS=/root/val3 EVAL_TIMEOUT_S=120 bash scripts/device/eval_jobs.sh "${jobs[@]}"; mv "$OUT/evals.tgz" "$OUT/val3.tgz"
+  best=$(python -c "import json,sys; r={n: json.load(open(f'/root/val3/val_{n}/results.json'))['results']['stepped']['cpg_rl']['success_5m'] for n in sys.argv[1:]}; print(max(r, key=r.get))" st8a3s23 st8a3s33 st8a3s43)
+  echo "best on validation: $best"
+  EVALS=/root/test3 EVAL_TIMEOUT_S=$(( ${DEADLINE_S:-480} - SECONDS )) bash scripts/device/eval_jobs.sh \
+    "test_$best@0:$(ev st8 "$KEEP/$best.pt")" "test_${best}_expected@1:$(ev st8 "$KEEP/$best.pt" | sed 's/--stochastic/--expected/')"
+  ;;
+*) echo "usage: session8.sh train|evaluate|train2|train3" >&2; exit 2;;
 esac
