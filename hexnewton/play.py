@@ -28,7 +28,7 @@ from dataclasses import replace
 import numpy as np
 
 from .cli import ArgumentParser, positive_int, run, terrain_name
-from .config import JOINT_NAMES, TERRAINS, HexConfig, TaskConfig, TerrainConfig
+from .config import JOINT_NAMES, TERRAINS, HexConfig, TaskConfig, TerrainConfig, terrain_for_goal
 from .kernels.terminations import STATUS_NAMES
 
 CONTROLLERS = {"cpg": "cpg", "cpg_rl": "cpg", "joint": "joint"}  # controller -> env action mode
@@ -241,6 +241,8 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--steps", type=positive_int, default=500, help="control steps (20 ms each by default)")
     p.add_argument("--device", default=None, help="cpu, cuda or cuda:N (default: cuda if present, else cpu)")
     p.add_argument("--seed", type=int, default=0, help="terrain and reset seed")
+    p.add_argument("--step_rise", type=float, default=TerrainConfig.step_rise, help="step height [m] (§3.1: 0.06)")
+    p.add_argument("--goal_distance", type=float, default=TaskConfig.goal_distance, help="goal ahead of the start [m]")
     p.add_argument("--reset_yaw", type=float, default=0.0,
                    help="start yaw noise [rad] (training uses 0.2; 0 starts every robot facing its goal)")
     p.add_argument("--record", metavar="PATH.npz", help="save the rollout (first terrain)")
@@ -279,8 +281,9 @@ def main(argv: list[str] | None = None) -> int:
     for i, terrain in enumerate(args.terrain):
         cfg = HexConfig(
             sim=replace(trained.sim, num_envs=args.num_envs, device=args.device),  # the policy's own physics
-            terrain=TerrainConfig(name=terrain, seed=args.seed),
-            task=replace(TaskConfig(), seed=args.seed, reset_yaw=args.reset_yaw),
+            terrain=terrain_for_goal(TerrainConfig(name=terrain, seed=args.seed, step_rise=args.step_rise),
+                                     args.goal_distance),
+            task=replace(TaskConfig(), seed=args.seed, reset_yaw=args.reset_yaw, goal_distance=args.goal_distance),
             cpg=trained.cpg,  # the policy's own parameter ranges
         )
         env = make_env(cfg, mode)

@@ -372,7 +372,9 @@ def test_training_writes_checkpoint_onnx_and_tensorboard(trained):
 def test_play_loads_the_trained_checkpoint(trained):
     logs, _ = trained
     proc = subprocess.run([sys.executable, "play.py", "--controller", "cpg_rl", "--log_dir", str(logs), "--num_envs",
-                           "2", "--steps", "10", "--device", "cpu"], capture_output=True, text=True, timeout=600)  # fmt: skip
+                           "2", "--steps", "10", "--device", "cpu", "--terrain", "flat", "stepped",
+                           "--step_rise", "0.08", "--goal_distance", "5.5"],
+                          capture_output=True, text=True, timeout=600)  # fmt: skip
     assert proc.returncode == 0, proc.stderr[-3000:]
     assert "[cpg_rl (" in proc.stdout and "model_1.pt" in proc.stdout
 
@@ -415,6 +417,9 @@ def test_bad_checkpoints_are_one_line_errors(trained, tmp_path):
         (["train.py", "--frame_dt", "0.015"], "must be a positive multiple of sim.frame_dt"),
         (["train.py", "--a2_range", "1.0", "0.5"], "--a2_range must satisfy"),
         (["train.py", "--a2_range", "0.9", "1.3", "--resume", str(corrupt)], "--a2_range is for new runs"),
+        (["train.py", "--stability_tilt", "2"], "--stability_tilt must lie in (0, pi/2)"),
+        (["play.py", "--goal_distance", "0.2", "--steps", "1"], "goal_distance must exceed"),
+        (["play.py", "--terrain", "stepped", "--step_rise", "-0.1", "--steps", "1"], "step_rise must be >= 0"),
     ]
     before = sorted(glob.glob(str(logs / "**"), recursive=True))
     for args, message in cases:
