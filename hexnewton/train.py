@@ -352,7 +352,7 @@ def main(argv: list[str] | None = None) -> int:
                    help="paid once on leaving the course (ours; 0: the paper's reward, see kernels/rewards.py)")
     p.add_argument("--stability_tilt", type=float, default=RewardConfig.stability_tilt,
                    help="roll / pitch [rad] beyond which r_s fines every step (Table 1: pi/6; 8 cm stairs pitch the "
-                        "torso ~25 deg, see kernels/rewards.py)")
+                        "torso 19-25 deg, see kernels/rewards.py)")
     add_update_args(p)
     args = p.parse_args(argv)
     if args.preset not in PRESETS:

@@ -24,7 +24,7 @@ not scaled.
 - r_s (stability), "-100 if z_r < 0.05 or |θ_y| > π/6 or |θ_x| > π/6", weight 1. Paid per (20 ms) step while
   the condition holds. A fall (z < 0.05, or tilt > π/3) ends the episode at that step. The π/6 is
   ``RewardConfig.stability_tilt`` (``train.py --stability_tilt``): climbing 8 cm stairs pitches this robot's
-  torso by 25° on average (its stance pose is fixed, so the body follows the feet: front feet one or two steps
+  torso by 19-25° on average (its stance pose is fixed, so the body follows the feet: front feet one or two steps
   above the rear ones), and a -100 fine on every step beyond 30° makes falling cheaper than climbing.
 - r_f (forward), "-0.3 if x_r - x_pr < 0.01", weight 1. The paper's step is unstated. 1 cm per 20 ms would
   be 0.5 m/s, twice what the fixed CPG walks. We read the threshold as a speed, ``FORWARD_MIN_SPEED`` =
