@@ -205,14 +205,28 @@ class CPGConfig:
     fixed_a2: float = 0.5
     fixed_a3: float = 0.5
 
-    def fixed_params(self) -> list[float]:
-        """The fixed baseline's 15 parameters in PARAM_NAMES order."""
-        return [self.fixed_omega] + [self.fixed_a1] * 2 + [self.fixed_a2] * 6 + [self.fixed_a3] * 6
+    def fixed_params(self, gait: str = "default") -> list[float]:
+        """A fixed baseline's 15 parameters in PARAM_NAMES order: ``default`` (the ``fixed_*`` fields) or a gait of
+        ``FIXED_GAITS`` (``swept``: the best of the documented sweep, ``hexnewton.cpg_sweep``)."""
+        omega, a1, a2, a3 = (self.fixed_omega, self.fixed_a1, self.fixed_a2, self.fixed_a3) if gait == "default" \
+            else FIXED_GAITS[gait]
+        return gait_params(omega, a1, a2, a3)
 
     def param_ranges(self) -> tuple[list[float], list[float]]:
         """(lower, upper) bounds of the 15 parameters in PARAM_NAMES order."""
         rows = [self.omega_range] + [self.a1_range] * 2 + [self.a2_range] * 6 + [self.a3_range] * 6
         return [r[0] for r in rows], [r[1] for r in rows]
+
+
+def gait_params(omega: float, a1: float, a2: float, a3: float) -> list[float]:
+    """One fixed gait (the same amplitude on every leg) as the 15 parameters in PARAM_NAMES order."""
+    return [omega] + [a1] * 2 + [a2] * 6 + [a3] * 6
+
+
+#: Fixed CPG gaits (omega [rad/s], A1, A2, A3 [rad]) besides ``CPGConfig.fixed_*``: ``swept`` is the best gait of the
+#: sweep in results/cpg_sweep (``python -m hexnewton.cpg_sweep``; highest mean success at 3 m over rugged, stepped and
+#: complex ground, then the lowest pitch + roll variance), the fair fixed baseline.
+FIXED_GAITS = {"swept": (3.0 * math.pi, 0.3, 1.1, 0.5)}
 
 
 @dataclass
@@ -267,6 +281,22 @@ class RewardConfig:
     # ours: paid once on leaving the course (§2.4.4 (2)); without it PPO walks off the course when stuck at a
     # step (kernels/rewards.py). 0 restores the paper's reward.
     off_course_penalty: float = 100.0
+    # ours: gait-quality terms (kernels/rewards.py, "Stability shaping"), each per 20 ms step and 0 = off (Table 1
+    # has only the -100 fine beyond pi/6). Body tilt: -w_tilt (roll^2 + pitch^2) [rad^2]; body roll and pitch rate:
+    # -w_ang_vel (w_x^2 + w_y^2) [(rad/s)^2, body frame]; action rate: -w_action_rate sum_k (a_k - a_k,prev)^2 over
+    # the 15 actions in [-1, 1]. ``paper_reward()`` switches them off with the other additions.
+    w_tilt: float = 2.0
+    w_ang_vel: float = 0.02
+    w_action_rate: float = 0.05
+
+    def paper_reward(self) -> "RewardConfig":
+        """Table 1 as written: no goal bonus, no off-course penalty, no gait-quality terms, the π/6 dead band on the
+        start-to-goal direction (the weights w_h, w_d, w_theta, which the paper does not give, stay ours)."""
+        from dataclasses import replace
+
+        return replace(self, direction_deadband=math.pi / 6, direction_to_goal=False, goal_bonus=0.0,
+                       off_course_penalty=0.0, stability_tilt=math.pi / 6, w_tilt=0.0, w_ang_vel=0.0,
+                       w_action_rate=0.0)  # fmt: skip
 
 
 @dataclass

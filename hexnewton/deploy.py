@@ -13,8 +13,9 @@ Per control step (``control_dt``, 20 ms by default) :meth:`Controller.step` take
 - the goal relative to the robot in its heading frame (:func:`target_in_heading_frame`);
 - the highest terrain within ±30 cm minus the ground under the robot (0 without a terrain sensor).
 
-It runs the policy (its mean action; with ``stochastic=True`` an action sampled from the trained Gaussian, as
-in training: the session-5 step-climbing policy needs the sampling, RESULTS.md), scales its 15 actions to
+It runs the policy's deterministic action (the mean of its Beta distribution, computed inside ``policy.onnx``;
+older Gaussian bundles can also sample, ``stochastic=True``, or take the expected clipped action,
+``expected=True``), scales its 15 actions to
 (omega, A1, A2, A3), then integrates the two Hopf oscillators (Eq. 3, RK4) and applies the mapping function
 (Eq. 4) every ``substep_dt`` (2.5 ms by default), exactly as the simulator does. It returns the 18 joint
 position targets at the end of the step (all substeps' targets are in ``last_substep_targets``, for a servo
@@ -102,7 +103,8 @@ class Controller:
         if stochastic and expected:
             raise ValueError("choose sampled (stochastic) or expected actions, not both")
         if (stochastic or expected) and "action_std" not in spec:
-            raise ValueError(f"{bundle}: controller.json has no action_std (exported before sampled actions)")
+            raise ValueError(f"{bundle}: sampled and expected actions need a Gaussian policy's action_std; this "
+                             f"bundle's policy ({spec.get('distribution', 'gaussian')}) runs its deterministic action")
         self.stochastic, self.expected = stochastic, expected
         self.action_std = np.asarray(spec.get("action_std", np.zeros(spec["num_actions"])), np.float64)
         self.rng = np.random.default_rng(seed)

@@ -4,7 +4,7 @@ One ``step(actions)`` is one control step (``TaskConfig.control_dt``). Apart fro
 single captured graph (a CUDA graph on GPU, Warp's capture on CPU) of Warp kernels on preallocated arrays:
 
     actions -> parameters (kernels/actions.py)  -> [CPG (cpg.py) + mapping (mapping.py) + physics] x substeps
-            -> episode ends (terminations.py)   -> rewards (rewards.py) -> episode bookkeeping
+            -> episode ends (terminations.py)   -> rewards, stability shaping (rewards.py) -> episode bookkeeping
             -> [curriculum lane change (curriculum.py)] -> randomised resets of finished envs (resets.py)
             -> observations (observations.py)
 
@@ -48,7 +48,7 @@ from .kernels.actions import joint_actions_kernel, scale_actions_kernel
 from .kernels.curriculum import curriculum_kernel, placement_kernel, start_levels
 from .kernels.observations import OBS_DIM, OBS_LAYOUT, observations_kernel
 from .kernels.randomization import delay_actions_kernel, observation_noise_kernel, push_kernel
-from .kernels.rewards import TERMS, rewards_kernel
+from .kernels.rewards import TERMS, rewards_kernel, shaping_kernel
 from .kernels.terminations import NONFINITE, STATUS_NAMES, TIMEOUT, episode_status_kernel
 from .robot import BASE_Q
 from .sim import HexnewtonError, World, capture_graph
@@ -130,7 +130,9 @@ class HexapodEnv(VecEnv):
         self.obs = z(n, self.num_obs)
         # the state at the end of the last step, before finished envs were reset (play.py records these)
         self.last_q, self.last_start = z(n, 7 + 18), wp.zeros(n, dtype=wp.vec2, device=dev)
+        self.last_qd = z(n, 6 + 18)
         self.last_cpg_state, self.last_params = z(n, 4), z(n, 15)
+        self.prev_actions = z(n, self.num_actions)  # the policy's last actions (action-rate term)
         self._cursor = z(1, dtype=wp.int32)
         self._nonfinite_total = z(1, dtype=wp.int32)  # blown-up envs reset since the env was built
         # finished episodes: status one-hot (5), distance, length, curriculum level
@@ -229,6 +231,7 @@ class HexapodEnv(VecEnv):
         s = self.world.state_0
         arrays = [s.joint_q, s.joint_qd, s.body_q, s.body_qd, self.episode_steps, self.prev_x, self.world.start_wp,
                   self._ring, self._cursor, self.obs, self.reward, self.done_u8, self.time_out]  # fmt: skip
+        arrays.append(self.prev_actions)
         if self.controller is not None:
             arrays += [self.controller.params, self.controller.params_target, self.controller.state]
         if self.level is not None:
@@ -274,12 +277,19 @@ class HexapodEnv(VecEnv):
             outputs=[self.prev_x, self.reward, self.terms], device=dev,
         )  # fmt: skip
         wp.launch(
+            shaping_kernel, dim=n,
+            inputs=[w.joint_q_wp, w.joint_qd_wp, self.rpy, self.actions, self.episode_steps, r.w_tilt, r.w_ang_vel,
+                    r.w_action_rate, t.control_dt],
+            outputs=[self.prev_actions, self.reward, self.terms], device=dev,
+        )  # fmt: skip
+        wp.launch(
             _bookkeeping, dim=n,
             inputs=[self.status, w.joint_q_wp, w.start_wp, self.level if self.level is not None else self._no_level],
             outputs=[self.episode_steps, self.done, self.done_u8, self.time_out, self._cursor, self._ring,
                      self._nonfinite_total], device=dev,
         )  # fmt: skip
         wp.copy(self.last_q, w.joint_q_wp)
+        wp.copy(self.last_qd, w.joint_qd_wp)
         wp.copy(self.last_start, w.start_wp)
         if self.controller is not None:
             wp.copy(self.last_cpg_state, self.controller.state)

@@ -61,9 +61,37 @@ EVAL_TERRAIN_SEED = 1000
 EVAL_RESET_SEED = 2000
 START_SEED_OFFSET = EVAL_RESET_SEED - EVAL_TERRAIN_SEED  # --seed S: terrain seed S, start seed S + 1000
 # controller -> env action mode; *_cpg are the Stable-Baselines3 baselines (hexnewton.baselines)
-CONTROLLERS = {"cpg": "cpg", "cpg_rl": "cpg", "joint": "joint", "sac_cpg": "cpg", "td3_cpg": "cpg", "a2c_cpg": "cpg"}
-LABELS = {"cpg": "CPG", "cpg_rl": "CPG_RL", "joint": "pure DRL", "sac_cpg": "SAC-CPG", "td3_cpg": "TD3-CPG",
-          "a2c_cpg": "A2C-CPG"}  # fmt: skip
+CONTROLLERS = {"cpg": "cpg", "cpg_swept": "cpg", "cpg_rl": "cpg", "joint": "joint", "sac_cpg": "cpg", "td3_cpg": "cpg",
+               "a2c_cpg": "cpg"}  # fmt: skip
+FIXED = {"cpg": "default", "cpg_swept": "swept"}  # fixed-parameter controllers -> config.FIXED_GAITS
+LABELS = {"cpg": "CPG", "cpg_swept": "CPG (swept)", "cpg_rl": "CPG_RL", "joint": "pure DRL", "sac_cpg": "SAC-CPG",
+          "td3_cpg": "TD3-CPG", "a2c_cpg": "A2C-CPG"}  # fmt: skip
+#: Named perturbations beyond the training ranges (RandomizationConfig: friction 0.4-1.2, payload -0.2..0.6 kg,
+#: gains and effort x0.8-1.2, half the envs 20 ms late, pushes of 0.3 m/s every 6 s; 6 cm steps and blocks). Each
+#: changes one thing; everything else is the nominal robot. Values: (RandomizationConfig fields, TerrainConfig fields).
+_NOMINAL = dict(friction=(0.9, 0.9), payload=(0.0, 0.0), link_mass_scale=(1.0, 1.0), kp_scale=(1.0, 1.0),
+                kd_scale=(1.0, 1.0), effort_scale=(1.0, 1.0), latency_share=0.0, noise_joint_pos=0.0,
+                noise_joint_vel=0.0, noise_target=0.0, noise_quat=0.0, noise_height=0.0, push_velocity=0.0)
+PERTURBATIONS = {
+    "nominal": ({}, {}),
+    "friction_0.3": ({"friction": (0.3, 0.3)}, {}),
+    "payload_0.8kg": ({"payload": (0.8, 0.8)}, {}),
+    "motors_0.6": ({"kp_scale": (0.6, 0.6), "effort_scale": (0.6, 0.6)}, {}),
+    "push_0.6m/s": ({"push_velocity": 0.6, "push_interval": 3.0}, {}),
+    "latency_40ms": ({"latency_share": 1.0}, {}),  # every env one control step late, plus the 20 ms step itself
+    "sensor_noise_x2": ({"noise_joint_pos": 0.02, "noise_joint_vel": 1.0, "noise_target": 0.1, "noise_quat": 0.04,
+                         "noise_height": 0.02}, {}),
+    "steps_7cm": ({}, {"step_rise": 0.07}),
+    "blocks_8cm": ({}, {"block_height_max": 0.08}),
+}  # fmt: skip
+
+
+def perturbation(name: str) -> tuple[RandomizationConfig | None, dict]:
+    """The randomisation (None: off) and terrain overrides of a named perturbation (``PERTURBATIONS``)."""
+    if name not in PERTURBATIONS:
+        raise ValueError(f"unknown perturbation '{name}': choose from {', '.join(PERTURBATIONS)}")
+    rz, terrain = PERTURBATIONS[name]
+    return (RandomizationConfig(enabled=True, **{**_NOMINAL, **rz}) if rz else None), terrain
 SB3 = {"sac_cpg": "sac", "td3_cpg": "td3", "a2c_cpg": "a2c"}
 # Table 3 of Huang et al. 2025 (25 rounds): success [%] at 0.5, 1, 2, 3 m
 PAPER_TABLE3 = {
@@ -117,8 +145,30 @@ def round_metrics(pos: np.ndarray, rpy: np.ndarray, done: np.ndarray, status: np
             "in_episode": in_episode}  # fmt: skip
 
 
+def gait_quality(metrics: dict, ang_rate: np.ndarray, dparam: np.ndarray, daction: np.ndarray) -> dict:
+    """Body roll / pitch rate RMS [deg/s] and the mean change per control step of the CPG parameters (filtered, as
+    the oscillators see them) and of the policy's requested parameters, in % of each parameter's range, over every
+    step of every round's first episode (from its second step)."""
+    mask = metrics["in_episode"]
+    later = mask.copy()
+    later[0] = False
+    deg = 180.0 / math.pi
+    out = {}
+    for i, name in ((0, "roll"), (1, "pitch")):
+        r = np.asarray(ang_rate[..., i], np.float64)[mask]
+        r = r[np.isfinite(r)]
+        out[f"{name}_rate_rms_deg_s"] = float(np.sqrt(np.mean(r * r)) * deg) if r.size else None
+    for key, arr in (("param_change_pct", dparam), ("action_change_pct", daction)):
+        v = np.asarray(arr, np.float64)[later]
+        v = v[np.isfinite(v)]
+        out[key] = float(100.0 * v.mean()) if v.size else None
+    return out
+
+
 def summarize(metrics: dict, rpy: np.ndarray, distances: tuple[float, ...] = DISTANCES) -> dict:
-    """Rates and stability over all rounds (JSON-ready; angles in degrees)."""
+    """Rates and stability over all rounds (JSON-ready; angles in degrees): success and time at each distance, the
+    paper's roll / pitch mean, variance and peak, the 99.9th percentile of |roll| and |pitch|, the share of rounds
+    that ended in a fall (anywhere, also after the last distance), Y deviation and how the rounds ended."""
     deg = 180.0 / math.pi
     mask = metrics["in_episode"]
     rpy = np.asarray(rpy, np.float64)
@@ -132,6 +182,10 @@ def summarize(metrics: dict, rpy: np.ndarray, distances: tuple[float, ...] = DIS
         out[f"{name}_mean_deg"] = float(a.mean()) if a.size else None
         out[f"{name}_var_deg2"] = float(a.var()) if a.size else None
         out[f"{name}_peak_deg"] = float(np.abs(a).max()) if a.size else None
+    for i, name in ((0, "roll"), (1, "pitch")):  # gait quality beyond the paper's mean / variance / peak
+        a = np.abs(rpy[..., i][mask & np.isfinite(rpy[..., i])]) * deg
+        out[f"{name}_p999_deg"] = float(np.percentile(a, 99.9)) if a.size else None
+    out["fall_rate"] = float((metrics["end"] == FELL).mean())
     out["y_dev_mean_m"] = float(metrics["y_dev"].mean())
     out["y_dev_max_m"] = float(metrics["y_dev"].max())
     out["ended"] = {STATUS_NAMES[c]: int((metrics["end"] == c).sum()) for c in range(len(STATUS_NAMES))}
@@ -153,19 +207,26 @@ class Episode:
     status: np.ndarray  # (T, N)
     params: np.ndarray  # (T, 15) round 0's CPG parameters (physical units); NaN in joint mode
     dt: float
+    ang_rate: np.ndarray  # (T, N, 2) body roll and pitch rate [rad/s]
+    dparam: np.ndarray  # (T, N) mean |change| of the 15 filtered parameters since the last step / their ranges
+    daction: np.ndarray  # (T, N) the same for the parameters the policy asks for (params_target)
+    segments: dict  # complex course: mean parameters (physical units) on the blocks and on the stairs, all rounds
 
 
 def run_rounds(controller: str, checkpoint: str | None, terrain: str, rounds: int, device: str | None,
                max_steps: int, reset_yaw: float, progress: bool = True, randomize: bool = False,
                step_rise: float = TerrainConfig.step_rise, goal_distance: float = TaskConfig.goal_distance,
                stochastic: bool = False, physics: dict | None = None, expected: bool = False,
-               seed: int = EVAL_TERRAIN_SEED) -> Episode:
+               seed: int = EVAL_TERRAIN_SEED, randomization: RandomizationConfig | None = None,
+               terrain_overrides: dict | None = None, fixed_params: np.ndarray | None = None) -> Episode:
     """``rounds`` robots, one first episode each, with a deterministic controller on unseen seeds; with
     ``randomize``, under perturbed conditions (``RandomizationConfig`` drawn with the evaluation seed); with
     ``stochastic``, a learnt policy samples its actions from its Gaussian as in training (torch seeded with the
     evaluation seed); with ``expected``, the expected clipped action of that Gaussian. The physics (frame and
     substeps) is the policy's own, from its checkpoint, unless ``physics`` overrides fields of ``SimConfig``. ``seed``
-    is the terrain seed; the start poses (and sampled actions) use ``seed + START_SEED_OFFSET``."""
+    is the terrain seed; the start poses (and sampled actions) use ``seed + START_SEED_OFFSET``. ``randomization``
+    (a named perturbation) replaces ``randomize``'s training ranges; ``terrain_overrides`` changes ``TerrainConfig``
+    fields; ``fixed_params`` (N, 15) gives a fixed controller one gait per round (``hexnewton.cpg_sweep``)."""
     from .env import make_env
     from .play import fixed_cpg_actions, load_policy, stepped
 
@@ -173,16 +234,17 @@ def run_rounds(controller: str, checkpoint: str | None, terrain: str, rounds: in
 
     mode = CONTROLLERS[controller]
     trained = trained_config(load_checkpoint(checkpoint)) if controller in ("cpg_rl", "joint") else HexConfig()
+    ground = replace(TerrainConfig(name=terrain, seed=seed, step_rise=step_rise), **(terrain_overrides or {}))
     cfg = HexConfig(
         sim=replace(trained.sim, num_envs=rounds, device=device, **(physics or {})),
-        terrain=terrain_for_goal(TerrainConfig(name=terrain, seed=seed, step_rise=step_rise), goal_distance),
+        terrain=terrain_for_goal(ground, goal_distance),
         task=replace(TaskConfig(), seed=seed + START_SEED_OFFSET, reset_yaw=reset_yaw, goal_distance=goal_distance),
-        randomization=RandomizationConfig(enabled=randomize),
+        randomization=randomization or RandomizationConfig(enabled=randomize),
         cpg=trained.cpg,  # the policy's own parameter ranges
     )
     env = make_env(cfg, mode)
-    if controller == "cpg":
-        actions = fixed_cpg_actions(env)
+    if controller in FIXED:
+        actions = fixed_cpg_actions(env, FIXED[controller], fixed_params)
         policy = lambda obs: actions  # noqa: E731
     elif controller in SB3:
         from .baselines import load_sb3_policy
@@ -194,20 +256,45 @@ def run_rounds(controller: str, checkpoint: str | None, terrain: str, rounds: in
         import torch
 
         torch.manual_seed(seed + START_SEED_OFFSET)
-    pos, rpy, done, status, params = [], [], [], [], []
+    from .kernels.reference import quat_rotate_inv_np
+
+    lo, hi = (np.asarray(b, np.float64) for b in cfg.cpg.param_ranges())
+    split_x = ground.complex_rugged_length if terrain == "complex" else None
+    seg_sum, seg_n = {"blocks": np.zeros(15), "stairs": np.zeros(15)}, {"blocks": 0, "stairs": 0}
+    pos, rpy, done, status, params, ang_rate, dparam, daction = [], [], [], [], [], [], [], []
     finished = np.zeros(rounds, bool)
-    for _, st, _, p, r in stepped(env, policy, max_steps, f"{LABELS[controller]} on {terrain}", progress):
+    prev_p = prev_t = None
+    for _, st, q, p, r in stepped(env, policy, max_steps, f"{LABELS[controller]} on {terrain}", progress):
         pos.append(p[:, :2])
         rpy.append(r)
         done.append(st != 0)
         status.append(st.copy())
-        params.append(env.last_params.numpy()[0].copy() if mode == "cpg" else np.full(len(PARAM_NAMES), np.nan))
+        qd = env.last_qd.numpy()
+        ang_rate.append(quat_rotate_inv_np(q[:, 3:7], qd[:, 3:6])[:, :2].astype(np.float32))
+        if mode == "cpg":
+            pr, tg = env.last_params.numpy(), env.controller.params_target.numpy()
+            params.append(pr[0].copy())
+            change = lambda a, b: np.full(rounds, np.nan, np.float32) if b is None else \
+                (np.abs(a - b) / (hi - lo)).mean(axis=1).astype(np.float32)  # noqa: E731
+            dparam.append(change(pr, prev_p))
+            daction.append(change(tg, prev_t))
+            prev_p, prev_t = pr.copy(), tg.copy()
+            if split_x is not None:
+                alive = ~finished
+                for seg, sel in (("blocks", alive & (p[:, 0] < split_x)), ("stairs", alive & (p[:, 0] >= split_x))):
+                    seg_sum[seg] += pr[sel].sum(axis=0)
+                    seg_n[seg] += int(sel.sum())
+        else:
+            params.append(np.full(len(PARAM_NAMES), np.nan))
+            dparam.append(np.full(rounds, np.nan, np.float32))
+            daction.append(np.full(rounds, np.nan, np.float32))
         finished |= st != 0
         if finished.all():
             break
     env.world.check_contacts()
+    segments = {seg: (seg_sum[seg] / seg_n[seg]).tolist() for seg in seg_sum if seg_n[seg]}
     return Episode(np.stack(pos), np.stack(rpy), np.stack(done), np.stack(status), np.stack(params),
-                   cfg.task.control_dt)  # fmt: skip
+                   cfg.task.control_dt, np.stack(ang_rate), np.stack(dparam), np.stack(daction), segments)  # fmt: skip
 
 
 # ----------------------------------------------------------------------------------------------------
@@ -219,8 +306,9 @@ def _pct(v: float | None) -> str:
     return "—" if v is None else f"{100 * v:.0f}%"
 
 
-def report_markdown(results: dict, meta: dict) -> str:
-    """Table 3's shape (ours beside the paper's), then stability per terrain and controller."""
+def report_markdown(results: dict, meta: dict, robustness: dict | None = None) -> str:
+    """Table 3's shape (ours beside the paper's), stability and gait quality per terrain and controller, the
+    parameters on blocks and stairs, then one robustness table per controller (``robustness[name][ctrl][terrain]``)."""
     lines = ["# hexnewton evaluation", ""]
     lines += [f"- {k}: {v}" for k, v in meta.items()]
     distances = tuple(meta.get("distances", DISTANCES))
@@ -246,6 +334,45 @@ def report_markdown(results: dict, meta: dict) -> str:
             lines.append(f"| {terrain} | {LABELS[ctrl]} | {s['rounds']} | {ang['pitch']} | {ang['roll']} | "
                          f"{s['y_dev_mean_m']:.3f} / {s['y_dev_max_m']:.3f} | "
                          f"{'—' if t3 is None else f'{t3:.1f}'} | {ended} |")  # fmt: skip
+    lines += ["", "## Gait quality (deterministic actions unless stated in the header)", "",
+              "Falls: rounds that ended in a fall anywhere (also after the last distance). p99.9: the 99.9th percentile "
+              "of |angle| over every step. Rates: RMS of the body's roll / pitch rate. Δparam: mean change per "
+              "control step of the 15 CPG parameters the oscillators use (requested by the policy in brackets), in % "
+              "of each parameter's range. Ratios: variance against the fixed CPG's in the same run.", "",
+              "| terrain | method | falls | pitch var [deg²] | roll var [deg²] | \\|pitch\\| / \\|roll\\| p99.9 [deg] "
+              "| roll / pitch rate RMS [deg/s] | Δparam [%/step] | pitch / roll var ÷ CPG | ÷ CPG (swept) |",
+              "|---|---|---:|---:|---:|---|---|---|---|---|"]  # fmt: skip
+    f = lambda v, fmt=".1f": "—" if v is None else format(v, fmt)  # noqa: E731
+    for terrain, by_ctrl in results.items():
+        for ctrl, s in by_ctrl.items():
+            ratios = []
+            for base in ("cpg", "cpg_swept"):
+                b = by_ctrl.get(base)
+                ok = b and ctrl != base and b["pitch_var_deg2"] and b["roll_var_deg2"]
+                ratios.append(f"{s['pitch_var_deg2'] / b['pitch_var_deg2']:.2f} / "
+                              f"{s['roll_var_deg2'] / b['roll_var_deg2']:.2f}" if ok else "—")  # fmt: skip
+            lines.append(f"| {terrain} | {LABELS[ctrl]} | {s['ended'].get('fell', 0)} / {s['rounds']} | "
+                         f"{f(s['pitch_var_deg2'])} | {f(s['roll_var_deg2'])} | {f(s['pitch_p999_deg'])} / "
+                         f"{f(s['roll_p999_deg'])} | {f(s.get('roll_rate_rms_deg_s'))} / "
+                         f"{f(s.get('pitch_rate_rms_deg_s'))} | {f(s.get('param_change_pct'), '.2f')} "
+                         f"({f(s.get('action_change_pct'), '.2f')}) | {ratios[0]} | {ratios[1]} |")  # fmt: skip
+    segs = [(t, c, s["segments"]) for t, by in results.items() for c, s in by.items() if len(s.get("segments", {})) == 2]
+    if segs:
+        lines += ["", "## Parameters on the blocks and on the stairs (Fig. 5b; complex course, mean over all rounds)",
+                  "", "| method | where | " + " | ".join(PARAM_NAMES) + " |", "|---|---|" + "---:|" * len(PARAM_NAMES)]
+        for _, ctrl, seg in segs:
+            for where in ("blocks", "stairs"):
+                lines.append(f"| {LABELS[ctrl]} | {where} | " + " | ".join(f"{v:.2f}" for v in seg[where]) + " |")
+    robustness = robustness or {}
+    for ctrl in dict.fromkeys(c for by in robustness.values() for c in by):
+        lines += ["", f"## Robustness: {LABELS[ctrl]} under named perturbations (beyond the training ranges)", "",
+                  "| perturbation | terrain | " + " | ".join(f"{d:g} m" for d in distances) + " | falls | "
+                  "pitch var [deg²] | \\|pitch\\| p99.9 [deg] |", "|---|---|" + "---:|" * (len(distances) + 3)]  # fmt: skip
+        for name, by_ctrl in robustness.items():
+            for terrain, s in by_ctrl.get(ctrl, {}).items():
+                cells = " | ".join(_pct(s[f"success_{d:g}m"]) for d in distances)
+                lines.append(f"| {name} | {terrain} | {cells} | {s['ended'].get('fell', 0)} / {s['rounds']} | "
+                             f"{f(s['pitch_var_deg2'])} | {f(s['pitch_p999_deg'])} |")  # fmt: skip
     return "\n".join(lines) + "\n"
 
 
@@ -379,11 +506,17 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--goal_distance", type=float, default=TaskConfig.goal_distance,
                    help="goal ahead of the start [m]; the largest distance needs goal_distance - 0.5 or more")
     p.add_argument("--step_rise", type=float, default=TerrainConfig.step_rise, help="step height [m] (§3.1: 0.06)")
+    p.add_argument("--block_height_max", type=float, default=TerrainConfig.block_height_max,
+                   help="tallest rugged block [m] (§3.1: 0.06)")
     p.add_argument("--randomize", action="store_true",
                    help="perturbed conditions: friction, payload, masses, gains, latency, noise, pushes")
+    p.add_argument("--perturbations", nargs="+", default=[], metavar="NAME",
+                   help="also run every controller under these named perturbations beyond the training ranges, one "
+                        f"robustness table per controller: {', '.join(PERTURBATIONS)}")
     actions = p.add_mutually_exclusive_group()
     actions.add_argument("--stochastic", action="store_true",
-                         help="learnt policies sample their actions as in training (default: the mean action)")
+                         help="learnt policies sample their actions as in training (default: the deterministic "
+                              "action, the distribution's mean)")
     actions.add_argument("--expected", action="store_true",
                          help="learnt policies take the expected clipped action E[clip(a, -1, 1)] of their Gaussian "
                               "(deterministic; SB3 models: their deterministic action)")
@@ -411,16 +544,26 @@ def main(argv: list[str] | None = None) -> int:
         for terrain in args.terrains:
             if ctrl in SB3:
                 check_model_file(checkpoint_for(checkpoints, ctrl, terrain))
-            elif ctrl != "cpg":
+            elif ctrl not in FIXED:
                 load_checkpoint(checkpoint_for(checkpoints, ctrl, terrain))
     from .curves import read_curve
 
     for spec in runs.values():
         if "Train/mean_reward" not in read_curve(spec, "env_steps"):
             raise ValueError(f"no mean episode reward logged under {spec}")
+    for name in args.perturbations:
+        perturbation(name)
     physics = {k: v for k, v in (("frame_dt", args.frame_dt), ("substeps", args.substeps)) if v is not None}
     if args.frame_dt is not None:
         control_decimation(TaskConfig.control_dt, args.frame_dt)
+    # the fixed gaits walk under the first learnt policy's physics (the same run, the same simulator) unless told
+    learnt = [checkpoint_for(checkpoints, c, args.terrains[0]) for c in args.controllers if c in ("cpg_rl", "joint")]
+    fixed_physics = physics
+    if not physics and learnt:
+        from .train import trained_config
+
+        sim = trained_config(load_checkpoint(learnt[0])).sim
+        fixed_physics = {"frame_dt": sim.frame_dt, "substeps": sim.substeps}
     out = args.out or os.path.join("eval", datetime.datetime.now().strftime("%Y-%m-%d_%H-%M-%S"))
     if os.path.exists(out):
         raise ValueError(f"{out} exists: choose a new --out (nothing is overwritten)")
@@ -435,16 +578,21 @@ def main(argv: list[str] | None = None) -> int:
     results: dict[str, dict[str, dict]] = {}
     os.makedirs(out)
     t0 = time.perf_counter()
+    def evaluate_one(ctrl: str, terrain: str, randomization=None, terrain_overrides=None) -> tuple[dict, Episode, dict]:
+        ck = None if ctrl in FIXED else checkpoint_for(checkpoints, ctrl, terrain)
+        ep = run_rounds(ctrl, ck, terrain, args.rounds, device, args.max_steps, args.reset_yaw, progress,
+                        args.randomize, args.step_rise, args.goal_distance, args.stochastic,
+                        fixed_physics if ctrl in FIXED else physics, args.expected, args.seed, randomization,
+                        {"block_height_max": args.block_height_max, **(terrain_overrides or {})})  # fmt: skip
+        m = round_metrics(ep.pos, ep.rpy, ep.done, ep.status, ep.dt, distances)
+        s = summarize(m, ep.rpy, distances)
+        s.update(gait_quality(m, ep.ang_rate, ep.dparam, ep.daction), segments=ep.segments, checkpoint=ck)
+        return s, ep, m
+
     for terrain in args.terrains:
         episodes, metrics = {}, {}
         for ctrl in args.controllers:
-            ck = None if ctrl == "cpg" else checkpoint_for(checkpoints, ctrl, terrain)
-            ep = run_rounds(ctrl, ck, terrain, args.rounds, device, args.max_steps, args.reset_yaw, progress,
-                            args.randomize, args.step_rise, args.goal_distance, args.stochastic,
-                            physics, args.expected, args.seed)  # fmt: skip
-            m = round_metrics(ep.pos, ep.rpy, ep.done, ep.status, ep.dt, distances)
-            s = summarize(m, ep.rpy, distances)
-            s["checkpoint"] = ck
+            s, ep, m = evaluate_one(ctrl, terrain)
             results.setdefault(terrain, {})[ctrl] = s
             episodes[ctrl], metrics[ctrl] = ep, m
             print(f"{terrain:8s} {LABELS[ctrl]:8s} " + "  ".join(f"{d:g} m {_pct(s[f'success_{d:g}m'])}" for d in distances)
@@ -453,19 +601,30 @@ def main(argv: list[str] | None = None) -> int:
         plot_terrain(os.path.join(out, f"fig_{terrain}.png"), terrain, episodes, metrics)
         if terrain == args.terrains[0] and any(not np.isnan(ep.params).all() for ep in episodes.values()):
             plot_params(os.path.join(out, "fig_params.png"), terrain, episodes)
+    robustness: dict[str, dict[str, dict[str, dict]]] = {}
+    for name in args.perturbations:
+        rz, overrides = perturbation(name)
+        for terrain in args.terrains:
+            for ctrl in args.controllers:
+                s, _, _ = evaluate_one(ctrl, terrain, rz, overrides)
+                robustness.setdefault(name, {}).setdefault(ctrl, {})[terrain] = s
+                print(f"[{name}] {terrain:8s} {LABELS[ctrl]:8s} " + "  ".join(
+                    f"{d:g} m {_pct(s[f'success_{d:g}m'])}" for d in distances) + f"  falls {s['ended'].get('fell', 0)}",
+                    flush=True)  # fmt: skip
     wall = time.perf_counter() - t0
     meta = {"device": device, "rounds": args.rounds, "max_steps": args.max_steps, "reset_yaw": args.reset_yaw,
             "distances": list(distances), "goal_distance": args.goal_distance, "step_rise": args.step_rise,
             "randomized": args.randomize,
-            "actions": "sampled" if args.stochastic else "expected" if args.expected else "mean",
-            "physics": physics or "each policy's own (checkpoint)",
+            "actions": "sampled" if args.stochastic else "expected" if args.expected else "deterministic (mean)",
+            "physics": physics or "each policy's own (checkpoint)", "fixed_cpg_physics": fixed_physics or "default",
+            "block_height_max": args.block_height_max, "perturbations": args.perturbations,
             "terrain_seed": args.seed, "reset_seed": args.seed + START_SEED_OFFSET,
             "unseen": "terrain seed and start poses differ from training (train.py: terrain seed 0, seed 1)",
             "wall_s": round(wall, 1)}  # fmt: skip
     with open(os.path.join(out, "results.json"), "w") as f:
-        json.dump({"meta": meta, "results": results}, f, indent=1)
+        json.dump({"meta": meta, "results": results, "robustness": robustness}, f, indent=1)
     with open(os.path.join(out, "report.md"), "w") as f:
-        f.write(report_markdown(results, meta))
+        f.write(report_markdown(results, meta, robustness))
     if runs:
         plot_learning(os.path.join(out, "fig_learning.png"), runs)
     print(f"report in {out}/ (report.md, results.json, figures) after {wall:.0f} s")

@@ -33,8 +33,9 @@ def _sha256(path: str) -> str:
     return h.hexdigest()
 
 
-def controller_spec(env, checkpoint: str, action_std: list[float]) -> dict:
-    """controller.json for ``env``'s configuration; ``action_std`` is the policy's Gaussian standard deviation."""
+def controller_spec(env, checkpoint: str, action_std: list[float] | None) -> dict:
+    """controller.json for ``env``'s configuration; ``action_std`` is the policy's Gaussian standard deviation (None
+    for a Beta policy)."""
     from .kernels.observations import H_HALF_EXTENT, OBS_LAYOUT
     from .robot import leg_bounds
     from .bench import git_rev
@@ -59,8 +60,11 @@ def controller_spec(env, checkpoint: str, action_std: list[float]) -> dict:
         "param_lower": list(lo),
         "param_upper": list(hi),
         "initial_params": list(cfg.cpg.fixed_params()),
-        # the trained Gaussian's standard deviation per action: Controller(stochastic=True) samples as in training
-        "action_std": [float(v) for v in action_std],
+        # the deterministic action (policy.onnx) is the controller. A Gaussian policy's std per action lets
+        # Controller(stochastic=True / expected=True) sample as in training; a Beta policy's spread depends on the
+        # observation and is not exported
+        "distribution": "gaussian" if action_std is not None else "beta",
+        **({"action_std": [float(v) for v in action_std]} if action_std is not None else {}),
         "cpg": {k: getattr(cfg.cpg, k) for k in ("alpha", "mu", "delta", "theta", "duty", "steepness", "param_tau")},
         "control_dt": cfg.task.control_dt,
         "substep_dt": sub_dt,

@@ -8,7 +8,7 @@
 Controllers:
 - ``cpg``: the paper's fixed-parameter "CPG" baseline (§3.3). The two-Hopf CPG and the mapping run with the
   constant parameters of ``CPGConfig`` (``fixed_*``).
-- ``cpg_rl``: a trained CPG_RL policy, acting deterministically.
+- ``cpg_rl``: a trained CPG_RL policy, acting deterministically (its distribution's mean).
 - ``joint``: a trained pure-DRL policy that sets the 18 joint targets directly.
 
 All three run in the same ``HexapodEnv``, so episodes end and restart as §2.4.4 says (fall, off course,
@@ -114,15 +114,17 @@ class Recorder:
         np.savez_compressed(path, **arrays)
 
 
-def fixed_cpg_actions(env) -> "torch.Tensor":  # noqa: F821
-    """The fixed baseline's parameters expressed as (constant) policy actions."""
+def fixed_cpg_actions(env, gait: str = "default", params: np.ndarray | None = None) -> "torch.Tensor":  # noqa: F821
+    """A fixed baseline's parameters (``CPGConfig.fixed_params(gait)``, or ``params``: (15,) or one row per env)
+    expressed as (constant) policy actions."""
     import torch
 
     from .kernels.reference import params_to_actions
 
     lo, hi = env.cfg.cpg.param_ranges()
-    a = np.clip(params_to_actions(env.cfg.cpg.fixed_params(), lo, hi), -1.0, 1.0)
-    return torch.tensor(a, dtype=torch.float32, device=env._obs_t.device).repeat(env.num_envs, 1)
+    p = env.cfg.cpg.fixed_params(gait) if params is None else params
+    a = np.broadcast_to(np.clip(params_to_actions(p, lo, hi), -1.0, 1.0), (env.num_envs, len(lo)))
+    return torch.tensor(np.ascontiguousarray(a), dtype=torch.float32, device=env._obs_t.device)
 
 
 def stepped(env, policy, steps: int, description: str, progress: bool = True):
@@ -186,12 +188,13 @@ def load_runner(env, path: str, action_mode: str):
 
     from rsl_rl.runners import OnPolicyRunner
 
-    from .train import check_compatible, checkpoint_meta, load_checkpoint, train_cfg
+    from .train import check_compatible, checkpoint_distribution, checkpoint_meta, load_checkpoint, train_cfg
 
     ckpt = load_checkpoint(path)
     check_compatible(ckpt, path, env.num_obs, env.num_actions, action_mode)
     meta = checkpoint_meta(ckpt)
-    tcfg = train_cfg(meta.get("preset", "default"), env.num_envs, std_max=meta.get("std_max"))
+    tcfg = train_cfg(meta.get("preset", "default"), env.num_envs, std_max=meta.get("std_max"),
+                     distribution=checkpoint_distribution(ckpt))  # fmt: skip
     runner = OnPolicyRunner(env, copy.deepcopy(tcfg), log_dir=None, device=str(env._obs_t.device))
     # the actor alone: full training checkpoints and actor-only policy files (results/policies) both load
     runner.load(path, load_cfg={"actor": True}, map_location=str(env._obs_t.device))
@@ -211,9 +214,11 @@ def expected_clipped_action(mean, std):
 
 
 def load_policy(env, path: str, action_mode: str, stochastic: bool = False, expected: bool = False):
-    """Policy from an rsl-rl checkpoint, after checking it fits this environment: its mean action, with
-    ``stochastic`` an action sampled from its Gaussian as in training, with ``expected`` the expected clipped
-    action E[clip(a, -1, 1)] (deterministic; what the sampled policy asks of the CPG on average)."""
+    """Policy from an rsl-rl checkpoint, after checking it fits this environment: its deterministic action (the
+    distribution's mean: for a Beta policy the action the robot runs), with ``stochastic`` an action sampled from
+    its distribution as in training, with ``expected`` (Gaussian policies) the expected clipped action
+    E[clip(a, -1, 1)], what the sampled policy asks of the CPG on average. A Beta policy's mean already is its
+    expected action: ``expected`` gives the same."""
     import torch
 
     from .train import action_std
@@ -225,8 +230,9 @@ def load_policy(env, path: str, action_mode: str, stochastic: bool = False, expe
     policy = runner.get_inference_policy(device=device)
     if stochastic:
         return lambda obs: policy(obs, stochastic_output=True)
-    if expected:
-        std = torch.tensor(action_std(runner.alg.get_policy()), device=device)
+    std = action_std(runner.alg.get_policy())
+    if expected and std is not None:
+        std = torch.tensor(std, device=device)
         return lambda obs: expected_clipped_action(policy(obs), std)
     return policy
 

@@ -26,6 +26,7 @@ Presets (plain dicts, rsl-rl style):
 
 from __future__ import annotations
 
+import argparse
 import copy
 import dataclasses
 import datetime
@@ -55,9 +56,13 @@ from .config import (
 PRESETS = ("default", "paper")
 
 
+DISTRIBUTIONS = ("beta", "gaussian")
+
+
 def train_cfg(preset: str, num_envs: int, num_steps_per_env: int = 24, action_std: float | None = None,
               num_mini_batches: int | None = None, num_learning_epochs: int | None = None,
-              torch_compile: str | None = None, mixed_precision: bool = False, std_max: float | None = None) -> dict:
+              torch_compile: str | None = None, mixed_precision: bool = False, std_max: float | None = None,
+              distribution: str = "gaussian") -> dict:
     """rsl-rl-lib 5.5.1 runner configuration for ``preset``; ``action_std`` fixes the policy's Gaussian std (not
     learnt) instead of starting from the preset's and learning it. ``num_mini_batches`` / ``num_learning_epochs``
     override the preset's; ``torch_compile`` (a ``torch.compile`` mode rsl-rl accepts: ``default`` or
@@ -65,7 +70,16 @@ def train_cfg(preset: str, num_envs: int, num_steps_per_env: int = 24, action_st
     forward pass and losses under bfloat16 autocast (rsl-rl's ``use_mixed_precision``). ``std_max`` caps the learnt
     std (rsl-rl's ``std_range``): actions are clipped to [-1, 1] and low-pass filtered into the CPG parameters, so a
     wider Gaussian only changes the filtered parameter's mean, and the entropy bonus grew the std to 1.7-5.8 in
-    session 7's runs."""
+    session 7's runs.
+
+    ``distribution``: ``beta`` (rsl-rl's ``BetaDistribution``: actions bounded to [-1, 1] by construction, its mean is
+    the deterministic controller, the ONNX export computes that mean) or ``gaussian`` (a Gaussian clipped to [-1, 1]
+    by the action kernel; checkpoints without a recorded distribution are Gaussian). ``action_std`` and ``std_max``
+    are the Gaussian's."""
+    if distribution not in DISTRIBUTIONS:
+        raise ValueError(f"unknown distribution '{distribution}': choose one of {', '.join(DISTRIBUTIONS)}")
+    if distribution == "beta" and (action_std is not None or std_max is not None):
+        raise ValueError("--action_std and --std_max set the Gaussian's std: the Beta distribution has none to fix")
     if preset not in PRESETS:
         raise ValueError(f"unknown preset '{preset}': choose one of {', '.join(PRESETS)}")
     samples = num_envs * num_steps_per_env
@@ -93,9 +107,9 @@ def train_cfg(preset: str, num_envs: int, num_steps_per_env: int = 24, action_st
         # observations and rewards in-kernel (a blown-up env is reset and counted: kernels/terminations.py,
         # tested by injecting NaN/Inf), so the check only stalls the GPU
         "check_for_nan": False,
-        "actor": dict(model, distribution_cfg={"class_name": "GaussianDistribution", "init_std": action_std or std,
-                                               "learn_std": action_std is None,
-                                               "std_range": (1e-6, std_max or 1e6)}),  # rsl-rl's default range
+        "actor": dict(model, distribution_cfg={"class_name": "BetaDistribution"} if distribution == "beta" else
+                      {"class_name": "GaussianDistribution", "init_std": action_std or std,
+                       "learn_std": action_std is None, "std_range": (1e-6, std_max or 1e6)}),  # rsl-rl's default
         "critic": dict(model),
         "algorithm": algorithm,
         "torch_compile_mode": torch_compile,
@@ -121,9 +135,12 @@ def update_kwargs(args) -> dict:
                 torch_compile=args.torch_compile, mixed_precision=args.mixed_precision)
 
 
-def action_std(policy) -> list[float]:
-    """The Gaussian's std of each action (rsl-rl's scalar or log parameterisation, clamped to its range)."""
+def action_std(policy) -> list[float] | None:
+    """The Gaussian's std of each action (rsl-rl's scalar or log parameterisation, clamped to its range); None for a
+    Beta policy, whose spread depends on the observation."""
     dist = policy.distribution
+    if not hasattr(dist, "std_range"):
+        return None
     std = dist.std_param if hasattr(dist, "std_param") else dist.log_std_param.exp()
     return std.detach().clamp(*dist.std_range).cpu().tolist()
 
@@ -293,8 +310,50 @@ def check_compatible(ckpt: dict, path: str, num_obs: int, num_actions: int, acti
         if key.endswith("mlp.0.weight") and value.shape[1] != num_obs:
             raise ValueError(f"{path} expects {value.shape[1]} observations; this environment has {num_obs}")
     out = [v for k, v in ckpt["actor_state_dict"].items() if k.startswith("mlp.") and k.endswith(".weight")]
-    if out and out[-1].shape[0] != num_actions:
-        raise ValueError(f"{path} outputs {out[-1].shape[0]} actions; this environment takes {num_actions}")
+    per_action = 2 if checkpoint_distribution(ckpt) == "beta" else 1  # a Beta head outputs (alpha, beta) per action
+    if out and out[-1].shape[0] != per_action * num_actions:
+        raise ValueError(f"{path} outputs {out[-1].shape[0] // per_action} actions; this environment takes "
+                         f"{num_actions}")  # fmt: skip
+
+
+def checkpoint_distribution(ckpt: dict | None) -> str:
+    """The action distribution a checkpoint was trained with (those saved before the choice existed: Gaussian)."""
+    return checkpoint_meta(ckpt).get("distribution", "gaussian")
+
+
+#: What ``python train.py --terrain T`` trains when a flag is not given (``apply_recipe``). Flat ground: the plain
+#: MDP. The paper's terrains: the terrain curriculum (10 lanes, robots start on the first 3), the knee-lift floor
+#: (a high-stepping gait from the start), domain randomisation and the 20 ms physics frame; with the bounded (Beta)
+#: actions and the stability shaping of ``RewardConfig`` this is the shipped complex policy's recipe (RESULTS.md).
+RECIPES = {
+    "flat": {},
+    **{t: dict(levels=10, start_levels=3, a2_range=(0.9, 1.3), randomize=True, frame_dt=0.02, substeps=4)
+       for t in ("rugged", "stepped", "complex")},
+}
+
+
+def apply_recipe(args, resumed: bool) -> None:
+    """Fill the flags left unset (None) from ``RECIPES[args.terrain]``, then the config defaults; a resumed run keeps
+    its own parameter ranges and physics (they come from the checkpoint)."""
+    recipe = RECIPES[args.terrain]
+    keep = ("a2_range", "frame_dt", "substeps") if resumed else ()
+    for key, value in recipe.items():
+        if getattr(args, key) is None and key not in keep:
+            setattr(args, key, value)
+    for key, default in (("levels", TerrainConfig.levels), ("start_levels", TerrainConfig.start_levels),
+                         ("randomize", False)):  # fmt: skip
+        if getattr(args, key) is None:
+            setattr(args, key, default)
+
+
+def reward_config(args) -> RewardConfig:
+    """``RewardConfig`` (or Table 1's, ``--paper_reward``) with the reward flags that were given."""
+    base = RewardConfig().paper_reward() if args.paper_reward else RewardConfig()
+    given = {k: getattr(args, k) for k in ("direction_deadband", "goal_bonus", "off_course_penalty", "stability_tilt",
+                                           "w_tilt", "w_ang_vel", "w_action_rate") if getattr(args, k) is not None}
+    if args.direction_from_start:
+        given["direction_to_goal"] = False
+    return dataclasses.replace(base, **given)
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -318,41 +377,57 @@ def main(argv: list[str] | None = None) -> int:
                    help="stop once this share of the last 1024 training episodes succeeded (time-to-skill; with "
                         "--levels: of those, at least 256, played on the last level)")
     p.add_argument("--goal_distance", type=float, default=TaskConfig.goal_distance)
-    p.add_argument("--levels", type=int, default=TerrainConfig.levels,
+    p.add_argument("--levels", type=int, default=None,
                    help="terrain curriculum: this many lanes of increasing difficulty, the last one the terrain "
-                        "itself (0: off)")  # fmt: skip
-    p.add_argument("--start_levels", type=int, default=TerrainConfig.start_levels,
-                   help="with --levels: robots start spread over the first this many lanes")
+                        "itself (0: off; default: the terrain's recipe, RECIPES)")  # fmt: skip
+    p.add_argument("--start_levels", type=int, default=None,
+                   help="with --levels: robots start spread over the first this many lanes (default: the recipe's)")
     p.add_argument("--step_rise", type=float, default=TerrainConfig.step_rise, help="step height [m] (§3.1: 0.06)")
     p.add_argument("--block_height_max", type=float, default=TerrainConfig.block_height_max,
                    help="tallest rugged block [m] (§3.1: 0.06)")
-    p.add_argument("--randomize", action="store_true",
+    p.add_argument("--randomize", action=argparse.BooleanOptionalAction, default=None,
                    help="domain randomisation (RandomizationConfig): friction, payload, masses, gains, latency, "
-                        "observation noise, pushes")  # fmt: skip
+                        "observation noise, pushes (default: the recipe's)")  # fmt: skip
     p.add_argument("--a2_range", type=float, nargs=2, metavar=("LO", "HI"), default=None,
-                   help="knee-lift range [rad] of new runs (default CPGConfig.a2_range; a floor such as 0.9 starts "
-                        "PPO from a high-stepping gait, action 0 = the middle of the range)")  # fmt: skip
-    p.add_argument("--direction_deadband", type=float, default=RewardConfig.direction_deadband,
-                   help="heading error [rad] below which the direction term is 0 (Table 1: pi/6; default 0)")
+                   help="knee-lift range [rad] of new runs (default: the recipe's, else CPGConfig.a2_range; a floor "
+                        "such as 0.9 starts PPO from a high-stepping gait, action 0 = the middle of the range)")
+    p.add_argument("--param_tau", type=float, default=None,
+                   help=f"time constant [s] of the CPG parameters' filter, new runs (default {CPGConfig.param_tau})")
     p.add_argument("--frame_dt", type=float, default=None,
                    help="physics frame [s], collision once per frame (must divide the 20 ms control step; default "
-                        f"{SimConfig.frame_dt}, or the resumed checkpoint's)")
+                        f"the recipe's, else {SimConfig.frame_dt}, or the resumed checkpoint's)")
     p.add_argument("--substeps", type=positive_int, default=None,
-                   help=f"MuJoCo steps per frame (default {SimConfig.substeps}, or the resumed checkpoint's)")
+                   help=f"MuJoCo steps per frame (default as --frame_dt; {SimConfig.substeps})")
+    p.add_argument("--distribution", choices=DISTRIBUTIONS, default=None,
+                   help="action distribution of new runs: beta (bounded, default) or gaussian (clipped; the paper's "
+                        "SB3 PPO); a resumed run keeps its own")  # fmt: skip
     p.add_argument("--action_std", type=float, default=None,
-                   help="fix the policy's action std (not learnt; also on --resume) so that its mean action learns "
-                        "to do what its noise did (default: learnt, from the preset's initial std)")
+                   help="gaussian: fix the policy's action std (not learnt; also on --resume) so that its mean action "
+                        "learns to do what its noise did (default: learnt, from the preset's initial std)")
     p.add_argument("--std_max", type=float, default=None,
-                   help="cap the learnt action std (default: uncapped; see train_cfg)")
-    p.add_argument("--direction_from_start", action="store_true",
+                   help="gaussian: cap the learnt action std (default: uncapped; see train_cfg)")
+    r = p.add_argument_group("reward (RewardConfig; kernels/rewards.py)")
+    r.add_argument("--paper_reward", action="store_true",
+                   help="Table 1 as written (RewardConfig.paper_reward): no goal bonus, no off-course penalty, no "
+                        "gait-quality terms, pi/6 dead band on the start-to-goal direction; flags below still apply")
+    r.add_argument("--direction_deadband", type=float, default=None,
+                   help="heading error [rad] below which the direction term is 0 (Table 1: pi/6; default 0)")
+    r.add_argument("--direction_from_start", action="store_true",
                    help="direction term along the start-to-goal vector (Table 1's D) instead of robot-to-goal (ours)")
-    p.add_argument("--goal_bonus", type=float, default=RewardConfig.goal_bonus,
-                   help="paid once on reaching the goal (ours; see kernels/rewards.py)")
-    p.add_argument("--off_course_penalty", type=float, default=RewardConfig.off_course_penalty,
-                   help="paid once on leaving the course (ours; 0: the paper's reward, see kernels/rewards.py)")
-    p.add_argument("--stability_tilt", type=float, default=RewardConfig.stability_tilt,
+    r.add_argument("--goal_bonus", type=float, default=None,
+                   help=f"paid once on reaching the goal (ours, default {RewardConfig.goal_bonus:g})")
+    r.add_argument("--off_course_penalty", type=float, default=None,
+                   help=f"paid once on leaving the course (ours, default {RewardConfig.off_course_penalty:g}; 0: the "
+                        "paper's reward)")
+    r.add_argument("--stability_tilt", type=float, default=None,
                    help="roll / pitch [rad] beyond which r_s fines every step (Table 1: pi/6; 8 cm stairs pitch the "
                         "torso 19-25 deg, see kernels/rewards.py)")
+    r.add_argument("--w_tilt", type=float, default=None,
+                   help=f"ours: weight of -(roll^2 + pitch^2) per step (default {RewardConfig.w_tilt:g}; 0: off)")
+    r.add_argument("--w_ang_vel", type=float, default=None,
+                   help=f"ours: weight of -(roll rate^2 + pitch rate^2) (default {RewardConfig.w_ang_vel:g}; 0: off)")
+    r.add_argument("--w_action_rate", type=float, default=None,
+                   help=f"ours: weight of -sum (a - a_prev)^2 (default {RewardConfig.w_action_rate:g}; 0: off)")
     add_update_args(p)
     args = p.parse_args(argv)
     if args.preset not in PRESETS:
@@ -361,19 +436,25 @@ def main(argv: list[str] | None = None) -> int:
         raise ValueError("--max_minutes must be positive")
     if args.action_std is not None and not args.action_std > 0:
         raise ValueError("--action_std must be positive")
-    if not 0 < args.stability_tilt < math.pi / 2:
+    reward = reward_config(args)
+    if not 0 < reward.stability_tilt < math.pi / 2:
         raise ValueError("--stability_tilt must lie in (0, pi/2) rad")
+    if args.param_tau is not None and not args.param_tau >= 0:
+        raise ValueError("--param_tau must be >= 0")
     if args.std_max is not None and not args.std_max > 0:
         raise ValueError("--std_max must be positive")
     if args.target_success is not None and not 0 < args.target_success <= 1:
         raise ValueError("--target_success must lie in (0, 1]")
+    for flag in ("a2_range", "param_tau", "distribution"):
+        if args.resume and getattr(args, flag) is not None:
+            raise ValueError(f"--{flag} is for new runs: a resumed run keeps what it was trained with")
+    ckpt = load_checkpoint(args.resume) if args.resume else None  # fail before building anything
+    apply_recipe(args, resumed=ckpt is not None)
     if args.a2_range is not None:
         lo, hi = args.a2_range
         if not 0 <= lo < hi <= CPGConfig.a2_range[1]:
             raise ValueError(f"--a2_range must satisfy 0 <= LO < HI <= {CPGConfig.a2_range[1]} (the knee limit)")
-        if args.resume:
-            raise ValueError("--a2_range is for new runs: a resumed run keeps the ranges it was trained with")
-    ckpt = load_checkpoint(args.resume) if args.resume else None  # fail before building anything
+    distribution = checkpoint_distribution(ckpt) if ckpt is not None else args.distribution or "beta"
     check_log_dir(args.log_dir)
 
     from rsl_rl.runners import OnPolicyRunner
@@ -395,11 +476,11 @@ def main(argv: list[str] | None = None) -> int:
                                                start_levels=args.start_levels, step_rise=args.step_rise,
                                                block_height_max=args.block_height_max), args.goal_distance),
         task=dataclasses.replace(TaskConfig(), seed=seed, goal_distance=args.goal_distance),
-        reward=dataclasses.replace(RewardConfig(), direction_deadband=args.direction_deadband,
-                                   direction_to_goal=not args.direction_from_start, goal_bonus=args.goal_bonus,
-                                   off_course_penalty=args.off_course_penalty, stability_tilt=args.stability_tilt),
+        reward=reward,
         randomization=RandomizationConfig(enabled=args.randomize),
-        cpg=trained.cpg if args.a2_range is None else CPGConfig(a2_range=tuple(args.a2_range)),
+        cpg=trained.cpg if ckpt is not None else dataclasses.replace(
+            CPGConfig(), **({"a2_range": tuple(args.a2_range)} if args.a2_range else {}),
+            **({"param_tau": args.param_tau} if args.param_tau is not None else {})),
     )
     env = make_env(cfg, args.action_mode)
     if ckpt is not None:
@@ -407,13 +488,13 @@ def main(argv: list[str] | None = None) -> int:
     if ckpt is not None and args.std_max is None:  # a resumed run keeps its cap
         args.std_max = checkpoint_meta(ckpt).get("std_max")
     tcfg = train_cfg(args.preset, args.num_envs, args.num_steps_per_env, args.action_std,
-                     std_max=args.std_max, **update_kwargs(args))
+                     std_max=args.std_max, distribution=distribution, **update_kwargs(args))
     tcfg["save_interval"] = args.save_interval
     experiment = args.experiment or f"hexnewton_{args.action_mode}_{args.terrain}"
     run_dir = os.path.join(args.log_dir, experiment, datetime.datetime.now().strftime("%Y-%m-%d_%H-%M-%S"))
     meta = {"action_mode": args.action_mode, "num_obs": env.num_obs, "num_actions": env.num_actions,
             "preset": args.preset, "config": dataclasses.asdict(cfg), "world_size": dist.world_size,
-            "std_max": args.std_max}  # fmt: skip
+            "std_max": args.std_max, "distribution": distribution}  # fmt: skip
     if dist.is_main:  # only rank 0 writes logs, checkpoints and the export
         if os.path.exists(run_dir):
             raise ValueError(f"{run_dir} exists: nothing is overwritten (start again in a second, or change --experiment)")

@@ -107,3 +107,14 @@ def quat_to_rpy_np(q: np.ndarray) -> np.ndarray:
     pitch = np.arcsin(np.clip(2 * (w * y - z * x), -1, 1))
     yaw = np.arctan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
     return np.stack([roll, pitch, yaw], axis=-1)
+
+
+def quat_rotate_inv_np(q: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """R(q)^T v for unit quaternions (..., 4) in (x, y, z, w) order and vectors (..., 3): a world vector in the body
+    frame (float64; the reference of ``wp.quat_rotate_inv``)."""
+    q = np.asarray(q, np.float64)
+    q = q / np.linalg.norm(q, axis=-1, keepdims=True)
+    u, w = q[..., :3], q[..., 3:4]
+    v = np.asarray(v, np.float64)
+    t = 2.0 * np.cross(u, v)
+    return v - w * t + np.cross(u, t)

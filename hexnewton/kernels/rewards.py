@@ -41,6 +41,16 @@ not scaled.
   course (session 4, RESULTS.md). With gamma = 0.99 the discounted cost of lingering is ~ -7, far above -100.
 
 Weights (ours, marked in ``RewardConfig``): w_h = 1, w_d = 1, w_theta = 1.
+
+**Stability shaping** (ours, :func:`shaping_kernel`, after the Table 1 kernel; each weight 0 switches its term off,
+``RewardConfig.paper_reward()`` all of them). Table 1 fines a tilt only beyond π/6, so inside ±30° a policy is free
+to rock the body, and with a -100 cliff at 30° it learns nothing about how far it is from it. Three smooth costs
+per 20 ms step (scaled like the others):
+- r_tilt = -w_tilt (roll² + pitch²) [rad²]: 10° of pitch costs 0.06 w_tilt, 30° 0.55 w_tilt;
+- r_ang_vel = -w_ang_vel (ω_x² + ω_y²), the body's roll and pitch rates [rad/s] in its own frame: the rocking
+  that a tilt average hides;
+- r_action_rate = -w_action_rate Σ_k (a_k - a_k,prev)² over the 15 actions in [-1, 1] (0 on an episode's first
+  step): the CPG parameters should change with the ground, not every control step.
 """
 
 import numpy as np
@@ -51,7 +61,10 @@ from .terminations import FELL, OFF_COURSE, SUCCESS
 
 REF_DT = 0.02
 FORWARD_MIN_SPEED = 0.1
-TERMS = ("height", "direction", "distance", "stability", "forward", "goal", "off_course")
+#: Table 1's terms and ours (rewards_kernel), then the stability shaping (shaping_kernel)
+TABLE1_TERMS = ("height", "direction", "distance", "stability", "forward", "goal", "off_course")
+SHAPING_TERMS = ("tilt", "ang_vel", "action_rate")
+TERMS = TABLE1_TERMS + SHAPING_TERMS
 
 
 @wp.kernel
@@ -86,7 +99,7 @@ def rewards_kernel(
     st = status[e]
     if not (wp.isfinite(px) and wp.isfinite(py) and wp.isfinite(z)):
         # a blown-up env (reset and counted by the caller): no reward signal from garbage
-        for k in range(7):
+        for k in range(terms.shape[1]):
             terms[e, k] = 0.0
         reward[e] = 0.0
         prev_x[e] = 0.0
@@ -155,3 +168,68 @@ def rewards_reference(joint_q, rpy, status, ground, start, prev_x, goal_distance
     terms = np.stack([w_height * r_h * scale, w_direction * r_dir * scale, w_distance * r_d * scale, r_s * scale,
                       r_f * scale, r_g, r_off], axis=1)  # fmt: skip
     return terms.sum(axis=1), terms
+
+
+@wp.func
+def body_roll_pitch_rate(qx: float, qy: float, qz: float, qw: float, wx: float, wy: float, wz: float) -> wp.vec2:
+    """The base's world-frame angular velocity (a free joint's qd[3:6]) in its own frame: (roll rate, pitch rate)."""
+    w_body = wp.quat_rotate_inv(wp.quat(qx, qy, qz, qw), wp.vec3(wx, wy, wz))
+    return wp.vec2(w_body[0], w_body[1])
+
+
+@wp.kernel
+def shaping_kernel(
+    joint_q: wp.array2d[wp.float32],
+    joint_qd: wp.array2d[wp.float32],
+    rpy: wp.array2d[wp.float32],
+    actions: wp.array2d[wp.float32],
+    episode_steps: wp.array[wp.int32],
+    w_tilt: float,
+    w_ang_vel: float,
+    w_action_rate: float,
+    control_dt: float,
+    prev_actions: wp.array2d[wp.float32],
+    reward: wp.array[wp.float32],
+    terms: wp.array2d[wp.float32],
+):
+    """The stability shaping terms (module docstring), added to ``reward`` and written to ``terms[:, 7:10]``; then the
+    actions become ``prev_actions``. Runs after :func:`rewards_kernel`, before the episode counters advance."""
+    e = wp.tid()
+    scale = control_dt / REF_DT
+    rate = body_roll_pitch_rate(joint_q[e, 3], joint_q[e, 4], joint_q[e, 5], joint_q[e, 6], joint_qd[e, 3],
+                                joint_qd[e, 4], joint_qd[e, 5])  # fmt: skip
+    da = float(0.0)
+    for k in range(actions.shape[1]):
+        a = actions[e, k]
+        if not wp.isfinite(a):
+            a = 0.0
+        a = wp.clamp(a, -1.0, 1.0)
+        if episode_steps[e] > 0:
+            d = a - prev_actions[e, k]
+            da += d * d
+        prev_actions[e, k] = a
+    t_tilt = -w_tilt * (rpy[e, 0] * rpy[e, 0] + rpy[e, 1] * rpy[e, 1]) * scale
+    t_rate = -w_ang_vel * (rate[0] * rate[0] + rate[1] * rate[1]) * scale
+    t_act = -w_action_rate * da * scale
+    if not (wp.isfinite(t_tilt) and wp.isfinite(t_rate) and wp.isfinite(reward[e])):
+        t_tilt = 0.0  # a blown-up env (reset and counted by the caller)
+        t_rate = 0.0
+    terms[e, 7] = t_tilt
+    terms[e, 8] = t_rate
+    terms[e, 9] = t_act
+    reward[e] = reward[e] + t_tilt + t_rate + t_act
+
+
+def shaping_reference(joint_q, joint_qd, rpy, actions, prev_actions, episode_steps, w_tilt, w_ang_vel, w_action_rate,
+                      control_dt):  # fmt: skip
+    """Float64 reference of :func:`shaping_kernel` (finite states). Returns (terms (N, 3), new prev_actions (N, A))."""
+    from .reference import quat_rotate_inv_np
+
+    jq, jqd, rpy = (np.asarray(x, np.float64) for x in (joint_q, joint_qd, rpy))
+    scale = control_dt / REF_DT
+    w_body = quat_rotate_inv_np(jq[:, 3:7], jqd[:, 3:6])
+    a = np.clip(np.nan_to_num(np.asarray(actions, np.float64), nan=0.0), -1.0, 1.0)
+    da = np.where(np.asarray(episode_steps) > 0, ((a - np.asarray(prev_actions, np.float64)) ** 2).sum(axis=1), 0.0)
+    terms = np.stack([-w_tilt * (rpy[:, 0] ** 2 + rpy[:, 1] ** 2), -w_ang_vel * (w_body[:, 0] ** 2 + w_body[:, 1] ** 2),
+                      -w_action_rate * da], axis=1) * scale  # fmt: skip
+    return terms, a
