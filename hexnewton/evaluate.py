@@ -46,12 +46,14 @@ import numpy as np
 
 from .cli import ArgumentParser, positive_int, run, terrain_name
 from .config import (
+    FIXED_GAITS,
     PARAM_NAMES,
     HexConfig,
     RandomizationConfig,
     TaskConfig,
     TerrainConfig,
     control_decimation,
+    gait_params,
     terrain_for_goal,
 )
 from .kernels.terminations import FELL, NONFINITE, OFF_COURSE, STATUS_NAMES
@@ -510,6 +512,8 @@ def main(argv: list[str] | None = None) -> int:
                    help="tallest rugged block [m] (§3.1: 0.06)")
     p.add_argument("--randomize", action="store_true",
                    help="perturbed conditions: friction, payload, masses, gains, latency, noise, pushes")
+    p.add_argument("--swept_gait", type=float, nargs=4, metavar=("OMEGA", "A1", "A2", "A3"), default=None,
+                   help="the cpg_swept controller's gait (default config.FIXED_GAITS['swept'], from hexnewton.cpg_sweep)")
     p.add_argument("--perturbations", nargs="+", default=[], metavar="NAME",
                    help="also run every controller under these named perturbations beyond the training ranges, one "
                         f"robustness table per controller: {', '.join(PERTURBATIONS)}")
@@ -580,10 +584,11 @@ def main(argv: list[str] | None = None) -> int:
     t0 = time.perf_counter()
     def evaluate_one(ctrl: str, terrain: str, randomization=None, terrain_overrides=None) -> tuple[dict, Episode, dict]:
         ck = None if ctrl in FIXED else checkpoint_for(checkpoints, ctrl, terrain)
+        gait = gait_params(*args.swept_gait) if ctrl == "cpg_swept" and args.swept_gait else None
         ep = run_rounds(ctrl, ck, terrain, args.rounds, device, args.max_steps, args.reset_yaw, progress,
                         args.randomize, args.step_rise, args.goal_distance, args.stochastic,
                         fixed_physics if ctrl in FIXED else physics, args.expected, args.seed, randomization,
-                        {"block_height_max": args.block_height_max, **(terrain_overrides or {})})  # fmt: skip
+                        {"block_height_max": args.block_height_max, **(terrain_overrides or {})}, gait)  # fmt: skip
         m = round_metrics(ep.pos, ep.rpy, ep.done, ep.status, ep.dt, distances)
         s = summarize(m, ep.rpy, distances)
         s.update(gait_quality(m, ep.ang_rate, ep.dparam, ep.daction), segments=ep.segments, checkpoint=ck)
@@ -618,6 +623,7 @@ def main(argv: list[str] | None = None) -> int:
             "actions": "sampled" if args.stochastic else "expected" if args.expected else "deterministic (mean)",
             "physics": physics or "each policy's own (checkpoint)", "fixed_cpg_physics": fixed_physics or "default",
             "block_height_max": args.block_height_max, "perturbations": args.perturbations,
+            "swept_gait": args.swept_gait or list(FIXED_GAITS["swept"]),
             "terrain_seed": args.seed, "reset_seed": args.seed + START_SEED_OFFSET,
             "unseen": "terrain seed and start poses differ from training (train.py: terrain seed 0, seed 1)",
             "wall_s": round(wall, 1)}  # fmt: skip

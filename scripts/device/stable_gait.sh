@@ -1,0 +1,64 @@
+#!/bin/bash
+# Device calls that trained and measured the stable complex policy (RESULTS.md, "Stable gaits"), on one nvidia-h200,
+# after the chunk calls of ../shared/device/pack.sh + rechunk.sh (the last one installs, with runs/warpcache.tgz
+# from scripts/device/precompile.py).
+#
+#   bash scripts/device/stable_gait.sh train   # three stable-gait variants on one GPU, validation rounds, gait sweep
+#   bash scripts/device/stable_gait.sh test    # the variant chosen on validation: 1000 test rounds per terrain
+#                                              # (fixed CPG default and swept beside it), robustness report
+set -u
+OUT=${OUT:-out}
+KEEP=/root/keep
+export KEEP PYTHONUNBUFFERED=1
+VARIANTS="sa sb sc"
+case "${1:-}" in
+train)
+  # the fixed-gait sweep (180 gaits x 8 rounds per terrain) beside the training runs
+  ( python -m hexnewton.cpg_sweep --rounds 8 --frame_dt 0.02 --substeps 4 --out /root/sweep > /root/sweep.log 2>&1
+    tar czf "$OUT/sweep.tgz" -C /root sweep sweep.log ) &
+  # python train.py --terrain complex (its recipe) with the Beta actions and the default shaping (sa), with the
+  # slower parameter filter (sb), and with both plus stronger shaping (sc)
+  KEEP_ALL=1 SKIP_WARMUP=1 START_S=${START_S:-20} DEADLINE_S=${DEADLINE_S:-430} bash scripts/device/train_runs.sh \
+    "sa:--terrain complex --seed 1" \
+    "sb:--terrain complex --seed 1 --param_tau 0.1" \
+    "sc:--terrain complex --seed 1 --param_tau 0.1 --w_tilt 5 --w_ang_vel 0.05 --w_action_rate 0.1"
+  jobs=()
+  for r in $VARIANTS; do
+    jobs+=("val_$r:--controllers cpg_rl --checkpoint cpg_rl=$KEEP/$r.pt --terrains rugged stepped complex --rounds 250 --seed 3000")
+  done
+  EVALS=/root/val EVAL_TIMEOUT_S=$(( ${CALL_S:-585} - SECONDS - 10 )) bash scripts/device/eval_jobs.sh "${jobs[@]}"
+  mv "$OUT/evals.tgz" "$OUT/val.tgz"
+  wait
+  ;;
+test)
+  # the variant with >= 99 % at 3 m on every terrain and <= 0.5 % falls, then the smallest rugged pitch + roll
+  # variance (else the best mean success), on validation rounds
+  best=$(python - $VARIANTS <<'PY'
+import json, sys
+rows = {}
+for n in sys.argv[1:]:
+    try:
+        r = json.load(open(f"/root/val/val_{n}/results.json"))["results"]
+    except OSError:
+        continue
+    ok = all(r[t]["cpg_rl"]["success_3m"] >= 0.99 and r[t]["cpg_rl"]["fall_rate"] <= 0.005 for t in r)
+    succ = sum(r[t]["cpg_rl"]["success_3m"] for t in r) / len(r)
+    var = r["rugged"]["cpg_rl"]["pitch_var_deg2"] + r["rugged"]["cpg_rl"]["roll_var_deg2"]
+    rows[n] = (ok, succ if not ok else 1.0, -var)
+print(max(rows, key=rows.get))
+PY
+)
+  gait=$(python -c "import json; b=json.load(open('/root/sweep/results.json'))['best']; print(b['omega'], b['a1'], b['a2'], b['a3'])")
+  echo "chosen on validation: $best; swept gait: $gait"
+  ck="--checkpoint cpg_rl=$KEEP/$best.pt"
+  t3="--controllers cpg cpg_swept cpg_rl $ck --swept_gait $gait --rounds 1000"
+  rb="--controllers cpg_rl $ck --terrains complex --rounds 500"
+  EVALS=/root/test EVAL_TIMEOUT_S=$(( ${CALL_S:-585} - SECONDS - 15 )) bash scripts/device/eval_jobs.sh \
+    "rugged:$t3 --terrains rugged" "stepped:$t3 --terrains stepped" "complex:$t3 --terrains complex" \
+    "robust1:$rb --perturbations friction_0.3 payload_0.8kg motors_0.6" \
+    "robust2:$rb --perturbations push_0.6m/s latency_40ms sensor_noise_x2" \
+    "robust3:$rb --perturbations steps_7cm blocks_8cm"
+  cp "$KEEP/$best.pt" "$OUT/chosen_$best.pt"
+  ;;
+*) echo "usage: stable_gait.sh train|test" >&2; exit 2;;
+esac
