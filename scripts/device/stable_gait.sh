@@ -3,7 +3,8 @@
 # after the chunk calls of ../shared/device/pack.sh + rechunk.sh (the last one installs, with runs/warpcache.tgz
 # from scripts/device/precompile.py).
 #
-#   bash scripts/device/stable_gait.sh train   # three stable-gait variants on one GPU, validation rounds, gait sweep
+#   bash scripts/device/stable_gait.sh train     # three stable-gait variants on one GPU, the fixed-gait sweep beside
+#   bash scripts/device/stable_gait.sh validate  # validation rounds of each variant
 #   bash scripts/device/stable_gait.sh test    # the variant chosen on validation: 1000 test rounds per terrain
 #                                              # (fixed CPG default and swept beside it), robustness report
 set -u
@@ -18,17 +19,20 @@ train)
     tar czf "$OUT/sweep.tgz" -C /root sweep sweep.log ) &
   # python train.py --terrain complex (its recipe) with the Beta actions and the default shaping (sa), with the
   # slower parameter filter (sb), and with both plus stronger shaping (sc)
-  KEEP_ALL=1 SKIP_WARMUP=1 START_S=${START_S:-20} DEADLINE_S=${DEADLINE_S:-430} bash scripts/device/train_runs.sh \
+  KEEP_ALL=1 SKIP_WARMUP=1 START_S=${START_S:-40} DEADLINE_S=${DEADLINE_S:-560} bash scripts/device/train_runs.sh \
     "sa:--terrain complex --seed 1" \
     "sb:--terrain complex --seed 1 --param_tau 0.1" \
     "sc:--terrain complex --seed 1 --param_tau 0.1 --w_tilt 5 --w_ang_vel 0.05 --w_action_rate 0.1"
+  wait
+  ;;
+validate)
+  # 250 validation rounds (evaluate --seed 3000) of each variant on rugged and complex ground, 60 s each at most
   jobs=()
   for r in $VARIANTS; do
-    jobs+=("val_$r:--controllers cpg_rl --checkpoint cpg_rl=$KEEP/$r.pt --terrains rugged stepped complex --rounds 250 --seed 3000")
+    jobs+=("val_$r:--controllers cpg_rl --checkpoint cpg_rl=$KEEP/$r.pt --terrains rugged complex --rounds 250 --seed 3000 --max_steps 3000")
   done
-  EVALS=/root/val EVAL_TIMEOUT_S=$(( ${CALL_S:-585} - SECONDS - 10 )) bash scripts/device/eval_jobs.sh "${jobs[@]}"
+  EVALS=/root/val EVAL_TIMEOUT_S=200 bash scripts/device/eval_jobs.sh "${jobs[@]}"
   mv "$OUT/evals.tgz" "$OUT/val.tgz"
-  wait
   ;;
 test)
   # the variant with >= 99 % at 3 m on every terrain and <= 0.5 % falls, then the smallest rugged pitch + roll
@@ -60,5 +64,5 @@ PY
     "robust3:$rb --perturbations steps_7cm blocks_8cm"
   cp "$KEEP/$best.pt" "$OUT/chosen_$best.pt"
   ;;
-*) echo "usage: stable_gait.sh train|test" >&2; exit 2;;
+*) echo "usage: stable_gait.sh train|validate|test" >&2; exit 2;;
 esac
