@@ -226,7 +226,7 @@ def gait_params(omega: float, a1: float, a2: float, a3: float) -> list[float]:
 #: Fixed CPG gaits (omega [rad/s], A1, A2, A3 [rad]) besides ``CPGConfig.fixed_*``: ``swept`` is the best gait of the
 #: sweep in results/cpg_sweep (``python -m hexnewton.cpg_sweep``; highest mean success at 3 m over rugged, stepped and
 #: complex ground, then the lowest pitch + roll variance), the fair fixed baseline.
-FIXED_GAITS = {"swept": (3.0 * math.pi, 0.3, 1.1, 0.5)}
+FIXED_GAITS = {"swept": (2.0 * math.pi, 0.2, 0.9, 0.3)}
 
 
 @dataclass

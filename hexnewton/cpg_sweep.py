@@ -5,7 +5,7 @@
 
 Every gait of the grid (omega x A1 x A2 x A3, the same amplitude on every leg) walks ``--rounds`` rounds on each
 terrain, all gaits of a terrain at once (one robot per gait and round, one env batch), with the evaluation's
-protocol (``hexnewton.evaluate``: test seeds, the first episode of each robot, success at 3 m). The best gait has
+protocol (``hexnewton.evaluate``: the first episode of each robot, success at 3 m) on validation seeds. The best gait has
 the highest mean success at 3 m over the terrains; among gaits within ``--tie`` of it, the lowest mean pitch +
 roll variance. ``config.FIXED_GAITS["swept"]`` holds it, and ``evaluate --controllers cpg_swept`` runs it beside
 the paper-like default (``CPGConfig.fixed_*``).
@@ -53,11 +53,12 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--tie", type=float, default=0.02, help="success margin within which stability decides")
     p.add_argument("--frame_dt", type=float, default=None, help="physics frame [s] (default SimConfig's)")
     p.add_argument("--substeps", type=positive_int, default=None, help="MuJoCo steps per frame")
-    p.add_argument("--seed", type=int, default=None, help="terrain seed (default: the evaluation's test seed)")
+    p.add_argument("--seed", type=int, default=3000,
+                   help="terrain seed S, start poses S + 1000 (default 3000: a validation set, not the test set)")
     p.add_argument("--device", default=None)
     p.add_argument("--out", required=True, help="output directory (must not exist)")
     args = p.parse_args(argv)
-    from .evaluate import EVAL_TERRAIN_SEED, round_metrics, run_rounds, summarize
+    from .evaluate import round_metrics, run_rounds, summarize
 
     if os.path.exists(args.out):
         raise ValueError(f"{args.out} exists: choose a new --out (nothing is overwritten)")
@@ -76,7 +77,7 @@ def main(argv: list[str] | None = None) -> int:
     from .sim import resolve_device
 
     device = resolve_device(args.device)
-    seed = EVAL_TERRAIN_SEED if args.seed is None else args.seed
+    seed = args.seed
     n, r = len(gaits), args.rounds
     params = np.repeat(np.asarray([gait_params(*g) for g in gaits]), r, axis=0)  # gait-major: rows g*r .. g*r+r-1
     os.makedirs(args.out)

@@ -64,5 +64,17 @@ PY
     "robust3:$rb --perturbations steps_7cm blocks_8cm"
   cp "$KEEP/$best.pt" "$OUT/chosen_$best.pt"
   ;;
-*) echo "usage: stable_gait.sh train|validate|test" >&2; exit 2;;
+report)
+  # the chosen variant (runs/sc.pt, carried) on 1000 test rounds per terrain beside the fixed CPG (default and
+  # swept) and the Gaussian policy's deterministic action; the robustness report (300 rounds per perturbation)
+  ck="--checkpoint cpg_rl=runs/sc.pt"
+  t3="--controllers cpg cpg_swept cpg_rl $ck --rounds 1000"
+  rb="--controllers cpg_rl $ck --terrains complex --rounds 300"
+  EVALS=/root/test EVAL_TIMEOUT_S=${EVAL_TIMEOUT_S:-540} bash scripts/device/eval_jobs.sh \
+    "rugged:$t3 --terrains rugged" "stepped:$t3 --terrains stepped" "complex:$t3 --terrains complex" \
+    "gaussian:--controllers cpg_rl --checkpoint cpg_rl=results/policies/cpg_rl_complex.pt --terrains rugged complex --rounds 1000" \
+    "robust1:$rb --perturbations friction_0.3 payload_0.8kg motors_0.6 push_0.6m/s" \
+    "robust2:$rb --perturbations latency_40ms sensor_noise_x2 steps_7cm blocks_8cm"
+  ;;
+*) echo "usage: stable_gait.sh train|validate|test|report" >&2; exit 2;;
 esac
