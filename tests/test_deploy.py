@@ -168,3 +168,25 @@ def test_policies_keep_their_trained_parameter_ranges():
     assert trained_config(None).cpg == CPGConfig() and trained_config({"infos": None}).cpg == CPGConfig()
     spec = json.loads(open(os.path.join(ROOT, "results", "controllers", "cpg_rl_flat", "controller.json")).read())
     assert spec["param_upper"][3] == 0.8  # the shipped bundle carries the policy's own ranges
+
+
+BETA_POLICY = os.path.join(ROOT, "results", "policies", "cpg_rl_complex_beta.pt")
+
+
+def test_beta_policy_bundle_runs_its_deterministic_action(tmp_path):
+    """A Beta policy: the ONNX file computes the distribution's mean (the controller), the runtime reproduces the
+    simulator with it, and sampling in the runtime is refused with one clear error (no Gaussian std to sample)."""
+    from hexnewton.deploy import Controller, replay
+
+    out = tmp_path / "beta"
+    proc = _run(["-m", "hexnewton.export", "--checkpoint", BETA_POLICY, "--out", str(out), "--steps", "30",
+                 "--robots", "2"])  # fmt: skip
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    spec = json.loads((out / "controller.json").read_text())
+    assert spec["distribution"] == "beta" and "action_std" not in spec
+    assert replay(str(out))["max_target_diff_rad"] < 1e-4
+    obs = np.load(out / "check.npz")["obs"][0]
+    act = Controller(str(out), num_robots=2).act(obs)
+    assert act.shape == (2, 15) and np.all(np.abs(act) < 1.0)  # bounded by construction
+    with pytest.raises(ValueError, match="deterministic action"):
+        Controller(str(out), stochastic=True)

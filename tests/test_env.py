@@ -22,7 +22,14 @@ from hexnewton.kernels.actions import joint_actions_kernel
 from hexnewton.kernels.reference import joint_actions_reference
 from hexnewton.kernels.observations import OBS_LAYOUT, observations_kernel, observations_reference
 from hexnewton.kernels.resets import reset_bounds_reference
-from hexnewton.kernels.rewards import TERMS, rewards_kernel, rewards_reference
+from hexnewton.kernels.rewards import (
+    TABLE1_TERMS,
+    TERMS,
+    rewards_kernel,
+    rewards_reference,
+    shaping_kernel,
+    shaping_reference,
+)
 from hexnewton.kernels.terminations import FELL, NONFINITE, OFF_COURSE, SUCCESS, TIMEOUT
 from hexnewton.terrain import make_terrain, max_terrain_height_np, terrain_height_np
 from hexnewton.terrain.query import height_field_from_grid
@@ -242,7 +249,7 @@ def test_reward_kernel_matches_reference_on_random_states():
         ref_rew, ref_terms = rewards_reference(q.astype(np.float32), rpy.astype(np.float32), status, ground,
                                                start.astype(np.float32), prev_x.astype(np.float32),
                                                *_reward_args(dt, deadband, to_goal, tilt))  # fmt: skip
-        np.testing.assert_allclose(terms, ref_terms, rtol=1e-4, atol=1e-4)
+        np.testing.assert_allclose(terms[:, :len(TABLE1_TERMS)], ref_terms, rtol=1e-4, atol=1e-4)
         np.testing.assert_allclose(rew, ref_rew, rtol=1e-4, atol=1e-3)
         np.testing.assert_allclose(px, q[:, 0], atol=1e-6)
 
@@ -285,6 +292,59 @@ def test_reward_terms_on_hand_made_states():
         rpy[0, 2] = yaw
         _, terms, _ = _run_rewards(grid, q, rpy, status, np.zeros((5, 2)), prev_x, to_goal=to_goal)
         assert terms[0, TERMS.index("direction")] == pytest.approx(expect, abs=1e-6)
+
+
+def _run_shaping(q, qd, rpy, actions, prev, steps, weights, dt=TASK.control_dt, reward0=None):
+    n = len(q)
+    f = lambda a: wp.array(np.asarray(a, np.float32), device=DEV)  # noqa: E731
+    prev_w, rew = f(prev), f(np.zeros(n) if reward0 is None else reward0)
+    terms = wp.zeros((n, len(TERMS)), device=DEV)
+    wp.launch(shaping_kernel, dim=n, inputs=[f(q), f(qd), f(rpy), f(actions), wp.array(np.asarray(steps, np.int32),
+              device=DEV), *weights, dt], outputs=[prev_w, rew, terms], device=DEV)  # fmt: skip
+    return terms.numpy()[:, len(TABLE1_TERMS):], rew.numpy(), prev_w.numpy()
+
+
+def test_shaping_kernel_matches_reference_on_random_states():
+    """The stability shaping (tilt, body roll / pitch rate, action rate) against its float64 reference."""
+    rng = np.random.default_rng(7)
+    n = 200
+    q = np.zeros((n, 25))
+    quat = rng.normal(size=(n, 4))
+    q[:, 3:7] = quat / np.linalg.norm(quat, axis=1, keepdims=True)
+    qd = rng.normal(0.0, 2.0, (n, 24))
+    rpy = rng.uniform(-1.0, 1.0, (n, 3))
+    actions, prev = rng.uniform(-1.3, 1.3, (n, 15)), rng.uniform(-1.0, 1.0, (n, 15))
+    steps = rng.integers(0, 3, n)
+    for weights, dt in (((2.0, 0.02, 0.05), 0.02), ((5.0, 0.1, 0.3), 0.04), ((0.0, 0.0, 0.0), 0.02)):
+        terms, rew, new_prev = _run_shaping(q, qd, rpy, actions, prev, steps, weights, dt, reward0=np.ones(n))
+        ref, ref_prev = shaping_reference(q, qd, rpy, actions, prev, steps, *weights, dt)
+        np.testing.assert_allclose(terms, ref, rtol=1e-4, atol=1e-5)
+        np.testing.assert_allclose(rew, 1.0 + ref.sum(axis=1), rtol=1e-4, atol=1e-5)  # added to Table 1's reward
+        np.testing.assert_allclose(new_prev, ref_prev, atol=1e-6)
+
+
+def test_shaping_terms_on_hand_made_states():
+    q = np.zeros((3, 25))
+    q[:, 6] = 1.0  # upright, yaw 0: the body frame is the world frame
+    qd = np.zeros((3, 24))
+    qd[1, 3:6] = (1.0, 2.0, 5.0)  # roll rate 1, pitch rate 2 rad/s; the yaw rate is free
+    rpy = np.array([[math.radians(10), 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0]])
+    a = np.zeros((3, 15))
+    a[2, 0] = 1.0
+    prev = np.zeros((3, 15))
+    prev[2, 0] = -1.0
+    terms, _, new_prev = _run_shaping(q, qd, rpy, a, prev, [5, 5, 5], (REW.w_tilt, REW.w_ang_vel, REW.w_action_rate))
+    t = dict(zip(TERMS[len(TABLE1_TERMS):], terms.T))
+    np.testing.assert_allclose(t["tilt"], [-REW.w_tilt * math.radians(10) ** 2, 0, 0], rtol=1e-5)
+    np.testing.assert_allclose(t["ang_vel"], [0, -REW.w_ang_vel * 5.0, 0], rtol=1e-5)
+    np.testing.assert_allclose(t["action_rate"], [0, 0, -REW.w_action_rate * 4.0], rtol=1e-5)  # (1 - (-1))^2
+    np.testing.assert_allclose(new_prev, a)
+    # an episode's first step has no previous action; Table 1's reward has none of these terms
+    terms, _, _ = _run_shaping(q, qd, rpy, a, prev, [0, 0, 0], (REW.w_tilt, REW.w_ang_vel, REW.w_action_rate))
+    assert terms[2, 2] == 0.0
+    paper = REW.paper_reward()
+    assert (paper.w_tilt, paper.w_ang_vel, paper.w_action_rate, paper.goal_bonus, paper.off_course_penalty) == (0,) * 5
+    assert paper.direction_deadband == pytest.approx(math.pi / 6) and not paper.direction_to_goal
 
 
 # ------------------------------------------------------------------ observations (§2.4.1)
@@ -629,3 +689,32 @@ def test_max_minutes_stops_at_an_iteration_boundary(tmp_path):
     assert it, out[-2000:]
     (run,) = glob.glob(str(tmp_path / "*" / "*"))
     assert os.path.isfile(run + "/policy.onnx") and os.path.isfile(f"{run}/model_{it.group(1)}.pt")
+
+
+def test_terrain_recipes_and_reward_switches():
+    """``python train.py --terrain T`` fills unset flags from RECIPES (a resumed run keeps its ranges and physics);
+    ``--paper_reward`` is Table 1, and flags given on top still apply."""
+    import argparse
+
+    from hexnewton.train import RECIPES, apply_recipe, reward_config
+
+    def args(**kw):
+        base = dict(terrain="complex", levels=None, start_levels=None, randomize=None, a2_range=None, frame_dt=None,
+                    substeps=None, paper_reward=False, direction_deadband=None, goal_bonus=None,
+                    off_course_penalty=None, stability_tilt=None, w_tilt=None, w_ang_vel=None, w_action_rate=None,
+                    direction_from_start=False)  # fmt: skip
+        return argparse.Namespace(**{**base, **kw})
+
+    a = args()
+    apply_recipe(a, resumed=False)
+    assert (a.levels, a.start_levels, a.a2_range, a.randomize, a.frame_dt) == (10, 3, (0.9, 1.3), True, 0.02)
+    a = args(levels=0, randomize=False)
+    apply_recipe(a, resumed=True)
+    assert (a.levels, a.randomize, a.a2_range, a.frame_dt) == (0, False, None, None)  # given flags win; resumed
+    a = args(terrain="flat")
+    apply_recipe(a, resumed=False)
+    assert RECIPES["flat"] == {} and (a.levels, a.randomize, a.frame_dt) == (0, False, None)
+    assert reward_config(args()) == RewardConfig()
+    paper = reward_config(args(paper_reward=True, w_tilt=1.5))
+    assert paper.goal_bonus == 0 and paper.off_course_penalty == 0 and paper.w_tilt == 1.5 and paper.w_ang_vel == 0
+    assert not reward_config(args(direction_from_start=True)).direction_to_goal

@@ -220,3 +220,68 @@ def test_sb3_adapter_and_curves(tmp_path):
     w.close()
     (run / "config.json").write_text(json.dumps({"hexnewton": {"algo": "sac"}}))
     assert read_curve(str(run), "env_steps")["Train/mean_reward"] == [(1000.0, 1.0), (2000.0, 2.0)]
+
+
+def test_gait_quality_and_fall_metrics():
+    """Falls anywhere in a round, the 99.9th percentile of |angle|, body rate RMS and the parameters' change per step
+    (from each first episode's second step on)."""
+    from hexnewton.evaluate import gait_quality
+
+    pos, rpy, done, status = _synthetic()
+    m = round_metrics(pos, rpy, done, status, DT)
+    s = summarize(m, rpy)
+    assert s["fall_rate"] == pytest.approx(0.25)  # round 1 fell
+    assert s["roll_p999_deg"] <= s["roll_peak_deg"] and s["pitch_p999_deg"] <= 2.0 + 1e-9
+    rate = np.zeros(rpy.shape[:2] + (2,))
+    rate[..., 1] = 0.5  # pitch rate 0.5 rad/s everywhere
+    dparam = np.full(done.shape, 0.02)
+    dparam[0] = np.nan  # no previous step
+    dparam[280:, 0] = 1.0  # after round 0 ended: ignored
+    q = gait_quality(m, rate, dparam, dparam * 2)
+    assert q["roll_rate_rms_deg_s"] == 0.0 and q["pitch_rate_rms_deg_s"] == pytest.approx(np.degrees(0.5))
+    assert q["param_change_pct"] == pytest.approx(2.0) and q["action_change_pct"] == pytest.approx(4.0)
+
+
+def test_named_perturbations_change_one_thing():
+    from hexnewton.config import RandomizationConfig
+    from hexnewton.evaluate import PERTURBATIONS, perturbation
+
+    nominal, terrain = perturbation("nominal")
+    assert nominal is None and terrain == {}
+    friction, _ = perturbation("friction_0.3")
+    assert friction.enabled and friction.friction == (0.3, 0.3) and friction.payload == (0.0, 0.0)
+    assert friction.latency_share == 0.0 and friction.push_velocity == 0.0 and friction.noise_quat == 0.0
+    train = RandomizationConfig()
+    assert perturbation("payload_0.8kg")[0].payload[0] > train.payload[1]  # beyond the training range
+    assert perturbation("latency_40ms")[0].latency_share == 1.0 > train.latency_share
+    assert perturbation("steps_7cm") == (None, {"step_rise": 0.07})
+    assert len(PERTURBATIONS) >= 9
+    with pytest.raises(ValueError, match="unknown perturbation"):
+        perturbation("gravity")
+
+
+def test_fixed_gait_sweep_and_robustness_on_a_tiny_run(tmp_path):
+    """``hexnewton.cpg_sweep``: every gait of a 2-gait grid walks its rounds in one batch and the best is reported;
+    ``evaluate --perturbations`` adds a robustness table per controller, with the swept fixed gait beside."""
+    out = tmp_path / "sweep"
+    cmd = [sys.executable, "-m", "hexnewton.cpg_sweep", "--terrains", "flat", "--rounds", "2", "--omega", "9.42477796076938",
+           "--a1", "0.3", "--a2", "0.5", "1.1", "--a3", "0.5", "--max_steps", "30", "--device", "cpu", "--out", str(out)]
+    proc = subprocess.run(cmd, capture_output=True, text=True, timeout=900, cwd=ROOT)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    res = json.loads((out / "results.json").read_text())
+    assert res["meta"]["gaits"] == 2 and len(res["gaits"]) == 2 and res["best"]["a2"] in (0.5, 1.1)
+    assert res["default"] is not None and "best gait" in proc.stdout and "| default " in (out / "report.md").read_text()
+    ev = tmp_path / "ev"
+    cmd = [sys.executable, "-m", "hexnewton.evaluate", "--controllers", "cpg", "cpg_swept", "--terrains", "flat",
+           "--rounds", "2", "--max_steps", "20", "--device", "cpu", "--perturbations", "payload_0.8kg", "--out", str(ev)]
+    proc = subprocess.run(cmd, capture_output=True, text=True, timeout=900, cwd=ROOT)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    res = json.loads((ev / "results.json").read_text())
+    assert set(res["robustness"]["payload_0.8kg"]) == {"cpg", "cpg_swept"}
+    s = res["results"]["flat"]["cpg_swept"]
+    assert {"fall_rate", "pitch_p999_deg", "roll_rate_rms_deg_s", "param_change_pct"} <= set(s)
+    report = (ev / "report.md").read_text()
+    assert "## Gait quality" in report and "## Robustness: CPG (swept)" in report
+    bad = subprocess.run([sys.executable, "-m", "hexnewton.cpg_sweep", "--a2", "2.0", "--out", str(tmp_path / "b")],
+                         capture_output=True, text=True, timeout=300, cwd=ROOT)  # fmt: skip
+    assert bad.returncode == 2 and "leaves the parameter ranges" in bad.stderr and not (tmp_path / "b").exists()
