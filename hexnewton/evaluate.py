@@ -493,6 +493,42 @@ def checkpoint_for(checkpoints: dict[str, str], controller: str, terrain: str) -
     return path
 
 
+def merge_reports(dirs: list[str], out: str) -> int:
+    """One report from several evaluation folders (``--merge``): their results and robustness tables side by side.
+    The folders must share the seeds, rounds and distances (otherwise the rows would not be comparable)."""
+    runs = []
+    for d in dirs:
+        path = os.path.join(d, "results.json")
+        if not os.path.isfile(path):
+            raise ValueError(f"{d} holds no results.json (not an evaluation folder, or an unfinished one)")
+        with open(path) as f:
+            runs.append(json.load(f))
+    keys = ("terrain_seed", "reset_seed", "rounds", "distances", "max_steps", "goal_distance", "actions")
+    for d, r in zip(dirs[1:], runs[1:]):
+        differ = [k for k in keys if r["meta"].get(k) != runs[0]["meta"].get(k)]
+        if differ:
+            raise ValueError(f"{d} differs from {dirs[0]} in {', '.join(differ)}: its rounds are not comparable")
+    if os.path.exists(out):
+        raise ValueError(f"{out} exists: choose a new --out (nothing is overwritten)")
+    results: dict = {}
+    robustness: dict = {}
+    for r in runs:
+        for terrain, by_ctrl in r["results"].items():
+            results.setdefault(terrain, {}).update(by_ctrl)
+        for name, by_ctrl in r.get("robustness", {}).items():
+            for ctrl, by_terrain in by_ctrl.items():
+                robustness.setdefault(name, {}).setdefault(ctrl, {}).update(by_terrain)
+    meta = {**runs[0]["meta"], "merged_from": [os.path.abspath(d) for d in dirs],
+            "wall_s": round(sum(r["meta"].get("wall_s", 0.0) for r in runs), 1)}  # fmt: skip
+    os.makedirs(out)
+    with open(os.path.join(out, "results.json"), "w") as f:
+        json.dump({"meta": meta, "results": results, "robustness": robustness}, f, indent=1)
+    with open(os.path.join(out, "report.md"), "w") as f:
+        f.write(report_markdown(results, meta, robustness))
+    print(f"merged {len(dirs)} evaluations into {out}/ (report.md, results.json)")
+    return 0
+
+
 def main(argv: list[str] | None = None) -> int:
     p = ArgumentParser(prog="python -m hexnewton.evaluate", description="The paper's evaluation and report.")
     p.add_argument("--controllers", nargs="+", default=["cpg", "cpg_rl"], choices=list(CONTROLLERS))
@@ -533,8 +569,14 @@ def main(argv: list[str] | None = None) -> int:
                         "the test set). Choose checkpoints on another S (a validation set), report on the default")
     p.add_argument("--device", default=None)
     p.add_argument("--out", default=None, help="output directory (default eval/<date_time>); must not exist")
+    p.add_argument("--merge", nargs="+", metavar="DIR",
+                   help="simulate nothing: join the results.json of evaluations run apart (one controller or terrain "
+                        "per GPU or process, the same seeds) into one report in --out")
     p.add_argument("--no-progress", action="store_true")
     args = p.parse_args(argv)
+    if args.merge:
+        return merge_reports(args.merge, args.out or os.path.join("eval", datetime.datetime.now().strftime(
+            "%Y-%m-%d_%H-%M-%S")))
     distances = tuple(sorted(set(args.distances)))
     if not all(0 < d <= args.goal_distance - TaskConfig.goal_radius + 1e-9 for d in distances):
         raise ValueError(f"--distances must lie in (0, goal_distance - {TaskConfig.goal_radius:g}] = "

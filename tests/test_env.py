@@ -571,7 +571,8 @@ def test_same_seed_same_first_iteration_on_cpu(tmp_path):
 def test_resume_continues_iterations_and_learning_rate(tmp_path):
     """2 iterations + resume 2 numbers its iterations like 4 straight ones and keeps the adapted learning rate and
     the physics it was trained under."""
-    _train(tmp_path, "--max_iterations", "2", "--experiment", "part", "--frame_dt", "0.02", "--substeps", "2")
+    _train(tmp_path, "--max_iterations", "2", "--experiment", "part", "--frame_dt", "0.02", "--substeps", "2",
+           "--distribution", "gaussian")  # fmt: skip
     (first,) = _run_dirs(tmp_path, "part")
     ck = torch.load(first + "/model_1.pt", weights_only=False)
     lr_saved = ck["optimizer_state_dict"]["param_groups"][0]["lr"]
@@ -581,7 +582,9 @@ def test_resume_continues_iterations_and_learning_rate(tmp_path):
     assert "continuing at iteration 2" in out
     second = _run_dirs(tmp_path, "part")[1]
     assert os.path.isfile(second + "/model_3.pt") and torch.load(second + "/model_3.pt", weights_only=False)["iter"] == 3
-    sim = json.loads(open(second + "/config.json").read())["hexnewton"]["config"]["sim"]
+    meta = json.loads(open(second + "/config.json").read())["hexnewton"]
+    sim = meta["config"]["sim"]
+    assert meta["distribution"] == "gaussian"  # a resumed run keeps its action distribution
     assert (sim["frame_dt"], sim["substeps"]) == (0.02, 2)  # from the checkpoint: no --frame_dt on the resume
     # --action_std replaced the checkpoint's learnt std and held it fixed through training
     std = torch.load(second + "/model_3.pt", weights_only=False)["actor_state_dict"]["distribution.std_param"]

@@ -282,6 +282,17 @@ def test_fixed_gait_sweep_and_robustness_on_a_tiny_run(tmp_path):
     assert {"fall_rate", "pitch_p999_deg", "roll_rate_rms_deg_s", "param_change_pct"} <= set(s)
     report = (ev / "report.md").read_text()
     assert "## Gait quality" in report and "## Robustness: CPG (swept)" in report
+    # --merge joins evaluations run apart (same seeds); rounds that are not comparable are refused
+    other = tmp_path / "other"
+    other.mkdir()
+    res["meta"]["rounds"] = 3
+    (other / "results.json").write_text(json.dumps(res))
+    for dirs, code in (([ev, ev], 0), ([ev, other], 2)):
+        p = subprocess.run([sys.executable, "-m", "hexnewton.evaluate", "--merge", *map(str, dirs), "--out",
+                            str(tmp_path / f"merged{code}")], capture_output=True, text=True, timeout=300, cwd=ROOT)
+        assert p.returncode == code, p.stderr[-2000:]
+    assert "## Robustness: CPG (swept)" in (tmp_path / "merged0" / "report.md").read_text()
+    assert not (tmp_path / "merged2").exists()
     bad = subprocess.run([sys.executable, "-m", "hexnewton.cpg_sweep", "--a2", "2.0", "--out", str(tmp_path / "b")],
                          capture_output=True, text=True, timeout=300, cwd=ROOT)  # fmt: skip
     assert bad.returncode == 2 and "leaves the parameter ranges" in bad.stderr and not (tmp_path / "b").exists()
