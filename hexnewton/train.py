@@ -323,12 +323,13 @@ def checkpoint_distribution(ckpt: dict | None) -> str:
 
 #: What ``python train.py --terrain T`` trains when a flag is not given (``apply_recipe``). Flat ground: the plain
 #: MDP. The paper's terrains: the terrain curriculum (10 lanes, robots start on the first 3), the knee-lift floor
-#: (a high-stepping gait from the start), domain randomisation and the 20 ms physics frame; with the bounded (Beta)
-#: actions and the stability shaping of ``RewardConfig`` this is the shipped complex policy's recipe (RESULTS.md).
+#: (a high-stepping gait from the start), domain randomisation, the 20 ms physics frame and a 0.1 s filter on the
+#: CPG parameters; with the bounded (Beta) actions and the stability shaping of ``RewardConfig``,
+#: ``python train.py --terrain complex --seed 1`` is the recipe of results/policies/cpg_rl_complex_beta (RESULTS.md).
 RECIPES = {
     "flat": {},
-    **{t: dict(levels=10, start_levels=3, a2_range=(0.9, 1.3), randomize=True, frame_dt=0.02, substeps=4)
-       for t in ("rugged", "stepped", "complex")},
+    **{t: dict(levels=10, start_levels=3, a2_range=(0.9, 1.3), randomize=True, frame_dt=0.02, substeps=4,
+               param_tau=0.1) for t in ("rugged", "stepped", "complex")},
 }
 
 
@@ -336,7 +337,7 @@ def apply_recipe(args, resumed: bool) -> None:
     """Fill the flags left unset (None) from ``RECIPES[args.terrain]``, then the config defaults; a resumed run keeps
     its own parameter ranges and physics (they come from the checkpoint)."""
     recipe = RECIPES[args.terrain]
-    keep = ("a2_range", "frame_dt", "substeps") if resumed else ()
+    keep = ("a2_range", "frame_dt", "substeps", "param_tau") if resumed else ()
     for key, value in recipe.items():
         if getattr(args, key) is None and key not in keep:
             setattr(args, key, value)

@@ -703,17 +703,18 @@ def test_terrain_recipes_and_reward_switches():
 
     def args(**kw):
         base = dict(terrain="complex", levels=None, start_levels=None, randomize=None, a2_range=None, frame_dt=None,
-                    substeps=None, paper_reward=False, direction_deadband=None, goal_bonus=None,
+                    substeps=None, param_tau=None, paper_reward=False, direction_deadband=None, goal_bonus=None,
                     off_course_penalty=None, stability_tilt=None, w_tilt=None, w_ang_vel=None, w_action_rate=None,
                     direction_from_start=False)  # fmt: skip
         return argparse.Namespace(**{**base, **kw})
 
     a = args()
     apply_recipe(a, resumed=False)
-    assert (a.levels, a.start_levels, a.a2_range, a.randomize, a.frame_dt) == (10, 3, (0.9, 1.3), True, 0.02)
+    assert (a.levels, a.start_levels, a.a2_range, a.randomize, a.frame_dt, a.param_tau) == (10, 3, (0.9, 1.3), True,
+                                                                                            0.02, 0.1)  # fmt: skip
     a = args(levels=0, randomize=False)
     apply_recipe(a, resumed=True)
-    assert (a.levels, a.randomize, a.a2_range, a.frame_dt) == (0, False, None, None)  # given flags win; resumed
+    assert (a.levels, a.randomize, a.a2_range, a.frame_dt, a.param_tau) == (0, False, None, None, None)  # resumed
     a = args(terrain="flat")
     apply_recipe(a, resumed=False)
     assert RECIPES["flat"] == {} and (a.levels, a.randomize, a.frame_dt) == (0, False, None)
