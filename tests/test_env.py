@@ -722,3 +722,21 @@ def test_terrain_recipes_and_reward_switches():
     paper = reward_config(args(paper_reward=True, w_tilt=1.5))
     assert paper.goal_bonus == 0 and paper.off_course_penalty == 0 and paper.w_tilt == 1.5 and paper.w_ang_vel == 0
     assert not reward_config(args(direction_from_start=True)).direction_to_goal
+
+
+def test_best_checkpoint_keeps_the_best_iteration(tmp_path):
+    """model_best.pt follows the training success once enough episodes are in (a full ring; with a curriculum, a
+    quarter of it on the last level), and only a real improvement saves again."""
+    from hexnewton.env import RING
+    from hexnewton.train import BestCheckpoint, training_success
+
+    saved = []
+    best = BestCheckpoint(str(tmp_path), levels=0)
+    save = lambda path, infos: saved.append((path, infos["best_success"]))  # noqa: E731
+    for it, (rate, n) in enumerate([(0.9, RING // 2), (0.5, RING), (0.8, RING), (0.802, RING), (0.7, RING)]):
+        best.update({"success_rate": rate, "episodes": n}, it, save)
+    assert [r for _, r in saved] == [0.5, 0.8] and best.iteration == 2 and best.rate == 0.8
+    assert saved[0][0] == str(tmp_path / "model_best.pt")
+    stats = {"top_level_success_rate": 0.9, "top_level_episodes": RING // 4, "success_rate": 0.1, "episodes": RING}
+    assert training_success(stats, levels=10) == 0.9 and training_success(stats, levels=0) == 0.1
+    assert training_success({**stats, "top_level_episodes": 3}, levels=10) is None
