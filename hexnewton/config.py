@@ -284,12 +284,11 @@ class RewardConfig:
     # ours: gait-quality terms (kernels/rewards.py, "Stability shaping"), each per 20 ms step and 0 = off (Table 1
     # has only the -100 fine beyond pi/6). Body tilt: -w_tilt (roll^2 + pitch^2) [rad^2]; body roll and pitch rate:
     # -w_ang_vel (w_x^2 + w_y^2) [(rad/s)^2, body frame]; action rate: -w_action_rate sum_k (a_k - a_k,prev)^2 over
-    # the 15 actions in [-1, 1]. ``paper_reward()`` switches them off with the other additions. The values are those
-    # of the variant chosen on validation rounds among six (RESULTS.md, "Stable gaits"): fewest falls, lowest rugged
-    # pitch and roll variance; 2 / 0.02 / 0.05 fell 18x as often on rugged ground, 20 / 0.2 / 0.1 20x.
-    w_tilt: float = 5.0
-    w_ang_vel: float = 0.05
-    w_action_rate: float = 0.1
+    # the 15 actions in [-1, 1]. Off here; train.py's recipes for the paper's terrains switch them on
+    # (train.STABLE_SHAPING: 5 / 0.05 / 0.1), ``paper_reward()`` switches them off with the other additions.
+    w_tilt: float = 0.0
+    w_ang_vel: float = 0.0
+    w_action_rate: float = 0.0
 
     def paper_reward(self) -> "RewardConfig":
         """Table 1 as written: no goal bonus, no off-course penalty, no gait-quality terms, the π/6 dead band on the

@@ -167,13 +167,12 @@ def _stop(signum, frame):
 
 
 def training_success(stats: dict, levels: int) -> float | None:
-    """The success rate of the last training episodes (``env.episode_stats()``) once there are enough of them: a full
-    ring of RING, or with a curriculum at least RING // 4 played on the last level (the terrain itself); else None."""
+    """The success rate of the last training episodes (``env.episode_stats()``) once at least RING // 4 are in (with a
+    curriculum: played on the last level, the terrain itself); else None."""
     from .env import RING
 
-    key, need = ("top_level_", RING // 4) if levels else ("", RING)
-    n = stats.get(f"{key}episodes", 0)
-    return float(stats[f"{key}success_rate"]) if n >= need else None
+    key = "top_level_" if levels else ""
+    return float(stats[f"{key}success_rate"]) if stats.get(f"{key}episodes", 0) >= RING // 4 else None
 
 
 class BestCheckpoint:
@@ -349,6 +348,11 @@ def checkpoint_distribution(ckpt: dict | None) -> str:
     return checkpoint_meta(ckpt).get("distribution", "gaussian")
 
 
+#: The stability shaping of the variant chosen on validation rounds among six (RESULTS.md, "Stable gaits"): fewest
+#: falls, lowest rugged pitch and roll variance; 2 / 0.02 / 0.05 fell 18x as often on rugged ground, 20 / 0.2 / 0.1
+#: 20x. On flat ground (the CPU main job, 64 envs) it slowed learning: 59 % success after 300 iterations, not 87 %.
+STABLE_SHAPING = dict(w_tilt=5.0, w_ang_vel=0.05, w_action_rate=0.1)
+
 #: What ``python train.py --terrain T`` trains when a flag is not given (``apply_recipe``). Flat ground: the plain
 #: MDP. The paper's terrains: the terrain curriculum (10 lanes, robots start on the first 3), the knee-lift floor
 #: (a high-stepping gait from the start), domain randomisation, the 20 ms physics frame and a 0.1 s filter on the
@@ -357,7 +361,7 @@ def checkpoint_distribution(ckpt: dict | None) -> str:
 RECIPES = {
     "flat": {},
     **{t: dict(levels=10, start_levels=3, a2_range=(0.9, 1.3), randomize=True, frame_dt=0.02, substeps=4,
-               param_tau=0.1) for t in ("rugged", "stepped", "complex")},
+               param_tau=0.1, **STABLE_SHAPING) for t in ("rugged", "stepped", "complex")},
 }
 
 
@@ -366,6 +370,8 @@ def apply_recipe(args, resumed: bool) -> None:
     its own parameter ranges and physics (they come from the checkpoint)."""
     recipe = RECIPES[args.terrain]
     keep = ("a2_range", "frame_dt", "substeps", "param_tau") if resumed else ()
+    if args.paper_reward:  # Table 1 as written: no shaping unless a flag asks for it
+        keep += tuple(STABLE_SHAPING)
     for key, value in recipe.items():
         if getattr(args, key) is None and key not in keep:
             setattr(args, key, value)
@@ -465,8 +471,7 @@ def main(argv: list[str] | None = None) -> int:
         raise ValueError("--max_minutes must be positive")
     if args.action_std is not None and not args.action_std > 0:
         raise ValueError("--action_std must be positive")
-    reward = reward_config(args)
-    if not 0 < reward.stability_tilt < math.pi / 2:
+    if args.stability_tilt is not None and not 0 < args.stability_tilt < math.pi / 2:
         raise ValueError("--stability_tilt must lie in (0, pi/2) rad")
     if args.param_tau is not None and not args.param_tau >= 0:
         raise ValueError("--param_tau must be >= 0")
@@ -479,6 +484,7 @@ def main(argv: list[str] | None = None) -> int:
             raise ValueError(f"--{flag} is for new runs: a resumed run keeps what it was trained with")
     ckpt = load_checkpoint(args.resume) if args.resume else None  # fail before building anything
     apply_recipe(args, resumed=ckpt is not None)
+    reward = reward_config(args)
     if args.a2_range is not None:
         lo, hi = args.a2_range
         if not 0 <= lo < hi <= CPGConfig.a2_range[1]:

@@ -333,14 +333,17 @@ def test_shaping_terms_on_hand_made_states():
     a[2, 0] = 1.0
     prev = np.zeros((3, 15))
     prev[2, 0] = -1.0
-    terms, _, new_prev = _run_shaping(q, qd, rpy, a, prev, [5, 5, 5], (REW.w_tilt, REW.w_ang_vel, REW.w_action_rate))
+    from hexnewton.train import STABLE_SHAPING
+
+    w = STABLE_SHAPING
+    terms, _, new_prev = _run_shaping(q, qd, rpy, a, prev, [5, 5, 5], (w["w_tilt"], w["w_ang_vel"], w["w_action_rate"]))
     t = dict(zip(TERMS[len(TABLE1_TERMS):], terms.T))
-    np.testing.assert_allclose(t["tilt"], [-REW.w_tilt * math.radians(10) ** 2, 0, 0], rtol=1e-5)
-    np.testing.assert_allclose(t["ang_vel"], [0, -REW.w_ang_vel * 5.0, 0], rtol=1e-5)
-    np.testing.assert_allclose(t["action_rate"], [0, 0, -REW.w_action_rate * 4.0], rtol=1e-5)  # (1 - (-1))^2
+    np.testing.assert_allclose(t["tilt"], [-w["w_tilt"] * math.radians(10) ** 2, 0, 0], rtol=1e-5)
+    np.testing.assert_allclose(t["ang_vel"], [0, -w["w_ang_vel"] * 5.0, 0], rtol=1e-5)
+    np.testing.assert_allclose(t["action_rate"], [0, 0, -w["w_action_rate"] * 4.0], rtol=1e-5)  # (1 - (-1))^2
     np.testing.assert_allclose(new_prev, a)
     # an episode's first step has no previous action; Table 1's reward has none of these terms
-    terms, _, _ = _run_shaping(q, qd, rpy, a, prev, [0, 0, 0], (REW.w_tilt, REW.w_ang_vel, REW.w_action_rate))
+    terms, _, _ = _run_shaping(q, qd, rpy, a, prev, [0, 0, 0], (w["w_tilt"], w["w_ang_vel"], w["w_action_rate"]))
     assert terms[2, 2] == 0.0
     paper = REW.paper_reward()
     assert (paper.w_tilt, paper.w_ang_vel, paper.w_action_rate, paper.goal_bonus, paper.off_course_penalty) == (0,) * 5
@@ -718,22 +721,28 @@ def test_terrain_recipes_and_reward_switches():
     a = args(terrain="flat")
     apply_recipe(a, resumed=False)
     assert RECIPES["flat"] == {} and (a.levels, a.randomize, a.frame_dt) == (0, False, None)
-    assert reward_config(args()) == RewardConfig()
+    assert reward_config(args()) == RewardConfig()  # shaping off in the config, on in the paper terrains' recipes
+    a = args()
+    apply_recipe(a, resumed=False)
+    assert (reward_config(a).w_tilt, reward_config(a).w_action_rate) == (5.0, 0.1)
+    a = args(paper_reward=True)
+    apply_recipe(a, resumed=False)
+    assert reward_config(a).w_tilt == 0.0 and a.levels == 10  # Table 1 as written; the curriculum stays
     paper = reward_config(args(paper_reward=True, w_tilt=1.5))
     assert paper.goal_bonus == 0 and paper.off_course_penalty == 0 and paper.w_tilt == 1.5 and paper.w_ang_vel == 0
     assert not reward_config(args(direction_from_start=True)).direction_to_goal
 
 
 def test_best_checkpoint_keeps_the_best_iteration(tmp_path):
-    """model_best.pt follows the training success once enough episodes are in (a full ring; with a curriculum, a
-    quarter of it on the last level), and only a real improvement saves again."""
+    """model_best.pt follows the training success once enough episodes are in (a quarter of the ring; with a
+    curriculum, played on the last level), and only a real improvement saves again."""
     from hexnewton.env import RING
     from hexnewton.train import BestCheckpoint, training_success
 
     saved = []
     best = BestCheckpoint(str(tmp_path), levels=0)
     save = lambda path, infos: saved.append((path, infos["best_success"]))  # noqa: E731
-    for it, (rate, n) in enumerate([(0.9, RING // 2), (0.5, RING), (0.8, RING), (0.802, RING), (0.7, RING)]):
+    for it, (rate, n) in enumerate([(0.9, RING // 8), (0.5, RING // 4), (0.8, RING), (0.802, RING), (0.7, RING)]):
         best.update({"success_rate": rate, "episodes": n}, it, save)
     assert [r for _, r in saved] == [0.5, 0.8] and best.iteration == 2 and best.rate == 0.8
     assert saved[0][0] == str(tmp_path / "model_best.pt")
