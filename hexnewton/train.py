@@ -70,7 +70,7 @@ def train_cfg(preset: str, num_envs: int, num_steps_per_env: int = 24, action_st
     forward pass and losses under bfloat16 autocast (rsl-rl's ``use_mixed_precision``). ``std_max`` caps the learnt
     std (rsl-rl's ``std_range``): actions are clipped to [-1, 1] and low-pass filtered into the CPG parameters, so a
     wider Gaussian only changes the filtered parameter's mean, and the entropy bonus grew the std to 1.7-5.8 in
-    session 7's runs.
+    the complex runs (RESULTS.md).
 
     ``distribution``: ``beta`` (rsl-rl's ``BetaDistribution``: actions bounded to [-1, 1] by construction, its mean is
     the deterministic controller, the ONNX export computes that mean) or ``gaussian`` (a Gaussian clipped to [-1, 1]
