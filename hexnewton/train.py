@@ -349,8 +349,8 @@ def checkpoint_distribution(ckpt: dict | None) -> str:
 
 
 #: The stability shaping of the variant chosen on validation rounds among six (RESULTS.md, "Stable gaits"): fewest
-#: falls, lowest rugged pitch and roll variance; 2 / 0.02 / 0.05 fell 18x as often on rugged ground, 20 / 0.2 / 0.1
-#: 20x. On flat ground (the CPU main job, 64 envs) it slowed learning: 59 % success after 300 iterations against 84 %
+#: falls, lowest rugged pitch and roll variance; 2 / 0.02 / 0.05 (with a 0.03 s filter) fell 18x as often on rugged
+#: ground, 20 / 0.2 / 0.1 20x. On flat ground (the CPU main job, 64 envs) it slowed learning: 59 % success after 300 iterations against 84 %
 #: without it (results/cpu_main_job).
 STABLE_SHAPING = dict(w_tilt=5.0, w_ang_vel=0.05, w_action_rate=0.1)
 
