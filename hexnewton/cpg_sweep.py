@@ -5,8 +5,8 @@
 
 Every gait of the grid (omega x A1 x A2 x A3, the same amplitude on every leg) walks ``--rounds`` rounds on each
 terrain, all gaits of a terrain at once (one robot per gait and round, one env batch), with the evaluation's
-protocol (``hexnewton.evaluate``: the first episode of each robot, success at 3 m) on validation seeds. The best gait has
-the highest mean success at 3 m over the terrains; among gaits within ``--tie`` of it, the lowest mean pitch +
+protocol (``hexnewton.evaluate``: the first episode of each robot, success at 3 m) on validation seeds. The best gait
+has the highest mean success at 3 m over the terrains; among gaits within ``--tie`` of it, the lowest mean pitch +
 roll variance. ``config.FIXED_GAITS["swept"]`` holds it, and ``evaluate --controllers cpg_swept`` runs it beside
 the paper-like default (``CPGConfig.fixed_*``).
 
@@ -121,14 +121,15 @@ def main(argv: list[str] | None = None) -> int:
 
     def row(x: dict, tag: str = "") -> str:
         cells = " | ".join(f"{100 * x['by_terrain'][t]['success_3m']:.0f}%" for t in args.terrains)
-        return (f"| {tag}{x['omega'] / (2 * math.pi):.2f} Hz | {x['a1']:.2f} | {x['a2']:.2f} | {x['a3']:.2f} | {cells} | "
-                f"{100 * x['success_3m']:.1f}% | {x['tilt_var_deg2']:.1f} | {100 * x['fall_rate']:.1f}% |")
+        return (f"| {tag}{x['omega'] / (2 * math.pi):.2f} Hz | {x['a1']:.2f} | {x['a2']:.2f} | {x['a3']:.2f} | "
+                f"{cells} | {100 * x['success_3m']:.1f}% | {x['tilt_var_deg2']:.1f} | {100 * x['fall_rate']:.1f}% |")
 
     lines = ["# Fixed CPG sweep", "", *(f"- {k}: {v}" for k, v in meta.items()), "",
              f"Best (highest mean success at 3 m; within {args.tie:g} of it, the lowest pitch + roll variance): "
              f"omega {best['omega']:.4f} rad/s, A1 {best['a1']:g}, A2 {best['a2']:g}, A3 {best['a3']:g}.", "",
              "| omega | A1 | A2 | A3 | " + " | ".join(f"{t} 3 m" for t in args.terrains) +
-             " | mean 3 m | pitch + roll var [deg²] | falls |", "|---|---:|---:|---:|" + "---:|" * (len(args.terrains) + 3)]
+             " | mean 3 m | pitch + roll var [deg²] | falls |",
+             "|---|---:|---:|---:|" + "---:|" * (len(args.terrains) + 3)]
     lines += [row(x, "**best** " if x is best else "") for x in ranked[:10]]
     if default is not None:
         lines.append(row(default, "default "))

@@ -266,6 +266,13 @@ def run_rounds(controller: str, checkpoint: str | None, terrain: str, rounds: in
     pos, rpy, done, status, params, ang_rate, dparam, daction = [], [], [], [], [], [], [], []
     finished = np.zeros(rounds, bool)
     prev_p = prev_t = None
+
+    def change(now: np.ndarray, before: np.ndarray | None) -> np.ndarray:
+        """Mean |change| of the 15 parameters since the last step, in fractions of their ranges (NaN at the start)."""
+        if before is None:
+            return np.full(rounds, np.nan, np.float32)
+        return (np.abs(now - before) / (hi - lo)).mean(axis=1).astype(np.float32)
+
     for _, st, q, p, r in stepped(env, policy, max_steps, f"{LABELS[controller]} on {terrain}", progress):
         pos.append(p[:, :2])
         rpy.append(r)
@@ -276,8 +283,6 @@ def run_rounds(controller: str, checkpoint: str | None, terrain: str, rounds: in
         if mode == "cpg":
             pr, tg = env.last_params.numpy(), env.controller.params_target.numpy()
             params.append(pr[0].copy())
-            change = lambda a, b: np.full(rounds, np.nan, np.float32) if b is None else \
-                (np.abs(a - b) / (hi - lo)).mean(axis=1).astype(np.float32)  # noqa: E731
             dparam.append(change(pr, prev_p))
             daction.append(change(tg, prev_t))
             prev_p, prev_t = pr.copy(), tg.copy()
@@ -337,8 +342,8 @@ def report_markdown(results: dict, meta: dict, robustness: dict | None = None) -
                          f"{s['y_dev_mean_m']:.3f} / {s['y_dev_max_m']:.3f} | "
                          f"{'—' if t3 is None else f'{t3:.1f}'} | {ended} |")  # fmt: skip
     lines += ["", "## Gait quality (deterministic actions unless stated in the header)", "",
-              "Falls: rounds that ended in a fall anywhere (also after the last distance). p99.9: the 99.9th percentile "
-              "of |angle| over every step. Rates: RMS of the body's roll / pitch rate. Δparam: mean change per "
+              "Falls: rounds that ended in a fall anywhere (also after the last distance). p99.9: the 99.9th "
+              "percentile of |angle| over every step. Rates: RMS of the body's roll / pitch rate. Δparam: mean change per "
               "control step of the 15 CPG parameters the oscillators use (requested by the policy in brackets), in % "
               "of each parameter's range. Ratios: variance against the fixed CPG's in the same run.", "",
               "| terrain | method | falls | pitch var [deg²] | roll var [deg²] | \\|pitch\\| / \\|roll\\| p99.9 [deg] "
@@ -358,7 +363,8 @@ def report_markdown(results: dict, meta: dict, robustness: dict | None = None) -
                          f"{f(s['roll_p999_deg'])} | {f(s.get('roll_rate_rms_deg_s'))} / "
                          f"{f(s.get('pitch_rate_rms_deg_s'))} | {f(s.get('param_change_pct'), '.2f')} "
                          f"({f(s.get('action_change_pct'), '.2f')}) | {ratios[0]} | {ratios[1]} |")  # fmt: skip
-    segs = [(t, c, s["segments"]) for t, by in results.items() for c, s in by.items() if len(s.get("segments", {})) == 2]
+    segs = [(t, c, s["segments"]) for t, by in results.items() for c, s in by.items()
+            if len(s.get("segments", {})) == 2]
     if segs:
         lines += ["", "## Parameters on the blocks and on the stairs (Fig. 5b; complex course, mean over all rounds)",
                   "", "| method | where | " + " | ".join(PARAM_NAMES) + " |", "|---|---|" + "---:|" * len(PARAM_NAMES)]
@@ -369,7 +375,8 @@ def report_markdown(results: dict, meta: dict, robustness: dict | None = None) -
     for ctrl in dict.fromkeys(c for by in robustness.values() for c in by):
         lines += ["", f"## Robustness: {LABELS[ctrl]} under named perturbations (beyond the training ranges)", "",
                   "| perturbation | terrain | " + " | ".join(f"{d:g} m" for d in distances) + " | falls | "
-                  "pitch var [deg²] | \\|pitch\\| p99.9 [deg] |", "|---|---|" + "---:|" * (len(distances) + 3)]  # fmt: skip
+                  "pitch var [deg²] | \\|pitch\\| p99.9 [deg] |",
+                  "|---|---|" + "---:|" * (len(distances) + 3)]  # fmt: skip
         for name, by_ctrl in robustness.items():
             for terrain, s in by_ctrl.get(ctrl, {}).items():
                 cells = " | ".join(_pct(s[f"success_{d:g}m"]) for d in distances)

@@ -350,14 +350,14 @@ def checkpoint_distribution(ckpt: dict | None) -> str:
 
 #: The stability shaping of the variant chosen on validation rounds among six (RESULTS.md, "Stable gaits"): fewest
 #: falls, lowest rugged pitch and roll variance; 2 / 0.02 / 0.05 (with a 0.03 s filter) fell 18x as often on rugged
-#: ground, 20 / 0.2 / 0.1 20x. On flat ground (the CPU main job, 64 envs) it slowed learning: 59 % success after 300 iterations against 84 %
-#: without it (results/cpu_main_job).
+#: ground, 20 / 0.2 / 0.1 20x. On flat ground (the CPU main job, 64 envs) it slowed learning: 59 % success after 300
+#: iterations against 84 % without it (results/cpu_main_job).
 STABLE_SHAPING = dict(w_tilt=5.0, w_ang_vel=0.05, w_action_rate=0.1)
 
 #: What ``python train.py --terrain T`` trains when a flag is not given (``apply_recipe``). Flat ground: the plain
 #: MDP. The paper's terrains: the terrain curriculum (10 lanes, robots start on the first 3), the knee-lift floor
 #: (a high-stepping gait from the start), domain randomisation, the 20 ms physics frame and a 0.1 s filter on the
-#: CPG parameters; with the bounded (Beta) actions and the stability shaping of ``RewardConfig``,
+#: CPG parameters and the stability shaping (``STABLE_SHAPING``); with the bounded (Beta) actions,
 #: ``python train.py --terrain complex --seed 1`` is the recipe of results/policies/cpg_rl_complex_beta (RESULTS.md).
 RECIPES = {
     "flat": {},
@@ -428,7 +428,8 @@ def main(argv: list[str] | None = None) -> int:
                    help="knee-lift range [rad] of new runs (default: the recipe's, else CPGConfig.a2_range; a floor "
                         "such as 0.9 starts PPO from a high-stepping gait, action 0 = the middle of the range)")
     p.add_argument("--param_tau", type=float, default=None,
-                   help=f"time constant [s] of the CPG parameters' filter, new runs (default {CPGConfig.param_tau})")
+                   help="time constant [s] of the CPG parameters' filter, new runs (default: the recipe's, else "
+                        f"{CPGConfig.param_tau})")
     p.add_argument("--frame_dt", type=float, default=None,
                    help="physics frame [s], collision once per frame (must divide the 20 ms control step; default "
                         f"the recipe's, else {SimConfig.frame_dt}, or the resumed checkpoint's)")
@@ -459,11 +460,15 @@ def main(argv: list[str] | None = None) -> int:
                    help="roll / pitch [rad] beyond which r_s fines every step (Table 1: pi/6; 8 cm stairs pitch the "
                         "torso 19-25 deg, see kernels/rewards.py)")
     r.add_argument("--w_tilt", type=float, default=None,
-                   help=f"ours: weight of -(roll^2 + pitch^2) per step (default {RewardConfig.w_tilt:g}; 0: off)")
+                   help="ours: weight of -(roll^2 + pitch^2) per step (default: the recipe's, "
+                        f"{STABLE_SHAPING['w_tilt']:g} on the paper's terrains, else {RewardConfig.w_tilt:g} = off)")
     r.add_argument("--w_ang_vel", type=float, default=None,
-                   help=f"ours: weight of -(roll rate^2 + pitch rate^2) (default {RewardConfig.w_ang_vel:g}; 0: off)")
+                   help="ours: weight of -(roll rate^2 + pitch rate^2) (default: the recipe's, "
+                        f"{STABLE_SHAPING['w_ang_vel']:g} on the paper's terrains, else {RewardConfig.w_ang_vel:g} = off)")
     r.add_argument("--w_action_rate", type=float, default=None,
-                   help=f"ours: weight of -sum (a - a_prev)^2 (default {RewardConfig.w_action_rate:g}; 0: off)")
+                   help="ours: weight of -sum (a - a_prev)^2 (default: the recipe's, "
+                        f"{STABLE_SHAPING['w_action_rate']:g} on the paper's terrains, else {RewardConfig.w_action_rate:g}"
+                        " = off)")
     add_update_args(p)
     args = p.parse_args(argv)
     if args.preset not in PRESETS:
