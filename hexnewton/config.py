@@ -157,6 +157,8 @@ class SimConfig:
 PARAM_NAMES = ("omega", "A1_R", "A1_L") + tuple(f"A2_{leg}" for leg in LEG_NAMES) + tuple(
     f"A3_{leg}" for leg in LEG_NAMES
 )
+#: The body-posture parameters of the ``cpg_posture`` action mode (kernels/mapping.py), after the 15.
+POSTURE_NAMES = ("P_h", "P_p", "P_r")
 #: Oscillator of each leg (R1, R2, R3, L1, L2, L3): tripod {R1, L2, R3} on 0, {L1, R2, L3} on 1 (§2.2).
 LEG_OSCILLATOR = (0, 1, 0, 1, 0, 1)
 
@@ -199,6 +201,12 @@ class CPGConfig:
     # their ranges: play, evaluate, export and --resume read them from the checkpoint.
     a2_range: tuple[float, float] = (0.0, 1.3)
     a3_range: tuple[float, float] = (0.0, 0.8)  # ankle tuck; 0.15 + 0.8 < pi/3 keeps it inside the limit
+    # ours: body posture (kernels/mapping.py), three more parameters after the 15: knee offsets [rad] for height
+    # (P_h) and for pitch and roll (P_p, P_r: +-range at the front/rear and right/left legs). Off in the paper's
+    # cpg action mode; the cpg_posture mode turns it on. The knee's standing angle is 0.15 above its lower limit.
+    posture: bool = False
+    posture_height_range: tuple[float, float] = (-0.15, 0.15)
+    posture_tilt_range: tuple[float, float] = (-0.3, 0.3)
     # ours: the fixed-parameter "CPG" baseline (§3.3), tuned to walk straight on flat ground
     fixed_omega: float = 3.0 * math.pi  # 1.5 Hz
     fixed_a1: float = 0.3
@@ -210,11 +218,22 @@ class CPGConfig:
         ``FIXED_GAITS`` (``swept``: the best of the documented sweep, ``hexnewton.cpg_sweep``)."""
         omega, a1, a2, a3 = (self.fixed_omega, self.fixed_a1, self.fixed_a2, self.fixed_a3) if gait == "default" \
             else FIXED_GAITS[gait]
-        return gait_params(omega, a1, a2, a3)
+        return gait_params(omega, a1, a2, a3) + [0.0] * (self.num_params - 15)
+
+    @property
+    def num_params(self) -> int:
+        """15 (Eq. 4), or 18 with the body posture."""
+        return 18 if self.posture else 15
+
+    @property
+    def param_names(self) -> tuple[str, ...]:
+        return PARAM_NAMES + (POSTURE_NAMES if self.posture else ())
 
     def param_ranges(self) -> tuple[list[float], list[float]]:
-        """(lower, upper) bounds of the 15 parameters in PARAM_NAMES order."""
+        """(lower, upper) bounds of the parameters in ``param_names`` order."""
         rows = [self.omega_range] + [self.a1_range] * 2 + [self.a2_range] * 6 + [self.a3_range] * 6
+        if self.posture:
+            rows += [self.posture_height_range] + [self.posture_tilt_range] * 2
         return [r[0] for r in rows], [r[1] for r in rows]
 
 

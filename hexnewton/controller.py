@@ -1,8 +1,9 @@
 """The CPG controller: mid level (Eq. 3) and low level (Eq. 4) driving a ``World``'s joints every substep.
 
 ``CPGController(world, cfg)`` owns, per env:
-- ``params_target`` (N, 15): the parameters the high level asks for, in physical units;
-- ``params`` (N, 15): their filtered values, which the oscillators and the mapping actually use;
+- ``params_target`` (N, P): the parameters the high level asks for, in physical units (P = 15, or 18 with the
+  body posture, ``CPGConfig.posture``);
+- ``params`` (N, P): their filtered values, which the oscillators and the mapping actually use;
 - ``state`` (N, 4): the oscillators' (x0, y0, x1, y1);
 - ``dy`` (N, 2): the oscillators' dy/dt.
 
@@ -51,8 +52,6 @@ def _reset_cpg(
 class CPGController:
     """Batched two-oscillator CPG + mapping function for one ``World``."""
 
-    num_params = 15
-
     def __init__(self, world, cfg: CPGConfig | None = None, robot: RobotConfig | None = None):
         self.cfg = cfg = cfg or world.cfg.cpg
         robot = robot or world.cfg.robot
@@ -61,7 +60,7 @@ class CPGController:
         if not (cfg.mu > 0 and cfg.alpha >= 0 and cfg.param_tau >= 0):
             raise ValueError("cpg.mu must be > 0, cpg.alpha and cpg.param_tau >= 0")
         n, dev = world.num_envs, world.device
-        self.num_envs, self.device = n, dev
+        self.num_envs, self.device, self.num_params = n, dev, cfg.num_params
         self.dt = world.sim_dt
         self.gain = 1.0 if cfg.param_tau == 0 else 1.0 - math.exp(-self.dt / cfg.param_tau)
         lo, hi = cfg.param_ranges()
@@ -79,7 +78,7 @@ class CPGController:
 
     # ------------------------------------------------------------------ high-level inputs
     def set_actions(self, actions) -> None:
-        """Policy actions (N, 15) in [-1, 1] (torch tensor, Warp array or NumPy) -> ``params_target``."""
+        """Policy actions (N, P) in [-1, 1] (torch tensor, Warp array or NumPy) -> ``params_target``."""
         if isinstance(actions, wp.array):
             a = actions
         else:
@@ -92,7 +91,7 @@ class CPGController:
                   inputs=[a, self.lower, self.upper, self.params_target], device=self.device)  # fmt: skip
 
     def set_params(self, params) -> None:
-        """Physical parameters, (15,) for every env or (N, 15)."""
+        """Physical parameters, (P,) for every env or (N, P)."""
         p = np.broadcast_to(np.asarray(params, np.float32), (self.num_envs, self.num_params))
         self.params_target.assign(np.ascontiguousarray(p))
 

@@ -16,7 +16,7 @@ Per control step (``control_dt``, 20 ms by default) :meth:`Controller.step` take
 It runs the policy's deterministic action (the mean of its Beta distribution, computed inside ``policy.onnx``;
 older Gaussian bundles can also sample, ``stochastic=True``, or take the expected clipped action,
 ``expected=True``), scales its 15 actions to
-(omega, A1, A2, A3), then integrates the two Hopf oscillators (Eq. 3, RK4) and applies the mapping function
+(omega, A1, A2, A3) (18 with the body posture P_h, P_p, P_r), then integrates the two Hopf oscillators (Eq. 3, RK4) and applies the mapping function
 (Eq. 4) every ``substep_dt`` (2.5 ms by default), exactly as the simulator does. It returns the 18 joint
 position targets at the end of the step (all substeps' targets are in ``last_substep_targets``, for a servo
 loop faster than the control rate).
@@ -116,7 +116,7 @@ class Controller:
         """Selected robots (all if None): oscillators at their locked start, parameters at the initial gait."""
         m = np.ones(self.n, bool) if mask is None else np.asarray(mask, bool)
         if not hasattr(self, "params"):
-            self.params = np.zeros((self.n, 15))
+            self.params = np.zeros((self.n, len(self.spec["initial_params"])))
             self.state = np.zeros((self.n, 4))
             self.dy = np.zeros((self.n, 2))
             self.last_substep_targets = np.zeros((self.substeps, self.n, 18))
@@ -135,7 +135,8 @@ class Controller:
             "joint_vel": np.asarray(joint_vel, np.float64).reshape(self.n, 18),
             "target": np.asarray(target, np.float64).reshape(self.n, 3),
             "omega": self.params[:, :1],
-            "amplitudes": self.params[:, 1:],
+            "amplitudes": self.params[:, 1:15],
+            "posture": self.params[:, 15:],
             "quat": quat * np.where(quat[:, 3:4] < 0, -1.0, 1.0),
             "max_height": h,
         }
@@ -144,7 +145,7 @@ class Controller:
         return obs
 
     def act(self, obs: np.ndarray) -> np.ndarray:
-        """The policy's actions (N, 15) for observations (N, num_obs): the mean, sampled around it, or the expected
+        """The policy's actions (N, num_actions) for observations (N, num_obs): the mean, sampled around it, or the expected
         clipped action (:func:`expected_clipped_action`)."""
         mean = self.session.run(None, {self._input: np.asarray(obs, np.float32)})[0]
         if self.expected:

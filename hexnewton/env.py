@@ -28,6 +28,9 @@ Finished envs auto-reset. ``extras["time_outs"]`` marks time-limit ends. ``extra
 
 Action modes:
 - ``cpg`` (15 actions): omega, A1[2], A2[6], A3[6], each scaled to its range (the paper's CPG_RL);
+  with ``CPGConfig.posture`` (ours, kernels/mapping.py) 18: the 15 and the body posture P_h, P_p, P_r, knee
+  offsets that level the body over uneven footholds; the observation adds their 3 filtered values (62,
+  layout ``cpg_posture``);
 - ``joint`` (18 actions): joint targets over each joint's limits (the pure-DRL comparison). Its observation
   lacks the CPG parameters (44 values instead of 59); the reward is the same.
 """
@@ -53,7 +56,7 @@ from .kernels.terminations import NONFINITE, STATUS_NAMES, TIMEOUT, episode_stat
 from .robot import BASE_Q
 from .sim import HexnewtonError, World, capture_graph
 
-ACTION_MODES = {"cpg": 15, "joint": 18}
+ACTION_MODES = ("cpg", "joint")
 RING = 1024  # finished episodes the logged rates average over
 
 
@@ -112,8 +115,10 @@ class HexapodEnv(VecEnv):
         task = cfg.task
         self.decimation = control_decimation(task.control_dt, world.frame_dt)
         self.num_envs = n = world.num_envs
-        self.num_actions = ACTION_MODES[action_mode]
-        self.num_obs = OBS_DIM[action_mode]
+        posture = action_mode == "cpg" and cfg.cpg.posture
+        self.obs_layout = "cpg_posture" if posture else action_mode
+        self.num_actions = cfg.cpg.num_params if action_mode == "cpg" else 18
+        self.num_obs = OBS_DIM[self.obs_layout]
         self.max_episode_length = task.max_episode_steps
         self.device = world.device
         dev = self.device
@@ -131,7 +136,7 @@ class HexapodEnv(VecEnv):
         # the state at the end of the last step, before finished envs were reset (play.py records these)
         self.last_q, self.last_start = z(n, 7 + 18), wp.zeros(n, dtype=wp.vec2, device=dev)
         self.last_qd = z(n, 6 + 18)
-        self.last_cpg_state, self.last_params = z(n, 4), z(n, 15)
+        self.last_cpg_state, self.last_params = z(n, 4), z(n, cfg.cpg.num_params)
         self.prev_actions = z(n, self.num_actions)  # the policy's last actions (action-rate term)
         self._cursor = z(1, dtype=wp.int32)
         self._nonfinite_total = z(1, dtype=wp.int32)  # blown-up envs reset since the env was built
@@ -222,7 +227,7 @@ class HexapodEnv(VecEnv):
         amp = {"joint_pos": rz.noise_joint_pos, "joint_vel": rz.noise_joint_vel, "target": rz.noise_target,
                "quat": rz.noise_quat, "max_height": rz.noise_height}  # fmt: skip
         noise = np.zeros(self.num_obs, np.float32)
-        for name, a, b in OBS_LAYOUT[self.action_mode]:
+        for name, a, b in OBS_LAYOUT[self.obs_layout]:
             noise[a:b] = amp.get(name, 0.0)  # the CPG parameters are the controller's own: exact
         self._obs_noise = wp.array(noise, device=dev)
         self._push_steps = max(1, int(round(rz.push_interval / self.cfg.task.control_dt)))

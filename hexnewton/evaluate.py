@@ -48,6 +48,7 @@ from .cli import ArgumentParser, positive_int, run, terrain_name
 from .config import (
     FIXED_GAITS,
     PARAM_NAMES,
+    POSTURE_NAMES,
     HexConfig,
     RandomizationConfig,
     TaskConfig,
@@ -262,13 +263,14 @@ def run_rounds(controller: str, checkpoint: str | None, terrain: str, rounds: in
 
     lo, hi = (np.asarray(b, np.float64) for b in cfg.cpg.param_ranges())
     split_x = ground.complex_rugged_length if terrain == "complex" else None
-    seg_sum, seg_n = {"blocks": np.zeros(15), "stairs": np.zeros(15)}, {"blocks": 0, "stairs": 0}
+    npar = cfg.cpg.num_params
+    seg_sum, seg_n = {"blocks": np.zeros(npar), "stairs": np.zeros(npar)}, {"blocks": 0, "stairs": 0}
     pos, rpy, done, status, params, ang_rate, dparam, daction = [], [], [], [], [], [], [], []
     finished = np.zeros(rounds, bool)
     prev_p = prev_t = None
 
     def change(now: np.ndarray, before: np.ndarray | None) -> np.ndarray:
-        """Mean |change| of the 15 parameters since the last step, in fractions of their ranges (NaN at the start)."""
+        """Mean |change| of the CPG parameters (15, or 18 with the posture) since the last step, in fractions of their ranges (NaN at the start)."""
         if before is None:
             return np.full(rounds, np.nan, np.float32)
         return (np.abs(now - before) / (hi - lo)).mean(axis=1).astype(np.float32)
@@ -344,7 +346,7 @@ def report_markdown(results: dict, meta: dict, robustness: dict | None = None) -
     lines += ["", "## Gait quality (deterministic actions unless stated in the header)", "",
               "Falls: rounds that ended in a fall anywhere (also after the last distance). p99.9: the 99.9th "
               "percentile of |angle| over every step. Rates: RMS of the body's roll / pitch rate. Δparam: mean change per "
-              "control step of the 15 CPG parameters the oscillators use (requested by the policy in brackets), in % "
+              "control step of the CPG parameters the oscillators and the mapping use (15; 18 with the body posture) (requested by the policy in brackets), in % "
               "of each parameter's range. Ratios: variance against the fixed CPG's in the same run.", "",
               "| terrain | method | falls | pitch var [deg²] | roll var [deg²] | \\|pitch\\| / \\|roll\\| p99.9 [deg] "
               "| roll / pitch rate RMS [deg/s] | Δparam [%/step] | pitch / roll var ÷ CPG | ÷ CPG (swept) |",
@@ -366,11 +368,13 @@ def report_markdown(results: dict, meta: dict, robustness: dict | None = None) -
     segs = [(t, c, s["segments"]) for t, by in results.items() for c, s in by.items()
             if len(s.get("segments", {})) == 2]
     if segs:
+        names = PARAM_NAMES + (POSTURE_NAMES if any(len(seg["blocks"]) > len(PARAM_NAMES) for *_, seg in segs) else ())
         lines += ["", "## Parameters on the blocks and on the stairs (Fig. 5b; complex course, mean over all rounds)",
-                  "", "| method | where | " + " | ".join(PARAM_NAMES) + " |", "|---|---|" + "---:|" * len(PARAM_NAMES)]
+                  "", "| method | where | " + " | ".join(names) + " |", "|---|---|" + "---:|" * len(names)]
         for _, ctrl, seg in segs:
             for where in ("blocks", "stairs"):
-                lines.append(f"| {LABELS[ctrl]} | {where} | " + " | ".join(f"{v:.2f}" for v in seg[where]) + " |")
+                v = [f"{v:.2f}" for v in seg[where]] + ["—"] * (len(names) - len(seg[where]))
+                lines.append(f"| {LABELS[ctrl]} | {where} | " + " | ".join(v) + " |")
     robustness = robustness or {}
     for ctrl in dict.fromkeys(c for by in robustness.values() for c in by):
         lines += ["", f"## Robustness: {LABELS[ctrl]} under named perturbations (beyond the training ranges)", "",

@@ -21,7 +21,7 @@ from argparse import ArgumentParser
 import numpy as np
 
 from .cli import positive_int, run
-from .config import JOINT_NAMES, PARAM_NAMES, RandomizationConfig, TaskConfig, TerrainConfig, config_from_dict
+from .config import JOINT_NAMES, RandomizationConfig, TaskConfig, TerrainConfig, config_from_dict
 from .deploy import FORMAT, replay
 
 
@@ -49,14 +49,14 @@ def controller_spec(env, checkpoint: str, action_std: list[float] | None) -> dic
         "action_mode": "cpg",
         "num_obs": env.num_obs,
         "num_actions": env.num_actions,
-        "obs_layout": [list(row) for row in OBS_LAYOUT["cpg"]],
+        "obs_layout": [list(row) for row in OBS_LAYOUT[env.obs_layout]],
         "obs_notes": {
             "joint order": list(JOINT_NAMES),
             "target": "goal relative to the base in its heading frame (x forward, y left) [m]; z = goal ground - base z",
             "quat": "base orientation (x, y, z, w), w >= 0",
             "max_height": f"highest terrain within +-{H_HALF_EXTENT} m of the base minus the ground under it [m]",
         },
-        "param_names": list(PARAM_NAMES),
+        "param_names": list(cfg.cpg.param_names),
         "param_lower": list(lo),
         "param_upper": list(hi),
         "initial_params": list(cfg.cpg.fixed_params()),

@@ -20,6 +20,16 @@ stance leg push backward, and no sign flip is needed here.
 Tripods: R1, L2, R3 follow oscillator 0; L1, R2, L3 follow oscillator 1. With leg order R1, R2, R3, L1,
 L2, L3 that is ``oscillator = leg % 2``.
 Parameter layout per env (15): omega, A1_R, A1_L, A2[R1..L3], A3[R1..L3].
+
+Body posture (ours, the ``cpg_posture`` action mode; off in the paper's ``cpg`` mode): three more parameters
+P_h, P_p, P_r (columns 15..17) add a knee offset to every leg in both phases,
+
+    knee += P_h + P_p * fx[leg] + P_r * sy[leg],   fx = +1 front, 0 middle, -1 rear;  sy = +1 right, -1 left
+
+A positive knee angle raises the foot, so in stance P_h lowers the body, P_p > 0 lowers its front (nose down)
+and P_r > 0 lowers its right side. With Eq. 4 alone a stance leg holds the standing pose whatever the ground
+under it; the posture terms let the high level level the body over uneven footholds (the stance-knee /
+pitch feedback of the paper's ref. [19]). A params array of 15 columns leaves them out.
 """
 
 import warp as wp
@@ -38,6 +48,7 @@ def mapping_kernel(
     targets: wp.array2d[wp.float32],
 ):
     e = wp.tid()
+    posture = params.shape[1] > 15
     for leg in range(6):
         osc = leg % 2
         y = state[e, 2 * osc + 1] * inv_sqrt_mu
@@ -47,7 +58,13 @@ def mapping_kernel(
         a1 = params[e, 1]
         if leg >= 3:
             a1 = params[e, 2]
+        knee = stand[1] + params[e, 3 + leg] * lift
+        if posture:
+            side = float(1.0)
+            if leg >= 3:
+                side = -1.0
+            knee += params[e, 15] + params[e, 16] * float(1 - leg % 3) + params[e, 17] * side
         col = target_offset + 3 * leg
         targets[e, col + 0] = wp.clamp(stand[0] + a1 * y, lower[0], upper[0])
-        targets[e, col + 1] = wp.clamp(stand[1] + params[e, 3 + leg] * lift, lower[1], upper[1])
+        targets[e, col + 1] = wp.clamp(knee, lower[1], upper[1])
         targets[e, col + 2] = wp.clamp(stand[2] - params[e, 9 + leg] * lift, lower[2], upper[2])

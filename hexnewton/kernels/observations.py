@@ -18,6 +18,9 @@ We add omega (the fifteenth CPG parameter) and the base orientation as a unit qu
     [54:58]  base orientation quaternion (x, y, z, w), sign chosen so that w >= 0
     [58]     h: highest terrain within +-H_HALF_EXTENT of the base, minus the terrain under the base [m]
 
+``cpg_posture`` layout (62): as ``cpg`` with the body posture P_h, P_p, P_r [rad] (filtered) at [54:57], the
+quaternion at [57:61] and h at [61].
+
 ``joint`` layout (44, the pure-DRL comparison): the same without omega and the amplitudes:
     [0:18] positions, [18:36] velocities, [36:39] target, [39:43] quaternion, [43] h.
 """
@@ -30,10 +33,12 @@ from .reference import quat_to_rpy_np
 from .terminations import quat_to_rpy
 
 H_HALF_EXTENT = 0.3  # ours: the square that "max height h" looks at: +-30 cm, about the legs' reach [m]
-OBS_DIM = {"cpg": 59, "joint": 44}
+OBS_DIM = {"cpg": 59, "cpg_posture": 62, "joint": 44}
 OBS_LAYOUT = {
     "cpg": (("joint_pos", 0, 18), ("joint_vel", 18, 36), ("target", 36, 39), ("omega", 39, 40),
             ("amplitudes", 40, 54), ("quat", 54, 58), ("max_height", 58, 59)),
+    "cpg_posture": (("joint_pos", 0, 18), ("joint_vel", 18, 36), ("target", 36, 39), ("omega", 39, 40),
+                    ("amplitudes", 40, 54), ("posture", 54, 57), ("quat", 57, 61), ("max_height", 61, 62)),
     "joint": (("joint_pos", 0, 18), ("joint_vel", 18, 36), ("target", 36, 39), ("quat", 39, 43),
               ("max_height", 43, 44)),
 }  # fmt: skip
@@ -69,9 +74,9 @@ def observations_kernel(
     obs[e, 38] = terrain_height(hf, gx, gy) - pz
     k = int(39)
     if with_params != 0:
-        for p in range(15):
+        for p in range(params.shape[1]):
             obs[e, 39 + p] = params[e, p]
-        k = 54
+        k = 39 + params.shape[1]
     sign = float(1.0)
     if joint_q[e, 6] < 0.0:
         sign = -1.0
@@ -98,6 +103,6 @@ def observations_reference(joint_q, joint_qd, params, ground_at, start, goal_dis
     h = ground_at.max(jq[:, 0], jq[:, 1], H_HALF_EXTENT) - ground_at(jq[:, 0], jq[:, 1])
     parts = [jq[:, 7:25], jqd[:, 6:24], target]
     if with_params:
-        parts.append(np.asarray(params, np.float64).reshape(n, 15))
+        parts.append(np.asarray(params, np.float64).reshape(n, -1))
     parts += [quat, h[:, None]]
     return np.concatenate(parts, axis=1)

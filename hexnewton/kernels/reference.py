@@ -67,7 +67,11 @@ def mapping_offsets_np(state, dy, params, mu):
     y = state[:, 2 * osc + 1] / np.sqrt(mu)  # (N, 6)
     lift = np.where(dy[:, osc] >= 0.0, np.maximum(1.0 - y**2, 0.0), 0.0)
     a1 = np.where(np.arange(6) < 3, params[:, 1:2], params[:, 2:3])
-    return np.stack([a1 * y, params[:, 3:9] * lift, -params[:, 9:15] * lift], axis=-1)
+    knee = params[:, 3:9] * lift
+    if params.shape[1] > 15:  # body posture: P_h + P_p * fx + P_r * sy on every knee
+        fx, sy = np.array([1.0, 0.0, -1.0] * 2), np.array([1.0] * 3 + [-1.0] * 3)
+        knee = knee + params[:, 15:16] + params[:, 16:17] * fx + params[:, 17:18] * sy
+    return np.stack([a1 * y, knee, -params[:, 9:15] * lift], axis=-1)
 
 
 def mapping_reference(state, dy, params, mu, stand, lower, upper):

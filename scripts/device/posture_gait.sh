@@ -1,0 +1,83 @@
+#!/bin/bash
+# Device calls that trained and measured the body-posture policy (RESULTS.md, "Stable gaits"), on one nvidia-h200,
+# after the chunk calls of ../shared/device/pack.sh + rechunk.sh (the last one installs, with runs/warpcache.tgz
+# from scripts/device/precompile.py).
+#
+#   bash scripts/device/posture_gait.sh train     # three posture variants of the complex recipe at once on one GPU
+#   bash scripts/device/posture_gait.sh validate  # 250 validation rounds of each on rugged and complex ground, then
+#                                                 # the chosen one on 1000 test rounds per terrain; the fixed CPG's
+#                                                 # rugged test rounds beside
+#   bash scripts/device/posture_gait.sh robust    # the chosen policy under each named perturbation (300 complex rounds)
+#   bash scripts/device/posture_gait.sh fixed     # the fixed CPG's stepped and complex test rounds
+set -u
+OUT=${OUT:-out}
+KEEP=/root/keep
+export KEEP PYTHONUNBUFFERED=1
+VARIANTS=${VARIANTS:-"pa pb pc"}
+FIXED_PHYSICS="--frame_dt 0.02 --substeps 4"   # the complex recipe's physics (RECIPES), which the learnt policies use
+SWEPT="--swept_gait 6.283185307179586 0.2 0.9 0.3"
+chosen() { cat "$KEEP/chosen" 2>/dev/null; }
+case "${1:-}" in
+train)
+  KEEP_ALL=1 SKIP_WARMUP=1 START_S=${START_S:-0} DEADLINE_S=${DEADLINE_S:-585} bash scripts/device/train_runs.sh \
+    "pa:--terrain complex --seed 1 --posture" \
+    "pb:--terrain complex --seed 1 --posture --w_tilt 15 --w_ang_vel 0.1" \
+    "pc:--terrain complex --seed 1 --posture --param_tau 0.05"
+  ;;
+validate)
+  # each variant's best checkpoint (train_runs.sh keeps model_best.pt as $KEEP/<name>.pt) and its last one
+  jobs=()
+  for r in $VARIANTS; do
+    cp "$(ls -v "$KEEP/$r"/model_[0-9]*.pt | tail -1)" "$KEEP/${r}_last.pt"
+    for c in $r ${r}_last; do
+      jobs+=("val_$c:--controllers cpg_rl --checkpoint cpg_rl=$KEEP/$c.pt --terrains rugged complex --rounds 250 --seed 3000 --max_steps 3000")
+    done
+  done
+  fixed="--rounds 1000 --terrains rugged $FIXED_PHYSICS"
+  EVALS=/root/test EVAL_TIMEOUT_S=570 bash scripts/device/eval_jobs.sh "rugged_cpg:--controllers cpg $fixed" \
+    "rugged_cpg_swept:--controllers cpg_swept $SWEPT $fixed" > /root/fixed.txt 2>&1 &
+  EVALS=/root/val EVAL_TIMEOUT_S=220 bash scripts/device/eval_jobs.sh "${jobs[@]}"
+  mv "$OUT/evals.tgz" "$OUT/val.tgz"
+  # >= 99 % at 3 m and <= 0.5 % falls on both terrains first, then the smallest rugged pitch + roll variance
+  best=$(python - $(for r in $VARIANTS; do echo $r ${r}_last; done) <<'PY'
+import json, sys
+rows = {}
+for n in sys.argv[1:]:
+    try:
+        r = json.load(open(f"/root/val/val_{n}/results.json"))["results"]
+    except OSError:
+        continue
+    ok = all(r[t]["cpg_rl"]["success_3m"] >= 0.99 and r[t]["cpg_rl"]["fall_rate"] <= 0.005 for t in r)
+    succ = sum(r[t]["cpg_rl"]["success_3m"] for t in r) / len(r)
+    var = r["rugged"]["cpg_rl"]["pitch_var_deg2"] + r["rugged"]["cpg_rl"]["roll_var_deg2"]
+    rows[n] = (ok, succ if not ok else 1.0, -var)
+print(max(rows, key=rows.get))
+PY
+)
+  echo "$best" > "$KEEP/chosen"; echo "chosen on validation: $best"
+  cp "$KEEP/$best.pt" "$OUT/chosen_$best.pt"
+  ck="--controllers cpg_rl --checkpoint cpg_rl=$KEEP/$best.pt --rounds 1000"
+  EVALS=/root/test EVAL_TIMEOUT_S=$(( 585 - SECONDS )) bash scripts/device/eval_jobs.sh \
+    "rugged_cpg_rl:$ck --terrains rugged" "stepped_cpg_rl:$ck --terrains stepped" "complex_cpg_rl:$ck --terrains complex"
+  wait
+  cat /root/fixed.txt
+  tar czf "$OUT/test.tgz" -C /root test
+  ;;
+robust)
+  ck="--controllers cpg_rl --checkpoint cpg_rl=$KEEP/$(chosen).pt --terrains complex --rounds 300"
+  jobs=()
+  for p in nominal friction_0.3 payload_0.8kg motors_0.6 push_0.6m/s latency_40ms sensor_noise_x2 steps_7cm blocks_8cm; do
+    jobs+=("robust_${p//\//_}:$ck --perturbations $p")
+  done
+  EVALS=/root/robust EVAL_TIMEOUT_S=$(( 585 - SECONDS )) bash scripts/device/eval_jobs.sh "${jobs[@]}"
+  ;;
+fixed)
+  fixed="--rounds 1000 $FIXED_PHYSICS"
+  EVALS=/root/fixed EVAL_TIMEOUT_S=$(( 585 - SECONDS )) bash scripts/device/eval_jobs.sh \
+    "stepped_cpg:--controllers cpg $fixed --terrains stepped" \
+    "stepped_cpg_swept:--controllers cpg_swept $SWEPT $fixed --terrains stepped" \
+    "complex_cpg:--controllers cpg $fixed --terrains complex" \
+    "complex_cpg_swept:--controllers cpg_swept $SWEPT $fixed --terrains complex"
+  ;;
+*) echo "usage: posture_gait.sh train|validate|robust|fixed" >&2; exit 2;;
+esac
