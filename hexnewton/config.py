@@ -207,6 +207,9 @@ class CPGConfig:
     posture: bool = False
     posture_height_range: tuple[float, float] = (-0.15, 0.15)
     posture_tilt_range: tuple[float, float] = (-0.3, 0.3)
+    # ours: levelling reflex gain [rad of knee per rad of body tilt] on the posture's tilt terms, at every substep
+    # (kernels/mapping.py); 0 = off. Only with ``posture``.
+    posture_reflex: float = 0.0
     # ours: the fixed-parameter "CPG" baseline (§3.3), tuned to walk straight on flat ground
     fixed_omega: float = 3.0 * math.pi  # 1.5 Hz
     fixed_a1: float = 0.3

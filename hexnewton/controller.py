@@ -109,7 +109,8 @@ class CPGController:
             mapping_kernel,
             dim=self.num_envs,
             inputs=[self.state, self.dy, self.params, 1.0 / math.sqrt(c.mu), self.stand, self.joint_lower,
-                    self.joint_upper, BASE_Q],  # fmt: skip
+                    self.joint_upper, BASE_Q, world.state_0.joint_q.reshape(world.joint_q_wp.shape), c.posture_reflex,
+                    c.posture_tilt_range[1]],  # fmt: skip
             outputs=[world.joint_target_wp],
             device=self.device,
         )

@@ -25,6 +25,7 @@ def gait_trajectory(cfg: HexConfig, cycles: float = 2.0, device: str = "cpu"):
     state = wp.array(np.asarray([initial_cpg_state(c.mu, c.theta)], np.float32), device=device)
     dy = wp.zeros((1, 2), dtype=wp.float32, device=device)
     targets = wp.zeros((1, 18), dtype=wp.float32, device=device)
+    no_q = wp.zeros((1, 7), dtype=wp.float32, device=device)  # the body's attitude (no reflex without the posture)
     stand = wp.vec3(*r.stand_pose)
     lower, upper = leg_bounds(r)
     lo, hi = wp.vec3(*lower), wp.vec3(*upper)
@@ -33,8 +34,8 @@ def gait_trajectory(cfg: HexConfig, cycles: float = 2.0, device: str = "cpu"):
     for k in range(steps):
         wp.launch(hopf_cpg_kernel, dim=1, inputs=[params, 1.0, c.alpha, c.mu, c.delta, c.theta, c.duty, c.steepness,
                   dt], outputs=[params, state, dy], device=device)  # fmt: skip
-        wp.launch(mapping_kernel, dim=1, inputs=[state, dy, params, 1.0 / math.sqrt(c.mu), stand, lo, hi, 0],
-                  outputs=[targets], device=device)  # fmt: skip
+        wp.launch(mapping_kernel, dim=1, inputs=[state, dy, params, 1.0 / math.sqrt(c.mu), stand, lo, hi, 0, no_q, 0.0,
+                  0.0], outputs=[targets], device=device)  # fmt: skip
         ts.append((k + 1) * dt)
         ss.append(state.numpy()[0].copy())
         qs.append(targets.numpy()[0].copy())

@@ -16,6 +16,7 @@ from hexnewton.kernels.reference import (
     hopf_cpg_reference,
     mapping_offsets_np,
     mapping_reference,
+    quat_to_rpy_np,
     params_to_actions,
     scale_actions_reference,
 )
@@ -67,21 +68,27 @@ def test_hopf_kernel_matches_reference(seed, gain, duty, theta, mu):
 
 
 @settings(max_examples=25, deadline=None)
-@given(seed=st.integers(0, 2**31 - 1), mu=st.floats(0.25, 4.0))
-def test_mapping_kernel_matches_reference(seed, mu):
+@given(seed=st.integers(0, 2**31 - 1), mu=st.floats(0.25, 4.0), posture=st.booleans(), reflex=st.sampled_from([0.0, 2.0]))
+def test_mapping_kernel_matches_reference(seed, mu, posture, reflex):
     rng = np.random.default_rng(seed)
     n = 64
     state = rng.uniform(-1.2, 1.2, (n, 4)) * math.sqrt(mu)
     dy = rng.normal(size=(n, 2))
     dy[: n // 4] = 0.0  # exactly on the edge: counts as rising (dy >= 0)
     params = _random_params(rng, n)
+    if posture:  # the body posture (P_h, P_p, P_r) inside and beyond its ranges
+        params = np.concatenate([params, rng.uniform(-0.4, 0.4, (n, 3))], axis=1)
+    q = np.zeros((n, 25))
+    q[:, 3:7] = rng.normal(size=(n, 4)) * [0.2, 0.2, 0.2, 1.0]  # random body attitudes, not normalised
     targets = wp.zeros((n, 25), dtype=wp.float32, device=DEV)
     wp.launch(mapping_kernel, dim=n,
               inputs=[_arr(state), _arr(dy), _arr(params), 1.0 / math.sqrt(mu), wp.vec3(*STAND), wp.vec3(*LOWER),
-                      wp.vec3(*UPPER), 7],
+                      wp.vec3(*UPPER), 7, _arr(q), reflex, 0.3],
               outputs=[targets], device=DEV)  # fmt: skip
     t = targets.numpy()
-    np.testing.assert_allclose(t[:, 7:], mapping_reference(state, dy, params, mu, STAND, LOWER, UPPER), atol=1e-5)
+    rpy = quat_to_rpy_np(q[:, 3:7])
+    ref = mapping_reference(state, dy, params, mu, STAND, LOWER, UPPER, rpy, reflex, 0.3)
+    np.testing.assert_allclose(t[:, 7:], ref, atol=1e-5)
     assert np.all(t[:, :7] == 0.0)
 
 

@@ -30,9 +30,19 @@ A positive knee angle raises the foot, so in stance P_h lowers the body, P_p > 0
 and P_r > 0 lowers its right side. With Eq. 4 alone a stance leg holds the standing pose whatever the ground
 under it; the posture terms let the high level level the body over uneven footholds (the stance-knee /
 pitch feedback of the paper's ref. [19]). A params array of 15 columns leaves them out.
+
+Levelling reflex (ours, ``CPGConfig.posture_reflex``, with the posture only): at every substep the body's
+measured pitch and roll (an IMU's reading) feed back into the tilt terms,
+
+    P_p' = clamp(P_p - k * pitch, -tilt_max, tilt_max),   P_r' = clamp(P_r - k * roll, -tilt_max, tilt_max)
+
+so the legs under a raised corner bend within milliseconds while the policy (50 Hz, through the parameter
+filter) sets the posture it wants. k = 0 turns the reflex off.
 """
 
 import warp as wp
+
+from .terminations import quat_to_rpy
 
 
 @wp.kernel
@@ -45,10 +55,22 @@ def mapping_kernel(
     lower: wp.vec3,
     upper: wp.vec3,
     target_offset: int,
+    joint_q: wp.array2d[wp.float32],
+    reflex: float,
+    tilt_max: float,
     targets: wp.array2d[wp.float32],
 ):
     e = wp.tid()
     posture = params.shape[1] > 15
+    tilt_p = float(0.0)
+    tilt_r = float(0.0)
+    if posture:
+        tilt_p = params[e, 16]
+        tilt_r = params[e, 17]
+        if reflex != 0.0:
+            rpy = quat_to_rpy(wp.normalize(wp.quat(joint_q[e, 3], joint_q[e, 4], joint_q[e, 5], joint_q[e, 6])))
+            tilt_p = wp.clamp(tilt_p - reflex * rpy[1], -tilt_max, tilt_max)
+            tilt_r = wp.clamp(tilt_r - reflex * rpy[0], -tilt_max, tilt_max)
     for leg in range(6):
         osc = leg % 2
         y = state[e, 2 * osc + 1] * inv_sqrt_mu
@@ -63,7 +85,7 @@ def mapping_kernel(
             side = float(1.0)
             if leg >= 3:
                 side = -1.0
-            knee += params[e, 15] + params[e, 16] * float(1 - leg % 3) + params[e, 17] * side
+            knee += params[e, 15] + tilt_p * float(1 - leg % 3) + tilt_r * side
         col = target_offset + 3 * leg
         targets[e, col + 0] = wp.clamp(stand[0] + a1 * y, lower[0], upper[0])
         targets[e, col + 1] = wp.clamp(knee, lower[1], upper[1])

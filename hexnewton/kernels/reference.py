@@ -58,8 +58,9 @@ def hopf_cpg_reference(params_target, params, state, gain, alpha, mu, delta, the
     return params, s, d[:, [1, 3]]
 
 
-def mapping_offsets_np(state, dy, params, mu):
-    """Float64 Eq. 4 offsets (N, 6, 3) before the standing pose and clipping are applied."""
+def mapping_offsets_np(state, dy, params, mu, rpy=None, reflex=0.0, tilt_max=0.0):
+    """Float64 Eq. 4 offsets (N, 6, 3) before the standing pose and clipping are applied; with the body posture
+    (18 parameters) and a ``reflex`` gain, ``rpy`` (N, 3) is the body's measured attitude."""
     state = np.asarray(state, np.float64)
     dy = np.asarray(dy, np.float64)
     params = np.asarray(params, np.float64)
@@ -70,13 +71,18 @@ def mapping_offsets_np(state, dy, params, mu):
     knee = params[:, 3:9] * lift
     if params.shape[1] > 15:  # body posture: P_h + P_p * fx + P_r * sy on every knee
         fx, sy = np.array([1.0, 0.0, -1.0] * 2), np.array([1.0] * 3 + [-1.0] * 3)
-        knee = knee + params[:, 15:16] + params[:, 16:17] * fx + params[:, 17:18] * sy
+        tilt_p, tilt_r = params[:, 16:17], params[:, 17:18]
+        if reflex != 0.0:
+            rpy = np.asarray(rpy, np.float64)
+            tilt_p = np.clip(tilt_p - reflex * rpy[:, 1:2], -tilt_max, tilt_max)
+            tilt_r = np.clip(tilt_r - reflex * rpy[:, 0:1], -tilt_max, tilt_max)
+        knee = knee + params[:, 15:16] + tilt_p * fx + tilt_r * sy
     return np.stack([a1 * y, knee, -params[:, 9:15] * lift], axis=-1)
 
 
-def mapping_reference(state, dy, params, mu, stand, lower, upper):
+def mapping_reference(state, dy, params, mu, stand, lower, upper, rpy=None, reflex=0.0, tilt_max=0.0):
     """Float64 reference of :func:`mapping_kernel`: joint targets (N, 18)."""
-    out = mapping_offsets_np(state, dy, params, mu) + np.asarray(stand, np.float64)
+    out = mapping_offsets_np(state, dy, params, mu, rpy, reflex, tilt_max) + np.asarray(stand, np.float64)
     out = np.clip(out, np.asarray(lower, np.float64), np.asarray(upper, np.float64))
     return out.reshape(len(out), 18)
 

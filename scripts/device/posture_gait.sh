@@ -13,16 +13,16 @@ set -u
 OUT=${OUT:-out}
 KEEP=/root/keep
 export KEEP PYTHONUNBUFFERED=1
-VARIANTS=${VARIANTS:-"pa pb pc"}
+VARIANTS=${VARIANTS:-"ra rb rc"}
 FIXED_PHYSICS="--frame_dt 0.02 --substeps 4"   # the complex recipe's physics (RECIPES), which the learnt policies use
 SWEPT="--swept_gait 6.283185307179586 0.2 0.9 0.3"
 chosen() { cat "$KEEP/chosen" 2>/dev/null; }
 case "${1:-}" in
 train)
   KEEP_ALL=1 SKIP_WARMUP=1 START_S=${START_S:-0} DEADLINE_S=${DEADLINE_S:-585} bash scripts/device/train_runs.sh \
-    "pa:--terrain complex --seed 1 --posture" \
-    "pb:--terrain complex --seed 1 --posture --w_tilt 15 --w_ang_vel 0.1" \
-    "pc:--terrain complex --seed 1 --posture --param_tau 0.05"
+    "ra:--terrain complex --seed 1 --posture --posture_reflex 2" \
+    "rb:--terrain complex --seed 1 --posture --posture_reflex 4" \
+    "rc:--terrain complex --seed 1 --posture --posture_reflex 2 --w_tilt 15 --w_ang_vel 0.1"
   ;;
 validate)
   # each variant's best checkpoint (train_runs.sh keeps model_best.pt as $KEEP/<name>.pt) and its last one
