@@ -221,7 +221,8 @@ def run_rounds(controller: str, checkpoint: str | None, terrain: str, rounds: in
                step_rise: float = TerrainConfig.step_rise, goal_distance: float = TaskConfig.goal_distance,
                stochastic: bool = False, physics: dict | None = None, expected: bool = False,
                seed: int = EVAL_TERRAIN_SEED, randomization: RandomizationConfig | None = None,
-               terrain_overrides: dict | None = None, fixed_params: np.ndarray | None = None) -> Episode:
+               terrain_overrides: dict | None = None, fixed_params: np.ndarray | None = None,
+               posture_reflex: float | None = None) -> Episode:
     """``rounds`` robots, one first episode each, with a deterministic controller on unseen seeds; with
     ``randomize``, under perturbed conditions (``RandomizationConfig`` drawn with the evaluation seed); with
     ``stochastic``, a learnt policy samples its actions from its Gaussian as in training (torch seeded with the
@@ -229,7 +230,9 @@ def run_rounds(controller: str, checkpoint: str | None, terrain: str, rounds: in
     substeps) is the policy's own, from its checkpoint, unless ``physics`` overrides fields of ``SimConfig``. ``seed``
     is the terrain seed; the start poses (and sampled actions) use ``seed + START_SEED_OFFSET``. ``randomization``
     (a named perturbation) replaces ``randomize``'s training ranges; ``terrain_overrides`` changes ``TerrainConfig``
-    fields; ``fixed_params`` (N, 15) gives a fixed controller one gait per round (``hexnewton.cpg_sweep``)."""
+    fields; ``fixed_params`` (N, 15) gives a fixed controller one gait per round (``hexnewton.cpg_sweep``);
+    ``posture_reflex`` sets the levelling reflex gain (``CPGConfig.posture_reflex``) of a posture policy, or gives a
+    fixed gait the body posture at its neutral values with that reflex."""
     from .env import make_env
     from .play import fixed_cpg_actions, load_policy, stepped
 
@@ -238,12 +241,17 @@ def run_rounds(controller: str, checkpoint: str | None, terrain: str, rounds: in
     mode = CONTROLLERS[controller]
     trained = trained_config(load_checkpoint(checkpoint)) if controller in ("cpg_rl", "joint") else HexConfig()
     ground = replace(TerrainConfig(name=terrain, seed=seed, step_rise=step_rise), **(terrain_overrides or {}))
+    cpg = trained.cpg  # a policy's own parameter ranges
+    if posture_reflex is not None and mode == "cpg":
+        if controller not in FIXED and not cpg.posture:
+            raise ValueError(f"{checkpoint} has no body posture: --posture_reflex needs a policy trained with --posture")
+        cpg = replace(cpg, posture=True, posture_reflex=posture_reflex)
     cfg = HexConfig(
         sim=replace(trained.sim, num_envs=rounds, device=device, **(physics or {})),
         terrain=terrain_for_goal(ground, goal_distance),
         task=replace(TaskConfig(), seed=seed + START_SEED_OFFSET, reset_yaw=reset_yaw, goal_distance=goal_distance),
         randomization=randomization or RandomizationConfig(enabled=randomize),
-        cpg=trained.cpg,  # the policy's own parameter ranges
+        cpg=cpg,
     )
     env = make_env(cfg, mode)
     if controller in FIXED:
@@ -555,6 +563,10 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--goal_distance", type=float, default=TaskConfig.goal_distance,
                    help="goal ahead of the start [m]; the largest distance needs goal_distance - 0.5 or more")
     p.add_argument("--step_rise", type=float, default=TerrainConfig.step_rise, help="step height [m] (§3.1: 0.06)")
+    p.add_argument("--posture_reflex", type=float, default=None, metavar="K",
+                   help="levelling reflex gain of every CPG controller (kernels/mapping.py): a posture policy's "
+                        "instead of its own; fixed gaits get the body posture at its neutral values (default: each "
+                        "policy's own, fixed gaits without posture)")
     p.add_argument("--block_height_max", type=float, default=TerrainConfig.block_height_max,
                    help="tallest rugged block [m] (§3.1: 0.06)")
     p.add_argument("--randomize", action="store_true",
@@ -641,7 +653,8 @@ def main(argv: list[str] | None = None) -> int:
         ep = run_rounds(ctrl, ck, terrain, args.rounds, device, args.max_steps, args.reset_yaw, progress,
                         args.randomize, args.step_rise, args.goal_distance, args.stochastic,
                         fixed_physics if ctrl in FIXED else physics, args.expected, args.seed, randomization,
-                        {"block_height_max": args.block_height_max, **(terrain_overrides or {})}, gait)  # fmt: skip
+                        {"block_height_max": args.block_height_max, **(terrain_overrides or {})}, gait,
+                        args.posture_reflex)  # fmt: skip
         m = round_metrics(ep.pos, ep.rpy, ep.done, ep.status, ep.dt, distances)
         s = summarize(m, ep.rpy, distances)
         s.update(gait_quality(m, ep.ang_rate, ep.dparam, ep.daction), segments=ep.segments, checkpoint=ck)
@@ -675,6 +688,7 @@ def main(argv: list[str] | None = None) -> int:
             "randomized": args.randomize,
             "actions": "sampled" if args.stochastic else "expected" if args.expected else "deterministic (mean)",
             "physics": physics or "each policy's own (checkpoint)", "fixed_cpg_physics": fixed_physics or "default",
+            "posture_reflex": "each policy's own" if args.posture_reflex is None else args.posture_reflex,
             "block_height_max": args.block_height_max, "perturbations": args.perturbations,
             "swept_gait": args.swept_gait or list(FIXED_GAITS["swept"]),
             "terrain_seed": args.seed, "reset_seed": args.seed + START_SEED_OFFSET,

@@ -79,5 +79,17 @@ fixed)
     "complex_cpg:--controllers cpg $fixed --terrains complex" \
     "complex_cpg_swept:--controllers cpg_swept $SWEPT $fixed --terrains complex"
   ;;
-*) echo "usage: posture_gait.sh train|validate|robust|fixed" >&2; exit 2;;
+compare)
+  # validation rounds on rugged ground: the fixed gaits with and without the levelling reflex, the posture policy
+  # trained without it (runs/posture/pa.pt) with and without it, and the one trained with it (rc2.pt)
+  v="--terrains rugged --rounds 300 --seed 3000 --max_steps 3000"
+  f="$v $FIXED_PHYSICS"
+  EVALS=/root/compare EVAL_TIMEOUT_S=$(( 570 - SECONDS )) bash scripts/device/eval_jobs.sh \
+    "cpg:--controllers cpg $f" "cpg_swept:--controllers cpg_swept $SWEPT $f" \
+    "cpg_swept_reflex2:--controllers cpg_swept $SWEPT $f --posture_reflex 2" \
+    "pa:--controllers cpg_rl --checkpoint cpg_rl=$KEEP/pa.pt $v" \
+    "pa_reflex2:--controllers cpg_rl --checkpoint cpg_rl=$KEEP/pa.pt $v --posture_reflex 2" \
+    "rc2:--controllers cpg_rl --checkpoint cpg_rl=$KEEP/rc2.pt $v"
+  ;;
+*) echo "usage: posture_gait.sh train|validate|robust|fixed|compare" >&2; exit 2;;
 esac
