@@ -115,6 +115,10 @@ def main(argv: list[str] | None = None) -> int:
         raise ValueError(f"{args.checkpoint} is a '{meta['action_mode']}' policy: a bundle carries the CPG hierarchy "
                          "(a joint-mode policy's policy.onnx from train.py is its whole controller)")  # fmt: skip
     cfg = config_from_dict(meta.get("config", {}))
+    if cfg.cpg.posture and cfg.cpg.posture_reflex:
+        raise ValueError(f"{args.checkpoint} was trained with the levelling reflex (posture_reflex "
+                         f"{cfg.cpg.posture_reflex:g}), which needs the body attitude at every substep: the deploy "
+                         "runtime reads it once per control step and has no reflex")  # fmt: skip
     cfg = dataclasses.replace(
         cfg,
         sim=dataclasses.replace(cfg.sim, num_envs=args.robots, device="cpu"),

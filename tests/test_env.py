@@ -1,5 +1,6 @@
 """The rsl-rl VecEnv: API conformance, reward / observation / reset kernels vs NumPy, train.py -> play.py."""
 
+import dataclasses
 import glob
 import json
 import math
@@ -353,8 +354,8 @@ def test_shaping_terms_on_hand_made_states():
 # ------------------------------------------------------------------ observations (§2.4.1)
 
 
-def test_observation_layout_covers_59_and_44():
-    for mode, dim in (("cpg", 59), ("joint", 44)):
+def test_observation_layout_covers_59_62_and_44():
+    for mode, dim in (("cpg", 59), ("cpg_posture", 62), ("joint", 44)):
         spans = OBS_LAYOUT[mode]
         assert spans[0][1] == 0 and spans[-1][2] == dim
         assert all(a[2] == b[1] for a, b in zip(spans, spans[1:]))
@@ -372,7 +373,7 @@ def test_observation_kernel_matches_reference():
     q[:, 3:7] = quat / np.linalg.norm(quat, axis=1, keepdims=True)
     q[:, 7:] = rng.uniform(-1, 1, (n, 18))
     qd = rng.normal(size=(n, 24)).astype(np.float32)
-    params = rng.uniform(0, 10, (n, 15)).astype(np.float32)
+    params = rng.uniform(0, 10, (n, 18)).astype(np.float32)
     start = rng.uniform(-0.2, 0.2, (n, 2)).astype(np.float32)
     hf = height_field_from_grid(grid, DEV)
 
@@ -380,14 +381,34 @@ def test_observation_kernel_matches_reference():
         return terrain_height_np(grid, x, y)
 
     ground_at.max = lambda x, y, h: max_terrain_height_np(grid, x, y, h)
-    for with_params, dim in ((1, 59), (0, 44)):
+    for with_params, npar, dim in ((1, 15, 59), (1, 18, 62), (0, 15, 44)):  # the paper's, with the posture, joint
+        p = np.ascontiguousarray(params[:, :npar])
         out = wp.zeros((n, dim), dtype=wp.float32, device=DEV)
         wp.launch(observations_kernel, dim=n,
-                  inputs=[wp.array(q, device=DEV), wp.array(qd, device=DEV), wp.array(params, device=DEV), hf,
+                  inputs=[wp.array(q, device=DEV), wp.array(qd, device=DEV), wp.array(p, device=DEV), hf,
                           wp.array(start, dtype=wp.vec2, device=DEV), TASK.goal_distance, with_params],
                   outputs=[out], device=DEV)  # fmt: skip
-        ref = observations_reference(q, qd, params, ground_at, start, TASK.goal_distance, with_params)
+        ref = observations_reference(q, qd, p, ground_at, start, TASK.goal_distance, with_params)
         np.testing.assert_allclose(out.numpy(), ref, atol=2e-4, rtol=1e-4)
+
+
+def test_posture_env_acts_with_18_and_levels_with_the_reflex():
+    """The body posture adds 3 actions and 3 observations; the reflex bends the knees against the measured tilt."""
+    cfg = _cfg("flat", 2, reset_yaw=0.0, reset_lateral=0.0, reset_joint_noise=0.0)
+    cfg.cpg = dataclasses.replace(cfg.cpg, posture=True, posture_reflex=2.0)
+    env = make_env(cfg)
+    assert env.num_actions == 18 and env.num_obs == 62 and env.obs_layout == "cpg_posture"
+    obs, rew, done, _ = env.step(torch.zeros(2, 18))
+    assert obs["policy"].shape == (2, 62) and torch.isfinite(obs["policy"]).all() and torch.isfinite(rew).all()
+    sl = {name: slice(a, b) for name, a, b in OBS_LAYOUT["cpg_posture"]}
+    np.testing.assert_allclose(obs["policy"][:, sl["posture"]].numpy(), 0.0, atol=1e-6)  # action 0: neutral
+    q = env.world.joint_q
+    q[:, 3:7] = q.new_tensor([0.0, math.sin(0.05), 0.0, math.cos(0.05)])  # pitched by 0.1 rad
+    env.controller(env.world)  # one CPG + mapping substep on this attitude
+    knee = env.world.joint_target_wp.numpy()[:, 7:].reshape(2, 6, 3)[:, :, 1]
+    stand = cfg.robot.stand_pose[1]
+    # P_p' = -2 * 0.1 lowers the front knees' targets and raises the rear ones (swing lift only adds to the knee)
+    assert np.all(knee[:, [0, 3]] <= knee[:, [2, 5]] - 0.3) and np.all(knee[:, [2, 5]] >= stand + 0.19)
 
 
 def test_target_is_in_the_heading_frame():
