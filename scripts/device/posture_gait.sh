@@ -91,5 +91,20 @@ compare)
     "pa_reflex2:--controllers cpg_rl --checkpoint cpg_rl=$KEEP/pa.pt $v --posture_reflex 2" \
     "rc2:--controllers cpg_rl --checkpoint cpg_rl=$KEEP/rc2.pt $v"
   ;;
-*) echo "usage: posture_gait.sh train|validate|robust|fixed|compare" >&2; exit 2;;
+finetune)
+  # the posture policy (runs/posture/pa.pt, with its optimiser state, in $KEEP) resumed under the reflex it lacks
+  KEEP_ALL=0 SKIP_WARMUP=1 START_S=${START_S:-0} DEADLINE_S=${DEADLINE_S:-540} bash scripts/device/train_runs.sh \
+    "pr:--terrain complex --seed 3 --resume $KEEP/pa.pt --posture_reflex 2" \
+    "ps:--terrain complex --seed 3 --resume $KEEP/pa.pt --posture_reflex 2 --w_tilt 15 --w_ang_vel 0.1"
+  cp "$KEEP/pr.pt" "$KEEP/ps.pt" "$OUT/"
+  ;;
+validate_finetune)
+  v="--rounds 300 --seed 3000 --max_steps 3000"
+  jobs=()
+  for r in pr ps; do for t in rugged complex; do
+    jobs+=("${r}_$t:--controllers cpg_rl --checkpoint cpg_rl=$KEEP/$r.pt --terrains $t $v")
+  done; done
+  EVALS=/root/finetune EVAL_TIMEOUT_S=$(( 500 - SECONDS )) bash scripts/device/eval_jobs.sh "${jobs[@]}"
+  ;;
+*) echo "usage: posture_gait.sh train|validate|robust|fixed|compare|finetune|validate_finetune" >&2; exit 2;;
 esac
