@@ -154,6 +154,23 @@ def test_rounds_run_under_the_policys_own_physics(tmp_path, monkeypatch):
                                                                       (SimConfig.frame_dt, SimConfig.substeps, 2)]
 
 
+def test_posture_reflex_for_posture_policies_and_fixed_gaits():
+    """``--posture_reflex``: a posture policy runs with the given gain, a fixed gait (15 parameters) gets the neutral
+    posture and the reflex, a policy without the posture is refused with one error."""
+    from hexnewton.config import gait_params
+    from hexnewton.evaluate import run_rounds
+
+    posture = os.path.join(ROOT, "results", "policies", "cpg_rl_complex_posture.pt")
+    ep = run_rounds("cpg_rl", posture, "rugged", 2, "cpu", 5, 0.2, False, posture_reflex=2.0)
+    assert ep.params.shape[1] == 18 and np.isfinite(ep.rpy).all()
+    fixed = run_rounds("cpg_swept", None, "flat", 2, "cpu", 5, 0.2, False, posture_reflex=2.0,
+                       fixed_params=np.tile(gait_params(6.28, 0.2, 0.9, 0.3), (2, 1)))
+    np.testing.assert_allclose(fixed.params[-1, 15:], 0.0, atol=1e-6)
+    with pytest.raises(ValueError, match="no body posture"):
+        run_rounds("cpg_rl", os.path.join(ROOT, "results", "policies", "cpg_rl_flat.pt"), "flat", 2, "cpu", 5, 0.2,
+                   False, posture_reflex=2.0)
+
+
 def test_shipped_complex_policy_climbs_steps_under_its_20ms_physics():
     """The shipped complex policy (trained under a 20 ms frame = 4 x 5 ms) climbs the 6 cm risers on the CPU as
     on the GPU: 8 unseen rounds, sampled actions, 20 s. Steps climbable is one of issue 6's stability checks
