@@ -39,21 +39,7 @@ validate)
   EVALS=/root/val EVAL_TIMEOUT_S=220 bash scripts/device/eval_jobs.sh "${jobs[@]}"
   mv "$OUT/evals.tgz" "$OUT/val.tgz"
   # >= 99 % at 3 m and <= 0.5 % falls on both terrains first, then the smallest rugged pitch + roll variance
-  best=$(python - $(for r in $VARIANTS; do echo $r ${r}_last; done) <<'PY'
-import json, sys
-rows = {}
-for n in sys.argv[1:]:
-    try:
-        r = json.load(open(f"/root/val/val_{n}/results.json"))["results"]
-    except OSError:
-        continue
-    ok = all(r[t]["cpg_rl"]["success_3m"] >= 0.99 and r[t]["cpg_rl"]["fall_rate"] <= 0.005 for t in r)
-    succ = sum(r[t]["cpg_rl"]["success_3m"] for t in r) / len(r)
-    var = r["rugged"]["cpg_rl"]["pitch_var_deg2"] + r["rugged"]["cpg_rl"]["roll_var_deg2"]
-    rows[n] = (ok, succ if not ok else 1.0, -var)
-print(max(rows, key=rows.get))
-PY
-)
+  best=$(python scripts/device/choose_variant.py $(for r in $VARIANTS; do echo $r ${r}_last; done))
   echo "$best" > "$KEEP/chosen"; echo "chosen on validation: $best"
   cp "$KEEP/$best.pt" "$OUT/chosen_$best.pt"
   ck="--controllers cpg_rl --checkpoint cpg_rl=$KEEP/$best.pt --rounds 1000"

@@ -47,21 +47,7 @@ validate)
 test)
   # the variant with >= 99 % at 3 m on every terrain and <= 0.5 % falls, then the smallest rugged pitch + roll
   # variance (else the best mean success), on validation rounds
-  best=$(python - $VARIANTS <<'PY'
-import json, sys
-rows = {}
-for n in sys.argv[1:]:
-    try:
-        r = json.load(open(f"/root/val/val_{n}/results.json"))["results"]
-    except OSError:
-        continue
-    ok = all(r[t]["cpg_rl"]["success_3m"] >= 0.99 and r[t]["cpg_rl"]["fall_rate"] <= 0.005 for t in r)
-    succ = sum(r[t]["cpg_rl"]["success_3m"] for t in r) / len(r)
-    var = r["rugged"]["cpg_rl"]["pitch_var_deg2"] + r["rugged"]["cpg_rl"]["roll_var_deg2"]
-    rows[n] = (ok, succ if not ok else 1.0, -var)
-print(max(rows, key=rows.get))
-PY
-)
+  best=$(python scripts/device/choose_variant.py $VARIANTS)
   gait=$(python -c "import json; b=json.load(open('/root/sweep/results.json'))['best']; print(b['omega'], b['a1'], b['a2'], b['a3'])")
   echo "chosen on validation: $best; swept gait: $gait"
   ck="--checkpoint cpg_rl=$KEEP/$best.pt"
