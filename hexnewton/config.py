@@ -157,7 +157,7 @@ class SimConfig:
 PARAM_NAMES = ("omega", "A1_R", "A1_L") + tuple(f"A2_{leg}" for leg in LEG_NAMES) + tuple(
     f"A3_{leg}" for leg in LEG_NAMES
 )
-#: The body-posture parameters of the ``cpg_posture`` action mode (kernels/mapping.py), after the 15.
+#: The body-posture parameters (``CPGConfig.posture``, kernels/mapping.py), after the 15.
 POSTURE_NAMES = ("P_h", "P_p", "P_r")
 #: Oscillator of each leg (R1, R2, R3, L1, L2, L3): tripod {R1, L2, R3} on 0, {L1, R2, L3} on 1 (§2.2).
 LEG_OSCILLATOR = (0, 1, 0, 1, 0, 1)
@@ -202,8 +202,8 @@ class CPGConfig:
     a2_range: tuple[float, float] = (0.0, 1.3)
     a3_range: tuple[float, float] = (0.0, 0.8)  # ankle tuck; 0.15 + 0.8 < pi/3 keeps it inside the limit
     # ours: body posture (kernels/mapping.py), three more parameters after the 15: knee offsets [rad] for height
-    # (P_h) and for pitch and roll (P_p, P_r: +-range at the front/rear and right/left legs). Off in the paper's
-    # cpg action mode; the cpg_posture mode turns it on. The knee's standing angle is 0.15 above its lower limit.
+    # (P_h) and for pitch and roll (P_p, P_r: +-range at the front/rear and right/left legs). Off: the paper's 15
+    # parameters; train.py --posture turns it on. The knee's standing angle is 0.15 above its lower limit.
     posture: bool = False
     posture_height_range: tuple[float, float] = (-0.15, 0.15)
     posture_tilt_range: tuple[float, float] = (-0.3, 0.3)

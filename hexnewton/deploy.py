@@ -15,8 +15,8 @@ Per control step (``control_dt``, 20 ms by default) :meth:`Controller.step` take
 
 It runs the policy's deterministic action (the mean of its Beta distribution, computed inside ``policy.onnx``;
 older Gaussian bundles can also sample, ``stochastic=True``, or take the expected clipped action,
-``expected=True``), scales its 15 actions to
-(omega, A1, A2, A3) (18 with the body posture P_h, P_p, P_r), then integrates the two Hopf oscillators (Eq. 3, RK4) and applies the mapping function
+``expected=True``), scales its 15 actions to (omega, A1, A2, A3) (18 with the body posture P_h, P_p, P_r),
+then integrates the two Hopf oscillators (Eq. 3, RK4) and applies the mapping function
 (Eq. 4) every ``substep_dt`` (2.5 ms by default), exactly as the simulator does. It returns the 18 joint
 position targets at the end of the step (all substeps' targets are in ``last_substep_targets``, for a servo
 loop faster than the control rate).
@@ -145,8 +145,8 @@ class Controller:
         return obs
 
     def act(self, obs: np.ndarray) -> np.ndarray:
-        """The policy's actions (N, num_actions) for observations (N, num_obs): the mean, sampled around it, or the expected
-        clipped action (:func:`expected_clipped_action`)."""
+        """The policy's actions (N, num_actions) for observations (N, num_obs): the mean, sampled around it, or the
+        expected clipped action (:func:`expected_clipped_action`)."""
         mean = self.session.run(None, {self._input: np.asarray(obs, np.float32)})[0]
         if self.expected:
             return expected_clipped_action(mean, self.action_std)

@@ -278,7 +278,8 @@ def run_rounds(controller: str, checkpoint: str | None, terrain: str, rounds: in
     prev_p = prev_t = None
 
     def change(now: np.ndarray, before: np.ndarray | None) -> np.ndarray:
-        """Mean |change| of the CPG parameters (15, or 18 with the posture) since the last step, in fractions of their ranges (NaN at the start)."""
+        """Mean |change| of the CPG parameters (15, or 18 with the posture) since the last step, in fractions of
+        their ranges (NaN at the start)."""
         if before is None:
             return np.full(rounds, np.nan, np.float32)
         return (np.abs(now - before) / (hi - lo)).mean(axis=1).astype(np.float32)
@@ -354,8 +355,9 @@ def report_markdown(results: dict, meta: dict, robustness: dict | None = None) -
     lines += ["", "## Gait quality (deterministic actions unless stated in the header)", "",
               "Falls: rounds that ended in a fall anywhere (also after the last distance). p99.9: the 99.9th "
               "percentile of |angle| over every step. Rates: RMS of the body's roll / pitch rate. Δparam: mean change per "
-              "control step of the CPG parameters the oscillators and the mapping use (15; 18 with the body posture) (requested by the policy in brackets), in % "
-              "of each parameter's range. Ratios: variance against the fixed CPG's in the same run.", "",
+              "control step of the CPG parameters the oscillators and the mapping use (15; 18 with the body "
+              "posture), requested by the policy in brackets, in % of each parameter's range. Ratios: variance "
+              "against the fixed CPG's in the same run.", "",
               "| terrain | method | falls | pitch var [deg²] | roll var [deg²] | \\|pitch\\| / \\|roll\\| p99.9 [deg] "
               "| roll / pitch rate RMS [deg/s] | Δparam [%/step] | pitch / roll var ÷ CPG | ÷ CPG (swept) |",
               "|---|---|---:|---:|---:|---|---|---|---|---|"]  # fmt: skip

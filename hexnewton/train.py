@@ -432,7 +432,7 @@ def main(argv: list[str] | None = None) -> int:
                         f"{CPGConfig.param_tau})")
     p.add_argument("--posture", action=argparse.BooleanOptionalAction, default=None,
                    help="ours: 3 more actions, the body posture (height, pitch, roll knee offsets; kernels/mapping.py), "
-                        "new runs (default: the recipe's; off is the paper's 15 parameters)")
+                        "new runs (default off: the paper's 15 parameters)")
     p.add_argument("--posture_reflex", type=float, default=None,
                    help="ours: levelling reflex gain [rad of knee per rad of tilt] on the posture, at every substep "
                         "(kernels/mapping.py; default: the resumed checkpoint's, else 0 = off)")

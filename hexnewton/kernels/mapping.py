@@ -21,7 +21,7 @@ Tripods: R1, L2, R3 follow oscillator 0; L1, R2, L3 follow oscillator 1. With le
 L2, L3 that is ``oscillator = leg % 2``.
 Parameter layout per env (15): omega, A1_R, A1_L, A2[R1..L3], A3[R1..L3].
 
-Body posture (ours, the ``cpg_posture`` action mode; off in the paper's ``cpg`` mode): three more parameters
+Body posture (ours, ``CPGConfig.posture``; off for the paper's 15 parameters): three more parameters
 P_h, P_p, P_r (columns 15..17) add a knee offset to every leg in both phases,
 
     knee += P_h + P_p * fx[leg] + P_r * sy[leg],   fx = +1 front, 0 middle, -1 rear;  sy = +1 right, -1 left
