@@ -221,7 +221,15 @@ class CPGConfig:
         ``FIXED_GAITS`` (``swept``: the best of the documented sweep, ``hexnewton.cpg_sweep``)."""
         omega, a1, a2, a3 = (self.fixed_omega, self.fixed_a1, self.fixed_a2, self.fixed_a3) if gait == "default" \
             else FIXED_GAITS[gait]
-        return gait_params(omega, a1, a2, a3) + [0.0] * (self.num_params - 15)
+        return self.with_posture(gait_params(omega, a1, a2, a3)).tolist()
+
+    def with_posture(self, params):
+        """Parameters (..., 15) or (..., num_params) as (..., num_params): a 15-parameter gait gets the neutral
+        posture (zeros) when ``posture`` is on."""
+        import numpy as np
+
+        p = np.asarray(params, np.float64)
+        return np.concatenate([p, np.zeros(p.shape[:-1] + (self.num_params - p.shape[-1],))], axis=-1)
 
     @property
     def num_params(self) -> int:

@@ -122,9 +122,7 @@ def fixed_cpg_actions(env, gait: str = "default", params: np.ndarray | None = No
     from .kernels.reference import params_to_actions
 
     lo, hi = env.cfg.cpg.param_ranges()
-    p = env.cfg.cpg.fixed_params(gait) if params is None else np.asarray(params, np.float64)
-    if np.shape(p)[-1] < len(lo):  # a 15-parameter gait under the body posture: neutral posture
-        p = np.concatenate([p, np.zeros(np.shape(p)[:-1] + (len(lo) - np.shape(p)[-1],))], axis=-1)
+    p = env.cfg.cpg.fixed_params(gait) if params is None else env.cfg.cpg.with_posture(params)
     a = np.broadcast_to(np.clip(params_to_actions(p, lo, hi), -1.0, 1.0), (env.num_envs, len(lo)))
     return torch.tensor(np.ascontiguousarray(a), dtype=torch.float32, device=env._obs_t.device)
 
