@@ -4,8 +4,9 @@ A controller bundle (written by ``python -m hexnewton.export``) is a folder with
 - ``policy.onnx``: the high level (observation normaliser included), one file, dynamic batch dimension;
 - ``controller.json``: the observation layout, the parameter ranges, the CPG and mapping constants, the
   control and integration periods, the standing pose and joint limits;
-- ``check.npz``: a short simulator rollout (observations and the simulator's joint targets) that
-  ``python -m hexnewton.deploy BUNDLE`` replays to show this runtime reproduces the simulator here.
+- ``check.npz``: a short simulator rollout (observations, the simulator's joint targets and, for a controller with
+  the levelling reflex, the body attitude at every substep) that ``python -m hexnewton.deploy BUNDLE`` replays to
+  show this runtime reproduces the simulator here.
 
 Per control step (``control_dt``, 20 ms by default) :meth:`Controller.step` takes the robot's readings:
 - joint positions and velocities (18 each, order R1..L3 x hip, knee, ankle);
@@ -20,6 +21,11 @@ then integrates the two Hopf oscillators (Eq. 3, RK4) and applies the mapping fu
 (Eq. 4) every ``substep_dt`` (2.5 ms by default), exactly as the simulator does. It returns the 18 joint
 position targets at the end of the step (all substeps' targets are in ``last_substep_targets``, for a servo
 loop faster than the control rate).
+
+A controller trained with the levelling reflex (``posture_reflex`` in controller.json) bends its knees against the
+body's measured pitch and roll at every substep. On the robot, run the two rates apart: :meth:`Controller.set_actions`
+once per control step (``act(observe(...))``), then :meth:`Controller.substep` with the IMU's latest quaternion every
+``substep_dt``; :meth:`Controller.step` holds the control step's quaternion for all its substeps.
 The maths is the float64 reference of the simulator's kernels (``hexnewton.kernels.reference``).
 """
 
@@ -110,6 +116,8 @@ class Controller:
         self.rng = np.random.default_rng(seed)
         self.stand, self.joint_lower, self.joint_upper = (np.asarray(spec[k]) for k in ("stand_pose", "joint_lower",
                                                                                          "joint_upper"))  # fmt: skip
+        self.reflex = float(spec.get("posture_reflex", 0.0))  # levelling reflex gain (0: none; older bundles)
+        self.tilt_max = float(spec.get("posture_tilt_max", 0.0))
         self.reset()
 
     def reset(self, mask=None) -> None:
@@ -117,10 +125,11 @@ class Controller:
         m = np.ones(self.n, bool) if mask is None else np.asarray(mask, bool)
         if not hasattr(self, "params"):
             self.params = np.zeros((self.n, len(self.spec["initial_params"])))
+            self.target = np.zeros_like(self.params)
             self.state = np.zeros((self.n, 4))
             self.dy = np.zeros((self.n, 2))
             self.last_substep_targets = np.zeros((self.substeps, self.n, 18))
-        self.params[m] = self.spec["initial_params"]
+        self.params[m] = self.target[m] = self.spec["initial_params"]
         self.state[m] = initial_cpg_state(self.cpg[1], self.cpg[3])
         self.dy[m] = 0.0
 
@@ -154,20 +163,36 @@ class Controller:
             return mean
         return mean + self.action_std * self.rng.standard_normal(mean.shape)
 
-    def advance(self, actions: np.ndarray) -> np.ndarray:
-        """Scale actions to the CPG parameters, then run ``substeps_per_control`` CPG + mapping substeps;
-        returns the last substep's joint targets (N, 18)."""
-        target = scale_actions_reference(actions, self.lower, self.upper)
+    def set_actions(self, actions: np.ndarray) -> None:
+        """The policy's actions (N, num_actions) in [-1, 1] as the parameters the CPG follows from now on."""
+        self.target = scale_actions_reference(actions, self.lower, self.upper)
+
+    def substep(self, base_quat=None) -> np.ndarray:
+        """One CPG + mapping substep (``substep_dt``); returns the joint targets (N, 18). ``base_quat`` (N, 4) or
+        (4,), x y z w: the body's attitude now, required by a controller with the levelling reflex."""
+        rpy = None
+        if self.reflex:
+            if base_quat is None:
+                raise ValueError("this controller has the levelling reflex: pass the body's quaternion to substep()")
+            rpy = quat_to_rpy_np(np.broadcast_to(np.asarray(base_quat, np.float64), (self.n, 4)))
+        self.params, self.state, self.dy = hopf_cpg_reference(self.target, self.params, self.state, self.gain,
+                                                              *self.cpg, self.dt)  # fmt: skip
+        return mapping_reference(self.state, self.dy, self.params, self.cpg[1], self.stand, self.joint_lower,
+                                 self.joint_upper, rpy, self.reflex, self.tilt_max)  # fmt: skip
+
+    def advance(self, actions: np.ndarray, base_quat=None) -> np.ndarray:
+        """Scale actions to the CPG parameters, then run ``substeps_per_control`` substeps; returns the last
+        substep's joint targets (N, 18). ``base_quat``: the attitude for the reflex, (N, 4) held over the step or
+        (substeps, N, 4), one per substep."""
+        self.set_actions(actions)
+        q = None if base_quat is None else np.asarray(base_quat, np.float64)
         for k in range(self.substeps):
-            self.params, self.state, self.dy = hopf_cpg_reference(target, self.params, self.state, self.gain, *self.cpg,
-                                                                  self.dt)  # fmt: skip
-            self.last_substep_targets[k] = mapping_reference(self.state, self.dy, self.params, self.cpg[1], self.stand,
-                                                             self.joint_lower, self.joint_upper)  # fmt: skip
+            self.last_substep_targets[k] = self.substep(q[k] if q is not None and q.ndim == 3 else q)
         return self.last_substep_targets[-1].copy()
 
     def step(self, joint_pos, joint_vel, base_quat, target, max_height=0.0) -> np.ndarray:
         """One control step: readings in, 18 joint position targets out (N, 18)."""
-        return self.advance(self.act(self.observe(joint_pos, joint_vel, base_quat, target, max_height)))
+        return self.advance(self.act(self.observe(joint_pos, joint_vel, base_quat, target, max_height)), base_quat)
 
 
 def replay(bundle: str) -> dict:
@@ -175,6 +200,7 @@ def replay(bundle: str) -> dict:
     load_spec(bundle)
     rec = np.load(os.path.join(bundle, "check.npz"))
     obs, sim_targets = rec["obs"], rec["targets"]  # (K, N, num_obs), (K, N, 18)
+    quats = rec["substep_quat"] if "substep_quat" in rec else None  # (K, substeps, N, 4): the reflex's attitude
     ctrl = Controller(bundle, num_robots=obs.shape[1])
     lay = ctrl.layout
     sl = lambda o, name: o[:, lay[name][0]:lay[name][1]]  # noqa: E731
@@ -183,7 +209,7 @@ def replay(bundle: str) -> dict:
         o = obs[k]
         mine = ctrl.observe(sl(o, "joint_pos"), sl(o, "joint_vel"), sl(o, "quat"), sl(o, "target"), sl(o, "max_height"))
         err_obs = max(err_obs, float(np.abs(mine - o).max()))  # the CPG parameters were integrated here
-        q = ctrl.advance(ctrl.act(mine))
+        q = ctrl.advance(ctrl.act(mine), None if quats is None else quats[k])
         err_q = max(err_q, float(np.abs(q - sim_targets[k]).max()))
     return {"steps": len(obs), "robots": obs.shape[1], "max_obs_diff": err_obs, "max_target_diff_rad": err_q}
 

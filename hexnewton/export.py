@@ -57,6 +57,9 @@ def controller_spec(env, checkpoint: str, action_std: list[float] | None) -> dic
             "max_height": f"highest terrain within +-{H_HALF_EXTENT} m of the base minus the ground under it [m]",
         },
         "param_names": list(cfg.cpg.param_names),
+        # ours: the levelling reflex (CPGConfig.posture_reflex; 0 = none), its knee offsets clamped to +-tilt_max
+        "posture_reflex": cfg.cpg.posture_reflex if cfg.cpg.posture else 0.0,
+        "posture_tilt_max": cfg.cpg.posture_tilt_range[1],
         "param_lower": list(lo),
         "param_upper": list(hi),
         "initial_params": list(cfg.cpg.fixed_params()),
@@ -78,12 +81,29 @@ def controller_spec(env, checkpoint: str, action_std: list[float] | None) -> dic
     }
 
 
-def record(env, policy, steps: int) -> tuple[np.ndarray, np.ndarray]:
-    """``steps`` control steps of ``policy``: the observation before each step and the joint targets the
-    simulator's CPG and mapping wrote at the step's last substep. Stops early if an episode ends."""
+class AttitudeLog:
+    """The world's substep controller, wrapped: logs the body quaternion (x, y, z, w) each substep's mapping reads,
+    the levelling reflex's input (an env built without graph capture calls it from Python)."""
+
+    def __init__(self, controller):
+        self.controller, self.quats = controller, []
+
+    def __call__(self, world) -> None:
+        self.quats.append(world.state_0.joint_q.numpy().reshape(world.num_envs, -1)[:, 3:7].copy())
+        self.controller(world)
+
+
+def record(env, policy, steps: int) -> dict[str, np.ndarray]:
+    """``steps`` control steps of ``policy``: the observation before each step, the joint targets the simulator's
+    CPG and mapping wrote at the step's last substep and, with the levelling reflex, the body quaternion at every
+    substep (``substep_quat``, (K, substeps, N, 4)). Stops early if an episode ends."""
     import torch
 
-    obs_log, targets = [], []
+    log = None
+    if env.cfg.cpg.posture and env.cfg.cpg.posture_reflex:
+        log = AttitudeLog(env.controller)
+        env.world.set_controller(log)
+    rec = {"obs": [], "targets": [], "substep_quat": []}
     obs = env.get_observations()
     with torch.inference_mode():
         for _ in range(steps):
@@ -91,9 +111,12 @@ def record(env, policy, steps: int) -> tuple[np.ndarray, np.ndarray]:
             obs, _, done, _ = env.step(policy(obs))
             if bool(done.any()):  # the reset moved the CPG state: not part of one continuous rollout
                 break
-            obs_log.append(o)
-            targets.append(env.world.joint_target_wp.numpy()[:, 7:25].copy())
-    return np.asarray(obs_log, np.float32), np.asarray(targets, np.float32)
+            rec["obs"].append(o)
+            rec["targets"].append(env.world.joint_target_wp.numpy()[:, 7:25].copy())
+            if log is not None:
+                rec["substep_quat"].append(np.asarray(log.quats))
+                log.quats.clear()
+    return {k: np.asarray(v, np.float64 if k == "substep_quat" else np.float32) for k, v in rec.items() if len(v)}
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -115,25 +138,22 @@ def main(argv: list[str] | None = None) -> int:
         raise ValueError(f"{args.checkpoint} is a '{meta['action_mode']}' policy: a bundle carries the CPG hierarchy "
                          "(a joint-mode policy's policy.onnx from train.py is its whole controller)")  # fmt: skip
     cfg = config_from_dict(meta.get("config", {}))
-    if cfg.cpg.posture and cfg.cpg.posture_reflex:
-        raise ValueError(f"{args.checkpoint} was trained with the levelling reflex (posture_reflex "
-                         f"{cfg.cpg.posture_reflex:g}), which needs the body attitude at every substep: the deploy "
-                         "runtime reads it once per control step and has no reflex")  # fmt: skip
     cfg = dataclasses.replace(
         cfg,
-        sim=dataclasses.replace(cfg.sim, num_envs=args.robots, device="cpu"),
+        # no graph capture: the reflex's attitude log (AttitudeLog) runs from Python at every substep
+        sim=dataclasses.replace(cfg.sim, num_envs=args.robots, device="cpu", use_graph=False),
         terrain=TerrainConfig(name="flat"),
         task=dataclasses.replace(cfg.task, seed=12345, reset_yaw=TaskConfig.reset_yaw),
         randomization=RandomizationConfig(),  # the check rollout is the nominal robot (no latency, no noise)
     )
     env = make_env(cfg, "cpg")
     runner = load_runner(env, args.checkpoint, "cpg")
-    obs, targets = record(env, runner.get_inference_policy(device="cpu"), args.steps)
+    rec = record(env, runner.get_inference_policy(device="cpu"), args.steps)
     os.makedirs(args.out)
     err = export_onnx(runner.alg.get_policy(), env.num_obs, os.path.join(args.out, "policy.onnx"))
     with open(os.path.join(args.out, "controller.json"), "w") as f:
         json.dump(controller_spec(env, args.checkpoint, action_std(runner.alg.get_policy())), f, indent=1)
-    np.savez_compressed(os.path.join(args.out, "check.npz"), obs=obs, targets=targets)
+    np.savez_compressed(os.path.join(args.out, "check.npz"), **rec)
     r = replay(args.out)
     print(f"wrote {args.out}: policy.onnx (onnxruntime vs torch {err:.1e}), controller.json, check.npz "
           f"({r['steps']} steps x {r['robots']} robots); the runtime reproduces the simulator's joint targets "

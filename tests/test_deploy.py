@@ -190,3 +190,32 @@ def test_beta_policy_bundle_runs_its_deterministic_action(tmp_path):
     assert act.shape == (2, 15) and np.all(np.abs(act) < 1.0)  # bounded by construction
     with pytest.raises(ValueError, match="deterministic action"):
         Controller(str(out), stochastic=True)
+
+
+REFLEX_POLICY = os.path.join(ROOT, "results", "policies", "cpg_rl_complex.pt")
+
+
+def test_reflex_bundle_reads_the_attitude_at_every_substep(tmp_path):
+    """The shipped complex policy has the body posture and the levelling reflex: its bundle records the body's
+    quaternion at every substep, the runtime reproduces the simulator with them (and not with the control step's
+    quaternion held over the step), and a substep without the attitude is refused with one clear error."""
+    from hexnewton.deploy import Controller, replay
+
+    out = tmp_path / "reflex"
+    proc = _run(["-m", "hexnewton.export", "--checkpoint", REFLEX_POLICY, "--out", str(out), "--steps", "25",
+                 "--robots", "2"])  # fmt: skip
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    spec = json.loads((out / "controller.json").read_text())
+    assert spec["posture_reflex"] > 0 and spec["num_actions"] == 18
+    rec = np.load(out / "check.npz")
+    assert rec["substep_quat"].shape == (len(rec["obs"]), spec["substeps_per_control"], 2, 4)
+    assert replay(str(out))["max_target_diff_rad"] < 1e-4
+    ctrl = Controller(str(out), num_robots=2)
+    lay = ctrl.layout
+    held = 0.0
+    for obs, target in zip(rec["obs"], rec["targets"]):
+        quat = obs[:, lay["quat"][0]:lay["quat"][1]]
+        held = max(held, float(np.abs(ctrl.advance(ctrl.act(obs), quat) - target).max()))
+    assert held > 1e-3  # the attitude moves within a control step and the reflex follows it
+    with pytest.raises(ValueError, match="levelling reflex"):
+        ctrl.substep()

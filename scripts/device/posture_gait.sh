@@ -9,6 +9,8 @@
 #                                                 # rugged test rounds beside
 #   bash scripts/device/posture_gait.sh robust    # the chosen policy under each named perturbation (300 complex rounds)
 #   bash scripts/device/posture_gait.sh fixed     # the fixed CPG's stepped and complex test rounds
+#   bash scripts/device/posture_gait.sh level     # the reflex policy (ps) resumed under stronger tilt shaping / gain
+#   bash scripts/device/posture_gait.sh validate_level  # 300 validation rounds of each on the three terrains
 set -u
 OUT=${OUT:-out}
 KEEP=/root/keep
@@ -52,7 +54,8 @@ validate)
 robust)
   ck="--controllers cpg_rl --checkpoint cpg_rl=$KEEP/$(chosen).pt --terrains complex --rounds 300"
   jobs=()
-  for p in nominal friction_0.3 payload_0.8kg motors_0.6 push_0.6m/s latency_40ms sensor_noise_x2 steps_7cm blocks_8cm; do
+  # PERTURBATIONS: a subset per call (nine 300-round jobs at once ran past 420 s; five take ~300 s)
+  for p in ${PERTURBATIONS:-nominal friction_0.3 payload_0.8kg motors_0.6 push_0.6m/s latency_40ms sensor_noise_x2 steps_7cm blocks_8cm}; do
     jobs+=("robust_${p//\//_}:$ck --perturbations $p")
   done
   EVALS=/root/robust EVAL_TIMEOUT_S=$(( 585 - SECONDS )) bash scripts/device/eval_jobs.sh "${jobs[@]}"
@@ -92,5 +95,33 @@ validate_finetune)
   done; done
   EVALS=/root/finetune EVAL_TIMEOUT_S=$(( 500 - SECONDS )) bash scripts/device/eval_jobs.sh "${jobs[@]}"
   ;;
-*) echo "usage: posture_gait.sh train|validate|robust|fixed|compare|finetune|validate_finetune" >&2; exit 2;;
+level)
+  # ps (runs/posture/ps.pt, with its optimiser state, in $KEEP) resumed with a stronger tilt penalty and reflex gain
+  r="--terrain complex --seed 4 --resume $KEEP/ps.pt"
+  KEEP_ALL=1 SKIP_WARMUP=1 START_S=${START_S:-0} DEADLINE_S=${DEADLINE_S:-540} bash scripts/device/train_runs.sh \
+    "la:$r --posture_reflex 2 --w_tilt 40 --w_ang_vel 0.3" \
+    "lb:$r --posture_reflex 4 --w_tilt 40 --w_ang_vel 0.3" \
+    "lc:$r --posture_reflex 3 --w_tilt 100 --w_ang_vel 0.5"
+  for r in la lb lc; do cp "$KEEP/$r.pt" "$OUT/$r.pt"; cp "$(ls -v "$KEEP/$r"/model_[0-9]*.pt | tail -1)" "$OUT/${r}_last.pt"; done
+  ;;
+validate_level)
+  v="--rounds 300 --seed 3000 --max_steps 3000"
+  jobs=()
+  for r in ${VARIANTS:-la lb lc}; do
+    jobs+=("val_$r:--controllers cpg_rl --checkpoint cpg_rl=$KEEP/$r.pt --terrains rugged complex stepped $v")
+  done
+  EVALS=/root/val EVAL_TIMEOUT_S=$(( 560 - SECONDS )) bash scripts/device/eval_jobs.sh "${jobs[@]}"
+  python scripts/device/choose_variant.py ${VARIANTS:-la lb lc}
+  ;;
+test_level)
+  # the variant chosen on validation (la) on 1000 test rounds per terrain, the fixed CPG's rugged test rounds beside
+  echo la > "$KEEP/chosen"
+  ck="--controllers cpg_rl --checkpoint cpg_rl=$KEEP/la.pt --rounds 1000"
+  fixed="--rounds 1000 --terrains rugged $FIXED_PHYSICS"
+  EVALS=/root/test EVAL_TIMEOUT_S=$(( 560 - SECONDS )) bash scripts/device/eval_jobs.sh \
+    "rugged_cpg_rl:$ck --terrains rugged" "stepped_cpg_rl:$ck --terrains stepped" "complex_cpg_rl:$ck --terrains complex" \
+    "rugged_cpg:--controllers cpg $fixed" "rugged_cpg_swept:--controllers cpg_swept $SWEPT $fixed"
+  ;;
+*) echo "usage: posture_gait.sh train|validate|robust|fixed|compare|finetune|validate_finetune|level|validate_level|test_level" >&2
+   exit 2;;
 esac
