@@ -370,6 +370,17 @@ class HexapodEnv(VecEnv):
                        top_level_episodes=int(count))  # fmt: skip
         return out
 
+    def set_shaping(self, reward, posture_reflex: float) -> None:
+        """New reward weights (``RewardConfig``) and levelling reflex gain between iterations (a training curriculum,
+        ``train.STABLE_STAGES``); the next step captures the graphs again with them."""
+        import dataclasses
+
+        self.cfg = dataclasses.replace(self.cfg, reward=reward,
+                                       cpg=dataclasses.replace(self.cfg.cpg, posture_reflex=posture_reflex))
+        if self.controller is not None:
+            self.controller.cfg = self.cfg.cpg
+        self.graph = self.world.graph = None
+
     def close(self) -> None:
         self.graph = None
 

@@ -186,6 +186,12 @@ class BestCheckpoint:
         self.path, self.levels = os.path.join(run_dir, "model_best.pt"), levels
         self.rate, self.iteration = None, None
 
+    def reset(self) -> None:
+        """Forget the best so far (a new curriculum stage trains under another objective)."""
+        self.rate = self.iteration = None
+        if os.path.exists(self.path):
+            os.remove(self.path)
+
     def update(self, stats: dict, iteration: int, save) -> None:
         rate = training_success(stats, self.levels)
         if rate is not None and (self.rate is None or rate >= self.rate + self.margin):
@@ -354,16 +360,26 @@ def checkpoint_distribution(ckpt: dict | None) -> str:
 #: iterations against 84 % without it (results/cpu_main_job).
 STABLE_SHAPING = dict(w_tilt=5.0, w_ang_vel=0.05, w_action_rate=0.1)
 
+#: ours: the stable-gait curriculum of the complex recipe (RESULTS.md, "Stable gaits"): (first iteration, changes)
+#: of the reflex gain (``posture_reflex``) and the reward weights, applied from that iteration on. With the body
+#: posture from the start, it is in one run what three runs trained for results/policies/cpg_rl_complex.pt: the
+#: posture policy (its best checkpoint, iteration 381), resumed under the levelling reflex with tilt shaping 15 / 0.1
+#: to iteration 743, then with 40 / 0.3 to 1061 (scripts/device/posture_gait.sh train, finetune, level).
+STABLE_STAGES = ((382, dict(posture_reflex=2.0, w_tilt=15.0, w_ang_vel=0.1)), (744, dict(w_tilt=40.0, w_ang_vel=0.3)))
+
 #: What ``python train.py --terrain T`` trains when a flag is not given (``apply_recipe``). Flat ground: the plain
 #: MDP. The paper's terrains: the terrain curriculum (10 lanes, robots start on the first 3), the knee-lift floor
 #: (a high-stepping gait from the start), domain randomisation, the 20 ms physics frame and a 0.1 s filter on the
-#: CPG parameters and the stability shaping (``STABLE_SHAPING``); with the bounded (Beta) actions,
-#: ``python train.py --terrain complex --seed 1`` is the recipe of results/policies/cpg_rl_complex_beta (RESULTS.md).
+#: CPG parameters and the stability shaping (``STABLE_SHAPING``). The complex course adds the body posture and the
+#: stable-gait curriculum (``STABLE_STAGES``, 1062 iterations): ``python train.py --terrain complex`` trains the
+#: shipped results/policies/cpg_rl_complex; ``--no-posture --max_iterations 400`` the Beta policy without posture
+#: (results/policies/cpg_rl_complex_beta).
 RECIPES = {
     "flat": {},
     **{t: dict(levels=10, start_levels=3, a2_range=(0.9, 1.3), randomize=True, frame_dt=0.02, substeps=4,
                param_tau=0.1, **STABLE_SHAPING) for t in ("rugged", "stepped", "complex")},
 }
+RECIPES["complex"].update(posture=True, stages=STABLE_STAGES, max_iterations=1062)
 
 
 def apply_recipe(args, resumed: bool) -> None:
@@ -372,12 +388,12 @@ def apply_recipe(args, resumed: bool) -> None:
     recipe = RECIPES[args.terrain]
     keep = ("a2_range", "frame_dt", "substeps", "param_tau", "posture") if resumed else ()
     if args.paper_reward:  # Table 1 as written: no shaping unless a flag asks for it
-        keep += tuple(STABLE_SHAPING)
+        keep += tuple(STABLE_SHAPING) + ("stages",)
     for key, value in recipe.items():
         if getattr(args, key) is None and key not in keep:
             setattr(args, key, value)
     for key, default in (("levels", TerrainConfig.levels), ("start_levels", TerrainConfig.start_levels),
-                         ("randomize", False)):  # fmt: skip
+                         ("randomize", False), ("max_iterations", 300), ("stages", ())):  # fmt: skip
         if getattr(args, key) is None:
             setattr(args, key, default)
 
@@ -398,7 +414,8 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--terrain", type=terrain_name, default="flat")
     p.add_argument("--terrain_seed", type=int, default=0)
     p.add_argument("--device", default=None, help="cpu, cuda or cuda:N (default: cuda if present, else cpu)")
-    p.add_argument("--max_iterations", type=positive_int, default=300)
+    p.add_argument("--max_iterations", type=positive_int, default=None,
+                   help="default: the recipe's (complex: 1062, the stable-gait curriculum), else 300")
     p.add_argument("--seed", type=int, default=1)
     p.add_argument("--preset", default="default", help=f"one of {', '.join(PRESETS)}")
     p.add_argument("--action_mode", default="cpg", choices=["cpg", "joint"])
@@ -433,6 +450,9 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--posture", action=argparse.BooleanOptionalAction, default=None,
                    help="ours: 3 more actions, the body posture (height, pitch, roll knee offsets; kernels/mapping.py), "
                         "new runs (default off: the paper's 15 parameters)")
+    p.add_argument("--stages", action=argparse.BooleanOptionalAction, default=None,
+                   help="ours: the recipe's curriculum of reflex gain and reward weights (STABLE_STAGES, complex "
+                        "recipe with the posture; --no-stages: the first stage's settings throughout)")
     p.add_argument("--posture_reflex", type=float, default=None,
                    help="ours: levelling reflex gain [rad of knee per rad of tilt] on the posture, at every substep "
                         "(kernels/mapping.py; default: the resumed checkpoint's, else 0 = off)")
@@ -534,6 +554,11 @@ def main(argv: list[str] | None = None) -> int:
         if not cfg.cpg.posture:
             raise ValueError("--posture_reflex acts on the body posture: train with --posture (or resume a posture policy)")
         cfg = dataclasses.replace(cfg, cpg=dataclasses.replace(cfg.cpg, posture_reflex=args.posture_reflex))
+    stages = args.stages if isinstance(args.stages, tuple) else STABLE_STAGES if args.stages else ()
+    if stages and not (cfg.cpg.posture and args.action_mode == "cpg"):
+        if args.stages is True:
+            raise ValueError("--stages changes the levelling reflex: train with --posture (or resume a posture policy)")
+        stages = ()  # the recipe's curriculum needs the posture (--no-posture runs without it)
     env = make_env(cfg, args.action_mode)
     if ckpt is not None:
         check_compatible(ckpt, args.resume, env.num_obs, env.num_actions, args.action_mode)
@@ -568,9 +593,9 @@ def main(argv: list[str] | None = None) -> int:
     _log = runner.logger.log
     reduce = _sum_over_ranks(device) if dist.world_size > 1 else None
 
-    def log(*a, **k):
-        """After each iteration's log: keep the best policy (rank 0), then stop (every rank at once) on the time limit
-        or the target success. The ring's statistics are a few small host reads per iteration."""
+    def log_and_stop(*a, **k):
+        """Keep the best policy (rank 0), then stop (every rank at once) on the time limit or the target success. The
+        ring's statistics are a few small host reads per iteration."""
         _log(*a, **k)
         stats = env.episode_stats()
         if dist.is_main:
@@ -578,6 +603,31 @@ def main(argv: list[str] | None = None) -> int:
         reason = stop_reason(time_up[0], stats, args.target_success, args.levels, reduce)
         if reason:
             raise TrainingStopped(reason)
+
+    stage = [None]
+
+    def enter_stage(iteration: int) -> None:
+        """The curriculum (``stages``): from its first iteration on, a stage's reflex gain and reward weights (with
+        those of the stages before it). The best checkpoint is chosen within the last stage begun."""
+        begun = [k for k, (start, _) in enumerate(stages) if iteration >= start]
+        if not begun or begun[-1] == stage[0]:
+            return
+        stage[0] = begun[-1]
+        changes = {}
+        for _, c in stages[: stage[0] + 1]:
+            changes.update(c)
+        reflex = changes.pop("posture_reflex", env.cfg.cpg.posture_reflex)
+        env.set_shaping(dataclasses.replace(env.cfg.reward, **changes), reflex)
+        meta["config"] = dataclasses.asdict(env.cfg)  # checkpoints carry the gain they run with
+        best.reset()
+        print(f"iteration {iteration}: curriculum stage {stage[0] + 2} of {len(stages) + 1}: posture_reflex "
+              f"{reflex:g}, " + ", ".join(f"{k} {v:g}" for k, v in changes.items()), flush=True)
+
+    def log(*a, **k):
+        """After each iteration's log: the curriculum's next stage if it begins, the best policy (rank 0), then stop
+        (every rank at once) on the time limit or the target success."""
+        log_and_stop(*a, **k)
+        enter_stage(runner.current_learning_iteration + 1)
 
     runner.logger.log = log
     if ckpt is not None:
@@ -588,6 +638,7 @@ def main(argv: list[str] | None = None) -> int:
             fix_action_std(runner.alg.get_policy(), args.action_std)
         print(f"resumed from {args.resume}: continuing at iteration {runner.current_learning_iteration}, "
               f"learning rate {runner.alg.learning_rate:.2e}")
+    enter_stage(runner.current_learning_iteration)
     where = f"rank {dist.rank} of {dist.world_size}, " if dist.world_size > 1 else ""
     print(f"training {experiment}: {where}{args.num_envs} envs on {device}, preset {args.preset}, logs in {run_dir}")
     t0 = time.time()

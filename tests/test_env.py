@@ -411,6 +411,28 @@ def test_posture_env_acts_with_18_and_levels_with_the_reflex():
     assert np.all(knee[:, [0, 3]] <= knee[:, [2, 5]] - 0.3) and np.all(knee[:, [2, 5]] >= stand + 0.19)
 
 
+def test_set_shaping_recaptures_the_step_with_new_weights_and_reflex():
+    """A curriculum stage (``set_shaping``) between steps: the same weights again leave the rollout as it was (the
+    step is captured again from the same state), a heavier tilt penalty lowers the reward, the reflex moves the
+    joint targets."""
+    cfg = _cfg("rugged", 2, reset_yaw=0.0, reset_lateral=0.0, reset_joint_noise=0.0)
+    cfg.cpg = dataclasses.replace(cfg.cpg, posture=True)
+    cfg.reward = dataclasses.replace(cfg.reward, w_tilt=5.0)
+    envs = [make_env(cfg) for _ in range(3)]
+    act = torch.full((2, 18), 0.3)
+    for _ in range(5):
+        outs = [env.step(act) for env in envs]
+    envs[1].set_shaping(cfg.reward, 0.0)  # unchanged
+    envs[2].set_shaping(dataclasses.replace(cfg.reward, w_tilt=5000.0), 2.0)
+    assert envs[2].controller.cfg.posture_reflex == 2.0 and envs[2].cfg.reward.w_tilt == 5000.0
+    outs = [env.step(act) for env in envs]
+    torch.testing.assert_close(outs[1][0]["policy"], outs[0][0]["policy"])
+    torch.testing.assert_close(outs[1][1], outs[0][1])
+    assert torch.all(outs[2][1] < outs[0][1])
+    targets = [env.world.joint_target_wp.numpy() for env in envs]
+    assert np.abs(targets[2] - targets[0]).max() > 1e-3
+
+
 def test_target_is_in_the_heading_frame():
     env = make_env(_cfg("flat", 1, reset_yaw=0.0, reset_lateral=0.0))
     q = env.world.joint_q
@@ -723,19 +745,23 @@ def test_terrain_recipes_and_reward_switches():
     ``--paper_reward`` is Table 1, and flags given on top still apply."""
     import argparse
 
-    from hexnewton.train import RECIPES, apply_recipe, reward_config
+    from hexnewton.train import RECIPES, STABLE_STAGES, apply_recipe, reward_config
 
     def args(**kw):
         base = dict(terrain="complex", levels=None, start_levels=None, randomize=None, a2_range=None, frame_dt=None,
                     substeps=None, param_tau=None, paper_reward=False, direction_deadband=None, goal_bonus=None,
                     off_course_penalty=None, stability_tilt=None, w_tilt=None, w_ang_vel=None, w_action_rate=None,
-                    direction_from_start=False)  # fmt: skip
+                    direction_from_start=False, posture=None, max_iterations=None, stages=None)  # fmt: skip
         return argparse.Namespace(**{**base, **kw})
 
     a = args()
     apply_recipe(a, resumed=False)
     assert (a.levels, a.start_levels, a.a2_range, a.randomize, a.frame_dt, a.param_tau) == (10, 3, (0.9, 1.3), True,
                                                                                             0.02, 0.1)  # fmt: skip
+    assert a.posture and a.stages == STABLE_STAGES and a.max_iterations == 1062  # the stable-gait curriculum
+    a = args(terrain="rugged")
+    apply_recipe(a, resumed=False)
+    assert a.posture is None and a.stages == () and a.max_iterations == 300
     a = args(levels=0, randomize=False)
     apply_recipe(a, resumed=True)
     assert (a.levels, a.randomize, a.a2_range, a.frame_dt, a.param_tau) == (0, False, None, None, None)  # resumed
@@ -752,6 +778,25 @@ def test_terrain_recipes_and_reward_switches():
     paper = reward_config(args(paper_reward=True, w_tilt=1.5))
     assert paper.goal_bonus == 0 and paper.off_course_penalty == 0 and paper.w_tilt == 1.5 and paper.w_ang_vel == 0
     assert not reward_config(args(direction_from_start=True)).direction_to_goal
+
+
+def test_curriculum_stages_change_reflex_and_weights_in_one_run(tmp_path, monkeypatch, capsys):
+    """The complex recipe's curriculum, on shortened stages: each stage begins at its iteration, the checkpoints
+    carry the gain and weights they were trained under, the best checkpoint is chosen within the last stage."""
+    import torch
+
+    from hexnewton import train
+
+    monkeypatch.setitem(train.RECIPES["complex"], "stages",
+                        ((1, dict(posture_reflex=2.0, w_tilt=15.0)), (2, dict(w_tilt=40.0, w_ang_vel=0.3))))
+    assert train.main(["--terrain", "complex", "--num_envs", "8", "--num_steps_per_env", "4", "--max_iterations",
+                       "3", "--device", "cpu", "--log_dir", str(tmp_path)]) == 0  # fmt: skip
+    out = capsys.readouterr().out
+    assert "iteration 1: curriculum stage 2 of 3: posture_reflex 2, w_tilt 15" in out
+    assert "iteration 2: curriculum stage 3 of 3: posture_reflex 2, w_tilt 40, w_ang_vel 0.3" in out
+    last = sorted(tmp_path.glob("*/*/model_2.pt"))[-1]
+    cfg = torch.load(last, weights_only=False)["infos"]["hexnewton"]["config"]
+    assert cfg["cpg"]["posture"] and cfg["cpg"]["posture_reflex"] == 2.0 and cfg["reward"]["w_tilt"] == 40.0
 
 
 def test_best_checkpoint_keeps_the_best_iteration(tmp_path):
