@@ -411,7 +411,8 @@ def reward_config(args) -> RewardConfig:
 def main(argv: list[str] | None = None) -> int:
     p = ArgumentParser(prog="python train.py", description="Train CPG_RL with rsl-rl PPO.")
     p.add_argument("--num_envs", type=positive_int, default=None, help="default 4096 on CUDA, 64 on CPU")
-    p.add_argument("--terrain", type=terrain_name, default="flat")
+    p.add_argument("--terrain", type=terrain_name, default=None,
+                   help="default: a resumed run's own terrain, else flat")
     p.add_argument("--terrain_seed", type=int, default=0)
     p.add_argument("--device", default=None, help="cpu, cuda or cuda:N (default: cuda if present, else cpu)")
     p.add_argument("--max_iterations", type=positive_int, default=None,
@@ -515,6 +516,8 @@ def main(argv: list[str] | None = None) -> int:
         if args.resume and getattr(args, flag) is not None:
             raise ValueError(f"--{flag} is for new runs: a resumed run keeps what it was trained with")
     ckpt = load_checkpoint(args.resume) if args.resume else None  # fail before building anything
+    if args.terrain is None:  # a resumed run goes on where it trained (and with that terrain's recipe)
+        args.terrain = checkpoint_meta(ckpt).get("config", {}).get("terrain", {}).get("name", "flat")
     apply_recipe(args, resumed=ckpt is not None)
     reward = reward_config(args)
     if args.a2_range is not None:

@@ -782,7 +782,7 @@ def test_terrain_recipes_and_reward_switches():
 
 def test_curriculum_stages_change_reflex_and_weights_in_one_run(tmp_path, monkeypatch, capsys):
     """The complex recipe's curriculum, on shortened stages: each stage begins at its iteration, the checkpoints
-    carry the gain and weights they were trained under, the best checkpoint is chosen within the last stage."""
+    carry the gain and weights they were trained under; a resumed run continues in its stage."""
     import torch
 
     from hexnewton import train
@@ -797,6 +797,11 @@ def test_curriculum_stages_change_reflex_and_weights_in_one_run(tmp_path, monkey
     last = sorted(tmp_path.glob("*/*/model_2.pt"))[-1]
     cfg = torch.load(last, weights_only=False)["infos"]["hexnewton"]["config"]
     assert cfg["cpg"]["posture"] and cfg["cpg"]["posture_reflex"] == 2.0 and cfg["reward"]["w_tilt"] == 40.0
+    # resumed without --terrain: the run goes on on its own terrain, in the stage its iteration is in
+    assert train.main(["--resume", str(last), "--num_envs", "8", "--num_steps_per_env", "4", "--max_iterations", "1",
+                       "--device", "cpu", "--log_dir", str(tmp_path)]) == 0  # fmt: skip
+    out = capsys.readouterr().out
+    assert "training hexnewton_cpg_complex" in out and "iteration 3: curriculum stage 3 of 3" in out
 
 
 def test_best_checkpoint_keeps_the_best_iteration(tmp_path):
