@@ -372,8 +372,8 @@ STABLE_STAGES = ((382, dict(posture_reflex=2.0, w_tilt=15.0, w_ang_vel=0.1)), (7
 #: (a high-stepping gait from the start), domain randomisation, the 20 ms physics frame and a 0.1 s filter on the
 #: CPG parameters and the stability shaping (``STABLE_SHAPING``). The complex course adds the body posture and the
 #: stable-gait curriculum (``STABLE_STAGES``, 1062 iterations): ``python train.py --terrain complex`` trains the
-#: shipped results/policies/cpg_rl_complex; ``--no-posture --max_iterations 400`` the Beta policy without posture
-#: (results/policies/cpg_rl_complex_beta).
+#: shipped results/policies/cpg_rl_complex; ``--no-posture --seed 1 --max_iterations 332`` the Beta policy without
+#: posture (results/policies/cpg_rl_complex_beta).
 RECIPES = {
     "flat": {},
     **{t: dict(levels=10, start_levels=3, a2_range=(0.9, 1.3), randomize=True, frame_dt=0.02, substeps=4,

@@ -1,5 +1,5 @@
 #!/bin/bash
-# Device calls that trained and measured the body-posture policy (RESULTS.md, "Stable gaits"), on one nvidia-h200,
+# Device calls that trained and measured the body-posture policies (RESULTS.md, "Stable gaits"), on one nvidia-h200,
 # after the chunk calls of ../shared/device/pack.sh + rechunk.sh (the last one installs, with runs/warpcache.tgz
 # from scripts/device/precompile.py).
 #
@@ -11,6 +11,9 @@
 #   bash scripts/device/posture_gait.sh fixed     # the fixed CPG's stepped and complex test rounds
 #   bash scripts/device/posture_gait.sh level     # the reflex policy (ps) resumed under stronger tilt shaping / gain
 #   bash scripts/device/posture_gait.sh validate_level  # 300 validation rounds of each on the three terrains
+#   bash scripts/device/posture_gait.sh test_level      # the chosen one (la, shipped as cpg_rl_complex) on 1000 test
+#                                                       # rounds per terrain, the fixed gaits' rugged rounds beside
+#   PERTURBATIONS="nominal friction_0.3 ..." bash scripts/device/posture_gait.sh robust   # (results/stable_gait)
 set -u
 OUT=${OUT:-out}
 KEEP=/root/keep
