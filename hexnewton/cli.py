@@ -36,7 +36,7 @@ def terrain_name(text: str) -> str:
 def run(main: Callable[[list[str] | None], int | None], prog: str, argv: list[str] | None = None) -> int:
     """Run ``main``; user errors (HexnewtonError, ValueError) become one stderr line and exit status 2, file
     system errors one line and exit status 1."""
-    from .sim import HexnewtonError
+    from .errors import HexnewtonError
 
     try:
         return int(main(argv) or 0)

@@ -76,7 +76,7 @@ def load_spec(bundle: str) -> dict:
 def expected_clipped_action(mean, std) -> np.ndarray:
     """E[clip(a, -1, 1)] for a ~ N(mean, std^2), per action, in float64: the action a sampled policy asks of the CPG
     on average (the clipped actions are low-pass filtered into its parameters). A deterministic action for policies
-    whose learnt std is wide, where the mean action is not what the policy does on average (RESULTS.md, session 7)."""
+    whose learnt std is wide, where the mean action is not what the policy does on average (RESULTS.md)."""
     mean = np.asarray(mean, np.float64)
     std = np.maximum(np.asarray(std, np.float64), 1e-12)
     erf = np.vectorize(math.erf, otypes=[np.float64])

@@ -14,8 +14,8 @@ observation noise (kernels/randomization.py); the per-env physical draws are ``W
 torch sees every buffer zero-copy (``wp.to_torch``), and nothing goes back to the host inside a step. What
 ``step`` and ``get_observations`` return are device copies of those buffers, made after the graph: rsl-rl keeps
 the observation an action was computed from until after the next ``step`` (its storage copies it only in
-``process_env_step``), so a view would hand it the next observation instead (session 6 found this: the stored
-observations were one step late, and the adaptive learning rate sat at its 1e-5 floor).
+``process_env_step``), so a view would hand it the next observation instead (the stored observations would be
+one step late, and the adaptive learning rate would sit at its 1e-5 floor).
 Finished envs auto-reset. ``extras["time_outs"]`` marks time-limit ends. ``extras["log"]`` carries:
 - the mean of each reward term;
 - success, fall, off-course, timeout and non-finite rates, with distance and length, over the last 1024
@@ -54,7 +54,8 @@ from .kernels.randomization import delay_actions_kernel, observation_noise_kerne
 from .kernels.rewards import TERMS, rewards_kernel, shaping_kernel
 from .kernels.terminations import NONFINITE, STATUS_NAMES, TIMEOUT, episode_status_kernel
 from .robot import BASE_Q
-from .sim import HexnewtonError, World, capture_graph
+from .errors import HexnewtonError
+from .sim import World, capture_graph
 
 ACTION_MODES = ("cpg", "joint")
 RING = 1024  # finished episodes the logged rates average over

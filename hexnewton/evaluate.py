@@ -8,7 +8,7 @@
 Protocol. A round is one robot walking toward the target 3.5 m ahead, from its own start pose, until its
 first episode ends (goal, fall, off course) or the episode limit (``TaskConfig.max_episode_steps``,
 7000 steps = 140 s). R rounds run as R robots in parallel; a deterministic policy acts in every round
-(``--stochastic``: it samples its actions from its Gaussian as in training; see RESULTS.md, session 5).
+(``--stochastic``: it samples its actions from its Gaussian as in training; see RESULTS.md).
 The robots use terrain seed ``EVAL_TERRAIN_SEED`` and reset seed ``EVAL_RESET_SEED`` (``--seed S``: S and S + 1000,
 a validation set for choosing among checkpoints before the one test-set report). Training uses
 ``train.py --terrain_seed 0 --seed 1`` by default, so both the ground and the start poses (lane,
@@ -57,7 +57,7 @@ from .config import (
     gait_params,
     terrain_for_goal,
 )
-from .kernels.terminations import FELL, NONFINITE, OFF_COURSE, STATUS_NAMES
+from .kernels.status import FELL, NONFINITE, OFF_COURSE, STATUS_NAMES
 
 DISTANCES = (0.5, 1.0, 2.0, 3.0)  # Table 3's columns [m]
 EVAL_TERRAIN_SEED = 1000

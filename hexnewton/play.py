@@ -1,9 +1,14 @@
 """Headless rollouts of a controller on any terrain, with statistics, an optional recording and a gait plot.
 
+    python play.py                                                       # the newest trained policy on its terrain
     python play.py --controller cpg --terrain flat --num_envs 64 --steps 500
     python play.py --controller cpg --terrain stepped --record rollout.npz --plot gait.png
-    python play.py --controller cpg_rl --terrain rugged                  # newest run's newest checkpoint
-    python play.py --controller cpg_rl --checkpoint logs/.../model_299.pt
+    python play.py --controller cpg_rl --terrain rugged                  # newest CPG_RL run's newest checkpoint
+    python play.py --checkpoint logs/.../model_299.pt                    # its controller and terrain from the file
+
+Without ``--controller`` and ``--checkpoint`` it plays the newest checkpoint under ``--log_dir`` (any task), or the
+shipped ``results/policies/cpg_rl_complex.pt`` when nothing was trained; without ``--terrain``, on the terrain the
+policy was trained on.
 
 Controllers:
 - ``cpg``: the paper's fixed-parameter "CPG" baseline (§3.3). The two-Hopf CPG and the mapping run with the
@@ -18,7 +23,9 @@ control step, the arrays listed under ``Recorder``.
 
 from __future__ import annotations
 
+import contextlib
 import glob
+import io
 import math
 import os
 import sys
@@ -29,7 +36,7 @@ import numpy as np
 
 from .cli import ArgumentParser, positive_int, run, terrain_name
 from .config import JOINT_NAMES, TERRAINS, HexConfig, TaskConfig, TerrainConfig, terrain_for_goal
-from .kernels.terminations import STATUS_NAMES
+from .kernels.status import STATUS_NAMES
 
 CONTROLLERS = {"cpg": "cpg", "cpg_rl": "cpg", "joint": "joint"}  # controller -> env action mode
 
@@ -173,10 +180,17 @@ def rollout(env, policy, steps: int, recorders: tuple = (), progress: bool = Tru
     return stats
 
 
+#: What ``python play.py`` plays when nothing was trained yet.
+SHIPPED_POLICY = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "results", "policies",
+                              "cpg_rl_complex.pt")  # fmt: skip
+
+
 def newest_checkpoint(log_dir: str, experiment: str) -> str:
-    runs = sorted(glob.glob(os.path.join(log_dir, experiment, "*")))
+    """The newest run's last numbered checkpoint under ``log_dir/experiment`` (a glob pattern: ``*`` for any); runs
+    are named by their start time, so the newest is the last name across experiments."""
+    runs = sorted(glob.glob(os.path.join(log_dir, experiment, "*")), key=os.path.basename)
     for run_dir in reversed(runs):
-        models = glob.glob(os.path.join(run_dir, "model_*.pt"))
+        models = glob.glob(os.path.join(run_dir, "model_[0-9]*.pt"))
         if models:
             return max(models, key=lambda m: int(m.rsplit("_", 1)[1].split(".")[0]))
     raise ValueError(f"no checkpoint under {os.path.join(log_dir, experiment)}: pass --checkpoint PATH")
@@ -188,16 +202,18 @@ def load_runner(env, path: str, action_mode: str):
 
     from rsl_rl.runners import OnPolicyRunner
 
-    from .train import check_compatible, checkpoint_distribution, checkpoint_meta, load_checkpoint, train_cfg
+    from .train import check_compatible, checkpoint_distribution, checkpoint_meta, load_checkpoint, load_into_runner, \
+        train_cfg
 
     ckpt = load_checkpoint(path)
     check_compatible(ckpt, path, env.num_obs, env.num_actions, action_mode)
     meta = checkpoint_meta(ckpt)
     tcfg = train_cfg(meta.get("preset", "default"), env.num_envs, std_max=meta.get("std_max"),
                      distribution=checkpoint_distribution(ckpt))  # fmt: skip
-    runner = OnPolicyRunner(env, copy.deepcopy(tcfg), log_dir=None, device=str(env._obs_t.device))
+    with contextlib.redirect_stdout(io.StringIO()):  # rsl-rl prints both networks in full
+        runner = OnPolicyRunner(env, copy.deepcopy(tcfg), log_dir=None, device=str(env._obs_t.device))
     # the actor alone: full training checkpoints and actor-only policy files (results/policies) both load
-    runner.load(path, load_cfg={"actor": True}, map_location=str(env._obs_t.device))
+    load_into_runner(runner, path, {"actor": True}, str(env._obs_t.device))
     return runner
 
 
@@ -239,10 +255,13 @@ def load_policy(env, path: str, action_mode: str, stochastic: bool = False, expe
 
 def main(argv: list[str] | None = None) -> int:
     p = ArgumentParser(prog="python play.py", description="Headless rollouts with statistics.")
-    p.add_argument("--controller", choices=list(CONTROLLERS), default="cpg")
-    p.add_argument("--checkpoint", metavar="PATH", help="cpg_rl / joint: default the newest run's newest model")
+    p.add_argument("--controller", choices=list(CONTROLLERS), default=None,
+                   help="default: the checkpoint's (cpg_rl or joint); cpg is the fixed gait and takes no checkpoint")
+    p.add_argument("--checkpoint", metavar="PATH", help="a trained policy (.pt); default: the newest under --log_dir, "
+                   "else results/policies/cpg_rl_complex.pt")  # fmt: skip
     p.add_argument("--log_dir", default="logs")
-    p.add_argument("--terrain", type=terrain_name, nargs="+", default=["flat"], help=f"one or more of {TERRAINS}")
+    p.add_argument("--terrain", type=terrain_name, nargs="+", default=None,
+                   help=f"one or more of {TERRAINS} (default: the policy's training terrain, else flat)")
     p.add_argument("--num_envs", type=positive_int, default=64)
     p.add_argument("--steps", type=positive_int, default=500, help="control steps (20 ms each by default)")
     p.add_argument("--device", default=None, help="cpu, cuda or cuda:N (default: cuda if present, else cpu)")
@@ -273,14 +292,31 @@ def main(argv: list[str] | None = None) -> int:
 
         check_video_path(args.video)
         check_writable(args.video, os.path.splitext(args.video)[1])
-    mode = CONTROLLERS[args.controller]
+    if args.controller == "cpg" and args.checkpoint:
+        raise ValueError("--checkpoint is a trained policy's: the fixed CPG (--controller cpg) has none; use "
+                         "--controller cpg_rl or joint, or leave --controller out")  # fmt: skip
     if args.controller != "cpg" and args.checkpoint is None:
-        args.checkpoint = newest_checkpoint(args.log_dir, f"hexnewton_{mode}_{args.terrain[0]}")
+        pattern = "hexnewton_*" if args.controller is None else f"hexnewton_{CONTROLLERS[args.controller]}_*"
+        try:
+            args.checkpoint = newest_checkpoint(args.log_dir, pattern)
+        except ValueError:
+            if args.controller == "joint" or not os.path.isfile(SHIPPED_POLICY):
+                raise
+            args.checkpoint = SHIPPED_POLICY
+        print(f"playing {args.checkpoint}")
     trained = HexConfig()
     if args.checkpoint:
-        from .train import load_checkpoint, trained_config
+        from .train import checkpoint_meta, load_checkpoint, trained_config
 
-        trained = trained_config(load_checkpoint(args.checkpoint))  # fails before building a world
+        ckpt = load_checkpoint(args.checkpoint)  # fails before building a world
+        trained = trained_config(ckpt)
+        ckpt_mode = checkpoint_meta(ckpt).get("action_mode", "cpg")
+        if args.controller is None:
+            args.controller = "joint" if ckpt_mode == "joint" else "cpg_rl"
+        if args.terrain is None:
+            args.terrain = [trained.terrain.name]
+    args.terrain = args.terrain or ["flat"]
+    mode = CONTROLLERS[args.controller]
 
     from .env import make_env
 

@@ -30,6 +30,7 @@ import warp as wp
 import newton
 from newton.solvers import SolverMuJoCo
 
+from .errors import HexnewtonError
 from .config import HexConfig, SimConfig
 from .robot import BASE_Q, BASE_QD, NUM_JOINTS, build_hexapod, leg_bounds, stand_height
 from .kernels.resets import advance_counter_kernel, reset_envs_kernel
@@ -44,9 +45,6 @@ OVERFLOW_CONTACT_REDUCTION = 1 << 21
 # not a dropped contact or constraint: counted apart from capacity overflow.
 NOT_CONVERGED_BITS = (1 << 9) | (1 << 10)
 
-
-class HexnewtonError(RuntimeError):
-    """A user-facing error: the CLI prints its message as one line and exits non-zero."""
 
 
 class ContactOverflowError(HexnewtonError):

@@ -21,22 +21,26 @@ Presets (plain dicts, rsl-rl style):
 - ``default``: ours, tuned for thousands of envs. Learning rate 1e-3 with rsl-rl's adaptive KL schedule
   (desired KL 0.01), 4 epochs x 2 mini-batches, [256, 256, 256, 256] ELU, initial action std 0.5. The update
   is bound by per-mini-batch overhead, not arithmetic: 2 x 4 costs 53 ms per iteration at 4096 envs against 119 ms
-  for rsl-rl's usual 4 x 5, and reached the same skill sooner (BENCHMARKS.md, session 7).
+  for rsl-rl's usual 4 x 5, and reached the same skill sooner (BENCHMARKS.md).
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import copy
 import dataclasses
 import datetime
+import io
 import json
+import logging
 import math
 import os
 import random
 import signal
 import sys
 import time
+import warnings
 
 import numpy as np
 
@@ -155,6 +159,17 @@ def fix_action_std(policy, std: float) -> None:
             dist.std_param.fill_(std)
         else:
             dist.log_std_param.fill_(math.log(std))
+
+
+def progress_line(log_kwargs: dict, stats: dict, elapsed: float) -> str:
+    """One console line per iteration: the iteration, the last training episodes' outcome (``env.episode_stats()``),
+    the iteration's time and the run's."""
+    it, total = log_kwargs.get("it", 0), log_kwargs.get("total_it", 0)
+    step_s = log_kwargs.get("collect_time", 0.0) + log_kwargs.get("learn_time", 0.0)
+    level = f"  level {stats['mean_level']:.1f}" if "mean_level" in stats else ""
+    return (f"iteration {it}/{total - 1}  success {stats['success_rate']:.3f}  fell {stats['fell_rate']:.3f}  "
+            f"off course {stats['off_course_rate']:.3f}  distance {stats['distance_m']:.2f} m{level}  "
+            f"{step_s:.2f} s/it  {datetime.timedelta(seconds=int(elapsed))}")  # fmt: skip
 
 
 class TrainingStopped(Exception):
@@ -286,8 +301,16 @@ def export_onnx(policy, num_obs: int, path: str) -> float:
     module = copy.deepcopy(policy.as_onnx(verbose=False)).to("cpu").eval()
     example = torch.zeros(1, num_obs)
     batch = torch.export.Dim("batch", min=1)
-    torch.onnx.export(module, (example,), path, input_names=["obs"], output_names=["actions"],
-                      dynamic_shapes=({0: batch},), external_data=False, dynamo=True)  # fmt: skip
+    onnx_log = logging.getLogger("torch.onnx")
+    level = onnx_log.level
+    onnx_log.setLevel(logging.ERROR)  # the exporter's progress lines and optional-dependency notices
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            torch.onnx.export(module, (example,), path, input_names=["obs"], output_names=["actions"],
+                              dynamic_shapes=({0: batch},), external_data=False, dynamo=True, verbose=False)  # fmt: skip
+    finally:
+        onnx_log.setLevel(level)
     obs = torch.randn(64, num_obs)
     with torch.no_grad():
         ref = module(obs).numpy()
@@ -306,17 +329,37 @@ def check_log_dir(log_dir: str) -> None:
 
 
 def load_checkpoint(path: str, map_location: str = "cpu") -> dict:
-    """torch.load with one-line errors for missing or corrupt files."""
+    """A checkpoint's tensors and plain data (``torch.load(weights_only=True)``: nothing in the file is executed), with
+    one-line errors for missing, corrupt, unsafe or wrong-type files."""
+    import pickle
+
     import torch
 
     if not os.path.isfile(path):
         raise ValueError(f"checkpoint not found: {path}")
+    if path.endswith(".onnx"):
+        raise ValueError(f"{path} is an ONNX policy: pass its .pt checkpoint here (an ONNX policy runs in a controller "
+                         "bundle, python -m hexnewton.deploy)")  # fmt: skip
     try:
-        ckpt = torch.load(path, weights_only=False, map_location=map_location)
+        ckpt = torch.load(path, weights_only=True, map_location=map_location)
+    except pickle.UnpicklingError as exc:
+        if "GLOBAL" not in str(exc).replace("Unsupported global", "GLOBAL"):  # no code reference: a damaged file
+            raise ValueError(f"cannot read checkpoint {path}: not a torch checkpoint (unpickling failed)") from None
+        raise ValueError(f"{path} holds more than tensors and plain data; it is not loaded, because loading it could "
+                         "run code from the file") from None  # fmt: skip
     except Exception as exc:  # torch raises many types for a damaged file
         raise ValueError(f"cannot read checkpoint {path}: {type(exc).__name__}: {str(exc).splitlines()[0][:120]}")
     if not isinstance(ckpt, dict) or "actor_state_dict" not in ckpt:
         raise ValueError(f"{path} is not an rsl-rl checkpoint (no actor_state_dict)")
+    return ckpt
+
+
+def load_into_runner(runner, path: str, load_cfg: dict | None = None, map_location: str = "cpu") -> dict:
+    """``OnPolicyRunner.load`` through :func:`load_checkpoint` (rsl-rl's own loads with ``weights_only=False``):
+    the models (and, with ``load_cfg`` None, the optimiser and iteration) from ``path``; returns the checkpoint."""
+    ckpt = load_checkpoint(path, map_location)
+    if runner.alg.load(ckpt, load_cfg, True):
+        runner.current_learning_iteration = ckpt["iter"]
     return ckpt
 
 
@@ -582,7 +625,10 @@ def main(argv: list[str] | None = None) -> int:
         with open(os.path.join(run_dir, "config.json"), "w") as f:
             json.dump({"hexnewton": meta, "train": tcfg}, f, indent=1, default=str)
 
-    runner = OnPolicyRunner(env, copy.deepcopy(tcfg), log_dir=run_dir if dist.is_main else None, device=device)
+    with contextlib.redirect_stdout(io.StringIO()):  # rsl-rl prints both networks in full
+        runner = OnPolicyRunner(env, copy.deepcopy(tcfg), log_dir=run_dir if dist.is_main else None, device=device)
+    # the run's git/ folder records hexnewton's commit and diff (rsl-rl's default looks for its own, installed, repo)
+    runner.logger.git_status_repos = [os.path.dirname(os.path.abspath(__file__))]
     _save = runner.save
 
     def save(path: str, infos: dict | None = None) -> None:
@@ -598,9 +644,13 @@ def main(argv: list[str] | None = None) -> int:
 
     def log_and_stop(*a, **k):
         """Keep the best policy (rank 0), then stop (every rank at once) on the time limit or the target success. The
-        ring's statistics are a few small host reads per iteration."""
-        _log(*a, **k)
+        ring's statistics are a few small host reads per iteration. rsl-rl's 30-line block per iteration goes to
+        TensorBoard only; the console gets :func:`progress_line`."""
+        with contextlib.redirect_stdout(io.StringIO()):
+            _log(*a, **k)
         stats = env.episode_stats()
+        if dist.is_main:
+            print(progress_line(k, stats, time.time() - t0), flush=True)
         if dist.is_main:
             best.update(stats, runner.current_learning_iteration, runner.save)
         reason = stop_reason(time_up[0], stats, args.target_success, args.levels, reduce)
@@ -634,7 +684,7 @@ def main(argv: list[str] | None = None) -> int:
 
     runner.logger.log = log
     if ckpt is not None:
-        runner.load(args.resume, map_location=device)
+        load_into_runner(runner, args.resume, map_location=device)
         # rsl-rl stores the last finished iteration and would start again from it: continue after it instead
         runner.current_learning_iteration += 1
         if args.action_std is not None:  # the checkpoint brought its own std: fix ours
@@ -672,12 +722,18 @@ def main(argv: list[str] | None = None) -> int:
     if best.iteration is not None and best.iteration != runner.current_learning_iteration:
         print(f"best training success {best.rate:.3f} at iteration {best.iteration} ({best.path}); the last iteration "
               f"ended at {training_success(stats, args.levels) or float('nan'):.3f}: exporting the best")
-        runner.load(best.path, load_cfg={"actor": True}, map_location=device)
+        load_into_runner(runner, best.path, {"actor": True}, device)
     onnx_path = os.path.join(run_dir, "policy.onnx")
     err = export_onnx(runner.alg.get_policy(), env.num_obs, onnx_path)
     print(f"exported {onnx_path} (dynamic batch; onnxruntime vs torch max |diff| {err:.2e})")
     if err > 1e-4:
         raise RuntimeError(f"ONNX export differs from torch by {err}")
+    final = best.path if best.iteration is not None else os.path.join(run_dir, f"model_{runner.current_learning_iteration}.pt")
+    print(f"\nresults in {run_dir} (checkpoints, TensorBoard events, policy.onnx). Next:\n"
+          f"  python play.py --checkpoint {final}\n"
+          f"  python -m hexnewton.evaluate --controllers cpg cpg_rl --checkpoint cpg_rl={final} --terrains {args.terrain}\n"
+          f"  python -m hexnewton.export --checkpoint {final} --out bundle/\n"
+          f"  tensorboard --logdir {args.log_dir}")  # fmt: skip
     return 0
 
 

@@ -219,3 +219,37 @@ def test_reflex_bundle_reads_the_attitude_at_every_substep(tmp_path):
     assert held > 1e-3  # the attitude moves within a control step and the reflex follows it
     with pytest.raises(ValueError, match="levelling reflex"):
         ctrl.substep()
+
+
+class _Payload:
+    """Unpickling this runs ``os.system``: what a crafted checkpoint could do to whoever loads it."""
+
+    def __init__(self, marker):
+        self.marker = marker
+
+    def __reduce__(self):
+        return (os.system, (f"touch {self.marker}",))
+
+
+def test_checkpoints_load_as_data_only(tmp_path):
+    """A checkpoint whose pickle would run code is refused with one line and nothing runs; an ONNX file passed as a
+    checkpoint is named for what it is."""
+    import torch
+
+    marker = tmp_path / "ran"
+    evil = tmp_path / "evil.pt"
+    torch.save({"actor_state_dict": {}, "iter": 0, "infos": {"x": _Payload(str(marker))}}, evil)
+    proc = _run(["-m", "hexnewton.export", "--checkpoint", str(evil), "--out", str(tmp_path / "b")])
+    assert proc.returncode == 2 and "could run code" in proc.stderr and len(proc.stderr.strip().splitlines()) == 1
+    assert not marker.exists()
+    onnx_file = os.path.join(ROOT, "results", "policies", "cpg_rl_flat.onnx")
+    onnx = _run(["-m", "hexnewton.export", "--checkpoint", onnx_file, "--out", str(tmp_path / "c")])
+    assert onnx.returncode == 2 and "is an ONNX policy" in onnx.stderr
+
+
+@pytest.mark.parametrize("name", sorted(os.listdir(os.path.join(ROOT, "results", "controllers"))))
+def test_every_shipped_bundle_deploys(name):
+    """``python -m hexnewton.deploy results/controllers/<name>`` replays the bundle's recorded rollout (check.npz is
+    committed with it) within the default tolerance."""
+    proc = _run(["-m", "hexnewton.deploy", os.path.join(ROOT, "results", "controllers", name)])
+    assert proc.returncode == 0 and "(ok," in proc.stdout, proc.stdout + proc.stderr

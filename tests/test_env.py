@@ -36,6 +36,7 @@ from hexnewton.terrain import make_terrain, max_terrain_height_np, terrain_heigh
 from hexnewton.terrain.query import height_field_from_grid
 
 DEV = "cpu"
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 TASK, REW = TaskConfig(), RewardConfig()
 
 
@@ -81,8 +82,8 @@ def test_returned_tensors_outlive_the_next_step(env):
 
 def test_ppo_stores_the_observation_each_action_was_taken_from():
     """Before its first optimizer step, PPO recomputes the stored actions' Gaussians from the stored observations:
-    they must equal the ones the actions were sampled from (KL 0). With observations one step late (as before
-    session 6) the KL was ~0.04-0.2, and rsl-rl's adaptive schedule held the learning rate at its 1e-5 floor."""
+    they must equal the ones the actions were sampled from (KL 0). With observations one step late the KL was
+    ~0.04-0.2, and rsl-rl's adaptive schedule held the learning rate at its 1e-5 floor."""
     import copy
     import tempfile
 
@@ -485,6 +486,24 @@ def test_play_loads_the_trained_checkpoint(trained):
     assert "[cpg_rl (" in proc.stdout and "model_1.pt" in proc.stdout
 
 
+def test_play_without_arguments_plays_the_newest_policy(trained, tmp_path):
+    """``python play.py``: the newest run's checkpoint on the terrain it was trained on; with nothing trained, the
+    shipped complex policy; a checkpoint given to the fixed CPG is an error, never ignored."""
+    logs, _ = trained
+    base = [sys.executable, "play.py", "--num_envs", "1", "--steps", "3", "--device", "cpu", "--no-progress"]
+    proc = subprocess.run([*base, "--log_dir", str(logs)], capture_output=True, text=True, timeout=600, cwd=ROOT)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    assert "playing " in proc.stdout and "model_1.pt" in proc.stdout and "[cpg_rl (" in proc.stdout
+    assert "flat" in proc.stdout.split("[cpg_rl (")[1]
+    proc = subprocess.run([*base, "--log_dir", str(tmp_path / "none")], capture_output=True, text=True, timeout=600,
+                          cwd=ROOT)  # fmt: skip
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    assert "cpg_rl_complex.pt" in proc.stdout and "complex" in proc.stdout.split("[cpg_rl (")[1]
+    proc = subprocess.run([*base, "--controller", "cpg", "--checkpoint", "x.pt"], capture_output=True, text=True,
+                          timeout=600, cwd=ROOT)  # fmt: skip
+    assert proc.returncode == 2 and "the fixed CPG (--controller cpg) has none" in proc.stderr
+
+
 def test_bad_checkpoints_are_one_line_errors(trained, tmp_path):
     logs, _ = trained
     good = sorted(glob.glob(str(logs / "hexnewton_cpg_flat" / "*" / "model_1.pt")))[0]
@@ -524,8 +543,9 @@ def test_bad_checkpoints_are_one_line_errors(trained, tmp_path):
         (["train.py", "--a2_range", "1.0", "0.5"], "--a2_range must satisfy"),
         (["train.py", "--a2_range", "0.9", "1.3", "--resume", str(corrupt)], "--a2_range is for new runs"),
         (["train.py", "--stability_tilt", "2"], "--stability_tilt must lie in (0, pi/2)"),
-        (["play.py", "--goal_distance", "0.2", "--steps", "1"], "goal_distance must exceed"),
-        (["play.py", "--terrain", "stepped", "--step_rise", "-0.1", "--steps", "1"], "step_rise must be >= 0"),
+        (["play.py", "--controller", "cpg", "--goal_distance", "0.2", "--steps", "1"], "goal_distance must exceed"),
+        (["play.py", "--controller", "cpg", "--terrain", "stepped", "--step_rise", "-0.1", "--steps", "1"],
+         "step_rise must be >= 0"),
     ]
     before = sorted(glob.glob(str(logs / "**"), recursive=True))
     for args, message in cases:

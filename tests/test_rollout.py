@@ -188,7 +188,7 @@ def test_play_bad_input_is_one_line(args, message):
 
 
 @pytest.mark.parametrize("ext, extra, frames", [
-    (".gif", [], 6),
+    (".gif", ["--controller", "cpg"], 6),
     # a learnt policy sampling its actions, played twice as fast (every 4th control step)
     (".mp4", ["--controller", "cpg_rl", "--checkpoint", os.path.join(ROOT, "results", "policies", "cpg_rl_flat.pt"),
               "--stochastic", "--video_speed", "2"], 3),

@@ -16,7 +16,7 @@ not scaled.
   That is 0 inside the cone and falls continuously to -1 - cos(π/6) = -1.87 when walking backward. The paper's
   D is the start-to-goal vector; ours (``RewardConfig.direction_to_goal``) is the robot-to-goal vector. With
   the start-to-goal D, a robot that has drifted sideways is paid for walking parallel to the goal line and
-  past the goal circle (session 5: 94 % of a complex run's episodes walked past the goal and off the course).
+  past the goal circle (without it, 94 % of a complex run's episodes walked past the goal and off the course).
   The default dead band is 0 (ours, ``RewardConfig``): inside Table 1's ±30° cone nothing asks the policy to
   correct a heading error, and the goal circle (0.5 m at 3.5 m) allows only ~8°.
 - r_d (distance), "exp(-(d_n - d_t))": d_n is the distance to the goal and d_t the goal radius, so
@@ -33,12 +33,12 @@ not scaled.
   rewards would pay more for lingering just outside the goal radius than for entering it. The bonus must
   beat what lingering is worth: r_d is ~1 at the circle's edge, so with gamma = 0.99 walking past it is worth
   up to w_d / (1 - gamma) = 100. A bonus of 100 (sessions 2-4) made missing and entering the circle equal,
-  and the session-5 runs stopped aiming (RESULTS.md); 300 makes entering worth three times as much.
+  and runs without it stopped aiming (RESULTS.md); 300 makes entering worth three times as much.
 - r_off (ours), -100 once when the robot leaves the course (|y - y_start| > 1.5 m, §2.4.4 (2)), as much as
   a fall. Table 1 fines falls but not leaving the course, and a robot stuck at a step earns about -0.07 per
   step (r_f = -0.3 against r_d ~ 0.2 two metres from the goal). Without r_off, PPO learnt to end such
   episodes by walking sideways off the course: on complex terrain 98 % of the training episodes ended off
-  course (session 4, RESULTS.md). With gamma = 0.99 the discounted cost of lingering is ~ -7, far above -100.
+  course (RESULTS.md). With gamma = 0.99 the discounted cost of lingering is ~ -7, far above -100.
 
 Weights (ours, marked in ``RewardConfig``): w_h = 1, w_d = 1, w_theta = 1.
 

@@ -19,8 +19,7 @@ import warp as wp
 from ..terrain.query import HeightField, terrain_height
 from .reference import quat_to_rpy_np
 
-RUNNING, FELL, OFF_COURSE, SUCCESS, TIMEOUT, NONFINITE = 0, 1, 2, 3, 4, 5
-STATUS_NAMES = ("running", "fell", "off_course", "success", "timeout", "nonfinite")
+from .status import FELL, NONFINITE, OFF_COURSE, RUNNING, STATUS_NAMES, SUCCESS, TIMEOUT  # noqa: F401
 
 
 @wp.func

@@ -1,6 +1,6 @@
 #!/bin/bash
 # Halve the chunks of ../shared/device/pack.sh so each device call carries ~26 MB instead of ~51 MB.
-# A call carries the working tree as well (64 MiB in all), and the tree had grown to 14 MB by session 5:
+# A call carries the working tree as well (64 MiB in all), and the tree has grown past 14 MB:
 # one 51 MB chunk plus the tree was 63.7 MiB. Run right after pack.sh, from the repository root:
 #
 #   bash ../shared/device/pack.sh && bash scripts/device/rechunk.sh

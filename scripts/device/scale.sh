@@ -28,4 +28,4 @@ timeout -s TERM -k 20 "$left" torchrun --standalone --nproc_per_node=2 train.py 
 echo "exit $?" >> "$OUT/tts_2gpu.log"
 run=$(ls -d /root/tts/complex_2gpu/*/ | tail -1)
 tar czf "$OUT/run_tts_2gpu.tgz" -C "$run" config.json $(cd "$run" && ls events.* && ls -v model_*.pt | tail -1)
-grep -E 'Learning iteration|success_rate|Time elapsed' "$OUT/tts_2gpu.log" | tail -6
+grep -E '^iteration |success_rate' "$OUT/tts_2gpu.log" | tail -6

@@ -44,7 +44,7 @@ done
 wait
 last_of() { ls -v "$(ls -d "$OUT/logs/$1"/*/ | tail -1)"/model_*.pt | tail -1; }
 # pack and keep first: a device call that runs past its limit loses everything not yet under $OUT, and
-# $OUT itself is emptied by the next call (session 3 lost two checkpoints that way)
+# $OUT itself is emptied by the next call
 for spec in "$@"; do
   name=${spec%%:*}; name=${name%@*}; last=$(last_of "$name"); run=$(dirname "$last")
   echo "== $name: $(grep -E '^(trained|stopped|last episodes)' "$OUT/logs/$name.log" | tr '\n' ' ')"

@@ -4,9 +4,9 @@
 # (RESULTS.md / BENCHMARKS.md, session 7). Every run uses the 20 ms frame (4 x 5 ms) and correct rollout data
 # (session 6's fix: each action stored with its own observation).
 #
-#   bash scripts/device/session7.sh train    # time-to-skill, 5 m and 8 cm runs from scratch; PPO-update bench
-#   bash scripts/device/session7.sh train2   # 2 x 2048 torchrun, a faster-update run, 5 m / 8 cm with a std cap
-#   bash scripts/device/session7.sh table3   # Table 3 (25 rounds) on the GPU machine; 1000-round evaluations
+#   bash scripts/device/complex_2gpu.sh train    # time-to-skill, 5 m and 8 cm runs from scratch; PPO-update bench
+#   bash scripts/device/complex_2gpu.sh train2   # 2 x 2048 torchrun, a faster-update run, 5 m / 8 cm with a std cap
+#   bash scripts/device/complex_2gpu.sh table3   # Table 3 (25 rounds) on the GPU machine; 1000-round evaluations
 set -u
 OUT=${OUT:-out}
 KEEP=/root/keep
@@ -76,5 +76,5 @@ table3)
   tar czf "$OUT/table3.tgz" -C /root t3 t3_rugged.log t3_stepped.log t3_complex.log
   for t in rugged stepped complex; do tail -1 /root/t3_$t.log; grep -E '^\| '$t' \|' /root/t3/$t/report.md | head -6; done
   ;;
-*) echo "usage: session7.sh train|train2|table3" >&2; exit 2;;
+*) echo "usage: complex_2gpu.sh train|train2|table3" >&2; exit 2;;
 esac

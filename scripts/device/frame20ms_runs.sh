@@ -3,9 +3,9 @@
 # as the record of what ran (RESULTS.md / BENCHMARKS.md, session 6). The first call also installs (.dw3b), the
 # Stable-Baselines3 wheels (runs/sb3w), the precompiled kernel cache and the shipped policy's full checkpoint.
 #
-#   bash scripts/device/session6.sh train     # cres_std + SAC/TD3/A2C-CPG on GPU 0, time-to-skill on 1 and on 2+3
-#   bash scripts/device/session6.sh evaluate  # 1000-round evaluations of those, the fast-physics bench, a video
-#   bash scripts/device/session6.sh train2    # the time-to-skill run under the fast physics, and issue 9's runs
+#   bash scripts/device/frame20ms_runs.sh train     # cres_std + SAC/TD3/A2C-CPG on GPU 0, time-to-skill on 1 and on 2+3
+#   bash scripts/device/frame20ms_runs.sh evaluate  # 1000-round evaluations of those, the fast-physics bench, a video
+#   bash scripts/device/frame20ms_runs.sh train2    # the time-to-skill run under the fast physics, and issue 9's runs
 set -u
 OUT=${OUT:-out}
 KEEP=/root/keep
@@ -72,5 +72,5 @@ train2)
     "more_mean@2:$(ev $KEEP/std_more.pt complex)" \
     "s5m_mean@3:$(ev $KEEP/std_5m.pt complex '--goal_distance 5.5 --distances 1 3 5')"
   ;;
-*) echo "usage: session6.sh train|evaluate|train2" >&2; exit 2;;
+*) echo "usage: frame20ms_runs.sh train|evaluate|train2" >&2; exit 2;;
 esac

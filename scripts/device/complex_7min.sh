@@ -3,10 +3,10 @@
 # record of what ran (RESULTS.md, session 5). The first call also installs (.dw3), unpacks the precompiled
 # kernel cache (precompile.py) and copies the carried checkpoints (runs/ck) to /root/ck.
 #
-#   bash scripts/device/session5.sh train_a   # lease 1: with the off-course penalty; found the missed-goal problem
-#   bash scripts/device/session5.sh train     # lease 2: goal bonus 300 and the robot-to-goal direction term
-#   bash scripts/device/session5.sh evaluate  # lease 2: 1000-round evaluations, Table 3 (25 rounds) and the bench
-#   bash scripts/device/session5.sh evaluate2 # lease 3: the same policies with sampled actions (--stochastic)
+#   bash scripts/device/complex_7min.sh train_a   # lease 1: with the off-course penalty; found the missed-goal problem
+#   bash scripts/device/complex_7min.sh train     # lease 2: goal bonus 300 and the robot-to-goal direction term
+#   bash scripts/device/complex_7min.sh evaluate  # lease 2: 1000-round evaluations, Table 3 (25 rounds) and the bench
+#   bash scripts/device/complex_7min.sh evaluate2 # lease 3: the same policies with sampled actions (--stochastic)
 set -u
 OUT=${OUT:-out}
 KEEP=/root/keep
@@ -57,5 +57,5 @@ evaluate2)   # lease 3: the policies' sampled actions (evaluate --stochastic); r
     "s_plain_perturbed@2:$(ev complex complex --randomize)" \
     "s_dr_perturbed@3:$(ev complex_dr complex --randomize)"
   ;;
-*) echo "usage: session5.sh train_a|train|evaluate|evaluate2" >&2; exit 2;;
+*) echo "usage: complex_7min.sh train_a|train|evaluate|evaluate2" >&2; exit 2;;
 esac

@@ -3,12 +3,12 @@
 # the record of what ran (RESULTS.md, session 4). The first call of each lease also installs (.dw3) and unpacks
 # the precompiled kernel cache (precompile.py).
 #
-#   bash scripts/device/session4.sh train     # lease 1: four curriculum runs from scratch, one per GPU
-#   bash scripts/device/session4.sh evaluate1 # lease 1: 1000-round evaluations of those runs
-#   bash scripts/device/session4.sh retrain   # lease 2: the same with a knee-lift floor, +- curriculum
-#   bash scripts/device/session4.sh evaluate  # lease 2: 1000-round evaluations (too many for 165 s: see README)
-#   bash scripts/device/session4.sh evaluate2 # lease 2: the rugged ones again, one per GPU
-#   bash scripts/device/session4.sh continue  # planned for lease 1 but not run: its results called for the
+#   bash scripts/device/curriculum_runs.sh train     # lease 1: four curriculum runs from scratch, one per GPU
+#   bash scripts/device/curriculum_runs.sh evaluate1 # lease 1: 1000-round evaluations of those runs
+#   bash scripts/device/curriculum_runs.sh retrain   # lease 2: the same with a knee-lift floor, +- curriculum
+#   bash scripts/device/curriculum_runs.sh evaluate  # lease 2: 1000-round evaluations (too many for 165 s: see README)
+#   bash scripts/device/curriculum_runs.sh evaluate2 # lease 2: the rugged ones again, one per GPU
+#   bash scripts/device/curriculum_runs.sh continue  # planned for lease 1 but not run: its results called for the
 #                                             # retrain instead (resumes, or torchrun if complex_cur met 95 %)
 set -u
 OUT=${OUT:-out}
@@ -88,5 +88,5 @@ evaluate2)  # lease 2, after `evaluate`: the rugged jobs that had timed out, one
     "$(ev rugged_hi@1 $KEEP/rugged_hi.pt)" "$(ev rugged_perturbed_s4@2 /root/s4ck/complex_cur.pt --randomize)" \
     "$(ev rugged_perturbed_s4_dr@3 /root/s4ck/complex_cur_dr.pt --randomize)"
   ;;
-*) echo "usage: session4.sh train|continue|evaluate1|retrain|evaluate|evaluate2" >&2; exit 2 ;;
+*) echo "usage: curriculum_runs.sh train|continue|evaluate1|retrain|evaluate|evaluate2" >&2; exit 2 ;;
 esac

@@ -4,9 +4,9 @@
 # >= 99 % at 5 m on complex terrain and on 8 cm steps, 1000 unseen rounds. All runs use the 20 ms frame and the
 # default update (2 mini-batches x 4 epochs).
 #
-#   bash scripts/device/session8.sh train      # 5 m complex (two seeds / batch sizes), 8 cm stairs (two tilts)
-#   bash scripts/device/session8.sh evaluate   # 1000 test rounds of each run's last checkpoint, one job per GPU
-#   bash scripts/device/session8.sh train2     # each run resumed until the deadline, then 1000 test rounds again
+#   bash scripts/device/harder_courses.sh train      # 5 m complex (two seeds / batch sizes), 8 cm stairs (two tilts)
+#   bash scripts/device/harder_courses.sh evaluate   # 1000 test rounds of each run's last checkpoint, one job per GPU
+#   bash scripts/device/harder_courses.sh train2     # each run resumed until the deadline, then 1000 test rounds again
 set -u
 OUT=${OUT:-out}
 KEEP=/root/keep
@@ -72,5 +72,5 @@ train3)
   EVALS=/root/test3 EVAL_TIMEOUT_S=$(( ${DEADLINE_S:-480} - SECONDS )) bash scripts/device/eval_jobs.sh \
     "test_$best@0:$(ev st8 "$KEEP/$best.pt")" "test_${best}_expected@1:$(ev st8 "$KEEP/$best.pt" | sed 's/--stochastic/--expected/')"
   ;;
-*) echo "usage: session8.sh train|evaluate|train2|train3" >&2; exit 2;;
+*) echo "usage: harder_courses.sh train|evaluate|train2|train3" >&2; exit 2;;
 esac
