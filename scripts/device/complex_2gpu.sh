@@ -1,8 +1,8 @@
 #!/bin/bash
-# Session 7's device calls on one nvidia-h200-x4 lease (after the eight chunk calls of pack.sh + rechunk.sh; the
-# last one installs, with the Stable-Baselines3 wheels and the kernel cache), kept as the record of what ran
-# (RESULTS.md / BENCHMARKS.md, session 7). Every run uses the 20 ms frame (4 x 5 ms) and correct rollout data
-# (session 6's fix: each action stored with its own observation).
+# Device calls that trained cpg_rl_complex_gaussian (the complex recipe on one and on two GPUs) on one
+# nvidia-h200-x4 lease, after the eight chunk calls of pack.sh + rechunk.sh (the last one installs, with the
+# Stable-Baselines3 wheels and the kernel cache); the record of what ran for RESULTS.md / BENCHMARKS.md. Every run
+# uses the 20 ms frame (4 x 5 ms) and stores each action with its own observation.
 #
 #   bash scripts/device/complex_2gpu.sh train    # time-to-skill, 5 m and 8 cm runs from scratch; PPO-update bench
 #   bash scripts/device/complex_2gpu.sh train2   # 2 x 2048 torchrun, a faster-update run, 5 m / 8 cm with a std cap
@@ -12,7 +12,7 @@ OUT=${OUT:-out}
 KEEP=/root/keep
 export KEEP PYTHONUNBUFFERED=1 NCCL_NVLS_ENABLE=0
 F="--frame_dt 0.02 --substeps 4"
-C="--terrain complex --levels 10 --start_levels 3 --a2_range 0.9 1.3 --randomize $F"   # session 6's recipe
+C="--terrain complex --levels 10 --start_levels 3 --a2_range 0.9 1.3 --randomize $F"   # the complex recipe
 ev() { echo "--controllers cpg_rl --checkpoint cpg_rl=$1 --terrains $2 --rounds ${R:-1000} --stochastic ${3:-}"; }
 nth_last() { ls -v "$KEEP/$1"/model_*.pt | tail -"$2" | head -1; }   # a run's N-th last saved checkpoint
 G5="--goal_distance 5.5 --distances 1 3 5"

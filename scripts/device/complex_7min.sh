@@ -1,6 +1,6 @@
 #!/bin/bash
-# Session 5's device calls on one nvidia-h200-x4 lease (after the three chunk calls of pack.sh), kept as the
-# record of what ran (RESULTS.md, session 5). The first call also installs (.dw3), unpacks the precompiled
+# Device calls that trained cpg_rl_complex_7min on one nvidia-h200-x4 lease (after the three chunk calls of
+# pack.sh), kept as the record of what ran (RESULTS.md). The first call also installs (.dw3), unpacks the precompiled
 # kernel cache (precompile.py) and copies the carried checkpoints (runs/ck) to /root/ck.
 #
 #   bash scripts/device/complex_7min.sh train_a   # lease 1: with the off-course penalty; found the missed-goal problem

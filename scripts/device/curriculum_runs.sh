@@ -1,6 +1,6 @@
 #!/bin/bash
-# Session 4's device calls on two nvidia-h200-x4 leases (each after the three chunk calls of pack.sh), kept as
-# the record of what ran (RESULTS.md, session 4). The first call of each lease also installs (.dw3) and unpacks
+# Device calls of the terrain-curriculum runs on two nvidia-h200-x4 leases (each after the three chunk calls of
+# pack.sh), kept as the record of what ran (RESULTS.md). The first call of each lease also installs (.dw3) and unpacks
 # the precompiled kernel cache (precompile.py).
 #
 #   bash scripts/device/curriculum_runs.sh train     # lease 1: four curriculum runs from scratch, one per GPU

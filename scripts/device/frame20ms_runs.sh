@@ -1,6 +1,7 @@
 #!/bin/bash
-# Session 6's device calls on one nvidia-h200-x4 lease (after the eight chunk calls of pack.sh + rechunk.sh), kept
-# as the record of what ran (RESULTS.md / BENCHMARKS.md, session 6). The first call also installs (.dw3b), the
+# Device calls of the 20 ms-frame runs (cpg_rl_complex_6min, the SB3 baselines, time-to-skill) on one
+# nvidia-h200-x4 lease (after the eight chunk calls of pack.sh + rechunk.sh), kept as the record of what ran
+# (RESULTS.md / BENCHMARKS.md). The first call also installs (.dw3b), the
 # Stable-Baselines3 wheels (runs/sb3w), the precompiled kernel cache and the shipped policy's full checkpoint.
 #
 #   bash scripts/device/frame20ms_runs.sh train     # cres_std + SAC/TD3/A2C-CPG on GPU 0, time-to-skill on 1 and on 2+3
@@ -10,7 +11,7 @@ set -u
 OUT=${OUT:-out}
 KEEP=/root/keep
 export KEEP PYTHONUNBUFFERED=1 NCCL_NVLS_ENABLE=0
-C="--terrain complex --levels 10 --start_levels 3 --a2_range 0.9 1.3 --randomize"   # session 5's recipe
+C="--terrain complex --levels 10 --start_levels 3 --a2_range 0.9 1.3 --randomize"   # the recipe of cpg_rl_complex_7min
 MORE="--terrain complex --levels 10 --start_levels 10 --randomize"                # resumed: every lane at once
 ev() { echo "--controllers cpg_rl --checkpoint cpg_rl=$1 --terrains $2 --rounds ${R:-1000} ${3:-}"; }
 nth_last() { ls -v "$KEEP/$1"/model_*.pt | tail -"$2" | head -1; }   # a run's N-th last saved checkpoint
@@ -22,8 +23,8 @@ train)
       --num_envs 4096 --total_steps 1000000000 --max_minutes "${SB3_MIN:-7.4}" --seed 1 --device cuda \
       --log_dir /root/sb3 > /root/sb3_$a.log 2>&1 &
   done
-  # cres_std: the shipped policy (session 5, complex_dr_s5_model_768) with its std fixed at 0.3, so that the mean
-  # action learns what the noise did; tts: session 5's recipe from scratch (issue 6's time-to-skill), alone on its
+  # cres_std: cpg_rl_complex_7min (complex_dr_s5_model_768) with its std fixed at 0.3, so that the mean
+  # action learns what the noise did; tts: that recipe from scratch (issue 6's time-to-skill), alone on its
   # GPU; tts_2gpu: the same through torchrun on two GPUs (issue 8)
   KEEP_ALL=1 SKIP_WARMUP=1 START_S=${START_S:-25} DEADLINE_S=${DEADLINE_S:-560} bash scripts/device/train_runs.sh \
     "cres_std@0:$MORE --resume /root/ck/complex_dr.pt --seed 4 --action_std 0.3" \
