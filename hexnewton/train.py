@@ -651,7 +651,6 @@ def main(argv: list[str] | None = None) -> int:
         stats = env.episode_stats()
         if dist.is_main:
             print(progress_line(k, stats, time.time() - t0), flush=True)
-        if dist.is_main:
             best.update(stats, runner.current_learning_iteration, runner.save)
         reason = stop_reason(time_up[0], stats, args.target_success, args.levels, reduce)
         if reason:
