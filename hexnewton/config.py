@@ -106,7 +106,7 @@ class TerrainConfig:
     rugged_half_width: float = 2.0
     # resolution of the in-kernel height query grid [m] (must divide block_size and step_depth)
     query_resolution: float = 0.01
-    # ours: terrain curriculum (legged_gym style; issue 9), off at 0. With levels = L > 0 the terrain is L
+    # ours: terrain curriculum (legged_gym style), off at 0. With levels = L > 0 the terrain is L
     # lanes side by side along y, each lane_width wide (replacing ``width``); lane k (0-based) is this
     # terrain with its block heights and step rise scaled by (k + 1) / L, so the last lane is the terrain
     # above. Robots move up a lane after reaching the goal and down one after walking less than half of it
@@ -332,7 +332,7 @@ class RewardConfig:
 
 @dataclass
 class RandomizationConfig:
-    """Domain randomisation for sim-to-real (issue 9; ours). Off by default and in the paper's setting.
+    """Domain randomisation for sim-to-real (ours). Off by default and in the paper's setting.
 
     Drawn once per env when the world is built (uniform in each range): foot-ground friction, base payload,
     leg link masses, PD gains and effort limits. Every step: observation noise. Actions act one control step

@@ -101,7 +101,7 @@ def test_ppo_stores_the_observation_each_action_was_taken_from():
 
 
 def test_ppo_update_options_reach_rsl_rl():
-    """train.py / bench's update options (issue 6): fewer mini-batches and epochs, torch.compile and bfloat16
+    """train.py / bench's update options: fewer mini-batches and epochs, torch.compile and bfloat16
     autocast are rsl-rl's own; the runner must train with them (here on the CPU, inductor's C++ backend)."""
     import copy
     import tempfile

@@ -173,7 +173,7 @@ def test_posture_reflex_for_posture_policies_and_fixed_gaits():
 
 def test_shipped_complex_policy_climbs_steps_under_its_20ms_physics():
     """The shipped complex policy (trained under a 20 ms frame = 4 x 5 ms) climbs the 6 cm risers on the CPU as
-    on the GPU: 8 unseen rounds, sampled actions, 20 s. Steps climbable is one of issue 6's stability checks
+    on the GPU: 8 unseen rounds, sampled actions, 20 s. Steps climbable is one of the stability checks
     for that physics; the fixed CPG stands at the first riser (x = 0.5 m)."""
     from hexnewton.evaluate import run_rounds
     from hexnewton.kernels.terminations import FELL

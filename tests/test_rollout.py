@@ -97,7 +97,7 @@ def _fixed(env):
 
 
 def test_fixed_cpg_walks_straight_on_flat():
-    """Issue 3: 64 robots walk >= 1 m forward in 10 s with |y| drift < 0.2 m, none falls."""
+    """64 robots walk >= 1 m forward in 10 s with |y| drift < 0.2 m, none falls."""
     env = make_env(_cfg("flat", 64, reset_yaw=0.0))  # as play.py: every robot starts facing its goal
     stats = rollout(env, _fixed(env), steps=int(10.0 / TASK.control_dt), progress=False)
     assert stats["distance_min_m"] >= 1.0, stats

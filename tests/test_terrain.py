@@ -351,7 +351,7 @@ def test_add_to_builder_and_finalize() -> None:
 
 
 def test_patch_reaches_beyond_the_goal():
-    """A goal farther than the paper's 3.5 m (issue 9: 5 m walked) gets ground 1 m beyond it."""
+    """A goal farther than the paper's 3.5 m (5 m walked) gets ground 1 m beyond it."""
     from hexnewton.config import terrain_for_goal
 
     base = TerrainConfig(name="complex")

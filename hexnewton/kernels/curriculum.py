@@ -1,4 +1,4 @@
-"""Terrain curriculum (legged_gym style; issue 9): every finished episode moves its robot between lanes.
+"""Terrain curriculum (legged_gym style): every finished episode moves its robot between lanes.
 
 The curriculum terrain (``TerrainConfig.levels`` = L > 0) is L lanes side by side along y; lane k is the
 chosen terrain with its block heights and step rise scaled by (k + 1) / L (``terrain.heightmap.lane_config``).

@@ -32,7 +32,7 @@ not scaled.
 - r_goal (ours), +300 when the goal is reached. The episode ends there, so without a bonus the paper's
   rewards would pay more for lingering just outside the goal radius than for entering it. The bonus must
   beat what lingering is worth: r_d is ~1 at the circle's edge, so with gamma = 0.99 walking past it is worth
-  up to w_d / (1 - gamma) = 100. A bonus of 100 (sessions 2-4) made missing and entering the circle equal,
+  up to w_d / (1 - gamma) = 100. A bonus of 100 made missing and entering the circle equal,
   and runs without it stopped aiming (RESULTS.md); 300 makes entering worth three times as much.
 - r_off (ours), -100 once when the robot leaves the course (|y - y_start| > 1.5 m, §2.4.4 (2)), as much as
   a fall. Table 1 fines falls but not leaving the course, and a robot stuck at a step earns about -0.07 per

@@ -18,7 +18,7 @@ nth_last() { ls -v "$KEEP/$1"/model_*.pt | tail -"$2" | head -1; }   # a run's N
 G5="--goal_distance 5.5 --distances 1 3 5"
 case "${1:-}" in
 train)
-  # GPU 3, issue 6: the training / sim-only ratio at 4096 envs with rsl-rl's update options (same PPO maths:
+  # GPU 3: the training / sim-only ratio at 4096 envs with rsl-rl's update options (same PPO maths:
   # torch.compile, bfloat16 autocast; changed maths: 2 mini-batches of 49,152 samples instead of 4)
   ( export CUDA_VISIBLE_DEVICES=3
     b() { local t=$(( ${DEADLINE_S:-570} - ${START_S:-20} - SECONDS )); [ "$t" -gt "$1" ] && t=$1; [ "$t" -gt 30 ] || return
@@ -31,7 +31,7 @@ train)
     b 120 --mode train --num_mini_batches 2
     b 150 --mode train --num_mini_batches 2 --torch_compile default --mixed_precision
     b 120 --mode train --num_mini_batches 2 --num_learning_epochs 4 ) &
-  # tts7: the time-to-skill recipe with correct data; m5: 5 m goal; s8: 8 cm steps (issue 9), all from scratch
+  # tts7: the time-to-skill recipe with correct data; m5: 5 m goal; s8: 8 cm steps, all from scratch
   KEEP_ALL=1 SKIP_WARMUP=1 START_S=${START_S:-20} DEADLINE_S=${DEADLINE_S:-570} bash scripts/device/train_runs.sh \
     "tts7@0:$C --seed 1 --target_success 0.97" \
     "m5@1:$C --seed 2 --goal_distance 5.5" \
@@ -41,8 +41,8 @@ train)
   ;;
 train2)
   # a new lease: train's last checkpoints (actor-only copies, runs/ck7) came with the install call into $KEEP.
-  # issue 8: 2 x 2048 envs through torchrun (the same samples per update as one GPU's 4096); issue 6: the recipe
-  # with the fastest update of train's bench (2 mini-batches, 4 epochs); issue 9: 5 m and 8 cm with the std capped
+  # 2 x 2048 envs through torchrun (the same samples per update as one GPU's 4096); the recipe
+  # with the fastest update of train's bench (2 mini-batches, 4 epochs); 5 m and 8 cm with the std capped
   # (train's runs grew it to 3.9 and 5.8), both on GPU 3
   KEEP_ALL=1 SKIP_WARMUP=1 START_S=0 DEADLINE_S=${DEADLINE_S:-450} bash scripts/device/train_runs.sh \
     "g2x2048@0,1:$C --seed 1 --target_success 0.97 --num_envs 2048" \
@@ -52,7 +52,7 @@ train2)
   ls "$KEEP"/*/ > "$OUT/kept.txt" 2>&1
   ;;
 table3)
-  # issue 5: Table 3 on the GPU machine (CPG_RL = $POLICY, the SB3 models carried in runs/sb3m): rugged and stepped
+  # Table 3 on the GPU machine (CPG_RL = $POLICY, the SB3 models carried in runs/sb3m): rugged and stepped
   # on GPU 0, complex on GPU 1; the 1000-round evaluations of train's and train2's runs on GPUs 1-3
   # (as run, this call lacked the mkdir and every Table-3 job failed at once; a second call, one terrain per GPU with
   # 280 s each, ran out of time after the CPG and CPG_RL rows: 25 robots are launch-bound on the GPU. RESULTS.md)

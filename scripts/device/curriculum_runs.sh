@@ -26,7 +26,7 @@ train)
   ;;
 continue)
   train_s=${TRAIN_S:-300}
-  if grep -q "stopped by target success" "$KEEP/complex_cur.log"; then   # issue 8: time-to-skill on 2 GPUs
+  if grep -q "stopped by target success" "$KEEP/complex_cur.log"; then   # time-to-skill on 2 GPUs
     first="complex_cur_2gpu@0,1:--terrain complex $CUR --target_success 0.95"
     second=""
   else

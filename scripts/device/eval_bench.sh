@@ -1,5 +1,5 @@
 #!/bin/bash
-# Issues 5 and 6 on a 2-GPU machine, one device call: GPU 0 runs the benchmark table (then trains the pure-DRL
+# Table 3 and the benchmarks on a 2-GPU machine, one device call: GPU 0 runs the benchmark table (then trains the pure-DRL
 # `joint` controller on flat ground until the deadline, for Fig. 5a); GPU 1 runs the paper's evaluation
 # (25 rounds, then 1000) of fixed CPG and CPG_RL on rugged, stepped and complex terrain.
 #

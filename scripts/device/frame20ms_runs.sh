@@ -6,7 +6,7 @@
 #
 #   bash scripts/device/frame20ms_runs.sh train     # cres_std + SAC/TD3/A2C-CPG on GPU 0, time-to-skill on 1 and on 2+3
 #   bash scripts/device/frame20ms_runs.sh evaluate  # 1000-round evaluations of those, the fast-physics bench, a video
-#   bash scripts/device/frame20ms_runs.sh train2    # the time-to-skill run under the fast physics, and issue 9's runs
+#   bash scripts/device/frame20ms_runs.sh train2    # the time-to-skill run under the fast physics, and the harder-course runs
 set -u
 OUT=${OUT:-out}
 KEEP=/root/keep
@@ -24,8 +24,8 @@ train)
       --log_dir /root/sb3 > /root/sb3_$a.log 2>&1 &
   done
   # cres_std: cpg_rl_complex_7min (complex_dr_s5_model_768) with its std fixed at 0.3, so that the mean
-  # action learns what the noise did; tts: that recipe from scratch (issue 6's time-to-skill), alone on its
-  # GPU; tts_2gpu: the same through torchrun on two GPUs (issue 8)
+  # action learns what the noise did; tts: that recipe from scratch (time-to-skill), alone on its
+  # GPU; tts_2gpu: the same through torchrun on two GPUs
   KEEP_ALL=1 SKIP_WARMUP=1 START_S=${START_S:-25} DEADLINE_S=${DEADLINE_S:-560} bash scripts/device/train_runs.sh \
     "cres_std@0:$MORE --resume /root/ck/complex_dr.pt --seed 4 --action_std 0.3" \
     "tts@1:$C --seed 1 --target_success 0.97" \
@@ -60,7 +60,7 @@ evaluate)
   grep -E "robot-s/s|error" "$OUT/bench.log" | tail -20; tail -2 "$OUT/video.log"
   ;;
 train2)
-  # FAST=1 (the bench confirmed the 20 ms frame): the time-to-skill run under it; issue 9's runs resume cres_std
+  # FAST=1 (the bench confirmed the 20 ms frame): the time-to-skill run under it; the harder-course runs resume cres_std
   PHYS=""; [ "${FAST:-1}" = 1 ] && PHYS="--frame_dt 0.02 --substeps 4"
   SKIP_WARMUP=1 START_S=0 DEADLINE_S=${DEADLINE_S:-420} bash scripts/device/train_runs.sh \
     "tts_fast@0:$C --seed 1 --target_success 0.97 $PHYS" \

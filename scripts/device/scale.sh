@@ -1,5 +1,5 @@
 #!/bin/bash
-# Issue 8 on the device tool's nvidia-h200-x2: training throughput on 1 and 2 GPUs at the same envs per GPU
+# Data-parallel scaling on the device tool's nvidia-h200-x2: training throughput on 1 and 2 GPUs at the same envs per GPU
 # (torchrun + rsl-rl's NCCL mode), then a complex-terrain run on 2 GPUs from a fixed seed until the deadline
 # (time-to-skill; --target_success is single-process only, so the curve is read from the log).
 #

@@ -14,7 +14,7 @@
 # (EVAL_ENVS robots, start yaw noise 0.2 rad as in training, an unseen terrain/reset seed), cut off after
 # EVAL_TIMEOUT_S seconds (default 120; 7000 steps of 1024 robots took longer than 70 s on an H200); the
 # training deadline leaves that much time. Results: $OUT/run_<name>.tgz and $OUT/eval_<name>.txt.
-# Used for RESULTS.md (issue 4) on the device tool's H100.
+# Used for RESULTS.md on the device tool's GPUs.
 set -u
 export NCCL_NVLS_ENABLE=0 TORCH_SYMM_MEM_DISABLE_MULTICAST=1 NVSHMEM_DISABLE_NVLS=1   # device docs: no NVLink multicast
 OUT=${OUT:-out}
