@@ -213,7 +213,7 @@ def load_runner(env, path: str, action_mode: str):
     with contextlib.redirect_stdout(io.StringIO()):  # rsl-rl prints both networks in full
         runner = OnPolicyRunner(env, copy.deepcopy(tcfg), log_dir=None, device=str(env._obs_t.device))
     # the actor alone: full training checkpoints and actor-only policy files (results/policies) both load
-    load_into_runner(runner, path, {"actor": True}, str(env._obs_t.device))
+    load_into_runner(runner, ckpt, {"actor": True})
     return runner
 
 

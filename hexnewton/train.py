@@ -354,13 +354,12 @@ def load_checkpoint(path: str, map_location: str = "cpu") -> dict:
     return ckpt
 
 
-def load_into_runner(runner, path: str, load_cfg: dict | None = None, map_location: str = "cpu") -> dict:
-    """``OnPolicyRunner.load`` through :func:`load_checkpoint` (rsl-rl's own loads with ``weights_only=False``):
-    the models (and, with ``load_cfg`` None, the optimiser and iteration) from ``path``; returns the checkpoint."""
-    ckpt = load_checkpoint(path, map_location)
+def load_into_runner(runner, ckpt: dict, load_cfg: dict | None = None) -> None:
+    """``OnPolicyRunner.load`` for a checkpoint read by :func:`load_checkpoint` (rsl-rl's own reads the file again,
+    with ``weights_only=False``): the models and, with ``load_cfg`` None, the optimiser and iteration. State dicts
+    load onto the runner's device whatever device the checkpoint was read to."""
     if runner.alg.load(ckpt, load_cfg, True):
         runner.current_learning_iteration = ckpt["iter"]
-    return ckpt
 
 
 def checkpoint_meta(ckpt: dict | None) -> dict:
@@ -683,7 +682,7 @@ def main(argv: list[str] | None = None) -> int:
 
     runner.logger.log = log
     if ckpt is not None:
-        load_into_runner(runner, args.resume, map_location=device)
+        load_into_runner(runner, ckpt)
         # rsl-rl stores the last finished iteration and would start again from it: continue after it instead
         runner.current_learning_iteration += 1
         if args.action_std is not None:  # the checkpoint brought its own std: fix ours
@@ -721,7 +720,7 @@ def main(argv: list[str] | None = None) -> int:
     if best.iteration is not None and best.iteration != runner.current_learning_iteration:
         print(f"best training success {best.rate:.3f} at iteration {best.iteration} ({best.path}); the last iteration "
               f"ended at {training_success(stats, args.levels) or float('nan'):.3f}: exporting the best")
-        load_into_runner(runner, best.path, {"actor": True}, device)
+        load_into_runner(runner, load_checkpoint(best.path, device), {"actor": True})
     onnx_path = os.path.join(run_dir, "policy.onnx")
     err = export_onnx(runner.alg.get_policy(), env.num_obs, onnx_path)
     print(f"exported {onnx_path} (dynamic batch; onnxruntime vs torch max |diff| {err:.2e})")
