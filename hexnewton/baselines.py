@@ -177,7 +177,7 @@ def main(argv: list[str] | None = None) -> int:
 
     from .env import make_env
     from .sim import resolve_device
-    from .train import seed_everything
+    from .runner import seed_everything
 
     device = resolve_device(args.device)
     if args.num_envs is None:

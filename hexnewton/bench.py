@@ -22,9 +22,7 @@ from __future__ import annotations
 
 import datetime
 import json
-import os
 import platform
-import subprocess
 import sys
 import tempfile
 import time
@@ -33,11 +31,12 @@ from dataclasses import asdict, dataclass, replace
 import numpy as np
 import warp as wp
 
-from .cli import ArgumentParser, positive_int, run, terrain_name
+from .agent import AgentConfig
+from .cli import ArgumentParser, add_config_args, apply_overrides, config_overrides, positive_int, run, terrain_name
 from .config import TERRAINS, HexConfig, SimConfig, TerrainConfig
 from .controller import CPGController
+from .report import git_rev
 from .sim import World, resolve_device
-from .train import add_update_args, update_kwargs
 
 
 @dataclass
@@ -157,10 +156,10 @@ PHASES = (("env.step", "env", "step"), ("policy act", "alg", "act"), ("storage",
 
 
 def bench_train(terrain: str, num_envs: int, device: str, iterations: int, seed: int = 0, profile: bool = False,
-                sim: SimConfig | None = None, update: dict | None = None,
+                sim: SimConfig | None = None, agent=None,
                 ) -> tuple[PipelineResult, dict[str, float] | None]:  # fmt: skip
-    """``iterations`` timed PPO iterations (preset ``default``, with ``update``: :func:`train.train_cfg`'s PPO-update
-    options) after one untimed warm-up iteration (two with ``torch.compile``, whose first update compiles).
+    """``iterations`` timed PPO iterations of ``agent`` (default: ``AgentConfig()``) after one untimed warm-up iteration
+    (two with ``torch.compile``, whose first update compiles).
 
     With ``profile``, the same runner then trains ``iterations`` more with a device sync around each rsl-rl
     phase (so their total exceeds an unprofiled iteration's): seconds per iteration per phase, plus "other"."""
@@ -170,14 +169,14 @@ def bench_train(terrain: str, num_envs: int, device: str, iterations: int, seed:
     from rsl_rl.runners import OnPolicyRunner
 
     from .env import make_env
-    from .train import seed_everything, train_cfg
+    from .runner import seed_everything
 
     seed_everything(seed)
     cuda = device.startswith("cuda")
     used0 = _device_memory(device) if cuda else 0
     cfg = _config(terrain, num_envs, device, seed, sim)
     env = make_env(cfg)
-    tcfg = train_cfg("default", num_envs, **(update or {}))
+    tcfg = (agent or AgentConfig()).to_rsl_rl(num_envs)
     # a TensorBoard writer as in train.py: rsl-rl's logger only does its per-step bookkeeping with one
     logs = tempfile.TemporaryDirectory(prefix="hexnewton-bench-")
     runner = OnPolicyRunner(env, copy.deepcopy(tcfg), log_dir=logs.name, device=device)
@@ -281,14 +280,6 @@ def device_name(device: str) -> str:
     return f"CPU ({platform.processor() or platform.machine()}, Warp CPU kernels single-threaded)"
 
 
-def git_rev() -> str:
-    try:
-        return subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True,
-                              check=True).stdout.strip()  # fmt: skip
-    except Exception:  # e.g. a copy of the tree without .git (the GPU machine)
-        return os.environ.get("HEXNEWTON_GIT_REV", "unknown")
-
-
 def table(results: list[BenchResult], sim: SimConfig, command: str) -> str:
     dev = device_name(results[0].device) if results else "?"
     head = (
@@ -312,10 +303,6 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--num_envs", type=positive_int, nargs="+", default=None)
     p.add_argument("--terrain", type=terrain_name, nargs="+", default=list(TERRAINS))
     p.add_argument("--frames", type=positive_int, default=None, help="timed physics frames (default 400 GPU, 100 CPU)")
-    p.add_argument("--substeps", type=positive_int, default=SimConfig.substeps)
-    p.add_argument("--iterations", type=positive_int, default=SimConfig.iterations)
-    p.add_argument("--ls_iterations", type=positive_int, default=SimConfig.ls_iterations)
-    p.add_argument("--frame_dt", type=float, default=SimConfig.frame_dt)
     p.add_argument("--mode", nargs="+", choices=["sim", "env", "train"], default=["sim", "env", "train"])
     p.add_argument("--env_steps", type=positive_int, default=None, help="timed env steps (default 200 GPU, 25 CPU)")
     p.add_argument("--train_iterations", type=positive_int, default=None, help="timed PPO iterations (default 10 GPU, 2 CPU)")
@@ -324,17 +311,19 @@ def main(argv: list[str] | None = None) -> int:
                         "returns, PPO update)")  # fmt: skip
     p.add_argument("--largest", action="store_true",
                    help="sim-only: double the largest --num_envs until the device runs out of memory")
-    add_update_args(p)  # train mode: the PPO update's options, as train.py's
     p.add_argument("--append", metavar="PATH", help="append the markdown table to this file")
     p.add_argument("--json", metavar="PATH", help="write the raw results as JSON")
+    add_config_args(p, "env.sim", SimConfig(), skip=("num_envs", "device"),
+                    title="--env.sim.*: the physics (SimConfig), as train.py's")
+    add_config_args(p, "agent", AgentConfig(), title="--agent.*: train mode's learner (AgentConfig), as train.py's")
     args = p.parse_args(argv)
+    agent = apply_overrides(AgentConfig(), config_overrides(args, "agent"))
 
     device = resolve_device(args.device)
     gpu = device.startswith("cuda")
     envs = args.num_envs or ([1024] if gpu else [64])
     frames = args.frames or (400 if gpu else 100)
-    sim = replace(SimConfig(), substeps=args.substeps, iterations=args.iterations, ls_iterations=args.ls_iterations,
-                  frame_dt=args.frame_dt)  # fmt: skip
+    sim = apply_overrides(SimConfig(), config_overrides(args, "env.sim"))
     command = "python -m hexnewton.bench " + " ".join(sys.argv[1:] if argv is None else argv)
     results, pipeline, profiles = [], [], []
     env_steps = args.env_steps or (200 if gpu else 25)
@@ -356,7 +345,7 @@ def main(argv: list[str] | None = None) -> int:
                           f"({e.env_steps_per_s:,.0f} env-steps/s)", flush=True)  # fmt: skip
                 if "train" in args.mode:
                     t, prof = bench_train(terrain, n, device, iterations, profile=args.profile, sim=sim,
-                                          update=update_kwargs(args))
+                                          agent=agent)
                     for k in ("train_steps_per_s", "train_robot_s_per_s", "train_iteration_s", "memory_per_env_kb"):
                         setattr(pr, k, getattr(t, k))
                     print(f"{terrain:8s} N={n:6d} train {t.train_robot_s_per_s:12,.0f} robot-s/s  "

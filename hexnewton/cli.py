@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 from collections.abc import Callable
 
@@ -33,6 +34,15 @@ def terrain_name(text: str) -> str:
     return text
 
 
+def check_writable(path: str, ext: str) -> None:
+    """Fail before any simulation if an output file could not be written (never lose a finished rollout)."""
+    if not path.endswith(ext):
+        raise ValueError(f"{path}: expected a {ext} file name")
+    parent = os.path.dirname(os.path.abspath(path))
+    if not os.path.isdir(parent) or not os.access(parent, os.W_OK):
+        raise ValueError(f"cannot write {path}: {parent} is not a writable directory")
+
+
 def run(main: Callable[[list[str] | None], int | None], prog: str, argv: list[str] | None = None) -> int:
     """Run ``main``; user errors (HexnewtonError, ValueError) become one stderr line and exit status 2, file
     system errors one line and exit status 1."""
@@ -49,3 +59,106 @@ def run(main: Callable[[list[str] | None], int | None], prog: str, argv: list[st
     except KeyboardInterrupt:
         sys.stderr.write(f"{prog}: interrupted\n")
         return 130
+
+
+# ----------------------------------------------------------------------------------------------------
+# config overrides generated from the dataclasses: --env.<section>.<field> VALUE, --agent.<...>.<field> VALUE
+# ----------------------------------------------------------------------------------------------------
+
+_NONE = ("none", "null")
+
+
+def _field_parser(hint, choices=None):
+    """(argparse type, nargs, metavar) for a field annotated ``hint``."""
+    import ast
+    import types
+    import typing
+
+    args = typing.get_args(hint)
+    optional = (typing.get_origin(hint) in (typing.Union, types.UnionType)) and type(None) in args
+    if optional:
+        hint = next(a for a in args if a is not type(None))
+        args = typing.get_args(hint)
+
+    def nullable(parse, what):
+        def convert(text: str):
+            if optional and text.lower() in _NONE:
+                return None
+            try:
+                value = parse(text)
+            except (ValueError, SyntaxError):
+                raise argparse.ArgumentTypeError(f"expected {what}{' or none' if optional else ''}, got '{text}'")
+            if choices is not None and value not in choices:
+                raise argparse.ArgumentTypeError(f"'{text}' is not one of {', '.join(map(str, choices))}")
+            return value
+
+        return convert
+
+    def boolean(text: str) -> bool:
+        low = text.lower()
+        if low not in ("true", "false", "1", "0", "yes", "no", "on", "off"):
+            raise ValueError(text)
+        return low in ("true", "1", "yes", "on")
+
+    scalars = {bool: (boolean, "true or false"), int: (int, "an integer"), float: (float, "a number"),
+               str: (str, "a string")}  # fmt: skip
+    if hint in scalars:
+        return nullable(*scalars[hint]), None, "NONE|" * optional + {bool: "true|false", int: "INT", float: "FLOAT",
+                                                                      str: "|".join(choices or ()) or "TEXT"}[hint]
+    origin = typing.get_origin(hint)
+    if origin is tuple and args and all(a in (int, float) for a in args if a is not Ellipsis):
+        parse, what = scalars[args[0]]
+        nargs = "+" if Ellipsis in args else len(args)
+        return nullable(parse, what), nargs, ("INT" if args[0] is int else "X")
+    # anything else (tuples of tuples, the curriculum's stages): a Python literal
+    return nullable(ast.literal_eval, "a Python literal such as ((1, 2), (3, 4))"), None, "LITERAL"
+
+
+def add_config_args(parser, prefix: str, obj, skip: tuple[str, ...] = (), title: str | None = None) -> None:
+    """Add ``--<prefix>.<path> VALUE`` for every field of dataclass instance ``obj`` (recursively), its current value
+    shown as the default; ``skip`` lists paths (``sim.num_envs``) that have a conventional flag of their own. The
+    parsed values land in ``args.overrides`` as {path: value} (only those given)."""
+    import dataclasses
+    import typing
+
+    group = parser.add_argument_group(title or f"--{prefix}.*: any field of the {type(obj).__name__} tree")
+
+    def walk(o, path: str) -> None:
+        hints = typing.get_type_hints(type(o))
+        for f in dataclasses.fields(o):
+            value, sub = getattr(o, f.name), f"{path}{f.name}"
+            if dataclasses.is_dataclass(value):
+                walk(value, sub + ".")
+                continue
+            if sub in skip:
+                continue
+            convert, nargs, metavar = _field_parser(hints[f.name], f.metadata.get("choices"))
+            shown = "none" if value is None else " ".join(map(str, value)) if nargs and value else value
+            group.add_argument(f"--{prefix}.{sub}", dest=f"override:{prefix}:{sub}", type=convert, nargs=nargs,
+                               metavar=metavar, default=argparse.SUPPRESS, help=f"(default: {shown})")  # fmt: skip
+
+    walk(obj, "")
+
+
+def config_overrides(args, prefix: str) -> dict:
+    """{path: value} of the ``--<prefix>.*`` options that were given (see :func:`add_config_args`)."""
+    tag = f"override:{prefix}:"
+    return {k[len(tag):]: (tuple(v) if isinstance(v, list) else v) for k, v in vars(args).items() if k.startswith(tag)}
+
+
+def apply_overrides(obj, overrides: dict):
+    """``obj`` (a dataclass tree) with ``{"sim.frame_dt": 0.02, ...}`` set; ValueError for a path it does not have."""
+    import dataclasses
+
+    out = obj
+    for path, value in overrides.items():
+        def put(o, keys):
+            names = {f.name for f in dataclasses.fields(o)}
+            if keys[0] not in names:
+                raise ValueError(f"{type(obj).__name__} has no field '{path}'")
+            if len(keys) == 1:
+                return dataclasses.replace(o, **{keys[0]: value})
+            return dataclasses.replace(o, **{keys[0]: put(getattr(o, keys[0]), keys[1:])})
+
+        out = put(out, path.split("."))
+    return out

@@ -80,7 +80,7 @@ class RobotConfig:
 class TerrainConfig:
     """The paper's terrains (§3.1). Lengths in metres; +x is the walking direction."""
 
-    name: str = "flat"
+    name: str = field(default="flat", metadata={"choices": TERRAINS})
     seed: int = 0
     # §3.1: rugged = square blocks of 4 cm^2 (2 cm x 2 cm), heights uniform in [0, 6 cm]
     block_size: float = 0.02
@@ -131,10 +131,10 @@ class SimConfig:
     frame_dt: float = 0.010
     substeps: int = 4
     # ours: MuJoCo (mujoco_warp) solver settings
-    solver: str = "newton"
+    solver: str = field(default="newton", metadata={"choices": ("newton", "cg")})
     iterations: int = 10
     ls_iterations: int = 10
-    integrator: str = "implicitfast"
+    integrator: str = field(default="implicitfast", metadata={"choices": ("euler", "implicitfast", "implicit")})
     # ours: contact detection gap [m]. Newton's 0.1 m default overflows every buffer on 2 cm blocks; on the
     # rugged mesh a foot sees one contact per triangle within the gap: measured ~67 contacts per walking
     # robot at 0.01 m, ~39 at 0.005 m, ~26 at 0.002 m.
@@ -386,19 +386,30 @@ def terrain_for_goal(terrain: TerrainConfig, goal_distance: float) -> TerrainCon
     return terrain if need <= terrain.x_max else replace(terrain, x_max=need)
 
 
-def config_from_dict(d: dict) -> HexConfig:
-    """Rebuild a :class:`HexConfig` from ``dataclasses.asdict`` output (e.g. a checkpoint's or config.json's
-    "config"); missing sections and fields keep their defaults, lists become tuples again, unknown keys are
-    ignored (configs written by older or newer versions still load)."""
+def _as_tuples(v):
+    """Lists (JSON's and ``asdict``'s form of tuples) back to tuples, at any depth; dicts stay dicts."""
+    if isinstance(v, (list, tuple)):
+        return tuple(_as_tuples(x) for x in v)
+    if isinstance(v, dict):
+        return {k: _as_tuples(x) for k, x in v.items()}
+    return v
+
+
+def dataclass_from_dict(cls, values: dict):
+    """Rebuild dataclass ``cls`` from ``dataclasses.asdict`` output: nested dataclasses recursively, lists as tuples;
+    missing fields keep their defaults, unknown keys are ignored (configs written by older or newer versions load)."""
     import dataclasses
 
-    def build(cls, values: dict):
-        out = {}
-        for f in dataclasses.fields(cls):
-            if f.name in (values or {}):
-                v = values[f.name]
-                out[f.name] = tuple(tuple(x) if isinstance(x, list) else x for x in v) if isinstance(v, list) else v
-        return cls(**out)
+    out = {}
+    for f in dataclasses.fields(cls):
+        if f.name not in (values or {}):
+            continue
+        v = values[f.name]
+        default = f.default_factory() if f.default_factory is not dataclasses.MISSING else f.default
+        out[f.name] = dataclass_from_dict(type(default), v) if dataclasses.is_dataclass(default) else _as_tuples(v)
+    return cls(**out)
 
-    sections = {f.name: f.default_factory for f in dataclasses.fields(HexConfig)}
-    return HexConfig(**{name: build(factory, (d or {}).get(name, {})) for name, factory in sections.items()})
+
+def config_from_dict(d: dict) -> HexConfig:
+    """Rebuild a :class:`HexConfig` from ``dataclasses.asdict`` output (a checkpoint's or config.json's "config")."""
+    return dataclass_from_dict(HexConfig, d or {})

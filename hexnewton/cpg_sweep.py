@@ -58,7 +58,8 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--device", default=None)
     p.add_argument("--out", required=True, help="output directory (must not exist)")
     args = p.parse_args(argv)
-    from .evaluate import round_metrics, run_rounds, summarize
+    from .metrics import round_metrics, summarize
+    from .rollout import run_rounds
 
     if os.path.exists(args.out):
         raise ValueError(f"{args.out} exists: choose a new --out (nothing is overwritten)")
@@ -84,8 +85,8 @@ def main(argv: list[str] | None = None) -> int:
     t0 = time.perf_counter()
     per_terrain: dict[str, list[dict]] = {}
     for terrain in args.terrains:
-        ep = run_rounds("cpg", None, terrain, n * r, device, args.max_steps, TaskConfig.reset_yaw, False,
-                        physics=physics, seed=seed, fixed_params=params)  # fmt: skip
+        ep = run_rounds("cpg", None, terrain, n * r, device, args.max_steps, False, seed,
+                        {f"sim.{k}": v for k, v in physics.items()}, fixed_params=params)  # fmt: skip
         m = round_metrics(ep.pos, ep.rpy, ep.done, ep.status, ep.dt, (1.0, 3.0))
         rows = []
         for k in range(n):

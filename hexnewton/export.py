@@ -38,7 +38,7 @@ def controller_spec(env, checkpoint: str, action_std: list[float] | None) -> dic
     for a Beta policy)."""
     from .kernels.observations import H_HALF_EXTENT, OBS_LAYOUT
     from .robot import leg_bounds
-    from .bench import git_rev
+    from .report import git_rev
 
     cfg = env.cfg
     lo, hi = cfg.cpg.param_ranges()
@@ -130,8 +130,8 @@ def main(argv: list[str] | None = None) -> int:
     if os.path.exists(args.out):
         raise ValueError(f"{args.out} exists: nothing is overwritten")
     from .env import make_env
-    from .play import load_runner
-    from .train import action_std, checkpoint_meta, export_onnx, load_checkpoint
+    from .checkpoint import checkpoint_meta, load_checkpoint
+    from .policy import action_std, export_onnx, load_runner
 
     meta = checkpoint_meta(load_checkpoint(args.checkpoint))
     if meta.get("action_mode", "cpg") != "cpg":

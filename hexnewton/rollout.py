@@ -1,0 +1,237 @@
+"""Rollouts of a controller in the batched env: step by step (:func:`stepped`), with first-episode statistics
+(:func:`rollout`, ``play.py``), recorded (:class:`Recorder`), and the evaluation's rounds (:func:`run_rounds`:
+one robot per round on unseen seeds, the arrays behind every metric and figure).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from .config import JOINT_NAMES, PARAM_NAMES, HexConfig
+from .metrics import first_episode_stats
+
+EVAL_TERRAIN_SEED = 1000
+EVAL_RESET_SEED = 2000
+START_SEED_OFFSET = EVAL_RESET_SEED - EVAL_TERRAIN_SEED  # --seed S: terrain seed S, start seed S + 1000
+# controller -> env action mode; *_cpg are the Stable-Baselines3 baselines (hexnewton.baselines)
+CONTROLLERS = {"cpg": "cpg", "cpg_swept": "cpg", "cpg_rl": "cpg", "joint": "joint", "sac_cpg": "cpg", "td3_cpg": "cpg",
+               "a2c_cpg": "cpg"}  # fmt: skip
+FIXED = {"cpg": "default", "cpg_swept": "swept"}  # fixed-parameter controllers -> config.FIXED_GAITS
+LABELS = {"cpg": "CPG", "cpg_swept": "CPG (swept)", "cpg_rl": "CPG_RL", "joint": "pure DRL", "sac_cpg": "SAC-CPG",
+          "td3_cpg": "TD3-CPG", "a2c_cpg": "A2C-CPG"}  # fmt: skip
+#: Named perturbations beyond the training ranges (RandomizationConfig: friction 0.4-1.2, payload -0.2..0.6 kg,
+#: gains and effort x0.8-1.2, half the envs 20 ms late, pushes of 0.3 m/s every 6 s; 6 cm steps and blocks). Each
+#: changes one thing; everything else is the nominal robot. Values: (RandomizationConfig fields, TerrainConfig fields).
+_NOMINAL = dict(friction=(0.9, 0.9), payload=(0.0, 0.0), link_mass_scale=(1.0, 1.0), kp_scale=(1.0, 1.0),
+                kd_scale=(1.0, 1.0), effort_scale=(1.0, 1.0), latency_share=0.0, noise_joint_pos=0.0,
+                noise_joint_vel=0.0, noise_target=0.0, noise_quat=0.0, noise_height=0.0, push_velocity=0.0)
+PERTURBATIONS = {
+    "nominal": ({}, {}),
+    "friction_0.3": ({"friction": (0.3, 0.3)}, {}),
+    "payload_0.8kg": ({"payload": (0.8, 0.8)}, {}),
+    "motors_0.6": ({"kp_scale": (0.6, 0.6), "effort_scale": (0.6, 0.6)}, {}),
+    "push_0.6m/s": ({"push_velocity": 0.6, "push_interval": 3.0}, {}),
+    "latency_40ms": ({"latency_share": 1.0}, {}),  # every env one control step late, plus the 20 ms step itself
+    "sensor_noise_x2": ({"noise_joint_pos": 0.02, "noise_joint_vel": 1.0, "noise_target": 0.1, "noise_quat": 0.04,
+                         "noise_height": 0.02}, {}),
+    "steps_7cm": ({}, {"step_rise": 0.07}),
+    "blocks_8cm": ({}, {"block_height_max": 0.08}),
+}  # fmt: skip
+
+
+def perturbation(name: str) -> dict:
+    """A named perturbation (``PERTURBATIONS``) as config overrides for :func:`run_rounds`."""
+    if name not in PERTURBATIONS:
+        raise ValueError(f"unknown perturbation '{name}': choose from {', '.join(PERTURBATIONS)}")
+    rz, terrain = PERTURBATIONS[name]
+    out = {f"terrain.{k}": v for k, v in terrain.items()}
+    if rz:
+        out.update({"randomization.enabled": True, **{f"randomization.{k}": v for k, v in {**_NOMINAL, **rz}.items()}})
+    return out
+SB3 = {"sac_cpg": "sac", "td3_cpg": "td3", "a2c_cpg": "a2c"}
+
+
+class Recorder:
+    """Collects per-control-step arrays on the host; ``save(path)`` writes one ``.npz``.
+
+    Keys: ``t`` (T,), ``joint_target``/``joint_pos`` (T, N, 18), ``base_pos``/``base_rpy`` (T, N, 3) (world frame;
+    roll, pitch, yaw), ``cpg_xy`` (T, N, 2, 2) (oscillator, [x, y]), ``params`` (T, N, 15) (physical units),
+    ``done`` (T, N) (that env's episode ended at this step; the next row starts a new one), ``joint_names``.
+    A row holds the state at the end of the step, before a finished env is reset.
+    """
+
+    KEYS = ("t", "joint_target", "joint_pos", "base_pos", "base_rpy", "cpg_xy", "params", "done")
+
+    def __init__(self):
+        self.rows: dict[str, list[np.ndarray]] = {k: [] for k in self.KEYS}
+
+    def add(self, env, t: float, q: np.ndarray, rpy: np.ndarray, done: np.ndarray) -> None:
+        r = self.rows
+        r["t"].append(np.float64(t))
+        r["joint_target"].append(env.world.joint_target_wp.numpy()[:, 7:].copy())
+        r["joint_pos"].append(q[:, 7:].copy())
+        r["base_pos"].append(q[:, 0:3].copy())
+        r["base_rpy"].append(rpy.copy())
+        r["cpg_xy"].append(env.last_cpg_state.numpy().reshape(-1, 2, 2).copy())
+        r["params"].append(env.last_params.numpy().copy())
+        r["done"].append(done.copy())
+
+    def save(self, path: str) -> None:
+        arrays = {k: np.stack(v) for k, v in self.rows.items()}
+        arrays["joint_names"] = np.array(JOINT_NAMES)
+        np.savez_compressed(path, **arrays)
+
+
+def stepped(env, policy, steps: int, description: str, progress: bool = True):
+    """Run ``policy(obs) -> actions`` for up to ``steps`` control steps (deterministic, no gradients); yield
+    per step the host copies ``(k, status, q, pos, rpy)``: status codes (N,), the state before resets
+    (N, 25), base position relative to each env's start (N, 3) and roll/pitch/yaw (N, 3)."""
+    import torch
+
+    it = range(steps)
+    if progress:
+        from rich.progress import track
+
+        it = track(it, description=description, transient=True)
+    obs = env.get_observations()
+    with torch.inference_mode():
+        for k in it:
+            obs, _, _, _ = env.step(policy(obs))
+            q = env.last_q.numpy()
+            pos = q[:, :3].copy()
+            pos[:, :2] -= env.last_start.numpy()
+            yield k, env.status.numpy(), q, pos, env.rpy.numpy().copy()
+
+
+def rollout(env, policy, steps: int, recorders: tuple = (), progress: bool = True) -> dict:
+    """Run ``policy(obs) -> actions`` for up to ``steps`` control steps; returns first-episode statistics.
+    Each of ``recorders`` gets every step. Without recorders, the rollout ends as soon as every env's first
+    episode has (the statistics cover nothing else)."""
+    n = env.num_envs
+    pos = np.zeros((steps, n, 3), np.float32)
+    rpy = np.zeros((steps, n, 3), np.float32)
+    done = np.zeros((steps, n), bool)
+    status_log = np.zeros((steps, n), np.int32)
+    ended = np.zeros(n, bool)
+    last = steps
+    for k, status, q, p, r in stepped(env, policy, steps, env.cfg.terrain.name, progress):
+        pos[k], rpy[k], done[k], status_log[k] = p, r, status != 0, status
+        for rec in recorders:
+            rec.add(env, (k + 1) * env.cfg.task.control_dt, q, r, status != 0)
+        ended |= status != 0
+        if not recorders and ended.all():
+            last = k + 1
+            break
+    env.world.check_contacts()
+    stats = first_episode_stats(pos[:last], rpy[:last], done[:last], status_log[:last])
+    stats["control_s"] = last * env.cfg.task.control_dt
+    return stats
+
+
+@dataclass
+class Episode:
+    """Host arrays of one controller's rounds on one terrain (T steps, N rounds)."""
+
+    pos: np.ndarray  # (T, N, 2) relative to each round's start
+    rpy: np.ndarray  # (T, N, 3)
+    done: np.ndarray  # (T, N)
+    status: np.ndarray  # (T, N)
+    params: np.ndarray  # (T, 15) round 0's CPG parameters (physical units); NaN in joint mode
+    dt: float
+    ang_rate: np.ndarray  # (T, N, 2) body roll and pitch rate [rad/s]
+    dparam: np.ndarray  # (T, N) mean |change| of the 15 filtered parameters since the last step / their ranges
+    daction: np.ndarray  # (T, N) the same for the parameters the policy asks for (params_target)
+    segments: dict  # complex course: mean parameters (physical units) on the blocks and on the stairs, all rounds
+
+
+def run_rounds(controller: str, checkpoint: str | None, terrain: str, rounds: int, device: str | None,
+               max_steps: int, progress: bool = True, seed: int = EVAL_TERRAIN_SEED, overrides: dict | None = None,
+               stochastic: bool = False, expected: bool = False, fixed_params: np.ndarray | None = None) -> Episode:
+    """``rounds`` robots, one first episode each, with a controller on unseen seeds: the course of ``terrain``
+    (:func:`hexnewton.tasks.course`) with the policy's own physics and CPG (from its checkpoint), then ``overrides``
+    ({"terrain.step_rise": 0.07, "randomization.enabled": True, ...}: fields of the HexConfig tree; a named
+    perturbation is such a dict). ``seed`` is the terrain seed; the start poses (and sampled actions) use ``seed +
+    START_SEED_OFFSET``. ``stochastic``: a learnt policy samples its actions as in training; ``expected``: the
+    expected clipped action of its Gaussian. ``fixed_params`` (N, 15) gives a fixed controller one gait per round
+    (``hexnewton.cpg_sweep``). ``cpg.posture_reflex`` in ``overrides`` gives a fixed gait the body posture at its
+    neutral values with that reflex; a policy needs its own posture for it."""
+    from .checkpoint import load_checkpoint, trained_config
+    from .cli import apply_overrides
+    from .config import terrain_for_goal
+    from .env import make_env
+    from .policy import fixed_cpg_actions, load_policy
+    from .tasks import course
+
+    mode = CONTROLLERS[controller]
+    trained = trained_config(load_checkpoint(checkpoint)) if controller in ("cpg_rl", "joint") else HexConfig()
+    overrides = dict(overrides or {})
+    if "cpg.posture_reflex" in overrides and mode == "cpg":
+        if controller not in FIXED and not trained.cpg.posture:
+            raise ValueError(f"{checkpoint} has no body posture: a posture_reflex needs a policy trained with it")
+        overrides["cpg.posture"] = True
+    cfg = apply_overrides(course(terrain, trained, seed=seed + START_SEED_OFFSET), overrides)
+    cfg = replace(cfg, sim=replace(cfg.sim, num_envs=rounds, device=device),
+                  terrain=terrain_for_goal(replace(cfg.terrain, seed=seed), cfg.task.goal_distance))  # fmt: skip
+    ground = cfg.terrain
+    env = make_env(cfg, mode)
+    if controller in FIXED:
+        actions = fixed_cpg_actions(env, FIXED[controller], fixed_params)
+        policy = lambda obs: actions  # noqa: E731
+    elif controller in SB3:
+        from .baselines import load_sb3_policy
+
+        policy = load_sb3_policy(env, checkpoint, SB3[controller], deterministic=not stochastic)
+    else:
+        policy = load_policy(env, checkpoint, mode, stochastic, expected)
+    if stochastic:
+        import torch
+
+        torch.manual_seed(seed + START_SEED_OFFSET)
+    from .kernels.reference import quat_rotate_inv_np
+
+    lo, hi = (np.asarray(b, np.float64) for b in cfg.cpg.param_ranges())
+    split_x = ground.complex_rugged_length if terrain == "complex" else None
+    npar = cfg.cpg.num_params
+    seg_sum, seg_n = {"blocks": np.zeros(npar), "stairs": np.zeros(npar)}, {"blocks": 0, "stairs": 0}
+    pos, rpy, done, status, params, ang_rate, dparam, daction = [], [], [], [], [], [], [], []
+    finished = np.zeros(rounds, bool)
+    prev_p = prev_t = None
+
+    def change(now: np.ndarray, before: np.ndarray | None) -> np.ndarray:
+        """Mean |change| of the CPG parameters (15, or 18 with the posture) since the last step, in fractions of
+        their ranges (NaN at the start)."""
+        if before is None:
+            return np.full(rounds, np.nan, np.float32)
+        return (np.abs(now - before) / (hi - lo)).mean(axis=1).astype(np.float32)
+
+    for _, st, q, p, r in stepped(env, policy, max_steps, f"{LABELS[controller]} on {terrain}", progress):
+        pos.append(p[:, :2])
+        rpy.append(r)
+        done.append(st != 0)
+        status.append(st.copy())
+        qd = env.last_qd.numpy()
+        ang_rate.append(quat_rotate_inv_np(q[:, 3:7], qd[:, 3:6])[:, :2].astype(np.float32))
+        if mode == "cpg":
+            pr, tg = env.last_params.numpy(), env.controller.params_target.numpy()
+            params.append(pr[0].copy())
+            dparam.append(change(pr, prev_p))
+            daction.append(change(tg, prev_t))
+            prev_p, prev_t = pr.copy(), tg.copy()
+            if split_x is not None:
+                alive = ~finished
+                for seg, sel in (("blocks", alive & (p[:, 0] < split_x)), ("stairs", alive & (p[:, 0] >= split_x))):
+                    seg_sum[seg] += pr[sel].sum(axis=0)
+                    seg_n[seg] += int(sel.sum())
+        else:
+            params.append(np.full(len(PARAM_NAMES), np.nan))
+            dparam.append(np.full(rounds, np.nan, np.float32))
+            daction.append(np.full(rounds, np.nan, np.float32))
+        finished |= st != 0
+        if finished.all():
+            break
+    env.world.check_contacts()
+    segments = {seg: (seg_sum[seg] / seg_n[seg]).tolist() for seg in seg_sum if seg_n[seg]}
+    return Episode(np.stack(pos), np.stack(rpy), np.stack(done), np.stack(status), np.stack(params),
+                   cfg.task.control_dt, np.stack(ang_rate), np.stack(dparam), np.stack(daction), segments)  # fmt: skip
