@@ -106,6 +106,9 @@ class AgentConfig:
         if self.distribution.std_max is not None and not self.distribution.std_max > 0:
             raise ValueError("agent.distribution.std_max must be positive")
         a = self.algorithm
+        if a.use_mixed_precision and self.distribution.name == "beta":
+            raise ValueError("agent.algorithm.use_mixed_precision: bfloat16 autocast cannot sample the Beta distribution "
+                             "(torch has no bfloat16 Dirichlet); use it with --agent.distribution.name gaussian")
         if a.num_learning_epochs <= 0 or a.num_mini_batches <= 0 or (a.mini_batch_size or 1) <= 0:
             raise ValueError("agent.algorithm epochs, mini-batches and mini-batch size must be positive")
         for start, changes in self.stages:

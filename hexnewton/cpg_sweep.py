@@ -24,8 +24,8 @@ import time
 
 import numpy as np
 
-from .cli import ArgumentParser, positive_int, run, terrain_name
-from .config import CPGConfig, TaskConfig, control_decimation, gait_params
+from .cli import ArgumentParser, add_config_args, config_overrides, positive_int, run, terrain_name
+from .config import CPGConfig, HexConfig, gait_params
 
 GRID = {
     "omega": [math.pi, 2.0 * math.pi, 3.0 * math.pi, 4.0 * math.pi],  # 0.5 - 2 Hz
@@ -51,12 +51,12 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--max_steps", type=positive_int, default=3000,
                    help="control steps per round (default 3000 = 60 s: 3 m at 5 cm/s)")
     p.add_argument("--tie", type=float, default=0.02, help="success margin within which stability decides")
-    p.add_argument("--frame_dt", type=float, default=None, help="physics frame [s] (default SimConfig's)")
-    p.add_argument("--substeps", type=positive_int, default=None, help="MuJoCo steps per frame")
     p.add_argument("--seed", type=int, default=3000,
                    help="terrain seed S, start poses S + 1000 (default 3000: a validation set, not the test set)")
     p.add_argument("--device", default=None)
     p.add_argument("--out", required=True, help="output directory (must not exist)")
+    add_config_args(p, "env", HexConfig(), skip=("sim.num_envs", "sim.device", "task.seed", "terrain.seed", "terrain.name"),
+                    title="--env.*: a field of every course (HexConfig), e.g. --env.sim.frame_dt 0.02")  # fmt: skip
     args = p.parse_args(argv)
     from .metrics import round_metrics, summarize
     from .rollout import run_rounds
@@ -66,9 +66,7 @@ def main(argv: list[str] | None = None) -> int:
     parent = os.path.dirname(os.path.abspath(args.out))
     if not os.path.isdir(parent) or not os.access(parent, os.W_OK):
         raise ValueError(f"cannot create {args.out}: {parent} is not a writable directory")
-    physics = {k: v for k, v in (("frame_dt", args.frame_dt), ("substeps", args.substeps)) if v is not None}
-    if args.frame_dt is not None:
-        control_decimation(TaskConfig.control_dt, args.frame_dt)
+    overrides = config_overrides(args, "env")
     lo, hi = CPGConfig().param_ranges()
     gaits = list(itertools.product(args.omega, args.a1, args.a2, args.a3))
     for g in gaits:
@@ -85,8 +83,8 @@ def main(argv: list[str] | None = None) -> int:
     t0 = time.perf_counter()
     per_terrain: dict[str, list[dict]] = {}
     for terrain in args.terrains:
-        ep = run_rounds("cpg", None, terrain, n * r, device, args.max_steps, False, seed,
-                        {f"sim.{k}": v for k, v in physics.items()}, fixed_params=params)  # fmt: skip
+        ep = run_rounds("cpg", None, terrain, n * r, device, args.max_steps, False, seed, overrides,
+                        fixed_params=params)  # fmt: skip
         m = round_metrics(ep.pos, ep.rpy, ep.done, ep.status, ep.dt, (1.0, 3.0))
         rows = []
         for k in range(n):
@@ -114,7 +112,7 @@ def main(argv: list[str] | None = None) -> int:
                                                           [d.fixed_omega, d.fixed_a1, d.fixed_a2, d.fixed_a3])), None)
     wall = time.perf_counter() - t0
     meta = {"device": device, "gaits": n, "rounds": r, "terrains": args.terrains, "grid": {k: getattr(args, k) for k in
-            GRID}, "max_steps": args.max_steps, "tie": args.tie, "physics": physics or "default", "terrain_seed": seed,
+            GRID}, "max_steps": args.max_steps, "tie": args.tie, "overrides": overrides, "terrain_seed": seed,
             "wall_s": round(wall, 1), "command": "python -m hexnewton.cpg_sweep " + " ".join(argv or sys.argv[1:])}
     with open(os.path.join(args.out, "results.json"), "w") as f:
         json.dump({"meta": meta, "best": best, "default": default, "gaits": table}, f, indent=1)

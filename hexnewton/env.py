@@ -390,6 +390,15 @@ def make_env(cfg: HexConfig, action_mode: str = "cpg") -> HexapodEnv:
     """Build the environment; configuration errors become ``HexnewtonError`` / ``ValueError`` with one line."""
     if not math.isfinite(cfg.task.goal_distance) or cfg.task.goal_distance <= cfg.task.goal_radius:
         raise HexnewtonError("task.goal_distance must exceed task.goal_radius")
+    knee = cfg.robot.knee_limit[1] - cfg.robot.stand_pose[1]  # the knee lift the standing pose leaves
+    lo, hi = cfg.cpg.a2_range
+    if not 0 <= lo < hi <= knee:
+        raise HexnewtonError(f"cpg.a2_range must satisfy 0 <= LO < HI <= {knee:.3g} (the knee's limit above the "
+                             f"standing pose), got {lo:g} {hi:g}")  # fmt: skip
+    if not 0 < cfg.reward.stability_tilt < math.pi / 2:
+        raise HexnewtonError("reward.stability_tilt must lie in (0, pi/2) rad")
+    if not cfg.cpg.param_tau >= 0:
+        raise HexnewtonError("cpg.param_tau must be >= 0")
     return HexapodEnv(cfg, action_mode)
 
 

@@ -181,6 +181,7 @@ class HexRunner(OnPolicyRunner):
         self.best = BestCheckpoint(log_dir or "", self.levels)
         self._reduce = _sum_over_ranks(device) if rank.world_size > 1 else None
         self._rsl_log, self.logger.log = self.logger.log, self._after_iteration
+        self._rsl_init_writer, self.logger.init_logging_writer = self.logger.init_logging_writer, self._init_writer
         self._stage, self._time_up, self._t0 = None, False, time.time()
 
     # -------------------------------------------------------------- checkpoints
@@ -204,6 +205,11 @@ class HexRunner(OnPolicyRunner):
         if err > 1e-4:
             raise RuntimeError(f"ONNX export differs from torch by {err}")
         return err
+
+    def _init_writer(self) -> None:
+        """rsl-rl's writer, without its "Storing git diff ..." console line (the diff is in the run's git/ folder)."""
+        with contextlib.redirect_stdout(io.StringIO()):
+            self._rsl_init_writer()
 
     # -------------------------------------------------------------- per iteration
     def _after_iteration(self, *args, **kwargs) -> None:

@@ -51,6 +51,33 @@ class ContactOverflowError(HexnewtonError):
     pass
 
 
+def init_warp() -> None:
+    """``wp.init()`` without the notice Warp's native library prints on every start of a machine without a CUDA driver
+    ("Warp CUDA warning: Could not find or load the NVIDIA CUDA driver ...": the CPU machines this runs on by design);
+    anything else it writes to stderr passes through."""
+    import sys
+    import tempfile
+
+    if wp._src.context.runtime is not None:
+        return
+    sys.stderr.flush()
+    saved = os.dup(2)
+    with tempfile.TemporaryFile() as captured:
+        os.dup2(captured.fileno(), 2)
+        try:
+            wp.init()
+        finally:
+            os.dup2(saved, 2)
+            os.close(saved)
+        captured.seek(0)
+        text = captured.read().decode(errors="replace")
+    rest = [line for line in text.splitlines(keepends=True) if "Could not find or load the NVIDIA CUDA driver" not in line]
+    sys.stderr.write("".join(rest))
+
+
+init_warp()
+
+
 def resolve_device(name: str | None) -> str:
     """``None``/``"auto"`` -> ``cuda:0`` if CUDA is available else ``cpu``; explicit CUDA must exist."""
     wp.init()

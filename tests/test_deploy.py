@@ -97,7 +97,7 @@ def test_expected_clipped_action_matches_its_reference_and_monte_carlo():
     import torch
 
     from hexnewton.deploy import expected_clipped_action
-    from hexnewton.play import expected_clipped_action as expected_torch
+    from hexnewton.policy import expected_clipped_action as expected_torch
 
     rng = np.random.default_rng(0)
     mean, std = rng.uniform(-4, 4, (64, 15)), rng.uniform(0.01, 6.0, 15)
@@ -121,8 +121,8 @@ def test_expected_actions_in_the_runtime_and_the_simulator(bundle):
 
     from hexnewton.deploy import Controller, expected_clipped_action
     from hexnewton.env import make_env
-    from hexnewton.play import load_policy
-    from hexnewton.train import load_checkpoint, trained_config
+    from hexnewton.checkpoint import load_checkpoint, trained_config
+    from hexnewton.policy import load_policy
 
     obs = np.load(bundle / "check.npz")["obs"][0]
     std = np.asarray(json.loads((bundle / "controller.json").read_text())["action_std"])
@@ -161,7 +161,7 @@ def test_policies_keep_their_trained_parameter_ranges():
     """A checkpoint's actions mean what they meant in training: play, evaluate, export and --resume take the CPG
     ranges from the checkpoint, not from today's defaults."""
     from hexnewton.config import CPGConfig
-    from hexnewton.train import load_checkpoint, trained_config
+    from hexnewton.checkpoint import load_checkpoint, trained_config
 
     assert trained_config(load_checkpoint(POLICY)).cpg.a2_range == (0.0, 0.8)  # trained before the range was widened
     assert CPGConfig().a2_range == (0.0, 1.3)

@@ -89,10 +89,10 @@ def test_ppo_stores_the_observation_each_action_was_taken_from():
 
     from rsl_rl.runners import OnPolicyRunner
 
-    from hexnewton.train import train_cfg
+    from hexnewton.agent import AgentConfig
 
     env = make_env(_cfg("flat", 8))
-    tcfg = train_cfg("default", 8, num_steps_per_env=8)
+    tcfg = AgentConfig(num_steps_per_env=8).to_rsl_rl(8)
     runner = OnPolicyRunner(env, copy.deepcopy(tcfg), log_dir=tempfile.mkdtemp(prefix="hexnewton-kl-"), device=DEV)
     kls, kl = [], runner.alg.actor.get_kl_divergence
     runner.alg.actor.get_kl_divergence = lambda old, new: kls.append(float(kl(old, new).mean())) or kl(old, new)
@@ -101,18 +101,22 @@ def test_ppo_stores_the_observation_each_action_was_taken_from():
 
 
 def test_ppo_update_options_reach_rsl_rl():
-    """train.py / bench's update options: fewer mini-batches and epochs, torch.compile and bfloat16
-    autocast are rsl-rl's own; the runner must train with them (here on the CPU, inductor's C++ backend)."""
+    """AgentConfig's update options: fewer mini-batches and epochs, torch.compile and bfloat16 autocast are rsl-rl's
+    own; the runner must train with them (here on the CPU, inductor's C++ backend)."""
     import copy
     import tempfile
 
     from rsl_rl.runners import OnPolicyRunner
 
-    from hexnewton.train import train_cfg
+    from hexnewton.agent import AgentConfig, AlgorithmConfig, DistributionConfig
 
     env = make_env(_cfg("flat", 8))
-    tcfg = train_cfg("default", 8, num_steps_per_env=8, num_mini_batches=3, num_learning_epochs=3,
-                     torch_compile="default", mixed_precision=True)  # fmt: skip
+    agent = AgentConfig(num_steps_per_env=8, torch_compile="default", distribution=DistributionConfig(name="gaussian"),
+                        algorithm=AlgorithmConfig(num_mini_batches=3, num_learning_epochs=3, use_mixed_precision=True))
+    agent.check()
+    with pytest.raises(ValueError, match="Beta"):
+        AgentConfig(algorithm=AlgorithmConfig(use_mixed_precision=True)).check()
+    tcfg = agent.to_rsl_rl(8)
     runner = OnPolicyRunner(env, copy.deepcopy(tcfg), log_dir=tempfile.mkdtemp(prefix="hexnewton-up-"), device=DEV)
     alg = runner.alg
     assert alg.use_mixed_precision and alg.actor is not alg.get_policy()  # compiled wrapper; raw module exported
@@ -125,16 +129,18 @@ def test_ppo_update_options_reach_rsl_rl():
 
 
 def test_std_max_caps_the_sampling_std():
-    """--std_max: rsl-rl's std_range clamps the Gaussian in training, and action_std (export, deploy bundle) reports
+    """agent.distribution.std_max: rsl-rl's std_range clamps the Gaussian in training, and action_std (export, deploy bundle) reports
     the clamped value, not the raw parameter."""
     import copy
 
     from rsl_rl.runners import OnPolicyRunner
 
-    from hexnewton.train import action_std, train_cfg
+    from hexnewton.agent import AgentConfig, DistributionConfig
+    from hexnewton.policy import action_std
 
     env = make_env(_cfg("flat", 8))
-    runner = OnPolicyRunner(env, copy.deepcopy(train_cfg("default", 8, std_max=0.3)), log_dir=None, device=DEV)
+    agent = AgentConfig(distribution=DistributionConfig(name="gaussian", std_max=0.3))
+    runner = OnPolicyRunner(env, copy.deepcopy(agent.to_rsl_rl(8)), log_dir=None, device=DEV)
     policy = runner.alg.get_policy()
     with torch.no_grad():
         policy.distribution.std_param.fill_(5.0)
@@ -335,7 +341,7 @@ def test_shaping_terms_on_hand_made_states():
     a[2, 0] = 1.0
     prev = np.zeros((3, 15))
     prev[2, 0] = -1.0
-    from hexnewton.train import STABLE_SHAPING
+    from hexnewton.tasks import STABLE_SHAPING
 
     w = STABLE_SHAPING
     terms, _, new_prev = _run_shaping(q, qd, rpy, a, prev, [5, 5, 5], (w["w_tilt"], w["w_ang_vel"], w["w_action_rate"]))
@@ -454,7 +460,7 @@ def trained(tmp_path_factory):
     logs = tmp_path_factory.mktemp("logs")
     proc = subprocess.run(
         [sys.executable, "train.py", "--num_envs", "16", "--max_iterations", "2", "--device", "cpu", "--log_dir",
-         str(logs), "--terrain", "flat"],
+         str(logs), "--task", "flat"],
         capture_output=True, text=True, timeout=900,
     )  # fmt: skip
     assert proc.returncode == 0, proc.stdout[-2000:] + proc.stderr[-3000:]
@@ -463,7 +469,7 @@ def trained(tmp_path_factory):
 
 def test_training_writes_checkpoint_onnx_and_tensorboard(trained):
     logs, out = trained
-    run_dir = glob.glob(str(logs / "hexnewton_cpg_flat" / "*"))[0]
+    run_dir = glob.glob(str(logs / "hexnewton_flat" / "*"))[0]
     files = {p.rsplit("/", 1)[1] for p in glob.glob(run_dir + "/*")}
     assert {"model_0.pt", "model_1.pt", "policy.onnx", "config.json"} <= files
     assert any(f.startswith("events.out.tfevents") for f in files)
@@ -480,7 +486,7 @@ def test_play_loads_the_trained_checkpoint(trained):
     logs, _ = trained
     proc = subprocess.run([sys.executable, "play.py", "--controller", "cpg_rl", "--log_dir", str(logs), "--num_envs",
                            "2", "--steps", "10", "--device", "cpu", "--terrain", "flat", "stepped",
-                           "--step_rise", "0.08", "--goal_distance", "5.5"],
+                           "--env.terrain.step_rise", "0.08", "--env.task.goal_distance", "5.5"],
                           capture_output=True, text=True, timeout=600)  # fmt: skip
     assert proc.returncode == 0, proc.stderr[-3000:]
     assert "[cpg_rl (" in proc.stdout and "model_1.pt" in proc.stdout
@@ -506,7 +512,7 @@ def test_play_without_arguments_plays_the_newest_policy(trained, tmp_path):
 
 def test_bad_checkpoints_are_one_line_errors(trained, tmp_path):
     logs, _ = trained
-    good = sorted(glob.glob(str(logs / "hexnewton_cpg_flat" / "*" / "model_1.pt")))[0]
+    good = sorted(glob.glob(str(logs / "hexnewton_flat" / "*" / "model_1.pt")))[0]
     corrupt = tmp_path / "corrupt.pt"
     corrupt.write_bytes(b"not a checkpoint")
     ckpt = torch.load(good, weights_only=False)
@@ -525,7 +531,11 @@ def test_bad_checkpoints_are_one_line_errors(trained, tmp_path):
          "expects 44 observations"),
         (["play.py", "--controller", "joint", "--checkpoint", good, "--num_envs", "1", "--steps", "1"],
          "action mode 'cpg'"),
-        (["train.py", "--preset", "fancy"], "unknown preset 'fancy'"),
+        (["train.py", "--task", "fancy"], "unknown task 'fancy'"),
+        (["train.py", "--agent.distribution.name", "cauchy"], "'cauchy' is not one of beta, gaussian"),
+        (["train.py", "--env.reward.w_tilt", "much"], "expected a number"),
+        (["train.py", "--env.randomization.enabled", "maybe"], "expected true or false"),
+        (["train.py", "--resume", str(corrupt), "--task", "flat"], "continues the checkpoint's own task"),
         (["train.py", "--resume", str(corrupt)], "cannot read checkpoint"),
         (["train.py", "--resume", str(truncated)], "cannot read checkpoint"),
         (["play.py", "--controller", "cpg_rl", "--checkpoint", str(truncated)], "cannot read checkpoint"),
@@ -534,17 +544,18 @@ def test_bad_checkpoints_are_one_line_errors(trained, tmp_path):
         (["train.py", "--num_envs", "0"], "positive integer"),
         (["train.py", "--num_envs", "100000000"], "exceeds"),
         (["train.py", "--max_iterations", "1.5"], "positive integer"),
-        (["train.py", "--goal_distance", "far"], "invalid float value"),
-        (["train.py", "--terrain", "moon"], "unknown terrain 'moon'"),
+        (["train.py", "--env.task.goal_distance", "far"], "expected a number"),
+        (["train.py", "--env.terrain.name", "moon"], "'moon' is not one of flat, rugged, stepped, complex"),
         (["train.py", "--log_dir", str(a_file / "sub")], "not a writable directory"),
-        (["train.py", "--max_minutes", "-1"], "--max_minutes must be positive"),
-        (["train.py", "--action_std", "0"], "--action_std must be positive"),
-        (["train.py", "--frame_dt", "0.015"], "must be a positive multiple of sim.frame_dt"),
-        (["train.py", "--a2_range", "1.0", "0.5"], "--a2_range must satisfy"),
-        (["train.py", "--a2_range", "0.9", "1.3", "--resume", str(corrupt)], "--a2_range is for new runs"),
-        (["train.py", "--stability_tilt", "2"], "--stability_tilt must lie in (0, pi/2)"),
-        (["play.py", "--controller", "cpg", "--goal_distance", "0.2", "--steps", "1"], "goal_distance must exceed"),
-        (["play.py", "--controller", "cpg", "--terrain", "stepped", "--step_rise", "-0.1", "--steps", "1"],
+        (["train.py", "--agent.max_minutes", "-1"], "agent.max_minutes must be positive"),
+        (["train.py", "--agent.distribution.name", "gaussian", "--agent.distribution.init_std", "0"],
+         "init_std must be positive"),
+        (["train.py", "--env.sim.frame_dt", "0.015"], "must be a positive multiple of sim.frame_dt"),
+        (["train.py", "--env.cpg.a2_range", "1.0", "0.5"], "cpg.a2_range must satisfy"),
+        (["train.py", "--env.reward.stability_tilt", "2"], "stability_tilt must lie in (0, pi/2)"),
+        (["play.py", "--controller", "cpg", "--env.task.goal_distance", "0.2", "--steps", "1"],
+         "goal_distance must exceed"),
+        (["play.py", "--controller", "cpg", "--terrain", "stepped", "--env.terrain.step_rise", "-0.1", "--steps", "1"],
          "step_rise must be >= 0"),
     ]
     before = sorted(glob.glob(str(logs / "**"), recursive=True))
@@ -557,7 +568,7 @@ def test_bad_checkpoints_are_one_line_errors(trained, tmp_path):
 
 def test_learning_curves_from_a_run(trained, tmp_path):
     logs, _ = trained
-    run_dir = glob.glob(str(logs / "hexnewton_cpg_flat" / "*"))[0]
+    run_dir = glob.glob(str(logs / "hexnewton_flat" / "*"))[0]
     out = tmp_path / "curve.png"
     proc = subprocess.run([sys.executable, "-m", "hexnewton.curves", run_dir, "--out", str(out)], capture_output=True,
                           text=True, timeout=300)  # fmt: skip
@@ -574,7 +585,7 @@ def test_curve_axes_and_resumed_pieces(trained):
     from hexnewton.curves import read_curve, steps_per_iteration
 
     logs, _ = trained
-    run_dir = glob.glob(str(logs / "hexnewton_cpg_flat" / "*"))[0]
+    run_dir = glob.glob(str(logs / "hexnewton_flat" / "*"))[0]
     per_it = steps_per_iteration(run_dir)
     tag = next(iter(read_curve(run_dir)))
     its = [x for x, _ in read_curve(run_dir, "iteration")[tag]]
@@ -596,7 +607,7 @@ def test_shipped_policies_fit_the_environment(name):
     import onnxruntime as ort
 
     from hexnewton.kernels.observations import OBS_DIM
-    from hexnewton.train import check_compatible, load_checkpoint
+    from hexnewton.checkpoint import check_compatible, load_checkpoint
 
     base = os.path.join(os.path.dirname(__file__), "..", "results", "policies", name)
     ckpt = load_checkpoint(base + ".pt")
@@ -610,8 +621,8 @@ def test_shipped_policies_fit_the_environment(name):
 
 
 def _train(logs, *args, timeout=900):
-    cmd = [sys.executable, "train.py", "--num_envs", "8", "--device", "cpu", "--terrain", "flat", "--log_dir", str(logs),
-           "--num_steps_per_env", "8", *args]  # fmt: skip
+    cmd = [sys.executable, "train.py", "--num_envs", "8", "--device", "cpu", "--task", "flat", "--log_dir", str(logs),
+           "--agent.num_steps_per_env", "8", *args]  # fmt: skip
     proc = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout)
     assert proc.returncode == 0, proc.stdout[-2000:] + proc.stderr[-3000:]
     return proc.stdout
@@ -637,22 +648,22 @@ def test_same_seed_same_first_iteration_on_cpu(tmp_path):
 def test_resume_continues_iterations_and_learning_rate(tmp_path):
     """2 iterations + resume 2 numbers its iterations like 4 straight ones and keeps the adapted learning rate and
     the physics it was trained under."""
-    _train(tmp_path, "--max_iterations", "2", "--experiment", "part", "--frame_dt", "0.02", "--substeps", "2",
-           "--distribution", "gaussian")  # fmt: skip
+    _train(tmp_path, "--max_iterations", "2", "--experiment", "part", "--env.sim.frame_dt", "0.02",
+           "--env.sim.substeps", "2", "--agent.distribution.name", "gaussian")  # fmt: skip
     (first,) = _run_dirs(tmp_path, "part")
     ck = torch.load(first + "/model_1.pt", weights_only=False)
     lr_saved = ck["optimizer_state_dict"]["param_groups"][0]["lr"]
     time.sleep(1.1)  # run directories are named by the second
-    out = _train(tmp_path, "--max_iterations", "2", "--experiment", "part", "--resume", first + "/model_1.pt",
-                 "--action_std", "0.2")  # fmt: skip
+    out = _train(tmp_path, "--max_iterations", "2", "--experiment", "part", "--resume",
+                 first + "/model_1.pt", "--agent.distribution.init_std", "0.2")  # fmt: skip
     assert "continuing at iteration 2" in out
     second = _run_dirs(tmp_path, "part")[1]
     assert os.path.isfile(second + "/model_3.pt") and torch.load(second + "/model_3.pt", weights_only=False)["iter"] == 3
     meta = json.loads(open(second + "/config.json").read())["hexnewton"]
     sim = meta["config"]["sim"]
     assert meta["distribution"] == "gaussian"  # a resumed run keeps its action distribution
-    assert (sim["frame_dt"], sim["substeps"]) == (0.02, 2)  # from the checkpoint: no --frame_dt on the resume
-    # --action_std replaced the checkpoint's learnt std and held it fixed through training
+    assert (sim["frame_dt"], sim["substeps"]) == (0.02, 2)  # from the checkpoint: no --env.sim.* on the resume
+    # agent.distribution.init_std on a resume replaced the checkpoint's learnt std
     std = torch.load(second + "/model_3.pt", weights_only=False)["actor_state_dict"]["distribution.std_param"]
     assert ck["actor_state_dict"]["distribution.std_param"].sub(0.2).abs().max() > 1e-3
     torch.testing.assert_close(std, torch.full_like(std, 0.2))
@@ -674,8 +685,8 @@ def read_scalars_lr(run_dir):
 
 def test_interrupt_saves_and_exports(tmp_path):
     """SIGINT in the middle of training: a final checkpoint and the ONNX policy are written, exit status 0."""
-    cmd = [sys.executable, "train.py", "--num_envs", "8", "--device", "cpu", "--terrain", "flat", "--log_dir",
-           str(tmp_path), "--num_steps_per_env", "8", "--max_iterations", "100000", "--save_interval", "1"]  # fmt: skip
+    cmd = [sys.executable, "train.py", "--num_envs", "8", "--device", "cpu", "--task", "flat", "--log_dir",
+           str(tmp_path), "--agent.num_steps_per_env", "8", "--max_iterations", "100000", "--agent.save_interval", "1"]
     proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     deadline = time.time() + 600  # interrupt once training is under way (iteration 1 saved), whatever the load
     while not glob.glob(str(tmp_path / "*" / "*" / "model_1.pt")) and time.time() < deadline:
@@ -693,7 +704,7 @@ def test_interrupt_saves_and_exports(tmp_path):
 
 def test_torchrun_ranks_devices_and_seeds():
     """torchrun's variables pick cuda:LOCAL_RANK and rank-offset seeds; a plain run is unchanged (no GPU needed)."""
-    from hexnewton.train import distributed_rank
+    from hexnewton.runner import distributed_rank
 
     assert distributed_rank({}, None).device is None and distributed_rank({}, "cpu").world_size == 1
     r = distributed_rank({"WORLD_SIZE": "2", "RANK": "1", "LOCAL_RANK": "1"}, None)
@@ -720,7 +731,7 @@ def test_stop_reason_is_one_decision_for_all_ranks():
     """--max_minutes / --target_success under torchrun: every rank reaches the same decision from the sums over
     the ranks (here a fake two-rank sum), so no rank leaves the others waiting in a collective."""
     from hexnewton.env import RING
-    from hexnewton.train import stop_reason
+    from hexnewton.runner import stop_reason
 
     full = {"episodes": RING, "success_rate": 0.96, "top_level_episodes": RING // 4, "top_level_success_rate": 0.5}
     assert stop_reason(False, full, 0.95, 0) == "target success 0.960 >= 0.95"
@@ -739,12 +750,12 @@ def test_stop_reason_is_one_decision_for_all_ranks():
     assert stop_reason(False, full, 0.95, 0, time_up_elsewhere) == "the --max_minutes limit"
 
 
-@pytest.mark.parametrize("curriculum", [(), ("--levels", "2", "--start_levels", "2")])
+@pytest.mark.parametrize("curriculum", [(), ("--env.terrain.levels", "2", "--env.terrain.start_levels", "2")])
 def test_target_success_stops_training(tmp_path, curriculum):
     """--target_success (time-to-skill): with the goal 5 cm beyond reach every episode succeeds at once, so
     training stops as soon as 1024 episodes have finished (with a curriculum: 256 on its last level), then saves
     and exports."""
-    out = _train(tmp_path, "--goal_distance", "0.55", "--target_success", "0.9", "--max_iterations", "100000",
+    out = _train(tmp_path, "--env.task.goal_distance", "0.55", "--agent.target_success", "0.9", "--max_iterations", "100000",
                  "--num_envs", "32", *curriculum)  # fmt: skip
     assert ("stopped by target success on the last level" if curriculum else "stopped by target success") in out
     (run,) = glob.glob(str(tmp_path / "*" / "*"))
@@ -753,82 +764,120 @@ def test_target_success_stops_training(tmp_path, curriculum):
 
 def test_max_minutes_stops_at_an_iteration_boundary(tmp_path):
     """--max_minutes: the alarm is acted on at the end of an iteration (as under torchrun), then save and export."""
-    out = _train(tmp_path, "--max_minutes", "0.001", "--max_iterations", "100000", "--num_envs", "8")
+    out = _train(tmp_path, "--agent.max_minutes", "0.001", "--max_iterations", "100000", "--num_envs", "8")
     it = re.search(r"stopped by the --max_minutes limit after iteration (\d+): saving", out)
     assert it, out[-2000:]
     (run,) = glob.glob(str(tmp_path / "*" / "*"))
     assert os.path.isfile(run + "/policy.onnx") and os.path.isfile(f"{run}/model_{it.group(1)}.pt")
 
 
-def test_terrain_recipes_and_reward_switches():
-    """``python train.py --terrain T`` fills unset flags from RECIPES (a resumed run keeps its ranges and physics);
-    ``--paper_reward`` is Table 1, and flags given on top still apply."""
-    import argparse
+def test_tasks_hold_the_recipes():
+    """The registry's tasks: the terrain recipe (curriculum, knee-lift floor, randomisation, 20 ms frame, 0.1 s filter,
+    stability shaping), the complex course's posture and curriculum, Table 1 and Table 2 in ``paper``; every task has
+    a Gymnasium id, and ``task`` hands out copies."""
+    from hexnewton.agent import AgentConfig
+    from hexnewton.tasks import STABLE_STAGES, TASKS, task
 
-    from hexnewton.train import RECIPES, STABLE_STAGES, apply_recipe, reward_config
-
-    def args(**kw):
-        base = dict(terrain="complex", levels=None, start_levels=None, randomize=None, a2_range=None, frame_dt=None,
-                    substeps=None, param_tau=None, paper_reward=False, direction_deadband=None, goal_bonus=None,
-                    off_course_penalty=None, stability_tilt=None, w_tilt=None, w_ang_vel=None, w_action_rate=None,
-                    direction_from_start=False, posture=None, max_iterations=None, stages=None)  # fmt: skip
-        return argparse.Namespace(**{**base, **kw})
-
-    a = args()
-    apply_recipe(a, resumed=False)
-    assert (a.levels, a.start_levels, a.a2_range, a.randomize, a.frame_dt, a.param_tau) == (10, 3, (0.9, 1.3), True,
-                                                                                            0.02, 0.1)  # fmt: skip
-    assert a.posture and a.stages == STABLE_STAGES and a.max_iterations == 1062  # the stable-gait curriculum
-    a = args(terrain="rugged")
-    apply_recipe(a, resumed=False)
-    assert a.posture is None and a.stages == () and a.max_iterations == 300
-    a = args(levels=0, randomize=False)
-    apply_recipe(a, resumed=True)
-    assert (a.levels, a.randomize, a.a2_range, a.frame_dt, a.param_tau) == (0, False, None, None, None)  # resumed
-    a = args(terrain="flat")
-    apply_recipe(a, resumed=False)
-    assert RECIPES["flat"] == {} and (a.levels, a.randomize, a.frame_dt) == (0, False, None)
-    assert reward_config(args()) == RewardConfig()  # shaping off in the config, on in the paper terrains' recipes
-    a = args()
-    apply_recipe(a, resumed=False)
-    assert (reward_config(a).w_tilt, reward_config(a).w_action_rate) == (5.0, 0.1)
-    a = args(paper_reward=True)
-    apply_recipe(a, resumed=False)
-    assert reward_config(a).w_tilt == 0.0 and a.levels == 10  # Table 1 as written; the curriculum stays
-    paper = reward_config(args(paper_reward=True, w_tilt=1.5))
-    assert paper.goal_bonus == 0 and paper.off_course_penalty == 0 and paper.w_tilt == 1.5 and paper.w_ang_vel == 0
-    assert not reward_config(args(direction_from_start=True)).direction_to_goal
+    c = task("complex")
+    assert (c.env.terrain.levels, c.env.terrain.start_levels, c.env.cpg.a2_range, c.env.randomization.enabled,
+            c.env.sim.frame_dt, c.env.cpg.param_tau) == (10, 3, (0.9, 1.3), True, 0.02, 0.1)  # fmt: skip
+    assert c.env.cpg.posture and c.agent.stages == STABLE_STAGES and c.agent.max_iterations == 1062
+    assert (c.env.reward.w_tilt, c.env.reward.w_action_rate) == (5.0, 0.1)
+    r = task("rugged")
+    assert not r.env.cpg.posture and r.agent.stages == () and r.agent.max_iterations == 300
+    f = task("flat")
+    assert (f.env.terrain.levels, f.env.randomization.enabled, f.env.sim.frame_dt) == (0, False, 0.01)
+    assert f.env.reward == RewardConfig() and f.agent == AgentConfig()
+    p = task("paper")
+    assert p.env.reward == RewardConfig().paper_reward() and p.env.reward.goal_bonus == 0 and p.env.reward.w_tilt == 0
+    a = p.agent.to_rsl_rl(1024)["algorithm"]
+    assert (a["learning_rate"], a["schedule"], a["gamma"], a["lam"], a["clip_param"]) == (1e-4, "fixed", 0.99, 0.95, 0.2)
+    assert a["num_mini_batches"] == 1024 * 24 // 512  # Table 2's batch of 512
+    assert p.agent.model.activation == "relu" and p.agent.model.hidden_dims == (256, 256, 256, 256)
+    assert not p.env.cpg.posture and p.env.terrain.levels == 0 and not p.env.randomization.enabled
+    s8 = task("stairs-8cm")
+    assert (s8.env.terrain.step_rise, s8.env.task.goal_distance, s8.env.terrain.x_max) == (0.08, 5.5, 6.5)
+    assert task("complex-5m").env.task.goal_distance == 5.5 and task("complex-joint").action_mode == "joint"
+    c.env.reward.w_tilt = 99.0
+    assert task("complex").env.reward.w_tilt == 5.0  # a copy
+    assert len({t.gym_id for t in TASKS.values()}) == len(TASKS) and TASKS["complex-5m"].gym_id == "Hexnewton-Complex-5m-v0"
+    with pytest.raises(ValueError, match="unknown task 'moon'"):
+        task("moon")
 
 
-def test_curriculum_stages_change_reflex_and_weights_in_one_run(tmp_path, monkeypatch, capsys):
-    """The complex recipe's curriculum, on shortened stages: each stage begins at its iteration, the checkpoints
-    carry the gain and weights they were trained under; a resumed run continues in its stage."""
+def test_config_overrides_are_generated_from_the_dataclasses():
+    """Every field of the env and agent trees is a flag; values are typed (tuples, optionals, choices, literals);
+    only the given ones are overrides."""
+    from hexnewton.agent import AgentConfig
+    from hexnewton.cli import ArgumentParser, add_config_args, apply_overrides, config_overrides
+
+    p = ArgumentParser(prog="t")
+    add_config_args(p, "env", HexConfig(), skip=("sim.num_envs",))
+    add_config_args(p, "agent", AgentConfig())
+    flags = {o for a in p._actions for o in a.option_strings}
+    assert "--env.reward.w_tilt" in flags and "--agent.algorithm.learning_rate" in flags
+    assert "--env.sim.num_envs" not in flags  # a conventional flag of its own
+    args = p.parse_args(["--env.cpg.a2_range", "0.5", "1.0", "--env.randomization.enabled", "true",
+                         "--agent.distribution.std_max", "none", "--agent.model.hidden_dims", "64", "64",
+                         "--agent.stages", "((3, {'w_tilt': 2.0}),)", "--env.terrain.name", "rugged"])  # fmt: skip
+    env, agent = config_overrides(args, "env"), config_overrides(args, "agent")
+    assert env == {"cpg.a2_range": (0.5, 1.0), "randomization.enabled": True, "terrain.name": "rugged"}
+    assert agent == {"distribution.std_max": None, "model.hidden_dims": (64, 64), "stages": ((3, {"w_tilt": 2.0}),)}
+    cfg = apply_overrides(HexConfig(), env)
+    assert cfg.cpg.a2_range == (0.5, 1.0) and cfg.randomization.enabled and cfg.terrain.name == "rugged"
+    assert apply_overrides(AgentConfig(), agent).to_rsl_rl(8)["actor"]["hidden_dims"] == [64, 64]
+    with pytest.raises(ValueError, match="no field 'sim.warp'"):
+        apply_overrides(HexConfig(), {"sim.warp": 1})
+
+
+def test_gymnasium_makes_a_task_by_its_id():
+    """``gym.make("Hexnewton-<Task>-v0")`` after ``import hexnewton.tasks``: a batched env with torch tensors."""
+    import gymnasium as gym
+
+    import hexnewton.tasks  # noqa: F401
+
+    env = gym.make("Hexnewton-Rugged-v0", num_envs=3, device=DEV, overrides={"sim.frame_dt": 0.01})
+    obs, info = env.reset(seed=0)
+    assert obs.shape == (3, 59) and env.unwrapped.single_action_space.shape == (15,)
+    assert env.unwrapped.vec_env.cfg.terrain.name == "rugged" and env.unwrapped.vec_env.cfg.sim.frame_dt == 0.01
+    for _ in range(3):
+        obs, reward, terminated, truncated, info = env.step(env.action_space.sample())
+    assert obs.shape == (3, 59) and reward.shape == (3,) and terminated.dtype == torch.bool
+    assert torch.isfinite(obs).all() and "log" in info
+    env.close()
+
+
+def test_curriculum_stages_change_reflex_and_weights_in_one_run(tmp_path, capsys):
+    """The complex recipe's curriculum, on shortened stages (--agent.stages): each stage begins at its iteration, the
+    checkpoints carry the task, the gain and weights they were trained under; a resumed run continues in its
+    stage, on its own task."""
     import torch
 
     from hexnewton import train
 
-    monkeypatch.setitem(train.RECIPES["complex"], "stages",
-                        ((1, dict(posture_reflex=2.0, w_tilt=15.0)), (2, dict(w_tilt=40.0, w_ang_vel=0.3))))
-    assert train.main(["--terrain", "complex", "--num_envs", "8", "--num_steps_per_env", "4", "--max_iterations",
-                       "3", "--device", "cpu", "--log_dir", str(tmp_path)]) == 0  # fmt: skip
+    stages = "((1, {'posture_reflex': 2.0, 'w_tilt': 15.0}), (2, {'w_tilt': 40.0, 'w_ang_vel': 0.3}))"
+    assert train.main(["--task", "complex", "--num_envs", "8", "--agent.num_steps_per_env", "4", "--max_iterations",
+                       "3", "--device", "cpu", "--log_dir", str(tmp_path), "--agent.stages", stages]) == 0  # fmt: skip
     out = capsys.readouterr().out
     assert "iteration 1: curriculum stage 2 of 3: posture_reflex 2, w_tilt 15" in out
     assert "iteration 2: curriculum stage 3 of 3: posture_reflex 2, w_tilt 40, w_ang_vel 0.3" in out
     last = sorted(tmp_path.glob("*/*/model_2.pt"))[-1]
-    cfg = torch.load(last, weights_only=False)["infos"]["hexnewton"]["config"]
+    meta = torch.load(last, weights_only=True)["infos"]["hexnewton"]
+    cfg = meta["config"]
+    assert meta["task"] == "complex" and meta["agent"]["max_iterations"] == 3
     assert cfg["cpg"]["posture"] and cfg["cpg"]["posture_reflex"] == 2.0 and cfg["reward"]["w_tilt"] == 40.0
-    # resumed without --terrain: the run goes on on its own terrain, in the stage its iteration is in
-    assert train.main(["--resume", str(last), "--num_envs", "8", "--num_steps_per_env", "4", "--max_iterations", "1",
-                       "--device", "cpu", "--log_dir", str(tmp_path)]) == 0  # fmt: skip
+    # resumed: the run goes on with its own task and configs, in the stage its iteration is in
+    assert train.main(["--resume", str(last), "--num_envs", "8", "--max_iterations", "1", "--device", "cpu",
+                       "--log_dir", str(tmp_path)]) == 0  # fmt: skip
     out = capsys.readouterr().out
-    assert "training hexnewton_cpg_complex" in out and "iteration 3: curriculum stage 3 of 3" in out
+    assert "training task complex" in out and "iteration 3: curriculum stage 3 of 3" in out
 
 
 def test_best_checkpoint_keeps_the_best_iteration(tmp_path):
     """model_best.pt follows the training success once enough episodes are in (a quarter of the ring; with a
     curriculum, played on the last level), and only a real improvement saves again."""
     from hexnewton.env import RING
-    from hexnewton.train import BestCheckpoint, training_success
+    from hexnewton.runner import BestCheckpoint, training_success
 
     saved = []
     best = BestCheckpoint(str(tmp_path), levels=0)

@@ -8,7 +8,7 @@ import sys
 import numpy as np
 import pytest
 
-from hexnewton.evaluate import DISTANCES, round_metrics, summarize
+from hexnewton.metrics import DISTANCES, round_metrics, summarize
 from hexnewton.kernels.terminations import FELL, OFF_COURSE, SUCCESS
 
 DT = 0.02
@@ -104,7 +104,7 @@ def test_report_on_a_tiny_run(tmp_path):
         (["--controllers", "cpg_rl", "--checkpoint", "cpg_rl=/nope.pt", "--out", str(tmp_path / "x")], "not found"),
         (["--checkpoint", "cpg_rl", "--out", str(tmp_path / "x")], "NAME=PATH"),
         (["--rounds", "0"], "positive"),
-        (["--controllers", "cpg", "--frame_dt", "0.015", "--out", str(tmp_path / "x")], "positive multiple of"),
+        (["--controllers", "cpg", "--env.sim.frame_dt", "0.015", "--out", str(tmp_path / "x")], "positive multiple of"),
         (["--stochastic", "--expected", "--out", str(tmp_path / "x")], "not allowed with argument --stochastic"),
     ]
     for args, message in cases:
@@ -118,27 +118,27 @@ def test_report_on_a_tiny_run(tmp_path):
 def test_stochastic_rounds_are_seeded_and_sample_around_the_mean():
     """``--stochastic``: the policy samples its actions (trajectories differ from the mean action's), and the
     same evaluation seed gives the same rounds; another seed (``--seed``, a validation set) other rounds."""
-    from hexnewton.evaluate import run_rounds
+    from hexnewton.rollout import run_rounds
 
     policy = os.path.join(ROOT, "results", "policies", "cpg_rl_flat.pt")
-    mean, a, b = (run_rounds("cpg_rl", policy, "flat", 2, "cpu", 30, 0.2, False, stochastic=stochastic)
+    mean, a, b = (run_rounds("cpg_rl", policy, "flat", 2, "cpu", 30, False, stochastic=stochastic)
                   for stochastic in (False, True, True))
     np.testing.assert_array_equal(a.pos, b.pos)
     np.testing.assert_array_equal(a.params, b.params)
     assert np.abs(a.params - mean.params).max() > 1e-3
-    other = run_rounds("cpg_rl", policy, "flat", 2, "cpu", 30, 0.2, False, stochastic=True, seed=3000)
+    other = run_rounds("cpg_rl", policy, "flat", 2, "cpu", 30, False, stochastic=True, seed=3000)
     assert np.abs(other.rpy[0, :, 2] - a.rpy[0, :, 2]).max() > 1e-2  # other start headings
 
 
 def test_rounds_run_under_the_policys_own_physics(tmp_path, monkeypatch):
-    """A policy trained under other physics (train.py --frame_dt/--substeps) is evaluated under it, unless
-    ``physics`` overrides it; the fixed CPG runs under the defaults."""
+    """A policy trained under other physics (--env.sim.frame_dt / substeps) is evaluated under it, unless the overrides
+    set it; the fixed CPG runs under the defaults."""
     import torch
 
     import hexnewton.env
     from hexnewton.config import SimConfig
-    from hexnewton.evaluate import run_rounds
-    from hexnewton.train import load_checkpoint, trained_config
+    from hexnewton.rollout import run_rounds
+    from hexnewton.checkpoint import load_checkpoint, trained_config
 
     ckpt = load_checkpoint(os.path.join(ROOT, "results", "policies", "cpg_rl_flat.pt"))
     ckpt["infos"]["hexnewton"]["config"]["sim"].update(frame_dt=0.02, substeps=3)
@@ -147,42 +147,42 @@ def test_rounds_run_under_the_policys_own_physics(tmp_path, monkeypatch):
     assert (trained_config(ckpt).sim.frame_dt, trained_config(ckpt).sim.substeps) == (0.02, 3)
     seen, make_env = [], hexnewton.env.make_env
     monkeypatch.setattr(hexnewton.env, "make_env", lambda cfg, mode="cpg": seen.append(cfg.sim) or make_env(cfg, mode))
-    run_rounds("cpg_rl", path, "flat", 2, "cpu", 3, 0.2, False)
-    run_rounds("cpg_rl", path, "flat", 2, "cpu", 3, 0.2, False, physics={"frame_dt": 0.01, "substeps": 4})
-    run_rounds("cpg", None, "flat", 2, "cpu", 3, 0.2, False)
+    run_rounds("cpg_rl", path, "flat", 2, "cpu", 3, False)
+    run_rounds("cpg_rl", path, "flat", 2, "cpu", 3, False, overrides={"sim.frame_dt": 0.01, "sim.substeps": 4})
+    run_rounds("cpg", None, "flat", 2, "cpu", 3, False)
     assert [(s.frame_dt, s.substeps, s.num_envs) for s in seen] == [(0.02, 3, 2), (0.01, 4, 2),
                                                                       (SimConfig.frame_dt, SimConfig.substeps, 2)]
 
 
 def test_posture_reflex_for_posture_policies_and_fixed_gaits():
-    """``--posture_reflex``: a posture policy runs with the given gain, a fixed gait (15 parameters) gets the neutral
+    """``--env.cpg.posture_reflex``: a posture policy runs with the given gain, a fixed gait (15 parameters) gets the neutral
     posture and the reflex, a policy without the posture is refused with one error."""
     from hexnewton.config import gait_params
-    from hexnewton.evaluate import run_rounds
+    from hexnewton.rollout import run_rounds
 
     posture = os.path.join(ROOT, "results", "policies", "cpg_rl_complex_posture.pt")
-    ep = run_rounds("cpg_rl", posture, "rugged", 2, "cpu", 5, 0.2, False, posture_reflex=2.0)
+    ep = run_rounds("cpg_rl", posture, "rugged", 2, "cpu", 5, False, overrides={"cpg.posture_reflex": 2.0})
     assert ep.params.shape[1] == 18 and np.isfinite(ep.rpy).all()
-    fixed = run_rounds("cpg_swept", None, "flat", 2, "cpu", 5, 0.2, False, posture_reflex=2.0,
+    fixed = run_rounds("cpg_swept", None, "flat", 2, "cpu", 5, False, overrides={"cpg.posture_reflex": 2.0},
                        fixed_params=np.tile(gait_params(6.28, 0.2, 0.9, 0.3), (2, 1)))
     np.testing.assert_allclose(fixed.params[-1, 15:], 0.0, atol=1e-6)
     with pytest.raises(ValueError, match="no body posture"):
-        run_rounds("cpg_rl", os.path.join(ROOT, "results", "policies", "cpg_rl_flat.pt"), "flat", 2, "cpu", 5, 0.2,
-                   False, posture_reflex=2.0)
+        run_rounds("cpg_rl", os.path.join(ROOT, "results", "policies", "cpg_rl_flat.pt"), "flat", 2, "cpu", 5,
+                   False, overrides={"cpg.posture_reflex": 2.0})
 
 
 def test_shipped_complex_policy_climbs_steps_under_its_20ms_physics():
     """The shipped complex policy (trained under a 20 ms frame = 4 x 5 ms) climbs the 6 cm risers on the CPU as
     on the GPU: 8 unseen rounds, sampled actions, 20 s. Steps climbable is one of the stability checks
     for that physics; the fixed CPG stands at the first riser (x = 0.5 m)."""
-    from hexnewton.evaluate import run_rounds
+    from hexnewton.rollout import run_rounds
     from hexnewton.kernels.terminations import FELL
-    from hexnewton.train import load_checkpoint, trained_config
+    from hexnewton.checkpoint import load_checkpoint, trained_config
 
     policy = os.path.join(ROOT, "results", "policies", "cpg_rl_complex_gaussian.pt")
     sim = trained_config(load_checkpoint(policy)).sim
     assert (sim.frame_dt, sim.substeps) == (0.02, 4)
-    ep = run_rounds("cpg_rl", policy, "stepped", 8, "cpu", 1000, 0.2, False, stochastic=True)
+    ep = run_rounds("cpg_rl", policy, "stepped", 8, "cpu", 1000, False, stochastic=True)
     assert not (ep.status == FELL).any()
     assert (ep.pos[:, :, 0].max(axis=0) > 0.8).sum() >= 6  # the torso is past the second riser (0.75 m)
 
@@ -191,12 +191,12 @@ def test_shipped_policy_is_more_level_than_the_fixed_cpg_on_rugged_ground():
     """The shipped complex policy (body posture, levelling reflex, deterministic action) against the fixed CPG with
     its default gait under the same physics: 4 unseen rugged rounds of 8 s, the same seeds, no falls, lower pitch
     and roll variance (on the GPU's 1000 test rounds: 0.60x / 0.77x, RESULTS.md)."""
-    from hexnewton.evaluate import run_rounds
+    from hexnewton.rollout import run_rounds
 
     policy = os.path.join(ROOT, "results", "policies", "cpg_rl_complex.pt")
     stats = {}
-    for ctrl, ck, physics in (("cpg_rl", policy, None), ("cpg", None, {"frame_dt": 0.02, "substeps": 4})):
-        ep = run_rounds(ctrl, ck, "rugged", 4, "cpu", 400, 0.2, False, physics=physics)
+    for ctrl, ck, physics in (("cpg_rl", policy, None), ("cpg", None, {"sim.frame_dt": 0.02, "sim.substeps": 4})):
+        ep = run_rounds(ctrl, ck, "rugged", 4, "cpu", 400, False, overrides=physics)
         stats[ctrl] = summarize(round_metrics(ep.pos, ep.rpy, ep.done, ep.status, ep.dt), ep.rpy)
     assert stats["cpg_rl"]["fall_rate"] == 0.0
     for angle in ("pitch", "roll"):
@@ -258,7 +258,7 @@ def test_sb3_adapter_and_curves(tmp_path):
 def test_gait_quality_and_fall_metrics():
     """Falls anywhere in a round, the 99.9th percentile of |angle|, body rate RMS and the parameters' change per step
     (from each first episode's second step on)."""
-    from hexnewton.evaluate import gait_quality
+    from hexnewton.metrics import gait_quality
 
     pos, rpy, done, status = _synthetic()
     m = round_metrics(pos, rpy, done, status, DT)
@@ -277,17 +277,17 @@ def test_gait_quality_and_fall_metrics():
 
 def test_named_perturbations_change_one_thing():
     from hexnewton.config import RandomizationConfig
-    from hexnewton.evaluate import PERTURBATIONS, perturbation
+    from hexnewton.rollout import PERTURBATIONS, perturbation
 
-    nominal, terrain = perturbation("nominal")
-    assert nominal is None and terrain == {}
-    friction, _ = perturbation("friction_0.3")
-    assert friction.enabled and friction.friction == (0.3, 0.3) and friction.payload == (0.0, 0.0)
-    assert friction.latency_share == 0.0 and friction.push_velocity == 0.0 and friction.noise_quat == 0.0
+    assert perturbation("nominal") == {}
+    friction = perturbation("friction_0.3")
+    assert friction["randomization.enabled"] and friction["randomization.friction"] == (0.3, 0.3)
+    assert friction["randomization.payload"] == (0.0, 0.0) and friction["randomization.latency_share"] == 0.0
+    assert friction["randomization.push_velocity"] == 0.0 and friction["randomization.noise_quat"] == 0.0
     train = RandomizationConfig()
-    assert perturbation("payload_0.8kg")[0].payload[0] > train.payload[1]  # beyond the training range
-    assert perturbation("latency_40ms")[0].latency_share == 1.0 > train.latency_share
-    assert perturbation("steps_7cm") == (None, {"step_rise": 0.07})
+    assert perturbation("payload_0.8kg")["randomization.payload"][0] > train.payload[1]  # beyond the training range
+    assert perturbation("latency_40ms")["randomization.latency_share"] == 1.0 > train.latency_share
+    assert perturbation("steps_7cm") == {"terrain.step_rise": 0.07}
     assert len(PERTURBATIONS) >= 9
     with pytest.raises(ValueError, match="unknown perturbation"):
         perturbation("gravity")

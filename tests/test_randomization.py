@@ -110,7 +110,8 @@ def test_randomised_env_steps(pair):
 
 
 def test_evaluation_under_perturbed_conditions():
-    from hexnewton.evaluate import run_rounds
+    from hexnewton.rollout import run_rounds
 
-    ep = run_rounds("cpg", None, "flat", 3, DEV, 20, 0.0, progress=False, randomize=True, goal_distance=5.5)
+    ep = run_rounds("cpg", None, "flat", 3, DEV, 20, progress=False,
+                    overrides={"task.reset_yaw": 0.0, "randomization.enabled": True, "task.goal_distance": 5.5})
     assert ep.pos.shape == (20, 3, 2) and np.isfinite(ep.pos).all() and ep.pos[-1, :, 0].min() > 0

@@ -22,7 +22,8 @@ from hexnewton.kernels.terminations import (
 )
 from hexnewton.kernels.reference import quat_to_rpy_np
 from hexnewton.env import make_env
-from hexnewton.play import fixed_cpg_actions, rollout
+from hexnewton.policy import fixed_cpg_actions
+from hexnewton.rollout import rollout
 from hexnewton.terrain import make_terrain, terrain_height_np
 from hexnewton.terrain.query import height_field_from_grid
 

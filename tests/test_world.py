@@ -176,8 +176,8 @@ def test_bench_reports_sim_env_and_training(tmp_path):
     out, md = tmp_path / "b.json", tmp_path / "B.md"
     proc = subprocess.run([sys.executable, "-m", "hexnewton.bench", "--device", "cpu", "--terrain", "flat", "--num_envs",
                            "4", "--frames", "5", "--env_steps", "3", "--train_iterations", "1", "--json", str(out),
-                           "--append", str(md), "--profile", "--frame_dt", "0.02", "--substeps", "3",
-                           "--num_mini_batches", "2"],
+                           "--append", str(md), "--profile", "--env.sim.frame_dt", "0.02", "--env.sim.substeps", "3",
+                           "--agent.algorithm.num_mini_batches", "2"],
                           capture_output=True, text=True, timeout=600)  # fmt: skip
     assert proc.returncode == 0, proc.stderr[-2000:]
     res = json.loads(out.read_text())

@@ -28,7 +28,7 @@ def exercise(workdir: pathlib.Path) -> None:
     from hexnewton import bench, play, train
 
     log = workdir / "logs"
-    for extra in (["--terrain", "complex", "--levels", "3", "--randomize"], ["--terrain", "flat", "--action_mode", "joint"]):
+    for extra in (["--task", "complex", "--env.terrain.levels", "3"], ["--task", "complex-joint"]):
         train.main(["--num_envs", "4", "--max_iterations", "1", "--log_dir", str(log), "--experiment", "pre",
                     "--device", "cpu", *extra])
     play.main(["--controller", "cpg", "--num_envs", "2", "--steps", "3", "--terrain", "rugged", "--device", "cpu",

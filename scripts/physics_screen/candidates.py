@@ -29,7 +29,7 @@ from hexnewton.config import TERRAINS, CPGConfig, HexConfig, SimConfig, TaskConf
 from hexnewton.controller import CPGController
 from hexnewton.env import make_env
 from hexnewton.kernels.terminations import STATUS_NAMES
-from hexnewton.play import fixed_cpg_actions
+from hexnewton.policy import fixed_cpg_actions
 from hexnewton.robot import stand_height
 from hexnewton.sim import World
 from hexnewton.terrain import max_terrain_height_np

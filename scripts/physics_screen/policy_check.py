@@ -12,8 +12,9 @@ import numpy as np
 
 from hexnewton.config import HexConfig, SimConfig, TaskConfig, TerrainConfig
 from hexnewton.env import make_env
-from hexnewton.play import load_policy, rollout
-from hexnewton.train import load_checkpoint, trained_cpg
+from hexnewton.checkpoint import load_checkpoint, trained_config
+from hexnewton.policy import load_policy
+from hexnewton.rollout import rollout
 
 sys.path.insert(0, "scripts/physics_screen")
 from candidates import CANDIDATES  # noqa: E402
@@ -22,7 +23,7 @@ POL = {"flat": ("results/policies/cpg_rl_flat.pt", 15.0), "rugged": ("results/po
 
 for name in sys.argv[1:]:
     for terrain, (path, seconds) in POL.items():
-        cpg = trained_cpg(load_checkpoint(path))
+        cpg = trained_config(load_checkpoint(path)).cpg
         rows = []
         for seed in (11, 12):
             cfg = HexConfig(sim=replace(SimConfig(), num_envs=16, device="cpu", **CANDIDATES[name]),
