@@ -42,8 +42,8 @@ import time
 
 import numpy as np
 
-from .cli import ArgumentParser, add_config_args, config_overrides, positive_int, run, terrain_name
-from .config import FIXED_GAITS, HexConfig, TaskConfig, gait_params
+from .cli import ArgumentParser, add_config_args, apply_overrides, config_overrides, positive_int, run, terrain_name
+from .config import FIXED_GAITS, HexConfig, TaskConfig, control_decimation, gait_params
 from .metrics import DISTANCES, gait_quality, round_metrics, summarize
 from .rollout import CONTROLLERS, EVAL_TERRAIN_SEED, FIXED, LABELS, PERTURBATIONS, SB3, START_SEED_OFFSET, \
     perturbation, run_rounds
@@ -108,6 +108,8 @@ def main(argv: list[str] | None = None) -> int:
     args = p.parse_args(argv)
     env_overrides = config_overrides(args, "env")
     goal_distance = env_overrides.get("task.goal_distance", TaskConfig.goal_distance)
+    course = apply_overrides(HexConfig(), env_overrides)  # fail before any output folder is made
+    control_decimation(course.task.control_dt, course.sim.frame_dt)
     if args.merge:
         return merge_reports(args.merge, args.out or os.path.join("eval", datetime.datetime.now().strftime(
             "%Y-%m-%d_%H-%M-%S")))
