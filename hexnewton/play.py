@@ -29,7 +29,7 @@ import sys
 import time
 from dataclasses import replace
 
-from .cli import ArgumentParser, add_config_args, apply_overrides, check_writable, config_overrides, positive_int, \
+from .cli import ArgumentParser, add_config_args, check_writable, config_overrides, positive_int, \
     run, terrain_name
 from .config import TERRAINS, HexConfig
 
@@ -89,7 +89,7 @@ def main(argv: list[str] | None = None) -> int:
                 raise
             args.checkpoint = SHIPPED_POLICY
         print(f"playing {args.checkpoint}")
-    trained, courses = HexConfig(), args.terrain or ["flat"]
+    trained, courses, ckpt = HexConfig(), args.terrain or ["flat"], None
     if args.checkpoint:
         from .checkpoint import checkpoint_meta, load_checkpoint, trained_config
 
@@ -101,7 +101,6 @@ def main(argv: list[str] | None = None) -> int:
         courses = args.terrain or [trained.terrain]  # the policy's own course
     mode = CONTROLLERS[args.controller]
 
-    from .config import terrain_for_goal
     from .env import make_env
     from .policy import fixed_cpg_actions, load_policy
     from .rollout import Recorder, rollout
@@ -109,17 +108,15 @@ def main(argv: list[str] | None = None) -> int:
     from .tasks import course
 
     for i, ground in enumerate(courses):
-        base = course(ground, trained, seed=args.seed, reset_yaw=0.0, goal_distance=trained.task.goal_distance)
-        cfg = apply_overrides(base, config_overrides(args, "env"))
-        cfg = replace(cfg, sim=replace(cfg.sim, num_envs=args.num_envs, device=args.device),
-                      terrain=terrain_for_goal(replace(cfg.terrain, seed=args.seed), cfg.task.goal_distance))
+        cfg = course(ground, trained, config_overrides(args, "env"), args.num_envs, args.device, args.seed,
+                     seed=args.seed, reset_yaw=0.0, goal_distance=trained.task.goal_distance)
         terrain = cfg.terrain.name
         env = make_env(cfg, mode)
         if args.controller == "cpg":
             actions = fixed_cpg_actions(env)
             policy = lambda obs: actions  # noqa: E731
         else:
-            policy = load_policy(env, args.checkpoint, mode, args.stochastic, args.expected)
+            policy = load_policy(env, args.checkpoint, mode, args.stochastic, args.expected, ckpt)
             if args.stochastic:
                 import torch
 

@@ -52,11 +52,12 @@ def fixed_cpg_actions(env, gait: str = "default", params: np.ndarray | None = No
     return torch.tensor(np.ascontiguousarray(a), dtype=torch.float32, device=env._obs_t.device)
 
 
-def load_runner(env, path: str, action_mode: str):
-    """An rsl-rl runner holding the checkpoint's actor, after checking the checkpoint fits this environment."""
+def load_runner(env, path: str, action_mode: str, ckpt: dict | None = None):
+    """An rsl-rl runner holding the checkpoint's actor, after checking the checkpoint fits this environment; ``ckpt``:
+    the checkpoint at ``path`` already read (:func:`~hexnewton.checkpoint.load_checkpoint`), else it is read here."""
     from rsl_rl.runners import OnPolicyRunner
 
-    ckpt = load_checkpoint(path)
+    ckpt = load_checkpoint(path) if ckpt is None else ckpt
     check_compatible(ckpt, path, env.num_obs, env.num_actions, action_mode)
     tcfg = checkpoint_agent(ckpt).to_rsl_rl(env.num_envs)
     with contextlib.redirect_stdout(io.StringIO()):  # rsl-rl prints both networks in full
@@ -78,17 +79,19 @@ def expected_clipped_action(mean, std):
     return -cdf_a + (1.0 - cdf_b) + mean * (cdf_b - cdf_a) - std * (pdf_b - pdf_a)
 
 
-def load_policy(env, path: str, action_mode: str, stochastic: bool = False, expected: bool = False):
+def load_policy(env, path: str, action_mode: str, stochastic: bool = False, expected: bool = False,
+                ckpt: dict | None = None):
     """Policy from an rsl-rl checkpoint, after checking it fits this environment: its deterministic action (the
     distribution's mean: for a Beta policy the action the robot runs), with ``stochastic`` an action sampled from
     its distribution as in training, with ``expected`` (Gaussian policies) the expected clipped action
     E[clip(a, -1, 1)], what the sampled policy asks of the CPG on average. A Beta policy's mean already is its
-    expected action: ``expected`` gives the same."""
+    expected action: ``expected`` gives the same. ``ckpt``: the checkpoint at ``path``
+    already read."""
     import torch
 
     if stochastic and expected:
         raise ValueError("choose sampled (--stochastic) or expected (--expected) actions, not both")
-    runner = load_runner(env, path, action_mode)
+    runner = load_runner(env, path, action_mode, ckpt)
     device = str(env._obs_t.device)
     policy = runner.get_inference_policy(device=device)
     if stochastic:

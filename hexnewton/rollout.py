@@ -5,7 +5,7 @@ one robot per round on unseen seeds, the arrays behind every metric and figure).
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -158,22 +158,19 @@ def run_rounds(controller: str, checkpoint: str | None, terrain: str, rounds: in
     (``hexnewton.cpg_sweep``). ``cpg.posture_reflex`` in ``overrides`` gives a fixed gait the body posture at its
     neutral values with that reflex; a policy needs its own posture for it."""
     from .checkpoint import load_checkpoint, trained_config
-    from .cli import apply_overrides
-    from .config import terrain_for_goal
     from .env import make_env
     from .policy import fixed_cpg_actions, load_policy
     from .tasks import course
 
     mode = CONTROLLERS[controller]
-    trained = trained_config(load_checkpoint(checkpoint)) if controller in ("cpg_rl", "joint") else HexConfig()
+    ckpt = load_checkpoint(checkpoint) if controller in ("cpg_rl", "joint") else None
+    trained = trained_config(ckpt) if ckpt is not None else HexConfig()
     overrides = dict(overrides or {})
     if "cpg.posture_reflex" in overrides and mode == "cpg":
         if controller not in FIXED and not trained.cpg.posture:
             raise ValueError(f"{checkpoint} has no body posture: a posture_reflex needs a policy trained with it")
         overrides["cpg.posture"] = True
-    cfg = apply_overrides(course(terrain, trained, seed=seed + START_SEED_OFFSET), overrides)
-    cfg = replace(cfg, sim=replace(cfg.sim, num_envs=rounds, device=device),
-                  terrain=terrain_for_goal(replace(cfg.terrain, seed=seed), cfg.task.goal_distance))  # fmt: skip
+    cfg = course(terrain, trained, overrides, rounds, device, seed, seed=seed + START_SEED_OFFSET)
     ground = cfg.terrain
     env = make_env(cfg, mode)
     if controller in FIXED:
@@ -184,7 +181,7 @@ def run_rounds(controller: str, checkpoint: str | None, terrain: str, rounds: in
 
         policy = load_sb3_policy(env, checkpoint, SB3[controller], deterministic=not stochastic)
     else:
-        policy = load_policy(env, checkpoint, mode, stochastic, expected)
+        policy = load_policy(env, checkpoint, mode, stochastic, expected, ckpt)
     if stochastic:
         import torch
 

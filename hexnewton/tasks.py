@@ -86,15 +86,22 @@ def task_table() -> str:
     return "\n".join(f"{t.name:<{width}}  {t.gym_id:<{gid}}  {t.description}" for t in TASKS.values())
 
 
-def course(terrain: str | TerrainConfig, trained: HexConfig | None = None, **task_fields) -> HexConfig:
+def course(terrain: str | TerrainConfig, trained: HexConfig | None = None, overrides: dict | None = None,
+           num_envs: int | None = None, device: str | None = None, terrain_seed: int = 0, **task_fields) -> HexConfig:
     """The course a trained controller is played or evaluated on: ``terrain`` (a name: as §3.1 defines it; a
-    ``TerrainConfig``: that one) without curriculum lanes, no randomisation, the patch long enough for the goal, with
-    the controller's own physics and CPG (``trained``: a checkpoint's config; the defaults for the fixed CPG) and
-    ``TaskConfig`` with ``task_fields``."""
+    ``TerrainConfig``: that one) without curriculum lanes, no randomisation, with the controller's own physics and CPG
+    (``trained``: a checkpoint's config; the defaults for the fixed CPG) and ``TaskConfig`` with ``task_fields``;
+    then ``overrides`` ({"terrain.step_rise": 0.07, ...}), ``num_envs`` robots on ``device``, terrain seed
+    ``terrain_seed`` and the patch long enough for the goal."""
+    from .cli import apply_overrides
+
     trained = trained or HexConfig()
-    t = replace(TaskConfig(), **task_fields)
     ground = TerrainConfig(name=terrain) if isinstance(terrain, str) else replace(terrain, levels=0, start_levels=1)
-    return HexConfig(sim=trained.sim, cpg=trained.cpg, task=t, terrain=terrain_for_goal(ground, t.goal_distance))
+    cfg = HexConfig(sim=trained.sim, cpg=trained.cpg, task=replace(TaskConfig(), **task_fields), terrain=ground)
+    cfg = apply_overrides(cfg, overrides or {})
+    sim = cfg.sim if num_envs is None else replace(cfg.sim, num_envs=num_envs, device=device)
+    return replace(cfg, sim=sim, terrain=terrain_for_goal(replace(cfg.terrain, seed=terrain_seed),
+                                                          cfg.task.goal_distance))
 
 
 def _register_gymnasium(t: Task) -> None:
