@@ -49,16 +49,20 @@ from .config import HexConfig, control_decimation
 from .controller import CPGController
 from .kernels.actions import joint_actions_kernel, scale_actions_kernel
 from .kernels.curriculum import curriculum_kernel, placement_kernel, start_levels
-from .kernels.observations import OBS_DIM, OBS_LAYOUT, observations_kernel
+from .kernels.observations import LAYOUTS, OBS_DIM, ObsInputs, observation_noise, observations_kernel
 from .kernels.randomization import delay_actions_kernel, observation_noise_kernel, push_kernel
-from .kernels.rewards import TERMS, rewards_kernel, shaping_kernel
-from .kernels.terminations import NONFINITE, STATUS_NAMES, TIMEOUT, episode_status_kernel
+from .kernels.rewards import REWARD_TERMS, RewardInputs, reward_weights, rewards_kernel
+from .kernels.tables import make_struct
+from .kernels.terminations import NONFINITE, SUCCESS, TERMINATIONS, TIMEOUT, EndInputs, episode_status_kernel
 from .robot import BASE_Q
 from .errors import HexnewtonError
 from .sim import World, capture_graph
 
 ACTION_MODES = ("cpg", "joint")
 RING = 1024  # finished episodes the logged rates average over
+# the ring's columns: one per episode end (its status code - 1), then distance, length and curriculum level
+ENDS = sorted(TERMINATIONS, key=lambda end: end.code)
+DISTANCE, LENGTH, LEVEL = len(ENDS), len(ENDS) + 1, len(ENDS) + 2
 
 
 @wp.kernel
@@ -90,15 +94,15 @@ def _bookkeeping(
     if d:
         done_u8[e] = wp.uint8(1)
         slot = wp.atomic_add(cursor, 0, 1) % ring.shape[0]
-        for k in range(5):
+        for k in range(wp.static(len(ENDS))):
             ring[slot, k] = 0.0
         ring[slot, st - 1] = 1.0  # status 1..5 -> columns fell, off_course, success, timeout, nonfinite
         dist = float(0.0)
         if wp.isfinite(joint_q[e, 0]):
             dist = joint_q[e, 0] - start[e][0]
-        ring[slot, 5] = dist
-        ring[slot, 6] = float(steps[e] + 1)
-        ring[slot, 7] = float(level[e])
+        ring[slot, DISTANCE] = dist
+        ring[slot, LENGTH] = float(steps[e] + 1)
+        ring[slot, LEVEL] = float(level[e])
         steps[e] = 0
     else:
         steps[e] = steps[e] + 1
@@ -132,7 +136,7 @@ class HexapodEnv(VecEnv):
         self.status, self.rpy = z(n, dtype=wp.int32), z(n, 3)
         self.episode_steps = z(n, dtype=wp.int32)
         self.done, self.done_u8, self.time_out = z(n, dtype=wp.bool), z(n, dtype=wp.uint8), z(n, dtype=wp.uint8)
-        self.reward, self.terms, self.prev_x = z(n), z(n, len(TERMS)), z(n)
+        self.reward, self.terms, self.prev_x = z(n), z(n, len(REWARD_TERMS)), z(n)
         self.obs = z(n, self.num_obs)
         # the state at the end of the last step, before finished envs were reset (play.py records these)
         self.last_q, self.last_start = z(n, 7 + 18), wp.zeros(n, dtype=wp.vec2, device=dev)
@@ -142,7 +146,7 @@ class HexapodEnv(VecEnv):
         self._cursor = z(1, dtype=wp.int32)
         self._nonfinite_total = z(1, dtype=wp.int32)  # blown-up envs reset since the env was built
         # finished episodes: status one-hot (5), distance, length, curriculum level
-        self._ring = wp.full((RING, 8), float("nan"), dtype=wp.float32, device=dev)
+        self._ring = wp.full((RING, LEVEL + 1), float("nan"), dtype=wp.float32, device=dev)
         self._no_level = z(n, dtype=wp.int32)
 
         # torch views (zero-copy)
@@ -225,12 +229,7 @@ class HexapodEnv(VecEnv):
         self._late = wp.array(rng.random(n) < rz.latency_share, dtype=wp.bool, device=dev)
         self._prev_actions = wp.zeros((n, self.num_actions), dtype=wp.float32, device=dev)
         self._effective_actions = wp.zeros((n, self.num_actions), dtype=wp.float32, device=dev)
-        amp = {"joint_pos": rz.noise_joint_pos, "joint_vel": rz.noise_joint_vel, "target": rz.noise_target,
-               "quat": rz.noise_quat, "max_height": rz.noise_height}  # fmt: skip
-        noise = np.zeros(self.num_obs, np.float32)
-        for name, a, b in OBS_LAYOUT[self.obs_layout]:
-            noise[a:b] = amp.get(name, 0.0)  # the CPG parameters are the controller's own: exact
-        self._obs_noise = wp.array(noise, device=dev)
+        self._obs_noise = wp.array(observation_noise(self.obs_layout, rz), device=dev)
         self._push_steps = max(1, int(round(rz.push_interval / self.cfg.task.control_dt)))
 
     def _state_arrays(self) -> list[wp.array]:
@@ -267,27 +266,15 @@ class HexapodEnv(VecEnv):
                       device=dev)  # fmt: skip
         for _ in range(self.decimation):
             w.simulate_frame()
-        wp.launch(
-            episode_status_kernel, dim=n,
-            inputs=[w.joint_q_wp, w.joint_qd_wp, self.episode_steps, w.height_field, w.start_wp, t.goal_distance,
-                    t.goal_radius, t.min_height, t.max_tilt, t.max_abs_y, t.max_episode_steps, t.max_base_speed,
-                    t.max_joint_speed],
-            outputs=[self.status, self.rpy], device=dev,
-        )  # fmt: skip
-        wp.launch(
-            rewards_kernel, dim=n,
-            inputs=[w.joint_q_wp, self.rpy, self.status, w.height_field, w.start_wp, t.goal_distance, t.goal_radius,
-                    r.w_height, r.w_direction, r.w_distance, r.direction_deadband, int(r.direction_to_goal),
-                    r.stability_penalty, r.stability_tilt, r.forward_penalty, r.goal_bonus, r.off_course_penalty,
-                    t.control_dt],
-            outputs=[self.prev_x, self.reward, self.terms], device=dev,
-        )  # fmt: skip
-        wp.launch(
-            shaping_kernel, dim=n,
-            inputs=[w.joint_q_wp, w.joint_qd_wp, self.rpy, self.actions, self.episode_steps, r.w_tilt, r.w_ang_vel,
-                    r.w_action_rate, t.control_dt],
-            outputs=[self.prev_actions, self.reward, self.terms], device=dev,
-        )  # fmt: skip
+        ends = make_struct(EndInputs, joint_q=w.joint_q_wp, joint_qd=w.joint_qd_wp, episode_steps=self.episode_steps,
+                           start=w.start_wp, hf=w.height_field, task=t)  # fmt: skip
+        wp.launch(episode_status_kernel, dim=n, inputs=[ends], outputs=[self.status, self.rpy], device=dev)
+        rewards = make_struct(RewardInputs, joint_q=w.joint_q_wp, joint_qd=w.joint_qd_wp, rpy=self.rpy,
+                              status=self.status, episode_steps=self.episode_steps, actions=self.actions,
+                              start=w.start_wp, hf=w.height_field, prev_x=self.prev_x,
+                              prev_actions=self.prev_actions, task=t, reward=r)  # fmt: skip
+        wp.launch(rewards_kernel, dim=n, inputs=[rewards, reward_weights(r)], outputs=[self.reward, self.terms],
+                  device=dev)  # fmt: skip
         wp.launch(
             _bookkeeping, dim=n,
             inputs=[self.status, w.joint_q_wp, w.start_wp, self.level if self.level is not None else self._no_level],
@@ -321,13 +308,11 @@ class HexapodEnv(VecEnv):
 
     def _observe(self) -> None:
         w, ctrl = self.world, self.controller
-        params = ctrl.params if ctrl is not None else self.terms  # unused placeholder in joint mode
-        wp.launch(
-            observations_kernel, dim=self.num_envs,
-            inputs=[w.joint_q_wp, w.joint_qd_wp, params, w.height_field, w.start_wp, self.cfg.task.goal_distance,
-                    int(ctrl is not None)],
-            outputs=[self.obs], device=self.device,
-        )  # fmt: skip
+        params = ctrl.params if ctrl is not None else self.terms  # unread placeholder in joint mode
+        inputs = make_struct(ObsInputs, joint_q=w.joint_q_wp, joint_qd=w.joint_qd_wp, params=params,
+                             start=w.start_wp, hf=w.height_field, task=self.cfg.task)  # fmt: skip
+        wp.launch(observations_kernel, dim=self.num_envs, inputs=[inputs, LAYOUTS.index(self.obs_layout)],
+                  outputs=[self.obs], device=self.device)  # fmt: skip
         if self.randomized:
             wp.launch(observation_noise_kernel, dim=self.num_envs,
                       inputs=[self._obs_noise, self.cfg.task.seed + 15485863, w.reset_counter], outputs=[self.obs],
@@ -336,12 +321,12 @@ class HexapodEnv(VecEnv):
     # ------------------------------------------------------------------ logging
     def _log(self) -> dict[str, torch.Tensor]:
         means = self._terms_t.mean(dim=0)
-        log = {f"Reward/{name}": means[k] for k, name in enumerate(TERMS)}
+        log = {f"Reward/{term.name}": means[k] for k, term in enumerate(REWARD_TERMS)}
         rates = torch.nanmean(self._ring_t, dim=0)
-        for k, name in enumerate(STATUS_NAMES[1:]):
-            log[f"Episode/{name}_rate"] = rates[k]
-        log["Episode/distance_m"] = rates[5]
-        log["Episode/length_steps"] = rates[6]
+        for end in ENDS:
+            log[f"Episode/{end.name}_rate"] = rates[end.code - 1]
+        log["Episode/distance_m"] = rates[DISTANCE]
+        log["Episode/length_steps"] = rates[LENGTH]
         log["Episode/nonfinite_resets_total"] = self._nonfinite_t[0].float()
         log["Episode/contact_overflow_frames"] = self._overflow_frames_t
         if self.level is not None:
@@ -353,15 +338,15 @@ class HexapodEnv(VecEnv):
     def _top_level_success(self) -> tuple[torch.Tensor, torch.Tensor]:
         """(success rate, episode count) of the ring's episodes played on the last curriculum level (no host
         sync: masks and sums, nan while there is none)."""
-        top = self._ring_t[:, 7] == self.cfg.terrain.levels - 1
+        top = self._ring_t[:, LEVEL] == self.cfg.terrain.levels - 1
         count = top.sum()
-        return (top & (self._ring_t[:, 2] == 1.0)).sum() / count, count
+        return (top & (self._ring_t[:, SUCCESS - 1] == 1.0)).sum() / count, count
 
     def episode_stats(self) -> dict[str, float]:
         """Host copy of the logged episode rates (syncs; for reports, not for the training loop)."""
         rates = torch.nanmean(self._ring_t, dim=0).cpu().numpy()
-        out = {f"{name}_rate": float(rates[k]) for k, name in enumerate(STATUS_NAMES[1:])}
-        out.update(distance_m=float(rates[5]), length_steps=float(rates[6]),
+        out = {f"{end.name}_rate": float(rates[end.code - 1]) for end in ENDS}
+        out.update(distance_m=float(rates[DISTANCE]), length_steps=float(rates[LENGTH]),
                    episodes=int(min(int(self._cursor.numpy()[0]), RING)),
                    nonfinite_resets_total=int(self._nonfinite_total.numpy()[0]),
                    contact_overflow_frames=int(self.world.overflow_frames))  # fmt: skip

@@ -9,100 +9,242 @@ The paper says the state has 59 dimensions but lists only 54:
 
 We add omega (the fifteenth CPG parameter) and the base orientation as a unit quaternion, which makes 59.
 
-``cpg`` layout (59):
-    [0:18]   joint positions [rad], order R1..L3 x (hip, knee, ankle)
-    [18:36]  joint velocities [rad/s]
-    [36:39]  target relative to the robot in its heading frame (x forward, y left; z = goal ground - base z) [m]
-    [39]     omega [rad/s] (the filtered parameter the CPG runs with)
-    [40:54]  A1_R, A1_L, A2[R1..L3], A3[R1..L3] [rad] (filtered)
-    [54:58]  base orientation quaternion (x, y, z, w), sign chosen so that w >= 0
-    [58]     h: highest terrain within +-H_HALF_EXTENT of the base, minus the terrain under the base [m]
+``OBS_TERMS`` declares each part once, one :class:`ObsTerm` row per part in layout order: name, size, meaning, the
+``RandomizationConfig`` field of its noise amplitude (None: exact), the layouts that carry it, a ``@wp.func`` that
+writes its values for one env and a float64 NumPy function of the same values for all envs. From the table follow
+``OBS_LAYOUT`` (name, start, end per layout), ``OBS_DIM``, the noise per column (:func:`observation_noise`), the
+kernel (:func:`observations_kernel`, the rows unrolled with ``wp.static``, one launch for every layout), the float64
+reference (:func:`observations_reference`) and the layouts below. Adding a part: its row here; ``hexnewton.deploy``
+assembles the same parts from the robot's sensors by name.
 
-``cpg_posture`` layout (62): as ``cpg`` with the body posture P_h, P_p, P_r [rad] (filtered) at [54:57], the
-quaternion at [57:61] and h at [61].
-
-``joint`` layout (44, the pure-DRL comparison): the same without omega and the amplitudes:
-    [0:18] positions, [18:36] velocities, [36:39] target, [39:43] quaternion, [43] h.
+Layouts (from the table):
 """
+
+from dataclasses import dataclass
+from typing import Callable
 
 import numpy as np
 import warp as wp
 
 from ..terrain.query import HeightField, max_terrain_height, terrain_height
 from .reference import quat_to_rpy_np
+from .tables import TaskParams
 from .terminations import quat_to_rpy
 
 H_HALF_EXTENT = 0.3  # ours: the square that "max height h" looks at: +-30 cm, about the legs' reach [m]
-OBS_DIM = {"cpg": 59, "cpg_posture": 62, "joint": 44}
-OBS_LAYOUT = {
-    "cpg": (("joint_pos", 0, 18), ("joint_vel", 18, 36), ("target", 36, 39), ("omega", 39, 40),
-            ("amplitudes", 40, 54), ("quat", 54, 58), ("max_height", 58, 59)),
-    "cpg_posture": (("joint_pos", 0, 18), ("joint_vel", 18, 36), ("target", 36, 39), ("omega", 39, 40),
-                    ("amplitudes", 40, 54), ("posture", 54, 57), ("quat", 57, 61), ("max_height", 61, 62)),
-    "joint": (("joint_pos", 0, 18), ("joint_vel", 18, 36), ("target", 36, 39), ("quat", 39, 43),
-              ("max_height", 43, 44)),
-}  # fmt: skip
+#: ``cpg``: the paper's (15 CPG parameters); ``cpg_posture``: with the body posture (18); ``joint``: the pure-DRL
+#: comparison (no CPG parameters)
+LAYOUTS = ("cpg", "cpg_posture", "joint")
+CPG = ("cpg", "cpg_posture")
 
 
-@wp.kernel
-def observations_kernel(
-    joint_q: wp.array2d[wp.float32],
-    joint_qd: wp.array2d[wp.float32],
-    params: wp.array2d[wp.float32],
-    hf: HeightField,
-    start: wp.array[wp.vec2],
-    goal_distance: float,
-    with_params: int,
-    obs: wp.array2d[wp.float32],
-):
-    e = wp.tid()
+@wp.struct
+class ObsInputs:
+    """What the observation reads, one row per env."""
+
+    joint_q: wp.array2d[wp.float32]  # base position (3), quaternion (x, y, z, w), 18 joint angles
+    joint_qd: wp.array2d[wp.float32]  # base linear and angular velocity, 18 joint velocities
+    params: wp.array2d[wp.float32]  # the CPG parameters the controller runs with (filtered); unread in ``joint``
+    start: wp.array[wp.vec2]  # the episode's start; the goal lies task.goal_distance ahead of it along +x
+    hf: HeightField
+    task: TaskParams
+
+
+# ----------------------------------------------------------------------------------------------------
+# the parts: each Warp function writes its values to obs[e, k:k + size]; each NumPy function returns (N, size)
+# ----------------------------------------------------------------------------------------------------
+
+
+@wp.func
+def joint_pos(i: ObsInputs, e: int, obs: wp.array2d[wp.float32], k: int):
     for j in range(18):
-        obs[e, j] = joint_q[e, 7 + j]
-        obs[e, 18 + j] = joint_qd[e, 6 + j]
-    px = joint_q[e, 0]
-    py = joint_q[e, 1]
-    pz = joint_q[e, 2]
-    gx = start[e][0] + goal_distance
-    gy = start[e][1]
-    dx = gx - px
-    dy = gy - py
-    yaw = quat_to_rpy(wp.normalize(wp.quat(joint_q[e, 3], joint_q[e, 4], joint_q[e, 5], joint_q[e, 6])))[2]
+        obs[e, k + j] = i.joint_q[e, 7 + j]
+
+
+def joint_pos_np(i):
+    return np.asarray(i.joint_q, np.float64)[:, 7:25]
+
+
+@wp.func
+def joint_vel(i: ObsInputs, e: int, obs: wp.array2d[wp.float32], k: int):
+    for j in range(18):
+        obs[e, k + j] = i.joint_qd[e, 6 + j]
+
+
+def joint_vel_np(i):
+    return np.asarray(i.joint_qd, np.float64)[:, 6:24]
+
+
+@wp.func
+def target(i: ObsInputs, e: int, obs: wp.array2d[wp.float32], k: int):
+    gx = i.start[e][0] + i.task.goal_distance
+    gy = i.start[e][1]
+    dx = gx - i.joint_q[e, 0]
+    dy = gy - i.joint_q[e, 1]
+    yaw = quat_to_rpy(wp.normalize(wp.quat(i.joint_q[e, 3], i.joint_q[e, 4], i.joint_q[e, 5], i.joint_q[e, 6])))[2]
     c = wp.cos(yaw)
     s = wp.sin(yaw)
-    obs[e, 36] = c * dx + s * dy
-    obs[e, 37] = -s * dx + c * dy
-    obs[e, 38] = terrain_height(hf, gx, gy) - pz
-    k = int(39)
-    if with_params != 0:
-        for p in range(params.shape[1]):
-            obs[e, 39 + p] = params[e, p]
-        k = 39 + params.shape[1]
-    sign = float(1.0)
-    if joint_q[e, 6] < 0.0:
-        sign = -1.0
-    for i in range(4):
-        obs[e, k + i] = sign * joint_q[e, 3 + i]
-    obs[e, k + 4] = max_terrain_height(hf, px, py, H_HALF_EXTENT) - terrain_height(hf, px, py)
+    obs[e, k] = c * dx + s * dy
+    obs[e, k + 1] = -s * dx + c * dy
+    obs[e, k + 2] = terrain_height(i.hf, gx, gy) - i.joint_q[e, 2]
 
 
-def observations_reference(joint_q, joint_qd, params, ground_at, start, goal_distance, with_params):
-    """Float64 reference of :func:`observations_kernel`.
-
-    ``ground_at(x, y)`` returns terrain heights and ``ground_at.max(x, y, half_extent)`` the max over a square
-    (both vectorised), e.g. ``terrain_height_np`` / ``max_terrain_height_np`` bound to a grid.
-    """
-    jq, jqd = np.asarray(joint_q, np.float64), np.asarray(joint_qd, np.float64)
-    n = len(jq)
-    start = np.asarray(start, np.float64)
-    gx, gy = start[:, 0] + goal_distance, start[:, 1]
+def target_np(i):
+    jq, start = np.asarray(i.joint_q, np.float64), np.asarray(i.start, np.float64)
+    gx, gy = start[:, 0] + i.task.goal_distance, start[:, 1]
     dx, dy = gx - jq[:, 0], gy - jq[:, 1]
     yaw = quat_to_rpy_np(jq[:, 3:7])[:, 2]
     c, s = np.cos(yaw), np.sin(yaw)
-    target = np.stack([c * dx + s * dy, -s * dx + c * dy, ground_at(gx, gy) - jq[:, 2]], axis=1)
-    quat = jq[:, 3:7] * np.where(jq[:, 6:7] < 0, -1.0, 1.0)
-    h = ground_at.max(jq[:, 0], jq[:, 1], H_HALF_EXTENT) - ground_at(jq[:, 0], jq[:, 1])
-    parts = [jq[:, 7:25], jqd[:, 6:24], target]
-    if with_params:
-        parts.append(np.asarray(params, np.float64).reshape(n, -1))
-    parts += [quat, h[:, None]]
-    return np.concatenate(parts, axis=1)
+    return np.stack([c * dx + s * dy, -s * dx + c * dy, i.ground_at(gx, gy) - jq[:, 2]], axis=1)
+
+
+@wp.func
+def omega(i: ObsInputs, e: int, obs: wp.array2d[wp.float32], k: int):
+    obs[e, k] = i.params[e, 0]
+
+
+def omega_np(i):
+    return np.asarray(i.params, np.float64)[:, :1]
+
+
+@wp.func
+def amplitudes(i: ObsInputs, e: int, obs: wp.array2d[wp.float32], k: int):
+    for j in range(14):
+        obs[e, k + j] = i.params[e, 1 + j]
+
+
+def amplitudes_np(i):
+    return np.asarray(i.params, np.float64)[:, 1:15]
+
+
+@wp.func
+def posture(i: ObsInputs, e: int, obs: wp.array2d[wp.float32], k: int):
+    for j in range(3):
+        obs[e, k + j] = i.params[e, 15 + j]
+
+
+def posture_np(i):
+    return np.asarray(i.params, np.float64)[:, 15:18]
+
+
+@wp.func
+def quat(i: ObsInputs, e: int, obs: wp.array2d[wp.float32], k: int):
+    sign = float(1.0)
+    if i.joint_q[e, 6] < 0.0:
+        sign = -1.0
+    for j in range(4):
+        obs[e, k + j] = sign * i.joint_q[e, 3 + j]
+
+
+def quat_np(i):
+    jq = np.asarray(i.joint_q, np.float64)
+    return jq[:, 3:7] * np.where(jq[:, 6:7] < 0, -1.0, 1.0)
+
+
+@wp.func
+def max_height(i: ObsInputs, e: int, obs: wp.array2d[wp.float32], k: int):
+    px = i.joint_q[e, 0]
+    py = i.joint_q[e, 1]
+    obs[e, k] = max_terrain_height(i.hf, px, py, H_HALF_EXTENT) - terrain_height(i.hf, px, py)
+
+
+def max_height_np(i):
+    jq = np.asarray(i.joint_q, np.float64)
+    return (i.ground_at.max(jq[:, 0], jq[:, 1], H_HALF_EXTENT) - i.ground_at(jq[:, 0], jq[:, 1]))[:, None]
+
+
+# ----------------------------------------------------------------------------------------------------
+# the table
+# ----------------------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class ObsTerm:
+    """One part of the observation: ``size`` values in the layouts that carry it, in table order."""
+
+    name: str
+    size: int
+    doc: str
+    noise: str | None  # the RandomizationConfig field of its uniform noise amplitude (None: exact)
+    func: wp.Function  # (ObsInputs, env, obs, first column) writes the part's values
+    reference: Callable  # float64 NumPy (inputs namespace) -> (N, size)
+    layouts: tuple[str, ...] = LAYOUTS
+
+    @property
+    def mask(self) -> int:
+        """Bit ``LAYOUTS.index(layout)`` set for each layout that carries it."""
+        return sum(1 << LAYOUTS.index(name) for name in self.layouts)
+
+
+OBS_TERMS = (
+    ObsTerm("joint_pos", 18, "joint positions [rad], order R1..L3 x (hip, knee, ankle)", "noise_joint_pos",
+            joint_pos, joint_pos_np),
+    ObsTerm("joint_vel", 18, "joint velocities [rad/s]", "noise_joint_vel", joint_vel, joint_vel_np),
+    ObsTerm("target", 3, "target relative to the robot in its heading frame (x forward, y left; z = goal ground - "
+            "base z) [m]", "noise_target", target, target_np),
+    # the CPG parameters are the controller's own: exact
+    ObsTerm("omega", 1, "omega [rad/s] (the filtered parameter the CPG runs with)", None, omega, omega_np, CPG),
+    ObsTerm("amplitudes", 14, "A1_R, A1_L, A2[R1..L3], A3[R1..L3] [rad] (filtered)", None, amplitudes,
+            amplitudes_np, CPG),
+    ObsTerm("posture", 3, "body posture P_h, P_p, P_r [rad] (filtered)", None, posture, posture_np,
+            ("cpg_posture",)),
+    ObsTerm("quat", 4, "base orientation quaternion (x, y, z, w), sign chosen so that w >= 0", "noise_quat", quat,
+            quat_np),
+    ObsTerm("max_height", 1, "h: highest terrain within +-H_HALF_EXTENT of the base, minus the terrain under the "
+            "base [m]", "noise_height", max_height, max_height_np),
+)  # fmt: skip
+
+
+def _layout(layout: str) -> tuple[tuple[str, int, int], ...]:
+    spans, k = [], 0
+    for t in OBS_TERMS:
+        if layout in t.layouts:
+            spans.append((t.name, k, k + t.size))
+            k += t.size
+    return tuple(spans)
+
+
+#: (name, start, end) of each part, per layout
+OBS_LAYOUT = {layout: _layout(layout) for layout in LAYOUTS}
+OBS_DIM = {layout: spans[-1][2] for layout, spans in OBS_LAYOUT.items()}
+
+
+def _describe(layout: str) -> str:
+    doc = {t.name: t.doc for t in OBS_TERMS}
+    rows = [f"    [{a}:{b}]".ljust(14) + doc[name] if b > a + 1 else f"    [{a}]".ljust(14) + doc[name]
+            for name, a, b in OBS_LAYOUT[layout]]
+    return f"``{layout}`` ({OBS_DIM[layout]}):\n" + "\n".join(rows)
+
+
+if __doc__:  # None under python -OO
+    __doc__ += "\n" + "\n\n".join(_describe(layout) for layout in LAYOUTS) + "\n"
+
+
+def observation_noise(layout: str, randomization) -> np.ndarray:
+    """Uniform noise amplitude per column of ``layout`` from a ``RandomizationConfig`` (0 where exact)."""
+    noise = np.zeros(OBS_DIM[layout], np.float32)
+    for t in OBS_TERMS:
+        if t.noise is not None and layout in t.layouts:
+            _, a, b = next(span for span in OBS_LAYOUT[layout] if span[0] == t.name)
+            noise[a:b] = getattr(randomization, t.noise)
+    return noise
+
+
+@wp.kernel
+def observations_kernel(i: ObsInputs, layout: int, obs: wp.array2d[wp.float32]):
+    """The observation of each env in layout ``LAYOUTS[layout]``: the parts of ``OBS_TERMS`` that it carries, in
+    table order."""
+    e = wp.tid()
+    k = int(0)
+    for r in range(wp.static(len(OBS_TERMS))):
+        if (wp.static(OBS_TERMS[r].mask) >> layout) & 1 != 0:
+            wp.static(OBS_TERMS[r].func)(i, e, obs, k)
+            k += wp.static(OBS_TERMS[r].size)
+
+
+def observations_reference(i, layout: str) -> np.ndarray:
+    """Float64 reference of :func:`observations_kernel`. ``i`` has :class:`ObsInputs`' fields as NumPy arrays, with
+    ``task`` a ``TaskConfig`` and, in place of ``hf``, ``ground_at(x, y)`` returning terrain heights and
+    ``ground_at.max(x, y, half_extent)`` the max over a square (both vectorised), e.g. ``terrain_height_np`` /
+    ``max_terrain_height_np`` bound to a grid."""
+    return np.concatenate([t.reference(i) for t in OBS_TERMS if layout in t.layouts], axis=1)

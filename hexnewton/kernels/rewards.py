@@ -42,7 +42,7 @@ not scaled.
 
 Weights (ours, marked in ``RewardConfig``): w_h = 1, w_d = 1, w_theta = 1.
 
-**Stability shaping** (ours, :func:`shaping_kernel`, after the Table 1 kernel; each weight 0 switches its term off,
+**Stability shaping** (ours, the table's last three rows; each weight 0 switches its term off,
 ``RewardConfig.paper_reward()`` all of them). Table 1 fines a tilt only beyond π/6, so inside ±30° a policy is free
 to rock the body, and with a -100 cliff at 30° it learns nothing about how far it is from it. Three smooth costs
 per 20 ms step (scaled like the others):
@@ -51,123 +51,217 @@ per 20 ms step (scaled like the others):
   that a tilt average hides;
 - r_action_rate = -w_action_rate Σ_k (a_k - a_k,prev)² over the 15 actions in [-1, 1] (0 on an episode's first
   step): the CPG parameters should change with the ground, not every control step.
+
+**The table.** ``REWARD_TERMS`` declares every term once, one :class:`RewardTerm` row per term in column order:
+its name (logged as ``Reward/<name>``), the ``RewardConfig`` field that weighs it, whether it is paid per 20 ms step
+(scaled by ``control_dt / REF_DT``) or once, whether it is a cost (paid as -weight x value), a ``@wp.func`` that
+computes its unweighted value for one env from :class:`RewardInputs` and the env's :class:`RewardFrame`, and a
+float64 NumPy function of the same value for all envs (from a namespace with the same fields as NumPy arrays and the
+frame of :func:`reward_frame_np`). From the table follow the kernel (:func:`make_rewards_kernel`; one launch: the
+frame, then each row's function unrolled with ``wp.static``, times its weight and scale, written to ``terms[:, k]``
+and summed into ``reward`` in table order), the log names (``TERMS``), the weight vector (:func:`reward_weights`)
+and the float64 reference (:func:`rewards_reference`, weighted and summed the same way). A term computed from the
+simulator state (``state=True``) is 0 for an env whose base position is not finite (a blown-up env, reset and counted
+by the caller), and any term whose value is not finite is 0: training never sees a NaN.
+
+Adding a term touches two places: its row in ``REWARD_TERMS`` with its ``@wp.func`` and NumPy function (both read
+``i.task.<field>`` / ``i.reward.<field>`` for any ``TaskConfig`` / ``RewardConfig`` field: ``kernels/tables.py``
+makes the structs from the dataclasses), and, for a new weight or parameter, its field in ``RewardConfig``. The env
+sizes ``terms``, launches the kernel and logs ``Reward/<name>`` from the table; ``tests/test_terms.py`` checks every
+row's Warp function against its NumPy function.
 """
+
+from dataclasses import dataclass
+from typing import Callable
 
 import numpy as np
 import warp as wp
 
 from ..terrain.query import HeightField, terrain_height
-from .terminations import FELL, OFF_COURSE, SUCCESS
+from .reference import quat_rotate_inv_np
+from .status import FELL, OFF_COURSE, SUCCESS
+from .tables import RewardParams, TaskParams
 
 REF_DT = 0.02
 FORWARD_MIN_SPEED = 0.1
-#: Table 1's terms and ours (rewards_kernel), then the stability shaping (shaping_kernel)
-TABLE1_TERMS = ("height", "direction", "distance", "stability", "forward", "goal", "off_course")
-SHAPING_TERMS = ("tilt", "ang_vel", "action_rate")
-TERMS = TABLE1_TERMS + SHAPING_TERMS
 
 
-@wp.kernel
-def rewards_kernel(
-    joint_q: wp.array2d[wp.float32],
-    rpy: wp.array2d[wp.float32],
-    status: wp.array[wp.int32],
-    hf: HeightField,
-    start: wp.array[wp.vec2],
-    goal_distance: float,
-    goal_radius: float,
-    w_height: float,
-    w_direction: float,
-    w_distance: float,
-    direction_deadband: float,
-    direction_to_goal: int,
-    stability_penalty: float,
-    stability_tilt: float,
-    forward_penalty: float,
-    goal_bonus: float,
-    off_course_penalty: float,
-    control_dt: float,
-    prev_x: wp.array[wp.float32],
-    reward: wp.array[wp.float32],
-    terms: wp.array2d[wp.float32],
-):
-    e = wp.tid()
-    scale = control_dt / REF_DT
-    px = joint_q[e, 0]
-    py = joint_q[e, 1]
-    z = joint_q[e, 2] - terrain_height(hf, px, py)
-    st = status[e]
-    if not (wp.isfinite(px) and wp.isfinite(py) and wp.isfinite(z)):
-        # a blown-up env (reset and counted by the caller): no reward signal from garbage
-        for k in range(terms.shape[1]):
-            terms[e, k] = 0.0
-        reward[e] = 0.0
-        prev_x[e] = 0.0
-        return
-    r_h = float(0.0)
-    if z > 0.12:
-        r_h = z - 0.11
-    to_goal = start[e] + wp.vec2(goal_distance, 0.0) - wp.vec2(px, py)
+@wp.struct
+class RewardInputs:
+    """What the reward terms read, one row per env. The kernel also writes ``prev_x`` and ``prev_actions`` for the
+    next step."""
+
+    joint_q: wp.array2d[wp.float32]  # base position (3), quaternion (x, y, z, w), 18 joint angles
+    joint_qd: wp.array2d[wp.float32]  # base linear and angular velocity (world frame), 18 joint velocities
+    rpy: wp.array2d[wp.float32]  # roll, pitch, yaw (the terminations kernel's; 0 for a blown-up env)
+    status: wp.array[wp.int32]  # this step's episode status (kernels/status.py)
+    episode_steps: wp.array[wp.int32]  # the episode's steps before this one
+    actions: wp.array2d[wp.float32]  # the policy's actions
+    start: wp.array[wp.vec2]  # the episode's start; the goal lies task.goal_distance ahead of it along +x
+    hf: HeightField
+    prev_x: wp.array[wp.float32]  # base x at the last step
+    prev_actions: wp.array2d[wp.float32]  # the last step's actions, clamped to [-1, 1]
+    task: TaskParams
+    reward: RewardParams
+
+
+@wp.struct
+class RewardFrame:
+    """Per-env values the terms share, computed once per step by :func:`reward_frame`."""
+
+    e: int  # the env
+    px: float  # base position [m]
+    py: float
+    z: float  # torso height above the terrain under it [m]
+    to_goal: wp.vec2  # goal minus base position [m]
+    scale: float  # control_dt / REF_DT: per-step terms mean the same per second at any control rate
+    ok: bool  # base position and the terrain height under it are finite
+
+
+@wp.func
+def reward_frame(i: RewardInputs, e: int) -> RewardFrame:
+    f = RewardFrame()
+    f.e = e
+    f.px = i.joint_q[e, 0]
+    f.py = i.joint_q[e, 1]
+    f.z = i.joint_q[e, 2] - terrain_height(i.hf, f.px, f.py)
+    f.to_goal = i.start[e] + wp.vec2(i.task.goal_distance, 0.0) - wp.vec2(f.px, f.py)
+    f.scale = i.task.control_dt / REF_DT
+    f.ok = wp.isfinite(f.px) and wp.isfinite(f.py) and wp.isfinite(f.z)
+    return f
+
+
+@dataclass(frozen=True)
+class FrameNp:
+    """:class:`RewardFrame` for all envs, in float64."""
+
+    px: np.ndarray
+    py: np.ndarray
+    z: np.ndarray
+    to_goal: np.ndarray  # (N, 2)
+    scale: float
+    ok: np.ndarray
+
+
+def reward_frame_np(i) -> FrameNp:
+    """Float64 :func:`reward_frame` for all envs; ``i.ground`` (N,) is the terrain under each base."""
+    jq = np.asarray(i.joint_q, np.float64)
+    px, py = jq[:, 0], jq[:, 1]
+    z = jq[:, 2] - np.asarray(i.ground, np.float64)
+    start = np.asarray(i.start, np.float64)
+    to_goal = np.stack([start[:, 0] + i.task.goal_distance - px, start[:, 1] - py], axis=1)
+    ok = np.isfinite(px) & np.isfinite(py) & np.isfinite(z)
+    return FrameNp(px=px, py=py, z=z, to_goal=to_goal, scale=i.task.control_dt / REF_DT, ok=ok)
+
+
+# ----------------------------------------------------------------------------------------------------
+# the terms: unweighted values, one Warp function per env and one NumPy function for all envs
+# ----------------------------------------------------------------------------------------------------
+
+
+@wp.func
+def height(i: RewardInputs, f: RewardFrame) -> float:
+    """r_h: z - 0.11 above 0.12 m, else 0."""
+    r = float(0.0)
+    if f.z > 0.12:
+        r = f.z - 0.11
+    return r
+
+
+def height_np(i, f):
+    return np.where(f.z > 0.12, f.z - 0.11, 0.0)
+
+
+@wp.func
+def direction(i: RewardInputs, f: RewardFrame) -> float:
+    """r_theta: min(0, cos(heading error) - cos(dead band)), toward the goal (ours) or along +x."""
     # the start-to-goal direction D is +x, so (cos θ, sin θ) . D / |D| = cos(yaw); ours: D from the robot
     bearing = float(0.0)
-    if direction_to_goal != 0:
-        bearing = wp.atan2(to_goal[1], to_goal[0])
-    r_dir = wp.min(0.0, wp.cos(rpy[e, 2] - bearing) - wp.cos(direction_deadband))
-    d_n = wp.length(to_goal)
-    r_d = wp.exp(-(d_n - goal_radius))
-    tilted = wp.abs(rpy[e, 0]) > stability_tilt or wp.abs(rpy[e, 1]) > stability_tilt
-    r_s = float(0.0)
-    if z < 0.05 or tilted or st == FELL:
-        r_s = -stability_penalty
-    r_f = float(0.0)
-    if px - prev_x[e] < FORWARD_MIN_SPEED * control_dt:
-        r_f = -forward_penalty
-    r_g = float(0.0)
-    if st == SUCCESS:
-        r_g = goal_bonus
-    r_off = float(0.0)
-    if st == OFF_COURSE:
-        r_off = -off_course_penalty
-    t0 = w_height * r_h * scale
-    t1 = w_direction * r_dir * scale
-    t2 = w_distance * r_d * scale
-    t3 = r_s * scale
-    t4 = r_f * scale
-    terms[e, 0] = t0
-    terms[e, 1] = t1
-    terms[e, 2] = t2
-    terms[e, 3] = t3
-    terms[e, 4] = t4
-    terms[e, 5] = r_g
-    terms[e, 6] = r_off
-    reward[e] = t0 + t1 + t2 + t3 + t4 + r_g + r_off
-    prev_x[e] = px
+    if i.reward.direction_to_goal:
+        bearing = wp.atan2(f.to_goal[1], f.to_goal[0])
+    return wp.min(0.0, wp.cos(i.rpy[f.e, 2] - bearing) - wp.cos(i.reward.direction_deadband))
 
 
-def rewards_reference(joint_q, rpy, status, ground, start, prev_x, goal_distance, goal_radius, w_height, w_direction,
-                      w_distance, direction_deadband, direction_to_goal, stability_penalty, stability_tilt,
-                      forward_penalty, goal_bonus, off_course_penalty, control_dt):  # fmt: skip
-    """Float64 reference of :func:`rewards_kernel` (finite states); ``ground`` (N,) is the terrain under the base.
+def direction_np(i, f):
+    bearing = np.arctan2(f.to_goal[:, 1], f.to_goal[:, 0]) if i.reward.direction_to_goal else 0.0
+    return np.minimum(0.0, np.cos(np.asarray(i.rpy, np.float64)[:, 2] - bearing) - np.cos(i.reward.direction_deadband))
 
-    Returns (reward (N,), terms (N, 7))."""
-    jq, rpy = np.asarray(joint_q, np.float64), np.asarray(rpy, np.float64)
-    start = np.asarray(start, np.float64)
-    scale = control_dt / REF_DT
-    z = jq[:, 2] - ground
-    r_h = np.where(z > 0.12, z - 0.11, 0.0)
-    gx, gy = start[:, 0] + goal_distance - jq[:, 0], start[:, 1] - jq[:, 1]
-    bearing = np.arctan2(gy, gx) if direction_to_goal else 0.0
-    r_dir = np.minimum(0.0, np.cos(rpy[:, 2] - bearing) - np.cos(direction_deadband))
-    d_n = np.hypot(gx, gy)
-    r_d = np.exp(-(d_n - goal_radius))
-    tilted = (np.abs(rpy[:, 0]) > stability_tilt) | (np.abs(rpy[:, 1]) > stability_tilt)
-    r_s = np.where((z < 0.05) | tilted | (np.asarray(status) == FELL), -stability_penalty, 0.0)
-    r_f = np.where(jq[:, 0] - np.asarray(prev_x, np.float64) < FORWARD_MIN_SPEED * control_dt, -forward_penalty, 0.0)
-    r_g = np.where(np.asarray(status) == SUCCESS, goal_bonus, 0.0)
-    r_off = np.where(np.asarray(status) == OFF_COURSE, -off_course_penalty, 0.0)
-    terms = np.stack([w_height * r_h * scale, w_direction * r_dir * scale, w_distance * r_d * scale, r_s * scale,
-                      r_f * scale, r_g, r_off], axis=1)  # fmt: skip
-    return terms.sum(axis=1), terms
+
+@wp.func
+def distance(i: RewardInputs, f: RewardFrame) -> float:
+    """r_d: exp(-(d_n - d_t)), 1 on the goal circle."""
+    return wp.exp(-(wp.length(f.to_goal) - i.task.goal_radius))
+
+
+def distance_np(i, f):
+    return np.exp(-(np.hypot(f.to_goal[:, 0], f.to_goal[:, 1]) - i.task.goal_radius))
+
+
+@wp.func
+def stability(i: RewardInputs, f: RewardFrame) -> float:
+    """-1 while z < 0.05 m, |roll| or |pitch| > stability_tilt, or fallen (r_s = stability_penalty x this)."""
+    lim = i.reward.stability_tilt
+    tilted = wp.abs(i.rpy[f.e, 0]) > lim or wp.abs(i.rpy[f.e, 1]) > lim
+    r = float(0.0)
+    if f.z < 0.05 or tilted or i.status[f.e] == FELL:
+        r = -1.0
+    return r
+
+
+def stability_np(i, f):
+    rpy = np.asarray(i.rpy, np.float64)
+    tilted = (np.abs(rpy[:, 0]) > i.reward.stability_tilt) | (np.abs(rpy[:, 1]) > i.reward.stability_tilt)
+    return np.where((f.z < 0.05) | tilted | (np.asarray(i.status) == FELL), -1.0, 0.0)
+
+
+@wp.func
+def forward(i: RewardInputs, f: RewardFrame) -> float:
+    """-1 below FORWARD_MIN_SPEED along +x (r_f = forward_penalty x this)."""
+    r = float(0.0)
+    if f.px - i.prev_x[f.e] < FORWARD_MIN_SPEED * i.task.control_dt:
+        r = -1.0
+    return r
+
+
+def forward_np(i, f):
+    return np.where(f.px - np.asarray(i.prev_x, np.float64) < FORWARD_MIN_SPEED * i.task.control_dt, -1.0, 0.0)
+
+
+@wp.func
+def goal(i: RewardInputs, f: RewardFrame) -> float:
+    """1 on reaching the goal (ours: r_goal = goal_bonus x this)."""
+    r = float(0.0)
+    if i.status[f.e] == SUCCESS:
+        r = 1.0
+    return r
+
+
+def goal_np(i, f):
+    return np.where(np.asarray(i.status) == SUCCESS, 1.0, 0.0)
+
+
+@wp.func
+def off_course(i: RewardInputs, f: RewardFrame) -> float:
+    """-1 on leaving the course (ours: r_off = off_course_penalty x this)."""
+    r = float(0.0)
+    if i.status[f.e] == OFF_COURSE:
+        r = -1.0
+    return r
+
+
+def off_course_np(i, f):
+    return np.where(np.asarray(i.status) == OFF_COURSE, -1.0, 0.0)
+
+
+@wp.func
+def tilt(i: RewardInputs, f: RewardFrame) -> float:
+    """roll² + pitch² [rad²], a cost: r_tilt = -w_tilt x this."""
+    return i.rpy[f.e, 0] * i.rpy[f.e, 0] + i.rpy[f.e, 1] * i.rpy[f.e, 1]
+
+
+def tilt_np(i, f):
+    rpy = np.asarray(i.rpy, np.float64)
+    return rpy[:, 0] ** 2 + rpy[:, 1] ** 2
 
 
 @wp.func
@@ -177,59 +271,152 @@ def body_roll_pitch_rate(qx: float, qy: float, qz: float, qw: float, wx: float, 
     return wp.vec2(w_body[0], w_body[1])
 
 
-@wp.kernel
-def shaping_kernel(
-    joint_q: wp.array2d[wp.float32],
-    joint_qd: wp.array2d[wp.float32],
-    rpy: wp.array2d[wp.float32],
-    actions: wp.array2d[wp.float32],
-    episode_steps: wp.array[wp.int32],
-    w_tilt: float,
-    w_ang_vel: float,
-    w_action_rate: float,
-    control_dt: float,
-    prev_actions: wp.array2d[wp.float32],
-    reward: wp.array[wp.float32],
-    terms: wp.array2d[wp.float32],
-):
-    """The stability shaping terms (module docstring), added to ``reward`` and written to ``terms[:, 7:10]``; then the
-    actions become ``prev_actions``. Runs after :func:`rewards_kernel`, before the episode counters advance."""
-    e = wp.tid()
-    scale = control_dt / REF_DT
-    rate = body_roll_pitch_rate(joint_q[e, 3], joint_q[e, 4], joint_q[e, 5], joint_q[e, 6], joint_qd[e, 3],
-                                joint_qd[e, 4], joint_qd[e, 5])  # fmt: skip
+@wp.func
+def ang_vel(i: RewardInputs, f: RewardFrame) -> float:
+    """ω_x² + ω_y², the body's roll and pitch rates in its own frame [(rad/s)²]; a cost: r_ang_vel = -w_ang_vel x
+    this."""
+    e = f.e
+    rate = body_roll_pitch_rate(i.joint_q[e, 3], i.joint_q[e, 4], i.joint_q[e, 5], i.joint_q[e, 6], i.joint_qd[e, 3],
+                                i.joint_qd[e, 4], i.joint_qd[e, 5])  # fmt: skip
+    return rate[0] * rate[0] + rate[1] * rate[1]
+
+
+def ang_vel_np(i, f):
+    w_body = quat_rotate_inv_np(np.asarray(i.joint_q, np.float64)[:, 3:7], np.asarray(i.joint_qd, np.float64)[:, 3:6])
+    return w_body[:, 0] ** 2 + w_body[:, 1] ** 2
+
+
+@wp.func
+def clamped_action(i: RewardInputs, e: int, k: int) -> float:
+    """Action k of env e in [-1, 1] (0 if not finite), as the action scaling reads it."""
+    a = i.actions[e, k]
+    if not wp.isfinite(a):
+        a = 0.0
+    return wp.clamp(a, -1.0, 1.0)
+
+
+def clamped_actions_np(actions):
+    return np.clip(np.nan_to_num(np.asarray(actions, np.float64), nan=0.0), -1.0, 1.0)
+
+
+@wp.func
+def action_rate(i: RewardInputs, f: RewardFrame) -> float:
+    """Σ_k (a_k - a_k,prev)² (0 on an episode's first step), a cost: r_action_rate = -w_action_rate x this."""
     da = float(0.0)
-    for k in range(actions.shape[1]):
-        a = actions[e, k]
-        if not wp.isfinite(a):
-            a = 0.0
-        a = wp.clamp(a, -1.0, 1.0)
-        if episode_steps[e] > 0:
-            d = a - prev_actions[e, k]
+    if i.episode_steps[f.e] > 0:
+        for k in range(i.actions.shape[1]):
+            d = clamped_action(i, f.e, k) - i.prev_actions[f.e, k]
             da += d * d
-        prev_actions[e, k] = a
-    t_tilt = -w_tilt * (rpy[e, 0] * rpy[e, 0] + rpy[e, 1] * rpy[e, 1]) * scale
-    t_rate = -w_ang_vel * (rate[0] * rate[0] + rate[1] * rate[1]) * scale
-    t_act = -w_action_rate * da * scale
-    if not (wp.isfinite(t_tilt) and wp.isfinite(t_rate) and wp.isfinite(reward[e])):
-        t_tilt = 0.0  # a blown-up env (reset and counted by the caller)
-        t_rate = 0.0
-    terms[e, 7] = t_tilt
-    terms[e, 8] = t_rate
-    terms[e, 9] = t_act
-    reward[e] = reward[e] + t_tilt + t_rate + t_act
+    return da
 
 
-def shaping_reference(joint_q, joint_qd, rpy, actions, prev_actions, episode_steps, w_tilt, w_ang_vel, w_action_rate,
-                      control_dt):  # fmt: skip
-    """Float64 reference of :func:`shaping_kernel` (finite states). Returns (terms (N, 3), new prev_actions (N, A))."""
-    from .reference import quat_rotate_inv_np
+def action_rate_np(i, f):
+    da = ((clamped_actions_np(i.actions) - np.asarray(i.prev_actions, np.float64)) ** 2).sum(axis=1)
+    return np.where(np.asarray(i.episode_steps) > 0, da, 0.0)
 
-    jq, jqd, rpy = (np.asarray(x, np.float64) for x in (joint_q, joint_qd, rpy))
-    scale = control_dt / REF_DT
-    w_body = quat_rotate_inv_np(jq[:, 3:7], jqd[:, 3:6])
-    a = np.clip(np.nan_to_num(np.asarray(actions, np.float64), nan=0.0), -1.0, 1.0)
-    da = np.where(np.asarray(episode_steps) > 0, ((a - np.asarray(prev_actions, np.float64)) ** 2).sum(axis=1), 0.0)
-    terms = np.stack([-w_tilt * (rpy[:, 0] ** 2 + rpy[:, 1] ** 2), -w_ang_vel * (w_body[:, 0] ** 2 + w_body[:, 1] ** 2),
-                      -w_action_rate * da], axis=1) * scale  # fmt: skip
-    return terms, a
+
+# ----------------------------------------------------------------------------------------------------
+# the table
+# ----------------------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class RewardTerm:
+    """One reward term: ``terms[:, k] = (-)reward.<weight> * func(i, f) [* control_dt / REF_DT if per_step]``."""
+
+    name: str  # logged as Reward/<name>
+    weight: str  # the RewardConfig field that weighs it
+    func: wp.Function  # (RewardInputs, RewardFrame) -> unweighted value of one env
+    reference: Callable  # float64 NumPy (inputs namespace, reward_frame_np) -> (N,) unweighted values
+    per_step: bool = True  # paid per 20 ms step, scaled by control_dt / REF_DT (False: paid once)
+    state: bool = True  # computed from the simulator state: 0 for an env whose base position is not finite
+    cost: bool = False  # paid as -weight * value (a cost >= 0 that the weight scales)
+
+
+REWARD_TERMS = (
+    # Table 1 and Eq. 5
+    RewardTerm("height", "w_height", height, height_np),
+    RewardTerm("direction", "w_direction", direction, direction_np),
+    RewardTerm("distance", "w_distance", distance, distance_np),
+    RewardTerm("stability", "stability_penalty", stability, stability_np),  # -1 while fallen or tilted: -100
+    RewardTerm("forward", "forward_penalty", forward, forward_np),  # -1 below FORWARD_MIN_SPEED: -0.3
+    # ours: the success bonus and the off-course fine, paid once
+    RewardTerm("goal", "goal_bonus", goal, goal_np, per_step=False),
+    RewardTerm("off_course", "off_course_penalty", off_course, off_course_np, per_step=False),
+    # ours: the stability shaping
+    RewardTerm("tilt", "w_tilt", tilt, tilt_np, cost=True),
+    RewardTerm("ang_vel", "w_ang_vel", ang_vel, ang_vel_np, cost=True),
+    RewardTerm("action_rate", "w_action_rate", action_rate, action_rate_np, state=False, cost=True),
+)
+TERMS = tuple(t.name for t in REWARD_TERMS)  # the columns of ``terms``
+
+
+def reward_weights(reward, table=REWARD_TERMS):
+    """The table's weights from a ``RewardConfig``, in column order: the kernel's ``weights`` argument."""
+    return wp.types.vector(len(table), wp.float32)(*(float(getattr(reward, t.weight)) for t in table))
+
+
+def make_rewards_kernel(table=REWARD_TERMS) -> wp.Kernel:
+    """The fused reward kernel of a term table (:data:`rewards_kernel` is ``REWARD_TERMS``')."""
+
+    @wp.kernel(module="unique")
+    def rewards_kernel(
+        i: RewardInputs,
+        weights: wp.types.vector(len(table), wp.float32),
+        reward: wp.array[wp.float32],
+        terms: wp.array2d[wp.float32],
+    ):
+        """Every term of the table (weighted) into ``terms[e, k]`` and their sum, in table order, into ``reward[e]``;
+        then this step's base x and clamped actions become ``prev_x`` and ``prev_actions``. Runs after the episode
+        status, before the episode counters advance."""
+        e = wp.tid()
+        f = reward_frame(i, e)
+        total = float(0.0)
+        for k in range(wp.static(len(table))):
+            w = weights[wp.static(k)]
+            if wp.static(table[k].cost):
+                w = -w
+            t = w * wp.static(table[k].func)(i, f)
+            if wp.static(table[k].per_step):
+                t = t * f.scale
+            if wp.static(table[k].state):
+                if not f.ok:
+                    t = 0.0
+            if not wp.isfinite(t):
+                t = 0.0
+            terms[e, wp.static(k)] = t
+            if wp.static(k == 0):
+                total = t
+            else:
+                total = total + t
+        reward[e] = total
+        px = float(0.0)
+        if f.ok:
+            px = f.px
+        i.prev_x[e] = px
+        for k in range(i.actions.shape[1]):
+            i.prev_actions[e, k] = clamped_action(i, e, k)
+
+    return rewards_kernel
+
+
+rewards_kernel = make_rewards_kernel()
+
+
+def rewards_reference(i, table=REWARD_TERMS):
+    """Float64 reference of :func:`make_rewards_kernel`'s kernel. ``i`` has :class:`RewardInputs`' fields as NumPy
+    arrays, with ``ground`` (N,), the terrain under each base, in place of ``hf``, and ``task`` / ``reward`` a
+    ``TaskConfig`` / ``RewardConfig``. Returns (reward (N,), terms (N, len(table)), prev_x (N,), prev_actions (N, A)).
+    """
+    with np.errstate(invalid="ignore", over="ignore"):
+        f = reward_frame_np(i)
+        cols = []
+        for row in table:
+            t = (-1.0 if row.cost else 1.0) * getattr(i.reward, row.weight) * row.reference(i, f)
+            if row.per_step:
+                t = t * f.scale
+            if row.state:
+                t = np.where(f.ok, t, 0.0)
+            cols.append(np.where(np.isfinite(t), t, 0.0))
+    terms = np.stack(cols, axis=1)
+    return terms.sum(axis=1), terms, np.where(f.ok, f.px, 0.0), clamped_actions_np(i.actions)
