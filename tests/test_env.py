@@ -1,4 +1,5 @@
-"""The rsl-rl VecEnv: API conformance, reward / observation / reset kernels vs NumPy, train.py -> play.py."""
+"""The rsl-rl VecEnv: API conformance, action / reset kernels vs NumPy, train.py -> play.py (the reward, end and
+observation tables: tests/test_terms.py)."""
 
 import dataclasses
 import glob
@@ -21,23 +22,14 @@ from hexnewton.config import HexConfig, RewardConfig, SimConfig, TaskConfig, Ter
 from hexnewton.env import make_env
 from hexnewton.kernels.actions import joint_actions_kernel
 from hexnewton.kernels.reference import joint_actions_reference
-from hexnewton.kernels.observations import OBS_LAYOUT, observations_kernel, observations_reference
+from hexnewton.kernels.observations import OBS_LAYOUT
 from hexnewton.kernels.resets import reset_bounds_reference
-from hexnewton.kernels.rewards import (
-    TABLE1_TERMS,
-    TERMS,
-    rewards_kernel,
-    rewards_reference,
-    shaping_kernel,
-    shaping_reference,
-)
-from hexnewton.kernels.terminations import FELL, NONFINITE, OFF_COURSE, SUCCESS, TIMEOUT
-from hexnewton.terrain import make_terrain, max_terrain_height_np, terrain_height_np
-from hexnewton.terrain.query import height_field_from_grid
+from hexnewton.kernels.rewards import TERMS
+from hexnewton.kernels.terminations import NONFINITE, TIMEOUT
 
 DEV = "cpu"
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-TASK, REW = TaskConfig(), RewardConfig()
+TASK = TaskConfig()
 
 
 def _cfg(terrain="flat", n=4, **task):
@@ -214,189 +206,8 @@ def test_joint_actions_kernel_matches_reference():
     np.testing.assert_allclose(out.numpy()[:, 7:], joint_actions_reference(a, lo, hi), atol=1e-6)
 
 
-# ------------------------------------------------------------------ rewards (Table 1, Eq. 5)
-
-
-def _reward_args(dt=TASK.control_dt, deadband=REW.direction_deadband, to_goal=REW.direction_to_goal,
-                 tilt=REW.stability_tilt):  # fmt: skip
-    return (TASK.goal_distance, TASK.goal_radius, REW.w_height, REW.w_direction, REW.w_distance, deadband,
-            int(to_goal), REW.stability_penalty, tilt, REW.forward_penalty, REW.goal_bonus,
-            REW.off_course_penalty, dt)  # fmt: skip
-
-
-def _run_rewards(grid, q, rpy, status, start, prev_x, dt=TASK.control_dt, deadband=REW.direction_deadband,
-                 to_goal=REW.direction_to_goal, tilt=REW.stability_tilt):  # fmt: skip
-    n = len(q)
-    hf = height_field_from_grid(grid, DEV)
-    px, rew, terms = wp.array(prev_x.astype(np.float32), device=DEV), wp.zeros(n, device=DEV), wp.zeros((n, len(TERMS)), device=DEV)
-    f = lambda a, **k: wp.array(np.asarray(a, np.float32), device=DEV, **k)  # noqa: E731
-    wp.launch(rewards_kernel, dim=n,
-              inputs=[f(q), f(rpy), wp.array(np.asarray(status, np.int32), device=DEV), hf, f(start, dtype=wp.vec2),
-                      *_reward_args(dt, deadband, to_goal, tilt)],
-              outputs=[px, rew, terms], device=DEV)  # fmt: skip
-    return rew.numpy(), terms.numpy(), px.numpy()
-
-
-def test_reward_kernel_matches_reference_on_random_states():
-    rng = np.random.default_rng(1)
-    n = 256
-    grid = make_terrain(TerrainConfig(name="complex")).grid
-    q = np.zeros((n, 25))
-    q[:, 0] = (np.floor(rng.uniform(-0.5, 3.5, n) / 0.01) + 0.5) * 0.01
-    q[:, 1] = (np.floor(rng.uniform(-1.0, 1.0, n) / 0.01) + 0.5) * 0.01
-    ground = terrain_height_np(grid, q[:, 0], q[:, 1])
-    q[:, 2] = ground + rng.uniform(0.02, 0.2, n)
-    rpy = rng.uniform(-1.2, 1.2, (n, 3))
-    status = rng.integers(0, 5, n)
-    start = rng.uniform(-0.2, 0.2, (n, 2))
-    prev_x = q[:, 0] - rng.uniform(-0.01, 0.01, n)
-    # ours, Table 1's dead band and start-to-goal direction, and a wider stability tilt (--stability_tilt)
-    for dt, deadband, to_goal, tilt in ((0.02, 0.0, True, REW.stability_tilt), (0.04, 0.0, True, REW.stability_tilt),
-                                        (0.02, math.pi / 6, False, REW.stability_tilt), (0.02, 0.0, True, 0.8)):
-        rew, terms, px = _run_rewards(grid, q, rpy, status, start, prev_x, dt, deadband, to_goal, tilt)
-        ref_rew, ref_terms = rewards_reference(q.astype(np.float32), rpy.astype(np.float32), status, ground,
-                                               start.astype(np.float32), prev_x.astype(np.float32),
-                                               *_reward_args(dt, deadband, to_goal, tilt))  # fmt: skip
-        np.testing.assert_allclose(terms[:, :len(TABLE1_TERMS)], ref_terms, rtol=1e-4, atol=1e-4)
-        np.testing.assert_allclose(rew, ref_rew, rtol=1e-4, atol=1e-3)
-        np.testing.assert_allclose(px, q[:, 0], atol=1e-6)
-
-
-def test_reward_terms_on_hand_made_states():
-    grid = make_terrain(TerrainConfig(name="flat")).grid
-    # 0: upright at 0.13 m, facing the goal, 1 cm progress in a 20 ms step, 3 m from the goal
-    # 1: fallen (status), tilted 40 deg, no progress; 2: reached the goal; 3: facing backward;
-    # 4: left the course (status), stuck (no progress)
-    q = np.zeros((5, 25))
-    q[:, 2] = [0.13, 0.04, 0.13, 0.13, 0.13]
-    q[:, 0] = [0.5, 0.5, 3.2, 0.5, 0.5]
-    rpy = np.array([[0, 0, 0], [0.7, 0, 0], [0, 0, 0], [0, 0, math.pi], [0, 0, 0]])
-    status = np.array([0, FELL, SUCCESS, 0, OFF_COURSE])
-    prev_x = q[:, 0] - np.array([0.01, 0.0, 0.01, 0.01, 0.0])
-    _, terms, _ = _run_rewards(grid, q, rpy, status, np.zeros((5, 2)), prev_x)
-    t = dict(zip(TERMS, terms.T))
-    np.testing.assert_allclose(t["height"], [0.02, 0.0, 0.02, 0.02, 0.02], atol=1e-6)  # z - 0.11 when z > 0.12
-    np.testing.assert_allclose(t["distance"][0], math.exp(-(3.0 - 0.5)), rtol=1e-5)  # exp(-(d_n - d_t))
-    np.testing.assert_allclose(t["stability"], [0, -100, 0, 0, 0])
-    # pitched 35 deg nose-up (an 8 cm staircase): fined under Table 1's pi/6, free under --stability_tilt 0.8
-    rpy[0, 1] = -math.radians(35)
-    for tilt, expect in ((math.pi / 6, -100.0), (0.8, 0.0)):
-        _, terms, _ = _run_rewards(grid, q, rpy, status, np.zeros((5, 2)), prev_x, tilt=tilt)
-        assert terms[0, TERMS.index("stability")] == pytest.approx(expect)
-    rpy[0, 1] = 0.0
-    np.testing.assert_allclose(t["forward"], [0, -0.3, 0, 0, -0.3])
-    np.testing.assert_allclose(t["goal"], [0, 0, 300, 0, 0])  # ours: more than lingering by the goal is worth
-    np.testing.assert_allclose(t["off_course"], [0, 0, 0, 0, -100])  # ours: leaving the course costs a fall
-    np.testing.assert_allclose(t["direction"], [0, 0, 0, -2.0, 0], atol=1e-6)  # default dead band 0
-    # Table 1's dead band: a 20 deg heading error is free inside +-30 deg, and costs cos(20 deg) - 1 without it
-    rpy[0, 2] = math.radians(20)
-    for deadband, expect in ((math.pi / 6, 0.0), (0.0, math.cos(math.radians(20)) - 1)):
-        _, terms, _ = _run_rewards(grid, q, rpy, status, np.zeros((5, 2)), prev_x, deadband=deadband)
-        assert terms[0, TERMS.index("direction")] == pytest.approx(expect, abs=1e-6)
-    # 1 m to the side of the start, 2 m short of the goal: facing +x is the paper's ideal heading; ours asks
-    # for the bearing to the goal, atan2(-1, 2)
-    q[0, :2], bearing = (1.5, 1.0), math.atan2(-1.0, 2.0)
-    for yaw, to_goal, expect in ((0.0, False, 0.0), (0.0, True, math.cos(bearing) - 1), (bearing, True, 0.0)):
-        rpy[0, 2] = yaw
-        _, terms, _ = _run_rewards(grid, q, rpy, status, np.zeros((5, 2)), prev_x, to_goal=to_goal)
-        assert terms[0, TERMS.index("direction")] == pytest.approx(expect, abs=1e-6)
-
-
-def _run_shaping(q, qd, rpy, actions, prev, steps, weights, dt=TASK.control_dt, reward0=None):
-    n = len(q)
-    f = lambda a: wp.array(np.asarray(a, np.float32), device=DEV)  # noqa: E731
-    prev_w, rew = f(prev), f(np.zeros(n) if reward0 is None else reward0)
-    terms = wp.zeros((n, len(TERMS)), device=DEV)
-    wp.launch(shaping_kernel, dim=n, inputs=[f(q), f(qd), f(rpy), f(actions), wp.array(np.asarray(steps, np.int32),
-              device=DEV), *weights, dt], outputs=[prev_w, rew, terms], device=DEV)  # fmt: skip
-    return terms.numpy()[:, len(TABLE1_TERMS):], rew.numpy(), prev_w.numpy()
-
-
-def test_shaping_kernel_matches_reference_on_random_states():
-    """The stability shaping (tilt, body roll / pitch rate, action rate) against its float64 reference."""
-    rng = np.random.default_rng(7)
-    n = 200
-    q = np.zeros((n, 25))
-    quat = rng.normal(size=(n, 4))
-    q[:, 3:7] = quat / np.linalg.norm(quat, axis=1, keepdims=True)
-    qd = rng.normal(0.0, 2.0, (n, 24))
-    rpy = rng.uniform(-1.0, 1.0, (n, 3))
-    actions, prev = rng.uniform(-1.3, 1.3, (n, 15)), rng.uniform(-1.0, 1.0, (n, 15))
-    steps = rng.integers(0, 3, n)
-    for weights, dt in (((2.0, 0.02, 0.05), 0.02), ((5.0, 0.1, 0.3), 0.04), ((0.0, 0.0, 0.0), 0.02)):
-        terms, rew, new_prev = _run_shaping(q, qd, rpy, actions, prev, steps, weights, dt, reward0=np.ones(n))
-        ref, ref_prev = shaping_reference(q, qd, rpy, actions, prev, steps, *weights, dt)
-        np.testing.assert_allclose(terms, ref, rtol=1e-4, atol=1e-5)
-        np.testing.assert_allclose(rew, 1.0 + ref.sum(axis=1), rtol=1e-4, atol=1e-5)  # added to Table 1's reward
-        np.testing.assert_allclose(new_prev, ref_prev, atol=1e-6)
-
-
-def test_shaping_terms_on_hand_made_states():
-    q = np.zeros((3, 25))
-    q[:, 6] = 1.0  # upright, yaw 0: the body frame is the world frame
-    qd = np.zeros((3, 24))
-    qd[1, 3:6] = (1.0, 2.0, 5.0)  # roll rate 1, pitch rate 2 rad/s; the yaw rate is free
-    rpy = np.array([[math.radians(10), 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0]])
-    a = np.zeros((3, 15))
-    a[2, 0] = 1.0
-    prev = np.zeros((3, 15))
-    prev[2, 0] = -1.0
-    from hexnewton.tasks import STABLE_SHAPING
-
-    w = STABLE_SHAPING
-    terms, _, new_prev = _run_shaping(q, qd, rpy, a, prev, [5, 5, 5], (w["w_tilt"], w["w_ang_vel"], w["w_action_rate"]))
-    t = dict(zip(TERMS[len(TABLE1_TERMS):], terms.T))
-    np.testing.assert_allclose(t["tilt"], [-w["w_tilt"] * math.radians(10) ** 2, 0, 0], rtol=1e-5)
-    np.testing.assert_allclose(t["ang_vel"], [0, -w["w_ang_vel"] * 5.0, 0], rtol=1e-5)
-    np.testing.assert_allclose(t["action_rate"], [0, 0, -w["w_action_rate"] * 4.0], rtol=1e-5)  # (1 - (-1))^2
-    np.testing.assert_allclose(new_prev, a)
-    # an episode's first step has no previous action; Table 1's reward has none of these terms
-    terms, _, _ = _run_shaping(q, qd, rpy, a, prev, [0, 0, 0], (w["w_tilt"], w["w_ang_vel"], w["w_action_rate"]))
-    assert terms[2, 2] == 0.0
-    paper = REW.paper_reward()
-    assert (paper.w_tilt, paper.w_ang_vel, paper.w_action_rate, paper.goal_bonus, paper.off_course_penalty) == (0,) * 5
-    assert paper.direction_deadband == pytest.approx(math.pi / 6) and not paper.direction_to_goal
-
-
-# ------------------------------------------------------------------ observations (§2.4.1)
-
-
-def test_observation_layout_covers_59_62_and_44():
-    for mode, dim in (("cpg", 59), ("cpg_posture", 62), ("joint", 44)):
-        spans = OBS_LAYOUT[mode]
-        assert spans[0][1] == 0 and spans[-1][2] == dim
-        assert all(a[2] == b[1] for a, b in zip(spans, spans[1:]))
-
-
-def test_observation_kernel_matches_reference():
-    rng = np.random.default_rng(2)
-    n = 64
-    grid = make_terrain(TerrainConfig(name="stepped")).grid
-    q = np.zeros((n, 25), np.float32)
-    q[:, 0] = (np.floor(rng.uniform(-0.5, 4.0, n) / 0.01) + 0.5) * 0.01
-    q[:, 1] = (np.floor(rng.uniform(-1.0, 1.0, n) / 0.01) + 0.5) * 0.01
-    q[:, 2] = rng.uniform(0.1, 1.0, n)
-    quat = rng.normal(size=(n, 4))
-    q[:, 3:7] = quat / np.linalg.norm(quat, axis=1, keepdims=True)
-    q[:, 7:] = rng.uniform(-1, 1, (n, 18))
-    qd = rng.normal(size=(n, 24)).astype(np.float32)
-    params = rng.uniform(0, 10, (n, 18)).astype(np.float32)
-    start = rng.uniform(-0.2, 0.2, (n, 2)).astype(np.float32)
-    hf = height_field_from_grid(grid, DEV)
-
-    def ground_at(x, y):
-        return terrain_height_np(grid, x, y)
-
-    ground_at.max = lambda x, y, h: max_terrain_height_np(grid, x, y, h)
-    for with_params, npar, dim in ((1, 15, 59), (1, 18, 62), (0, 15, 44)):  # the paper's, with the posture, joint
-        p = np.ascontiguousarray(params[:, :npar])
-        out = wp.zeros((n, dim), dtype=wp.float32, device=DEV)
-        wp.launch(observations_kernel, dim=n,
-                  inputs=[wp.array(q, device=DEV), wp.array(qd, device=DEV), wp.array(p, device=DEV), hf,
-                          wp.array(start, dtype=wp.vec2, device=DEV), TASK.goal_distance, with_params],
-                  outputs=[out], device=DEV)  # fmt: skip
-        ref = observations_reference(q, qd, p, ground_at, start, TASK.goal_distance, with_params)
-        np.testing.assert_allclose(out.numpy(), ref, atol=2e-4, rtol=1e-4)
+# ------------------------------------------------------------------ rewards and observations in the env
+# (the kernels against their float64 references: tests/test_terms.py)
 
 
 def test_posture_env_acts_with_18_and_levels_with_the_reflex():

@@ -4,6 +4,7 @@ import math
 import os
 import subprocess
 import sys
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -12,11 +13,13 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from hexnewton.config import JOINT_NAMES, HexConfig, SimConfig, TaskConfig, TerrainConfig
+from hexnewton.kernels.tables import make_struct
 from hexnewton.kernels.terminations import (
     FELL,
     NONFINITE,
     RUNNING,
     SUCCESS,
+    EndInputs,
     episode_status_kernel,
     episode_status_np,
 )
@@ -62,13 +65,13 @@ def test_episode_status_kernel_matches_reference(seed):
     steps = rng.integers(6990, 7010, n).astype(np.int32)
     status = wp.zeros(n, dtype=wp.int32, device="cpu")
     rpy = wp.zeros((n, 3), dtype=wp.float32, device="cpu")
-    args = (TASK.goal_distance, TASK.goal_radius, TASK.min_height, TASK.max_tilt, TASK.max_abs_y,
-            TASK.max_episode_steps, TASK.max_base_speed, TASK.max_joint_speed)  # fmt: skip
     f32 = lambda a: wp.array(a.astype(np.float32), device="cpu")  # noqa: E731
-    wp.launch(episode_status_kernel, dim=n,
-              inputs=[f32(q), f32(qd), wp.array(steps, device="cpu"), hf, wp.array(start, dtype=wp.vec2, device="cpu"),
-                      *args], outputs=[status, rpy], device="cpu")  # fmt: skip
-    ref_status, ref_rpy = episode_status_np(q.astype(np.float32), qd.astype(np.float32), steps, ground, start, *args)
+    inputs = make_struct(EndInputs, joint_q=f32(q), joint_qd=f32(qd), episode_steps=wp.array(steps, device="cpu"),
+                         start=wp.array(start, dtype=wp.vec2, device="cpu"), hf=hf, task=TASK)  # fmt: skip
+    wp.launch(episode_status_kernel, dim=n, inputs=[inputs], outputs=[status, rpy], device="cpu")
+    ns = SimpleNamespace(joint_q=q.astype(np.float32), joint_qd=qd.astype(np.float32), episode_steps=steps,
+                         start=start, ground=ground, task=TASK)  # fmt: skip
+    ref_status, ref_rpy = episode_status_np(ns)
     assert (ref_status[: n // 8 + 8] == NONFINITE).all()
     # thresholds compared in float32 vs float64 can differ right at the boundary: allow a handful
     assert (status.numpy() != ref_status).sum() <= 2
