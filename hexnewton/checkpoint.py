@@ -65,7 +65,10 @@ def trained_config(ckpt: dict | None) -> HexConfig:
     """The configuration a checkpoint was trained with; the defaults for no checkpoint or one without hexnewton
     metadata. Its ``cpg`` parameter ranges give the actions their meaning, its ``sim`` is the physics (frame and
     substeps) the policy learnt under."""
-    cfg = checkpoint_meta(ckpt).get("config")
+    meta = checkpoint_meta(ckpt)
+    cfg = meta.get("config")
+    if cfg and meta.get("action_mode") == "joint" and "joint_action_scale" not in cfg.get("task", {}):
+        cfg = {**cfg, "task": {**cfg["task"], "joint_action_scale": 0.0}}  # saved before the offsets: whole range
     return config_from_dict(cfg) if cfg else HexConfig()
 
 

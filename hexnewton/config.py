@@ -157,7 +157,7 @@ class SimConfig:
 PARAM_NAMES = ("omega", "A1_R", "A1_L") + tuple(f"A2_{leg}" for leg in LEG_NAMES) + tuple(
     f"A3_{leg}" for leg in LEG_NAMES
 )
-#: The body-posture parameters (``CPGConfig.posture``, kernels/mapping.py), after the 15.
+#: The body-posture parameters (``CPGConfig.posture``, kernels/cpg.py), after the 15.
 POSTURE_NAMES = ("P_h", "P_p", "P_r")
 #: Oscillator of each leg (R1, R2, R3, L1, L2, L3): tripod {R1, L2, R3} on 0, {L1, R2, L3} on 1 (§2.2).
 LEG_OSCILLATOR = (0, 1, 0, 1, 0, 1)
@@ -201,14 +201,14 @@ class CPGConfig:
     # their ranges: play, evaluate, export and --resume read them from the checkpoint.
     a2_range: tuple[float, float] = (0.0, 1.3)
     a3_range: tuple[float, float] = (0.0, 0.8)  # ankle tuck; 0.15 + 0.8 < pi/3 keeps it inside the limit
-    # ours: body posture (kernels/mapping.py), three more parameters after the 15: knee offsets [rad] for height
+    # ours: body posture (kernels/cpg.py), three more parameters after the 15: knee offsets [rad] for height
     # (P_h) and for pitch and roll (P_p, P_r: +-range at the front/rear and right/left legs). Off: the paper's 15
     # parameters; train.py --posture turns it on. The knee's standing angle is 0.15 above its lower limit.
     posture: bool = False
     posture_height_range: tuple[float, float] = (-0.15, 0.15)
     posture_tilt_range: tuple[float, float] = (-0.3, 0.3)
     # ours: levelling reflex gain [rad of knee per rad of body tilt] on the posture's tilt terms, at every substep
-    # (kernels/mapping.py); 0 = off. Only with ``posture``.
+    # (kernels/cpg.py); 0 = off. Only with ``posture``.
     posture_reflex: float = 0.0
     # ours: the fixed-parameter "CPG" baseline (§3.3), tuned to walk straight on flat ground
     fixed_omega: float = 3.0 * math.pi  # 1.5 Hz
@@ -286,11 +286,14 @@ class TaskConfig:
     reset_yaw: float = 0.2  # [rad]
     reset_joint_noise: float = 0.05  # [rad]
     seed: int = 0
+    # ours: the pure-DRL action mode's joint targets, standing pose + joint_action_scale * action [rad], clipped
+    # to the limits (kernels/cpg.py); 0 spans each joint's whole limit range with the actions
+    joint_action_scale: float = 0.5
 
 
 @dataclass
 class RewardConfig:
-    """Table 1 / Eq. 5 weights. The paper names w_h, w_d, w_theta but gives no values (kernels/rewards.py)."""
+    """Table 1 / Eq. 5 weights. The paper names w_h, w_d, w_theta but gives no values (kernels/mdp.py)."""
 
     w_height: float = 1.0  # ours
     w_direction: float = 1.0  # ours
@@ -301,17 +304,17 @@ class RewardConfig:
     # ±0.2 rad start yaw, RESULTS.md).
     direction_deadband: float = 0.0
     # ours: Table 1's D is the start-to-goal vector; True takes it from the robot to the goal, so the direction
-    # term steers back toward a goal the robot has drifted away from (kernels/rewards.py). False: the paper's.
+    # term steers back toward a goal the robot has drifted away from (kernels/mdp.py). False: the paper's.
     direction_to_goal: bool = True
     stability_penalty: float = 100.0  # Table 1: r_s = -100, weight 1
-    stability_tilt: float = math.pi / 6  # Table 1: r_s while |roll| or |pitch| > pi/6 [rad] (kernels/rewards.py)
+    stability_tilt: float = math.pi / 6  # Table 1: r_s while |roll| or |pitch| > pi/6 [rad] (kernels/mdp.py)
     forward_penalty: float = 0.3  # Table 1: r_f = -0.3, weight 1
-    # ours: more than w_d / (1 - gamma) = 100, what lingering by the goal is worth (kernels/rewards.py)
+    # ours: more than w_d / (1 - gamma) = 100, what lingering by the goal is worth (kernels/mdp.py)
     goal_bonus: float = 300.0
     # ours: paid once on leaving the course (§2.4.4 (2)); without it PPO walks off the course when stuck at a
-    # step (kernels/rewards.py). 0 restores the paper's reward.
+    # step (kernels/mdp.py). 0 restores the paper's reward.
     off_course_penalty: float = 100.0
-    # ours: gait-quality terms (kernels/rewards.py, "Stability shaping"), each per 20 ms step and 0 = off (Table 1
+    # ours: gait-quality terms (kernels/mdp.py, "Stability shaping"), each per 20 ms step and 0 = off (Table 1
     # has only the -100 fine beyond pi/6). Body tilt: -w_tilt (roll^2 + pitch^2) [rad^2]; body roll and pitch rate:
     # -w_ang_vel (w_x^2 + w_y^2) [(rad/s)^2, body frame]; action rate: -w_action_rate sum_k (a_k - a_k,prev)^2 over
     # the 15 actions in [-1, 1]. Off here; train.py's recipes for the paper's terrains switch them on

@@ -21,9 +21,7 @@ import numpy as np
 import warp as wp
 
 from .config import CPGConfig, RobotConfig
-from .kernels.actions import scale_actions_kernel
-from .kernels.cpg import hopf_cpg_kernel
-from .kernels.mapping import mapping_kernel
+from .kernels.cpg import hopf_cpg_kernel, mapping_kernel, scale_actions_kernel
 from .kernels.reference import initial_cpg_state
 from .robot import BASE_Q, leg_bounds
 from .sim import as_mask

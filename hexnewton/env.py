@@ -3,10 +3,10 @@
 One ``step(actions)`` is one control step (``TaskConfig.control_dt``). Apart from the action copy, it is a
 single captured graph (a CUDA graph on GPU, Warp's capture on CPU) of Warp kernels on preallocated arrays:
 
-    actions -> parameters (kernels/actions.py)  -> [CPG (cpg.py) + mapping (mapping.py) + physics] x substeps
-            -> episode ends (terminations.py)   -> rewards, stability shaping (rewards.py) -> episode bookkeeping
-            -> [curriculum lane change (curriculum.py)] -> randomised resets of finished envs (resets.py)
-            -> observations (observations.py)
+    actions -> parameters (kernels/cpg.py) -> [CPG + mapping (kernels/cpg.py, through controller.py) + physics
+            (sim.py)] x substeps -> episode ends, rewards with the stability shaping (kernels/mdp.py)
+            -> episode bookkeeping (here) -> [curriculum lane change (kernels/curriculum.py)]
+            -> randomised resets of finished envs and observations (kernels/mdp.py)
 
 With ``RandomizationConfig.enabled`` the step also delays the actions of "late" envs, pushes bases and adds
 observation noise (kernels/randomization.py); the per-env physical draws are ``World.randomize``.
@@ -20,7 +20,7 @@ Finished envs auto-reset. ``extras["time_outs"]`` marks time-limit ends. ``extra
 - the mean of each reward term;
 - success, fall, off-course, timeout and non-finite rates, with distance and length, over the last 1024
   finished episodes;
-- ``Episode/nonfinite_resets_total``: how many blown-up envs (NaN/Inf or runaway state, ``kernels/terminations``)
+- ``Episode/nonfinite_resets_total``: how many blown-up envs (NaN/Inf or runaway state, ``kernels/mdp.py``)
   were reset since the env was built. Their reward stays finite (0 if the position itself is not) and their
   observation comes from the fresh start, so training never sees a NaN;
 - ``Episode/contact_overflow_frames``: frames with dropped contacts so far (checked every 250 steps);
@@ -28,10 +28,11 @@ Finished envs auto-reset. ``extras["time_outs"]`` marks time-limit ends. ``extra
 
 Action modes:
 - ``cpg`` (15 actions): omega, A1[2], A2[6], A3[6], each scaled to its range (the paper's CPG_RL);
-  with ``CPGConfig.posture`` (ours, kernels/mapping.py) 18: the 15 and the body posture P_h, P_p, P_r, knee
+  with ``CPGConfig.posture`` (ours, kernels/cpg.py) 18: the 15 and the body posture P_h, P_p, P_r, knee
   offsets that level the body over uneven footholds; the observation adds their 3 filtered values (62,
   layout ``cpg_posture``);
-- ``joint`` (18 actions): joint targets over each joint's limits (the pure-DRL comparison). Its observation
+- ``joint`` (18 actions): joint targets about the standing pose, ``TaskConfig.joint_action_scale`` rad per unit
+  action, clipped to the limits (the pure-DRL comparison). Its observation
   lacks the CPG parameters (44 values instead of 59); the reward is the same.
 """
 
@@ -47,15 +48,29 @@ from tensordict import TensorDict
 
 from .config import HexConfig, control_decimation
 from .controller import CPGController
-from .kernels.actions import joint_actions_kernel, scale_actions_kernel
-from .kernels.curriculum import curriculum_kernel, placement_kernel, start_levels
-from .kernels.observations import LAYOUTS, OBS_DIM, ObsInputs, observation_noise, observations_kernel
-from .kernels.randomization import delay_actions_kernel, observation_noise_kernel, push_kernel
-from .kernels.rewards import REWARD_TERMS, RewardInputs, reward_weights, rewards_kernel
-from .kernels.tables import make_struct
-from .kernels.terminations import NONFINITE, SUCCESS, TERMINATIONS, TIMEOUT, EndInputs, episode_status_kernel
-from .robot import BASE_Q
 from .errors import HexnewtonError
+from .kernels.cpg import joint_actions_kernel, scale_actions_kernel
+from .kernels.curriculum import curriculum_kernel, placement_kernel, start_levels
+from .kernels.mdp import (
+    LAYOUTS,
+    NONFINITE,
+    OBS_DIM,
+    REWARD_TERMS,
+    SUCCESS,
+    TERMINATIONS,
+    TIMEOUT,
+    EndInputs,
+    ObsInputs,
+    RewardInputs,
+    episode_status_kernel,
+    make_struct,
+    observation_noise,
+    observations_kernel,
+    reward_weights,
+    rewards_kernel,
+)
+from .kernels.randomization import delay_actions_kernel, observation_noise_kernel, push_kernel
+from .robot import BASE_Q
 from .sim import World, capture_graph
 
 ACTION_MODES = ("cpg", "joint")
@@ -187,6 +202,14 @@ class HexapodEnv(VecEnv):
         # rsl-rl's learn(init_at_random_ep_len=True) assigns a new tensor: copy it into the Warp buffer
         self._steps_t.copy_(value.to(self._steps_t.dtype))
 
+    def reset(self) -> TensorDict:
+        """Every robot back to a (randomised) start with its episode counter at 0; returns :meth:`get_observations`.
+        Training never needs it (finished robots restart inside ``step``); the Gymnasium adapter's ``reset`` does."""
+        self._reset(None)
+        self.episode_steps.zero_()
+        self._observe()
+        return self.get_observations()
+
     def get_observations(self) -> TensorDict:
         """A copy of the current observations (device to device), which the next ``step`` leaves untouched."""
         return TensorDict({"policy": self._obs_t.clone()}, batch_size=[self.num_envs], device=self._obs_t.device)
@@ -262,7 +285,8 @@ class HexapodEnv(VecEnv):
                       outputs=[self.controller.params_target], device=dev)  # fmt: skip
         else:
             wp.launch(joint_actions_kernel, dim=(n, self.num_actions),
-                      inputs=[actions, w.joint_lower, w.joint_upper, BASE_Q], outputs=[w.joint_target_wp],
+                      inputs=[actions, w.stand_pose, w.joint_lower, w.joint_upper, t.joint_action_scale, BASE_Q],
+                      outputs=[w.joint_target_wp],
                       device=dev)  # fmt: skip
         for _ in range(self.decimation):
             w.simulate_frame()

@@ -36,7 +36,7 @@ def _sha256(path: str) -> str:
 def controller_spec(env, checkpoint: str, action_std: list[float] | None) -> dict:
     """controller.json for ``env``'s configuration; ``action_std`` is the policy's Gaussian standard deviation (None
     for a Beta policy)."""
-    from .kernels.observations import H_HALF_EXTENT, OBS_LAYOUT
+    from .kernels.mdp import H_HALF_EXTENT, OBS_LAYOUT
     from .robot import leg_bounds
     from .report import git_rev
 

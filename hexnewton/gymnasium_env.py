@@ -53,17 +53,14 @@ class HexnewtonGymEnv(gym.Env):
         super().reset(seed=seed)
         if seed is not None:
             self.action_space.seed(seed)
-        env = self.vec_env
-        env._reset(None)
-        env._observe()
-        return env.get_observations()["policy"], {}
+        return self.vec_env.reset()["policy"], {}
 
     def step(self, action):
         import torch
 
         env = self.vec_env
         a = torch.as_tensor(np.asarray(action) if not isinstance(action, torch.Tensor) else action,
-                            dtype=torch.float32, device=env._obs_t.device)  # fmt: skip
+                            dtype=torch.float32, device=env.device)  # fmt: skip
         obs, reward, done, extras = env.step(a)
         truncated = extras["time_outs"].bool()
         terminated = done.bool() & ~truncated

@@ -9,7 +9,7 @@ import math
 
 import numpy as np
 
-from .kernels.status import FELL, NONFINITE, OFF_COURSE, STATUS_NAMES
+from .kernels.reference import FELL, NONFINITE, OFF_COURSE, STATUS_NAMES
 
 DISTANCES = (0.5, 1.0, 2.0, 3.0)  # Table 3's columns [m]
 _BAD_END = (FELL, OFF_COURSE, NONFINITE)
@@ -20,7 +20,7 @@ def round_metrics(pos: np.ndarray, rpy: np.ndarray, done: np.ndarray, status: np
     """Per-round metrics of each env's first episode.
 
     ``pos`` (T, N, 2+) x, y relative to the round's start; ``rpy`` (T, N, 3) [rad]; ``done`` (T, N) the
-    episode ended at that step; ``status`` (T, N) why (``kernels.terminations`` codes); ``dt`` the control
+    episode ended at that step; ``status`` (T, N) why (``kernels.reference`` status codes); ``dt`` the control
     period. Returns arrays over the N rounds: ``reached`` (D, N) bool, ``time_to`` (D, N) [s] (nan if not
     reached), ``y_dev`` (N,) [m], ``end`` (N,) status code (0 = still running at the last step),
     ``steps`` (N,), and ``in_episode`` (T, N), the rows that belong to each first episode.

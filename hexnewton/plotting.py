@@ -8,10 +8,9 @@ import numpy as np
 import warp as wp
 
 from .config import LEG_NAMES, HexConfig
+from .kernels.cpg import hopf_cpg_kernel, mapping_kernel
 from .kernels.reference import initial_cpg_state
 from .robot import leg_bounds
-from .kernels.cpg import hopf_cpg_kernel
-from .kernels.mapping import mapping_kernel
 
 
 def gait_trajectory(cfg: HexConfig, cycles: float = 2.0, device: str = "cpu"):

@@ -33,7 +33,7 @@ from newton.solvers import SolverMuJoCo
 from .errors import HexnewtonError
 from .config import HexConfig, SimConfig
 from .robot import BASE_Q, BASE_QD, NUM_JOINTS, build_hexapod, leg_bounds, stand_height
-from .kernels.resets import advance_counter_kernel, reset_envs_kernel
+from .kernels.mdp import advance_counter_kernel, reset_envs_kernel
 from .terrain import Terrain, make_terrain, max_terrain_height_np
 
 log = logging.getLogger("hexnewton")
@@ -477,7 +477,7 @@ class World:
     ) -> None:
         """Put the selected envs (all if ``mask`` is None) back on their start lane, at rest.
 
-        With ``lateral``/``yaw``/``joint_noise`` > 0 the start is randomised (``kernels.resets``); the new
+        With ``lateral``/``yaw``/``joint_noise`` > 0 the start is randomised (``kernels/mdp.py``); the new
         start lands in ``start_wp`` (and ``prev_x`` if given). MuJoCo's warm start for those worlds is cleared.
         Capturable when ``mask`` is a Warp array.
         """

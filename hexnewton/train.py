@@ -128,7 +128,7 @@ def main(argv: list[str] | None = None) -> int:
     run_dir = os.path.join(args.log_dir, experiment, datetime.datetime.now().strftime("%Y-%m-%d_%H-%M-%S"))
     meta = {"task": base.name, "action_mode": base.action_mode, "num_obs": env.num_obs,
             "num_actions": env.num_actions, "config": dataclasses.asdict(cfg), "agent": dataclasses.asdict(agent),
-            "distribution": agent.distribution.name, "world_size": rank.world_size}  # fmt: skip
+            "world_size": rank.world_size}  # fmt: skip
     if rank.is_main:  # only rank 0 writes logs, checkpoints and the export
         if os.path.exists(run_dir):
             raise ValueError(f"{run_dir} exists: nothing is overwritten (start again in a second, or change --experiment)")

@@ -9,15 +9,13 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from hexnewton.config import CPGConfig
-from hexnewton.kernels.actions import scale_actions_kernel
-from hexnewton.kernels.cpg import hopf_cpg_kernel
-from hexnewton.kernels.mapping import mapping_kernel
+from hexnewton.kernels.cpg import hopf_cpg_kernel, mapping_kernel, scale_actions_kernel
 from hexnewton.kernels.reference import (
     hopf_cpg_reference,
     mapping_offsets_np,
     mapping_reference,
-    quat_to_rpy_np,
     params_to_actions,
+    quat_to_rpy_np,
     scale_actions_reference,
 )
 

@@ -11,7 +11,7 @@ import warp as wp
 from hexnewton.config import HexConfig, SimConfig, TaskConfig, TerrainConfig
 from hexnewton.env import make_env
 from hexnewton.kernels.curriculum import curriculum_kernel, curriculum_reference, placement_kernel, start_levels
-from hexnewton.kernels.terminations import NONFINITE, SUCCESS
+from hexnewton.kernels.mdp import NONFINITE, SUCCESS
 from hexnewton.terrain import build_height_grid, height_field_from_grid, max_terrain_height_np, terrain_height_np
 from hexnewton.terrain.heightmap import lane_center_y
 

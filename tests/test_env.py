@@ -20,12 +20,9 @@ from tensordict import TensorDict
 
 from hexnewton.config import HexConfig, RewardConfig, SimConfig, TaskConfig, TerrainConfig
 from hexnewton.env import make_env
-from hexnewton.kernels.actions import joint_actions_kernel
+from hexnewton.kernels.cpg import joint_actions_kernel
+from hexnewton.kernels.mdp import NONFINITE, OBS_LAYOUT, REWARD_NAMES, TIMEOUT, reset_bounds_reference
 from hexnewton.kernels.reference import joint_actions_reference
-from hexnewton.kernels.observations import OBS_LAYOUT
-from hexnewton.kernels.resets import reset_bounds_reference
-from hexnewton.kernels.rewards import TERMS
-from hexnewton.kernels.terminations import NONFINITE, TIMEOUT
 
 DEV = "cpu"
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
@@ -53,7 +50,7 @@ def test_vecenv_api(env):
     assert rew.shape == (6,) and rew.dtype == torch.float32
     assert done.shape == (6,) and extras["time_outs"].shape == (6,)
     assert all(k.count("/") == 1 and v.dim() == 0 for k, v in extras["log"].items())
-    assert {f"Reward/{t}" for t in TERMS} <= set(extras["log"])
+    assert {f"Reward/{t}" for t in REWARD_NAMES} <= set(extras["log"])
     # rsl-rl's learn(init_at_random_ep_len=True) assigns a new tensor: it must reach the Warp buffer
     env.episode_length_buf = torch.randint_like(env.episode_length_buf, high=100)
     assert np.array_equal(env.episode_steps.numpy(), env.episode_length_buf.numpy())
@@ -191,19 +188,30 @@ def test_time_outs_and_auto_reset():
 def test_joint_action_mode():
     env = make_env(_cfg("flat", 2), action_mode="joint")
     assert env.num_actions == 18 and env.get_observations()["policy"].shape == (2, 44)
+    env.step(torch.ones(2, 18))  # standing pose + 0.5 rad, clipped to the limits
+    t = env.world.joint_target.numpy()
+    np.testing.assert_allclose(t.reshape(2, 6, 3), np.broadcast_to([0.5, 0.65, 0.0], (2, 6, 3)), atol=1e-6)
+    env = make_env(_cfg("flat", 2, joint_action_scale=0.0), action_mode="joint")  # the whole limit range
     env.step(torch.ones(2, 18))
     t = env.world.joint_target.numpy()
     np.testing.assert_allclose(t.reshape(2, 6, 3), np.broadcast_to([math.pi / 6, math.pi / 2, 0.0], (2, 6, 3)), atol=1e-6)
 
 
 def test_joint_actions_kernel_matches_reference():
+    """Pure DRL's joint targets: offsets about the standing pose (scale > 0) or the whole limit range (scale 0)."""
     rng = np.random.default_rng(0)
     a = rng.uniform(-1.5, 1.5, (16, 18)).astype(np.float32)
-    lo, hi = (-0.5, 0.0, -1.0), (0.5, 1.5, 0.0)
-    out = wp.zeros((16, 25), dtype=wp.float32, device=DEV)
-    wp.launch(joint_actions_kernel, dim=(16, 18), inputs=[wp.array(a, device=DEV), wp.vec3(*lo), wp.vec3(*hi), 7],
-              outputs=[out], device=DEV)  # fmt: skip
-    np.testing.assert_allclose(out.numpy()[:, 7:], joint_actions_reference(a, lo, hi), atol=1e-6)
+    a[0, :3] = (np.nan, np.inf, -np.inf)
+    stand, lo, hi = (0.0, 0.15, -0.15), (-0.5, 0.0, -1.0), (0.5, 1.5, 0.0)
+    for scale in (0.5, 0.2, 0.0):
+        out = wp.zeros((16, 25), dtype=wp.float32, device=DEV)
+        wp.launch(joint_actions_kernel, dim=(16, 18),
+                  inputs=[wp.array(a, device=DEV), wp.vec3(*stand), wp.vec3(*lo), wp.vec3(*hi), scale, 7],
+                  outputs=[out], device=DEV)  # fmt: skip
+        ref = joint_actions_reference(a, stand, lo, hi, scale)
+        np.testing.assert_allclose(out.numpy()[:, 7:], ref, atol=1e-6)
+        assert np.isfinite(ref).all() and (ref >= np.tile(lo, 6)).all() and (ref <= np.tile(hi, 6)).all()
+    assert np.allclose(joint_actions_reference(np.zeros((1, 18)), stand, lo, hi, 0.5), np.tile(stand, 6))
 
 
 # ------------------------------------------------------------------ rewards and observations in the env
@@ -417,8 +425,8 @@ def test_shipped_policies_fit_the_environment(name):
 
     import onnxruntime as ort
 
-    from hexnewton.kernels.observations import OBS_DIM
     from hexnewton.checkpoint import check_compatible, load_checkpoint
+    from hexnewton.kernels.mdp import OBS_DIM
 
     base = os.path.join(os.path.dirname(__file__), "..", "results", "policies", name)
     ckpt = load_checkpoint(base + ".pt")
@@ -474,7 +482,7 @@ def test_resume_continues_iterations_and_learning_rate(tmp_path):
     assert os.path.isfile(second + "/model_3.pt") and torch.load(second + "/model_3.pt", weights_only=False)["iter"] == 3
     meta = json.loads(open(second + "/config.json").read())["hexnewton"]
     sim = meta["config"]["sim"]
-    assert meta["distribution"] == "gaussian"  # a resumed run keeps its action distribution
+    assert meta["agent"]["distribution"]["name"] == "gaussian"  # a resumed run keeps its action distribution
     assert (sim["frame_dt"], sim["substeps"]) == (0.02, 2)  # from the checkpoint: no --env.sim.* on the resume
     # agent.distribution.init_std on a resume replaced the checkpoint's learnt std
     std = torch.load(second + "/model_3.pt", weights_only=False)["actor_state_dict"]["distribution.std_param"]
@@ -657,6 +665,9 @@ def test_gymnasium_makes_a_task_by_its_id():
         obs, reward, terminated, truncated, info = env.step(env.action_space.sample())
     assert obs.shape == (3, 59) and reward.shape == (3,) and terminated.dtype == torch.bool
     assert torch.isfinite(obs).all() and "log" in info
+    assert (env.unwrapped.vec_env.episode_length_buf == 3).all()
+    obs, _ = env.reset()
+    assert obs.shape == (3, 59) and (env.unwrapped.vec_env.episode_length_buf == 0).all()
     env.close()
 
 

@@ -8,8 +8,8 @@ import sys
 import numpy as np
 import pytest
 
+from hexnewton.kernels.mdp import FELL, OFF_COURSE, SUCCESS
 from hexnewton.metrics import DISTANCES, round_metrics, summarize
-from hexnewton.kernels.terminations import FELL, OFF_COURSE, SUCCESS
 
 DT = 0.02
 ROOT = os.path.join(os.path.dirname(__file__), "..")
@@ -136,9 +136,9 @@ def test_rounds_run_under_the_policys_own_physics(tmp_path, monkeypatch):
     import torch
 
     import hexnewton.env
+    from hexnewton.checkpoint import load_checkpoint, trained_config
     from hexnewton.config import SimConfig
     from hexnewton.rollout import run_rounds
-    from hexnewton.checkpoint import load_checkpoint, trained_config
 
     ckpt = load_checkpoint(os.path.join(ROOT, "results", "policies", "cpg_rl_flat.pt"))
     ckpt["infos"]["hexnewton"]["config"]["sim"].update(frame_dt=0.02, substeps=3)
@@ -175,9 +175,9 @@ def test_shipped_complex_policy_climbs_steps_under_its_20ms_physics():
     """The shipped complex policy (trained under a 20 ms frame = 4 x 5 ms) climbs the 6 cm risers on the CPU as
     on the GPU: 8 unseen rounds, sampled actions, 20 s. Steps climbable is one of the stability checks
     for that physics; the fixed CPG stands at the first riser (x = 0.5 m)."""
-    from hexnewton.rollout import run_rounds
-    from hexnewton.kernels.terminations import FELL
     from hexnewton.checkpoint import load_checkpoint, trained_config
+    from hexnewton.kernels.mdp import FELL
+    from hexnewton.rollout import run_rounds
 
     policy = os.path.join(ROOT, "results", "policies", "cpg_rl_complex_gaussian.pt")
     sim = trained_config(load_checkpoint(policy)).sim

@@ -10,7 +10,7 @@ import warp as wp
 
 from hexnewton.config import HexConfig, RandomizationConfig, SimConfig, TaskConfig
 from hexnewton.env import make_env
-from hexnewton.kernels.observations import OBS_LAYOUT
+from hexnewton.kernels.mdp import OBS_LAYOUT
 from hexnewton.kernels.randomization import (
     delay_actions_kernel,
     delay_actions_reference,

@@ -13,18 +13,17 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from hexnewton.config import JOINT_NAMES, HexConfig, SimConfig, TaskConfig, TerrainConfig
-from hexnewton.kernels.tables import make_struct
-from hexnewton.kernels.terminations import (
+from hexnewton.env import make_env
+from hexnewton.kernels.mdp import (
     FELL,
     NONFINITE,
-    RUNNING,
     SUCCESS,
     EndInputs,
     episode_status_kernel,
     episode_status_np,
+    make_struct,
 )
 from hexnewton.kernels.reference import quat_to_rpy_np
-from hexnewton.env import make_env
 from hexnewton.policy import fixed_cpg_actions
 from hexnewton.rollout import rollout
 from hexnewton.terrain import make_terrain, terrain_height_np

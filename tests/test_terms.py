@@ -1,4 +1,4 @@
-"""The term tables (kernels/rewards.py, terminations.py, observations.py): each fused kernel against the rows' float64
+"""The term tables (kernels/mdp.py): each fused kernel against the rows' float64
 NumPy functions on random states, the paper's terms on hand-made states, and what the tables drive (kernel columns,
 log names, layouts, noise)."""
 
@@ -13,30 +13,34 @@ import warp as wp
 
 from hexnewton.config import HexConfig, RandomizationConfig, RewardConfig, SimConfig, TaskConfig, TerrainConfig
 from hexnewton.env import make_env
-from hexnewton.kernels.observations import (
+from hexnewton.kernels.mdp import (
+    FELL,
     LAYOUTS,
     OBS_DIM,
     OBS_LAYOUT,
     OBS_TERMS,
+    OFF_COURSE,
+    REWARD_NAMES,
+    REWARD_TERMS,
+    SUCCESS,
+    TERMINATIONS,
     ObsInputs,
+    RewardFrame,
+    RewardInputs,
+    RewardParams,
+    RewardTerm,
+    TaskParams,
+    config_params,
+    make_rewards_kernel,
+    make_struct,
     observation_noise,
     observations_kernel,
     observations_reference,
-)
-from hexnewton.kernels.rewards import (
-    REWARD_TERMS,
-    TERMS,
-    RewardFrame,
-    RewardInputs,
-    RewardTerm,
-    make_rewards_kernel,
     reward_weights,
     rewards_kernel,
     rewards_reference,
 )
-from hexnewton.kernels.status import STATUS_NAMES
-from hexnewton.kernels.tables import RewardParams, TaskParams, config_params, make_struct
-from hexnewton.kernels.terminations import FELL, OFF_COURSE, SUCCESS, TERMINATIONS
+from hexnewton.kernels.reference import STATUS_NAMES
 from hexnewton.terrain import make_terrain, max_terrain_height_np, terrain_height_np
 from hexnewton.terrain.query import height_field_from_grid
 
@@ -109,7 +113,7 @@ def test_reward_kernel_matches_reference_on_random_states():
                          (TASK, dataclasses.replace(REW, stability_tilt=0.8, **shaping))):  # fmt: skip
         (rew, terms, px, prev), (ref_rew, ref_terms, ref_px, ref_prev) = _run_rewards(grid, arrays, task, reward)
         assert terms.shape == (n, len(REWARD_TERMS)) and np.isfinite(rew).all()
-        for k, name in enumerate(TERMS):
+        for k, name in enumerate(REWARD_NAMES):
             np.testing.assert_allclose(terms[:, k], ref_terms[:, k], rtol=1e-4, atol=1e-4, err_msg=name)
         np.testing.assert_allclose(rew, ref_rew, rtol=1e-4, atol=1e-3)
         np.testing.assert_allclose(px, ref_px, atol=1e-6)
@@ -133,7 +137,7 @@ def test_reward_terms_on_hand_made_states():
     def terms(reward=REW):
         (_, t, _, _), _ = _run_rewards(grid, _reward_arrays(5, q.copy(), rpy=rpy, status=status, prev_x=prev_x),
                                        reward=reward)  # fmt: skip
-        return dict(zip(TERMS, t.T))
+        return dict(zip(REWARD_NAMES, t.T))
 
     t = terms()
     np.testing.assert_allclose(t["height"], [0.02, 0.0, 0.02, 0.02, 0.02], atol=1e-6)  # z - 0.11 when z > 0.12
@@ -183,7 +187,7 @@ def test_shaping_terms_on_hand_made_states():
         arrays = _reward_arrays(3, q.copy(), joint_qd=qd, rpy=rpy, actions=a, prev_actions=prev, episode_steps=steps)
         (rew, t, _, new_prev), _ = _run_rewards(grid, arrays, reward=reward)
         (base, _, _, _), _ = _run_rewards(grid, arrays)  # the same state without the shaping
-        return dict(zip(TERMS, t.T)), rew - base, new_prev
+        return dict(zip(REWARD_NAMES, t.T)), rew - base, new_prev
 
     t, extra, new_prev = run([5, 5, 5])
     np.testing.assert_allclose(t["tilt"], [-w["w_tilt"] * math.radians(10) ** 2, 0, 0], rtol=1e-5)
@@ -203,7 +207,7 @@ def test_reward_table_drives_kernel_reference_and_log():
     """The kernel's columns, the reference and the log names follow the table: a table with its rows reversed and
     one row added (a cost on the lateral offset, weighed by an existing config field) gives a kernel whose columns
     are those rows, each equal to its NumPy function, and whose reward is their sum."""
-    assert len(set(TERMS)) == len(TERMS) and all(hasattr(REW, t.weight) for t in REWARD_TERMS)
+    assert len(set(REWARD_NAMES)) == len(REWARD_NAMES) and all(hasattr(REW, t.weight) for t in REWARD_TERMS)
 
     @wp.func
     def lateral(i: RewardInputs, f: RewardFrame) -> float:
@@ -250,7 +254,7 @@ def test_config_structs_follow_the_config():
 
 
 def test_termination_table_covers_every_status_once():
-    """One row per status code 1..5, named as in kernels/status.py; the blow-up check comes first (its rpy is 0)."""
+    """One row per status code 1..5, named as in kernels/reference.py; the blow-up check comes first (its rpy is 0)."""
     assert sorted(t.code for t in TERMINATIONS) == list(range(1, len(STATUS_NAMES)))
     assert [t.name for t in sorted(TERMINATIONS, key=lambda t: t.code)] == list(STATUS_NAMES[1:])
     assert TERMINATIONS[0].name == "nonfinite" and [t.name for t in TERMINATIONS[1:]] == ["fell", "off_course",
@@ -268,7 +272,7 @@ def test_observation_layout_covers_59_62_and_44():
         assert all(a[2] == b[1] for a, b in zip(spans, spans[1:]))
         assert [name for name, _, _ in spans] == [t.name for t in OBS_TERMS if mode in t.layouts]
     # the layout documented in the module docstring is the table's
-    import hexnewton.kernels.observations as obs_module
+    import hexnewton.kernels.mdp as obs_module
 
     assert "    [54:57]   body posture P_h, P_p, P_r [rad] (filtered)" in obs_module.__doc__
 

@@ -17,7 +17,7 @@ import numpy as np
 import warp as wp
 
 from ..terrain.query import HeightField, max_terrain_height
-from .terminations import NONFINITE, SUCCESS
+from .reference import NONFINITE, SUCCESS
 
 
 @wp.func

@@ -1,15 +1,19 @@
-"""Float64 NumPy references of the control kernels, free of Warp, Newton and torch.
+"""The kernels' Warp-free side: float64 NumPy references of the control kernels and the episode status codes.
 
 The kernel tests compare each Warp kernel with its reference here, and the deployment runtime
-(``hexnewton.deploy``) runs the same functions on the robot's computer: the Hopf oscillators (Eq. 3, RK4,
-``kernels/cpg.py``), the mapping function (Eq. 4, ``kernels/mapping.py``), the action scaling
-(``kernels/actions.py``) and the base quaternion's roll/pitch/yaw (``kernels/terminations.py``). Each
-kernel module's docstring explains the maths; this module only holds the NumPy versions.
+(``hexnewton.deploy``) runs the same functions on the robot's computer: the Hopf oscillators (Eq. 3, RK4),
+the mapping function (Eq. 4) and the action scaling (all in ``kernels/cpg.py``) and the base quaternion's
+roll/pitch/yaw. The kernel modules' docstrings explain the maths; this module only holds the NumPy versions.
 """
 
 import math
 
 import numpy as np
+
+#: Episode status codes (``kernels/mdp.py`` writes them, §2.4.4), here so that command lines, reports and the robot
+#: runtime use them without loading Warp. ``mdp.TERMINATIONS`` gives each code after 0 its condition.
+RUNNING, FELL, OFF_COURSE, SUCCESS, TIMEOUT, NONFINITE = 0, 1, 2, 3, 4, 5
+STATUS_NAMES = ("running", "fell", "off_course", "success", "timeout", "nonfinite")
 
 
 def initial_cpg_state(mu: float, theta: float) -> tuple[float, float, float, float]:
@@ -101,11 +105,15 @@ def params_to_actions(params, lower, upper):
     return 2.0 * (np.asarray(params, np.float64) - lo) / (hi - lo) - 1.0
 
 
-def joint_actions_reference(actions, lower, upper):
+def joint_actions_reference(actions, stand, lower, upper, scale):
     """Float64 reference of :func:`joint_actions_kernel`: (N, 18) joint targets."""
     lo = np.tile(np.asarray(lower, np.float64), 6)
     hi = np.tile(np.asarray(upper, np.float64), 6)
-    return scale_actions_reference(actions, lo, hi)
+    if scale <= 0.0:
+        return scale_actions_reference(actions, lo, hi)
+    a = np.asarray(actions, np.float64)
+    a = np.clip(np.where(np.isfinite(a), a, 0.0), -1.0, 1.0)
+    return np.clip(np.tile(np.asarray(stand, np.float64), 6) + scale * a, lo, hi)
 
 
 def quat_to_rpy_np(q: np.ndarray) -> np.ndarray:

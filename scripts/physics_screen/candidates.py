@@ -28,7 +28,7 @@ import torch
 from hexnewton.config import TERRAINS, CPGConfig, HexConfig, SimConfig, TaskConfig, TerrainConfig
 from hexnewton.controller import CPGController
 from hexnewton.env import make_env
-from hexnewton.kernels.terminations import STATUS_NAMES
+from hexnewton.kernels.mdp import STATUS_NAMES
 from hexnewton.policy import fixed_cpg_actions
 from hexnewton.robot import stand_height
 from hexnewton.sim import World
