@@ -4,7 +4,9 @@
 ``train.py`` writes rsl-rl checkpoints with a ``hexnewton`` entry in ``infos`` (:func:`checkpoint_meta`):
 ``task``, ``action_mode``, ``num_obs``, ``num_actions``, ``config`` (the :class:`~hexnewton.config.HexConfig` as a
 dict), ``agent`` (the :class:`~hexnewton.agent.AgentConfig`), ``world_size``. Checkpoints written before the task
-registry carry ``preset``, ``distribution`` and ``std_max`` instead of ``agent``; both load.
+registry carry ``preset``, ``distribution`` and ``std_max`` instead of ``agent``; both load. The skrl baselines
+(:mod:`hexnewton.baselines`) write their own format with the same ``infos["hexnewton"]`` entry (``baseline`` holds
+their learner's config); :func:`policy_checkpoint` reads either kind.
 """
 
 from __future__ import annotations
@@ -20,9 +22,9 @@ SHIPPED_POLICY = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__
                               "cpg_rl_complex.pt")  # fmt: skip
 
 
-def load_checkpoint(path: str, map_location: str = "cpu") -> dict:
-    """A checkpoint's tensors and plain data (``torch.load(weights_only=True)``: nothing in the file is executed), with
-    one-line errors for missing, corrupt, unsafe or wrong-type files."""
+def read_checkpoint(path: str, map_location: str = "cpu"):
+    """A file's tensors and plain data (``torch.load(weights_only=True)``: nothing in the file is executed), with
+    one-line errors for missing, corrupt or unsafe files."""
     import pickle
 
     import torch
@@ -41,9 +43,33 @@ def load_checkpoint(path: str, map_location: str = "cpu") -> dict:
                          "run code from the file") from None  # fmt: skip
     except Exception as exc:  # torch raises many types for a damaged file
         raise ValueError(f"cannot read checkpoint {path}: {type(exc).__name__}: {str(exc).splitlines()[0][:120]}")
+    return ckpt
+
+
+def load_checkpoint(path: str, map_location: str = "cpu") -> dict:
+    """An rsl-rl checkpoint (``train.py``) read by :func:`read_checkpoint`, with one-line errors for missing, corrupt,
+    unsafe or wrong-type files."""
+    ckpt = read_checkpoint(path, map_location)
+    if isinstance(ckpt, dict) and ckpt.get("format", "").startswith("hexnewton-skrl"):
+        raise ValueError(f"{path} is a skrl baseline checkpoint (python -m hexnewton.baselines): evaluate it as "
+                         f"controller {ckpt.get('algo')}_cpg")
     if not isinstance(ckpt, dict) or "actor_state_dict" not in ckpt:
         raise ValueError(f"{path} is not an rsl-rl checkpoint (no actor_state_dict)")
     return ckpt
+
+
+def policy_checkpoint(path: str) -> tuple[dict, str]:
+    """Any trained policy's checkpoint (an rsl-rl one from ``train.py`` or a skrl baseline's from ``python -m
+    hexnewton.baselines``) read as data only, with the controller that runs it by default (``cpg_rl``, ``joint``,
+    ``sac_cpg``, ``td3_cpg``, ``a2c_cpg``)."""
+    ckpt = read_checkpoint(path)
+    if isinstance(ckpt, dict) and str(ckpt.get("format", "")).startswith("hexnewton-skrl"):
+        from .baselines import load_baseline_checkpoint
+
+        ckpt = load_baseline_checkpoint(path)
+        return ckpt, f"{ckpt['algo']}_cpg"
+    ckpt = load_checkpoint(path)
+    return ckpt, "joint" if checkpoint_meta(ckpt).get("action_mode", "cpg") == "joint" else "cpg_rl"
 
 
 def load_into_runner(runner, ckpt: dict, load_cfg: dict | None = None) -> None:

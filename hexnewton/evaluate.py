@@ -29,7 +29,8 @@ each distance. Outputs in ``--out``:
 - ``fig_learning.png`` (Fig. 5a: reward against env-steps and against wall time) with ``--runs``.
 
 Controllers: ``cpg`` (fixed parameters), ``cpg_rl`` and ``joint`` (rsl-rl checkpoints from ``train.py``),
-``sac_cpg`` / ``td3_cpg`` / ``a2c_cpg`` (Stable-Baselines3 ``model.zip`` from ``hexnewton.baselines``).
+``sac_cpg`` / ``td3_cpg`` / ``a2c_cpg`` (skrl checkpoints from ``python -m hexnewton.baselines``, deterministic action
+unless ``--stochastic``; ``--expected`` gives them their deterministic action).
 """
 
 from __future__ import annotations
@@ -45,7 +46,7 @@ import numpy as np
 from .cli import ArgumentParser, add_config_args, apply_overrides, config_overrides, positive_int, run, terrain_name
 from .config import FIXED_GAITS, HexConfig, TaskConfig, control_decimation, gait_params
 from .metrics import DISTANCES, gait_quality, round_metrics, summarize
-from .rollout import CONTROLLERS, EVAL_TERRAIN_SEED, FIXED, LABELS, PERTURBATIONS, SB3, START_SEED_OFFSET, \
+from .rollout import BASELINES, CONTROLLERS, EVAL_TERRAIN_SEED, FIXED, LABELS, PERTURBATIONS, START_SEED_OFFSET, \
     perturbation, run_rounds
 from .report import _pct, merge_reports, plot_learning, plot_params, plot_terrain, report_markdown
 
@@ -71,7 +72,7 @@ def checkpoint_for(checkpoints: dict[str, str], controller: str, terrain: str) -
 def main(argv: list[str] | None = None) -> int:
     p = ArgumentParser(prog="python -m hexnewton.evaluate", description="The paper's evaluation and report.")
     p.add_argument("--controllers", nargs="+", default=["cpg", "cpg_rl"], choices=list(CONTROLLERS))
-    p.add_argument("--checkpoint", nargs="+", metavar="CTRL[:TERRAIN]=PATH", help="policy of cpg_rl / joint")
+    p.add_argument("--checkpoint", nargs="+", metavar="CTRL[:TERRAIN]=PATH", help="policy of cpg_rl / joint / sac_cpg / td3_cpg / a2c_cpg")
     p.add_argument("--terrains", nargs="+", type=terrain_name, default=["rugged", "stepped", "complex"])
     p.add_argument("--rounds", type=positive_int, default=25, help="rounds per controller and terrain (paper: 25)")
     p.add_argument("--max_steps", type=positive_int, default=TaskConfig.max_episode_steps,
@@ -90,7 +91,7 @@ def main(argv: list[str] | None = None) -> int:
                               "action, the distribution's mean)")
     actions.add_argument("--expected", action="store_true",
                          help="learnt policies take the expected clipped action E[clip(a, -1, 1)] of their Gaussian "
-                              "(deterministic; SB3 models: their deterministic action)")
+                              "(deterministic; the skrl baselines: their deterministic action)")
     p.add_argument("--seed", type=int, default=EVAL_TERRAIN_SEED,
                    help=f"terrain seed S, start poses from seed S + {START_SEED_OFFSET} (default {EVAL_TERRAIN_SEED}: "
                         "the test set). Choose checkpoints on another S (a validation set), report on the default")
@@ -119,13 +120,13 @@ def main(argv: list[str] | None = None) -> int:
                          f"(0, {goal_distance - TaskConfig.goal_radius:g}] m (set --env.task.goal_distance)")  # fmt: skip
     checkpoints = _pairs(args.checkpoint, "--checkpoint")
     runs = _pairs(args.runs, "--runs")
-    from .baselines import check_model_file
-    from .checkpoint import load_checkpoint, trained_config
+    from .baselines import load_baseline_checkpoint
+    from .checkpoint import load_checkpoint, policy_checkpoint, trained_config
 
     for ctrl in args.controllers:  # fail before any simulation
         for terrain in args.terrains:
-            if ctrl in SB3:
-                check_model_file(checkpoint_for(checkpoints, ctrl, terrain))
+            if ctrl in BASELINES:
+                load_baseline_checkpoint(checkpoint_for(checkpoints, ctrl, terrain))
             elif ctrl not in FIXED:
                 load_checkpoint(checkpoint_for(checkpoints, ctrl, terrain))
     from .curves import read_curve
@@ -137,10 +138,10 @@ def main(argv: list[str] | None = None) -> int:
         perturbation(name)
     physics = {k: v for k, v in env_overrides.items() if k.startswith("sim.")}
     # the fixed gaits walk under the first learnt policy's physics (the same run, the same simulator) unless told
-    learnt = [checkpoint_for(checkpoints, c, args.terrains[0]) for c in args.controllers if c in ("cpg_rl", "joint")]
+    learnt = [checkpoint_for(checkpoints, c, args.terrains[0]) for c in args.controllers if c not in FIXED]
     fixed_physics = physics
     if not physics and learnt:
-        sim = trained_config(load_checkpoint(learnt[0])).sim
+        sim = trained_config(policy_checkpoint(learnt[0])[0]).sim
         fixed_physics = {"sim.frame_dt": sim.frame_dt, "sim.substeps": sim.substeps}
     out = args.out or os.path.join("eval", datetime.datetime.now().strftime("%Y-%m-%d_%H-%M-%S"))
     if os.path.exists(out):

@@ -16,8 +16,9 @@ Controllers:
   constant parameters of ``CPGConfig`` (``fixed_*``).
 - ``cpg_rl``: a trained CPG_RL policy, acting deterministically (its distribution's mean).
 - ``joint``: a trained pure-DRL policy that sets the 18 joint targets directly.
+- ``sac_cpg``, ``td3_cpg``, ``a2c_cpg``: the skrl baselines (``python -m hexnewton.baselines``), deterministic.
 
-All three run in the same ``HexapodEnv``, so episodes end and restart as §2.4.4 says (fall, off course,
+All of them run in the same ``HexapodEnv``, so episodes end and restart as §2.4.4 says (fall, off course,
 success, timeout). The statistics cover each robot's first episode. ``--record PATH.npz`` stores, per
 control step, the arrays listed under ``Recorder``.
 """
@@ -33,13 +34,16 @@ from .cli import ArgumentParser, add_config_args, check_writable, config_overrid
     run, terrain_name
 from .config import TERRAINS, HexConfig
 
-CONTROLLERS = {"cpg": "cpg", "cpg_rl": "cpg", "joint": "joint"}  # controller -> env action mode
+# controller -> env action mode; *_cpg are the skrl baselines (hexnewton.baselines)
+CONTROLLERS = {"cpg": "cpg", "cpg_rl": "cpg", "joint": "joint", "sac_cpg": "cpg", "td3_cpg": "cpg", "a2c_cpg": "cpg"}
+BASELINES = ("sac_cpg", "td3_cpg", "a2c_cpg")
 
 
 def main(argv: list[str] | None = None) -> int:
     p = ArgumentParser(prog="python play.py", description="Headless rollouts with statistics.")
     p.add_argument("--controller", choices=list(CONTROLLERS), default=None,
-                   help="default: the checkpoint's (cpg_rl or joint); cpg is the fixed gait and takes no checkpoint")
+                   help="default: the checkpoint's (cpg_rl, joint or a baseline's); cpg is the fixed gait and takes no "
+                        "checkpoint")
     p.add_argument("--checkpoint", metavar="PATH", help="a trained policy (.pt); default: the newest under --log_dir, "
                    "else results/policies/cpg_rl_complex.pt")  # fmt: skip
     p.add_argument("--log_dir", default="logs")
@@ -91,13 +95,14 @@ def main(argv: list[str] | None = None) -> int:
         print(f"playing {args.checkpoint}")
     trained, courses, ckpt = HexConfig(), args.terrain or ["flat"], None
     if args.checkpoint:
-        from .checkpoint import checkpoint_meta, load_checkpoint, trained_config
+        from .checkpoint import policy_checkpoint, trained_config
 
-        ckpt = load_checkpoint(args.checkpoint)  # fails before building a world
+        ckpt, default = policy_checkpoint(args.checkpoint)  # fails before building a world
         trained = trained_config(ckpt)
-        ckpt_mode = checkpoint_meta(ckpt).get("action_mode", "cpg")
         if args.controller is None:
-            args.controller = "joint" if ckpt_mode == "joint" else "cpg_rl"
+            args.controller = default
+        if (args.controller in BASELINES) != (default in BASELINES):
+            raise ValueError(f"{args.checkpoint} is run by controller {default}, not {args.controller}")
         courses = args.terrain or [trained.terrain]  # the policy's own course
     mode = CONTROLLERS[args.controller]
 
@@ -115,6 +120,10 @@ def main(argv: list[str] | None = None) -> int:
         if args.controller == "cpg":
             actions = fixed_cpg_actions(env)
             policy = lambda obs: actions  # noqa: E731
+        elif args.controller in BASELINES:
+            from .baselines import load_baseline_policy
+
+            policy = load_baseline_policy(env, args.checkpoint, args.controller, args.stochastic, ckpt)
         else:
             policy = load_policy(env, args.checkpoint, mode, args.stochastic, args.expected, ckpt)
             if args.stochastic:

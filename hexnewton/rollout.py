@@ -15,7 +15,7 @@ from .metrics import first_episode_stats
 EVAL_TERRAIN_SEED = 1000
 EVAL_RESET_SEED = 2000
 START_SEED_OFFSET = EVAL_RESET_SEED - EVAL_TERRAIN_SEED  # --seed S: terrain seed S, start seed S + 1000
-# controller -> env action mode; *_cpg are the Stable-Baselines3 baselines (hexnewton.baselines)
+# controller -> env action mode; *_cpg are the skrl baselines (hexnewton.baselines)
 CONTROLLERS = {"cpg": "cpg", "cpg_swept": "cpg", "cpg_rl": "cpg", "joint": "joint", "sac_cpg": "cpg", "td3_cpg": "cpg",
                "a2c_cpg": "cpg"}  # fmt: skip
 FIXED = {"cpg": "default", "cpg_swept": "swept"}  # fixed-parameter controllers -> config.FIXED_GAITS
@@ -50,7 +50,7 @@ def perturbation(name: str) -> dict:
     if rz:
         out.update({"randomization.enabled": True, **{f"randomization.{k}": v for k, v in {**_NOMINAL, **rz}.items()}})
     return out
-SB3 = {"sac_cpg": "sac", "td3_cpg": "td3", "a2c_cpg": "a2c"}
+BASELINES = ("sac_cpg", "td3_cpg", "a2c_cpg")  # controllers trained by hexnewton.baselines (skrl)
 
 
 class Recorder:
@@ -163,7 +163,13 @@ def run_rounds(controller: str, checkpoint: str | None, terrain: str, rounds: in
     from .tasks import course
 
     mode = CONTROLLERS[controller]
-    ckpt = load_checkpoint(checkpoint) if controller in ("cpg_rl", "joint") else None
+    ckpt = None
+    if controller in BASELINES:
+        from .baselines import load_baseline_checkpoint
+
+        ckpt = load_baseline_checkpoint(checkpoint)
+    elif controller in ("cpg_rl", "joint"):
+        ckpt = load_checkpoint(checkpoint)
     trained = trained_config(ckpt) if ckpt is not None else HexConfig()
     overrides = dict(overrides or {})
     if "cpg.posture_reflex" in overrides and mode == "cpg":
@@ -176,10 +182,10 @@ def run_rounds(controller: str, checkpoint: str | None, terrain: str, rounds: in
     if controller in FIXED:
         actions = fixed_cpg_actions(env, FIXED[controller], fixed_params)
         policy = lambda obs: actions  # noqa: E731
-    elif controller in SB3:
-        from .baselines import load_sb3_policy
+    elif controller in BASELINES:
+        from .baselines import load_baseline_policy
 
-        policy = load_sb3_policy(env, checkpoint, SB3[controller], deterministic=not stochastic)
+        policy = load_baseline_policy(env, checkpoint, controller, stochastic, ckpt)
     else:
         policy = load_policy(env, checkpoint, mode, stochastic, expected, ckpt)
     if stochastic:

@@ -203,58 +203,6 @@ def test_shipped_policy_is_more_level_than_the_fixed_cpg_on_rugged_ground():
         assert stats["cpg_rl"][f"{angle}_var_deg2"] < stats["cpg"][f"{angle}_var_deg2"], stats
 
 
-@pytest.mark.parametrize("algo", ["sac", "td3", "a2c"])
-def test_sb3_baseline_trains_and_evaluates(algo, tmp_path):
-    """A few SB3 updates on 4 envs write a model.zip that the evaluation loads as a controller. A2C ends on
-    --max_minutes long before its --total_steps, and still saves."""
-    logs = tmp_path / "logs"
-    steps = ["--total_steps", "100000000", "--max_minutes", "0.02"] if algo == "a2c" else ["--total_steps", "48"]
-    train = [sys.executable, "-m", "hexnewton.baselines", "--algo", algo, "--num_envs", "4", *steps,
-             "--learning_starts", "8", "--gradient_steps", "1", "--device", "cpu", "--log_dir", str(logs)]  # fmt: skip
-    proc = subprocess.run(train, capture_output=True, text=True, timeout=600, cwd=ROOT)
-    assert proc.returncode == 0, proc.stderr[-3000:]
-    trained = int(proc.stdout.split("trained ")[1].split()[0])
-    assert 0 < trained < 100000000 if algo == "a2c" else trained >= 48
-    (model,) = logs.glob(f"hexnewton_{algo}_cpg_flat/*/model.zip")
-    cfg = json.loads((model.parent / "config.json").read_text())
-    assert cfg["hexnewton"]["sb3"]["learning_rate"] == 1e-4 and cfg["hexnewton"]["net_arch"] == [256] * 4  # Table 2
-    out = tmp_path / "eval"
-    ev = [sys.executable, "-m", "hexnewton.evaluate", "--controllers", f"{algo}_cpg", "--checkpoint",
-          f"{algo}_cpg={model}", "--terrains", "flat", "--rounds", "2", "--max_steps", "5", "--device", "cpu",
-          "--out", str(out)]  # fmt: skip
-    proc = subprocess.run(ev, capture_output=True, text=True, timeout=600, cwd=ROOT)
-    assert proc.returncode == 0, proc.stderr[-3000:]
-    assert f"{algo.upper()}-CPG" in (out / "report.md").read_text()
-
-
-def test_sb3_adapter_and_curves(tmp_path):
-    """The SB3 VecEnv adapter returns numpy batches in SB3's layout; SB3's reward tag is read against env-steps."""
-    from stable_baselines3.common.vec_env import VecMonitor
-
-    from hexnewton.baselines import make_sb3_env
-    from hexnewton.config import HexConfig, SimConfig
-    from hexnewton.curves import read_curve
-    from hexnewton.env import make_env
-
-    venv = make_sb3_env(make_env(HexConfig(sim=SimConfig(num_envs=3, device="cpu"))))
-    assert isinstance(venv, VecMonitor)
-    obs = venv.reset()
-    assert obs.shape == (3, 59) and obs.dtype == np.float32
-    obs, rew, done, infos = venv.step(np.zeros((3, 15), np.float32))
-    assert obs.shape == (3, 59) and rew.shape == (3,) and done.dtype == bool and len(infos) == 3
-
-    from torch.utils.tensorboard import SummaryWriter
-
-    run = tmp_path / "sb3run"
-    run.mkdir()
-    w = SummaryWriter(str(run))
-    for step, r in ((1000, 1.0), (2000, 2.0)):
-        w.add_scalar("rollout/ep_rew_mean", r, step)
-    w.close()
-    (run / "config.json").write_text(json.dumps({"hexnewton": {"algo": "sac"}}))
-    assert read_curve(str(run), "env_steps")["Train/mean_reward"] == [(1000.0, 1.0), (2000.0, 2.0)]
-
-
 def test_gait_quality_and_fall_metrics():
     """Falls anywhere in a round, the 99.9th percentile of |angle|, body rate RMS and the parameters' change per step
     (from each first episode's second step on)."""
