@@ -1,19 +1,26 @@
-"""Learning curves from training runs' TensorBoard events: one PNG and a CSV.
+"""Learning curves from training runs' TensorBoard events: one PNG and a CSV; Fig. 5a over seeds.
 
-    python -m hexnewton.curves logs/hexnewton_cpg_flat/<run> [more runs] --out curve.png
+    python -m hexnewton.curves logs/hexnewton_flat/<run> [more runs] --out curve.png
     python -m hexnewton.curves RUN_A,RUN_A_RESUMED --x env_steps --out curve.png   # one curve from a resumed run
+    python -m hexnewton.curves --method cpg_rl RUN1 RUN2 RUN3 --method sac_cpg RUN4 RUN5 RUN6 --out fig5a.png
 
 A run given as ``DIR1,DIR2,...`` is one curve: the pieces of a run continued with ``train.py --resume``,
 joined in order. The x axis is the iteration, the env-steps (iterations x envs x steps per env, from each
-piece's ``config.json``; a Stable-Baselines3 run from ``hexnewton.baselines`` logs env-steps directly) or
+piece's ``config.json``; a skrl baseline run from ``hexnewton.baselines`` logs against env-steps directly) or
 the wall time (each piece's own time from its first to its last logged
 iteration, so the pause between pieces does not count).
+
+``--method NAME RUN...`` (Fig. 5a, :func:`plot_fig5a`): the mean episode return and the training success rate
+(``Train/mean_reward``, ``Episode/success_rate``: the last 1024 finished episodes) of each method's runs (seeds)
+against env-steps and against wall time, as the mean over seeds with their range (min to max) shaded, each method up
+to the shortest of its runs; ``--out``'s CSV holds the bands and a JSON the final values.
 """
 
 from __future__ import annotations
 
 import csv
 import json
+import math
 import os
 import sys
 
@@ -21,8 +28,6 @@ from .cli import ArgumentParser, run
 
 TAGS = ("Episode/success_rate", "Episode/distance_m", "Train/mean_reward", "Episode/fell_rate",
         "Episode/off_course_rate", "Curriculum/mean_level", "Curriculum/top_level_success_rate")  # fmt: skip
-# Stable-Baselines3 runs (hexnewton.baselines) log the mean episode return against env-steps
-SB3_ALIASES = {"rollout/ep_rew_mean": "Train/mean_reward"}
 X_AXES = {"iteration": "iteration", "env_steps": "env-steps", "wall_time": "wall time [min]"}
 
 
@@ -37,16 +42,12 @@ def read_scalars(run_dir: str) -> dict[str, list[tuple[int, float, float]]]:
     tags = set(acc.Tags().get("scalars", []))
     if not tags:
         raise ValueError(f"no TensorBoard scalars under {run_dir}")
-    out = {t: [(e.step, e.value, e.wall_time) for e in acc.Scalars(t)] for t in TAGS if t in tags}
-    for sb3_tag, tag in SB3_ALIASES.items():
-        if sb3_tag in tags and tag not in out:
-            out[tag] = [(e.step, e.value, e.wall_time) for e in acc.Scalars(sb3_tag)]
-    return out
+    return {t: [(e.step, e.value, e.wall_time) for e in acc.Scalars(t)] for t in TAGS if t in tags}
 
 
 def steps_per_iteration(run_dir: str) -> int | None:
     """Env-steps collected per PPO iteration (num_envs x num_steps_per_env) from the run's config.json;
-    None for a Stable-Baselines3 run, whose TensorBoard step already counts env-steps."""
+    None for a skrl baseline run (``hexnewton.baselines``), whose TensorBoard step already counts env-steps."""
     path = os.path.join(run_dir, "config.json")
     try:
         with open(path) as f:
@@ -87,13 +88,95 @@ def read_curve(spec: str, x: str = "iteration") -> dict[str, list[tuple[float, f
     return out
 
 
+FIG5A_TAGS = {"Train/mean_reward": "mean episode return", "Episode/success_rate": "training success rate"}
+
+
+def seed_band(specs: list[str], x: str, tag: str, points: int = 200) -> dict | None:
+    """Mean, min and max over ``specs`` (one run per seed) of ``tag`` against ``x`` on a common grid up to the shortest
+    run's last point (linear interpolation; before a run's first point, its first value). None when a run lacks the
+    tag."""
+    import numpy as np
+
+    curves = [[(a, v) for a, v in read_curve(spec, x).get(tag, []) if math.isfinite(v)] for spec in specs]
+    if any(not c for c in curves):  # a run without the tag, or without a finite value of it (no episode ended)
+        return None
+    end = min(c[-1][0] for c in curves)
+    grid = np.linspace(0.0, end, points)
+    ys = np.stack([np.interp(grid, *map(np.asarray, zip(*c))) for c in curves])
+    return {"x": grid, "mean": ys.mean(axis=0), "min": ys.min(axis=0), "max": ys.max(axis=0), "seeds": len(specs),
+            "final": ys[:, -1].tolist()}  # finite: NaN points are dropped above
+
+
+def plot_fig5a(path: str, methods: dict[str, list[str]]) -> dict:
+    """Fig. 5a: reward and success (rows) against env-steps and wall time (columns), one band per method (its seeds'
+    mean, min to max shaded); writes ``path`` (PNG) and the bands as ``<path>.csv``; returns each method's final
+    values {method: {axis: {tag: [per seed]}}} and the axis end it was read at."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from .rollout import LABELS
+
+    fig, axes = plt.subplots(2, 2, figsize=(12, 7.5))
+    rows, summary = [], {}
+    for col, x in enumerate(("env_steps", "wall_time")):
+        for row, (tag, ylabel) in enumerate(FIG5A_TAGS.items()):
+            ax = axes[row, col]
+            for name, specs in methods.items():
+                band = seed_band(specs, x, tag)
+                if band is None:
+                    continue
+                line, = ax.plot(band["x"], band["mean"], label=f"{LABELS.get(name, name)} ({band['seeds']} seeds)")
+                ax.fill_between(band["x"], band["min"], band["max"], color=line.get_color(), alpha=0.2, lw=0)
+                summary.setdefault(name, {}).setdefault(x, {})[tag] = {"at": float(band["x"][-1]),
+                                                                      "final": band["final"]}  # fmt: skip
+                rows += [[name, tag, x, float(a), float(m), float(lo), float(hi)]
+                         for a, m, lo, hi in zip(band["x"], band["mean"], band["min"], band["max"])]
+            ax.set(xlabel=X_AXES[x], ylabel=ylabel)
+            ax.grid(alpha=0.3)
+    if axes[0, 0].get_legend_handles_labels()[0]:
+        axes[0, 0].legend(fontsize=8)
+    fig.suptitle("Fig. 5a: mean over seeds, min to max shaded")
+    fig.tight_layout()
+    fig.savefig(path, dpi=100)
+    plt.close(fig)
+    with open(os.path.splitext(path)[0] + ".csv", "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(["method", "tag", "x_axis", "x", "mean", "min", "max"])
+        w.writerows(rows)
+    return summary
+
+
 def main(argv: list[str] | None = None) -> int:
     p = ArgumentParser(prog="python -m hexnewton.curves", description=__doc__.split("\n")[0])
-    p.add_argument("runs", nargs="+", help="run directories; DIR1,DIR2 joins a resumed run's pieces")
+    p.add_argument("runs", nargs="*", help="run directories; DIR1,DIR2 joins a resumed run's pieces")
     p.add_argument("--out", default="curve.png")
     p.add_argument("--labels", nargs="+", help="one legend label per run (default: experiment/run)")
     p.add_argument("--x", default="iteration", choices=list(X_AXES))
+    p.add_argument("--method", nargs="+", action="append", metavar=("NAME", "RUN"),
+                   help="Fig. 5a: a method (cpg_rl, sac_cpg, ..., joint) and its runs, one per seed; repeat per method")
     args = p.parse_args(argv)
+    if not args.out.endswith(".png"):
+        raise ValueError(f"--out {args.out}: expected a .png file name")
+    if args.method:
+        if args.runs:
+            raise ValueError("give runs either positionally (one curve each) or with --method (Fig. 5a), not both")
+        methods = {}
+        for name, *runs in args.method:
+            if not runs:
+                raise ValueError(f"--method {name}: name its runs (one per seed)")
+            methods[name] = runs
+        for runs in methods.values():
+            for r in runs:
+                read_curve(r)  # one-line errors before any plotting
+        summary = plot_fig5a(args.out, methods)
+        with open(os.path.splitext(args.out)[0] + ".json", "w") as f:
+            json.dump({"methods": methods, "final": summary}, f, indent=1)
+        print(f"wrote {args.out}, its .csv and .json")
+        return 0
+    if not args.runs:
+        raise ValueError("name at least one run directory (or --method NAME RUN...)")
     import matplotlib
 
     matplotlib.use("Agg")

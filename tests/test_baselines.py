@@ -157,3 +157,41 @@ def test_deterministic_action_of_a2c_is_the_clipped_mean():
         agent.policy.net[-1].bias.copy_(torch.tensor([3.0, -0.25]))
         a = deterministic_action("a2c", agent, torch.randn(5, 4))
     assert torch.allclose(a, torch.tensor([[1.0, -0.25]] * 5)) and math.isclose(float(a.max()), 1.0)
+
+
+def _events(run, points, config):
+    from torch.utils.tensorboard import SummaryWriter
+
+    run.mkdir(parents=True)
+    (run / "config.json").write_text(json.dumps(config))
+    w = SummaryWriter(str(run))
+    for step, reward, success in points:
+        w.add_scalar("Train/mean_reward", reward, step)
+        w.add_scalar("Episode/success_rate", success, step)
+    w.close()
+
+
+def test_fig5a_and_table3_over_seeds(tmp_path, capsys):
+    """hexnewton.compare on synthetic runs: a PPO run (iterations) and two skrl runs (env-steps) become one band per
+    method; two seeds' evaluations one Table 3 row with their mean and range."""
+    from hexnewton.compare import main
+
+    ppo = {"hexnewton": {"config": {"sim": {"num_envs": 8}}}, "train": {"num_steps_per_env": 24}}
+    _events(tmp_path / "runs" / "cpg_rl_s1" / "r", [(0, 1.0, 0.0), (1, 2.0, 0.5), (2, 3.0, 1.0)], ppo)
+    for seed, top in ((1, 0.4), (2, 0.6)):
+        _events(tmp_path / "runs" / f"sac_cpg_s{seed}" / "r", [(192, 0.0, 0.0), (576, 1.0, top)],
+                {"hexnewton": {"algo": "sac"}})
+        ev = tmp_path / "evals" / f"sac_cpg_s{seed}_complex"
+        ev.mkdir(parents=True)
+        summary = {"rounds": 4, "success_0.5m": top, "success_3m": top / 2, "fall_rate": 0.25}
+        (ev / "results.json").write_text(json.dumps({"meta": {"distances": [0.5, 3]},
+                                                     "results": {"complex": {"sac_cpg": summary}}}))
+    out = tmp_path / "report"
+    assert main(["--runs", str(tmp_path / "runs"), "--evals", str(tmp_path / "evals"), "--out", str(out)]) == 0
+    report = (out / "report.md").read_text()
+    assert "| complex | SAC-CPG | 2 | 4 | 50.0% (40-60) | 25.0% (20-30) | 25.0% (25-25) |" in report
+    res = json.loads((out / "results.json").read_text())
+    assert res["budgets"]["cpg_rl"]["1"]["env_steps"] == 3 * 8 * 24 and res["budgets"]["sac_cpg"]["2"]["env_steps"] == 576
+    final = res["fig5a_final"]
+    assert final["sac_cpg"]["env_steps"]["Episode/success_rate"]["final"] == pytest.approx([0.4, 0.6])
+    assert (out / "fig5a.png").stat().st_size > 10000
