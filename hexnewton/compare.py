@@ -40,12 +40,24 @@ def find_runs(runs_dir: str) -> dict[str, dict[int, str]]:
 
 
 def run_budget(run_dir: str) -> dict:
-    """The env-steps and wall time [min] a run trained for, from its TensorBoard points (first to last)."""
+    """The env-steps and wall time [min] a run trained for: a skrl run's last ``Perf/wall_time_s`` (its loop's time);
+    an rsl-rl run's time from its first to its last iteration's event plus the first iteration's collection and
+    learning time."""
+    from tensorboard.backend.event_processing.event_accumulator import EventAccumulator
+
     from .curves import read_curve
 
     steps = read_curve(run_dir, "env_steps").get("Episode/success_rate") or []
-    wall = read_curve(run_dir, "wall_time").get("Episode/success_rate") or []
-    return {"env_steps": int(steps[-1][0]) if steps else 0, "wall_min": round(wall[-1][0], 2) if wall else 0.0}
+    acc = EventAccumulator(run_dir, size_guidance={"scalars": 0})
+    acc.Reload()
+    tags = set(acc.Tags().get("scalars", []))
+    wall = 0.0
+    if "Perf/wall_time_s" in tags:
+        wall = acc.Scalars("Perf/wall_time_s")[-1].value
+    elif {"Perf/collection_time", "Perf/learning_time"} <= tags:
+        collect, learn = acc.Scalars("Perf/collection_time"), acc.Scalars("Perf/learning_time")
+        wall = collect[-1].wall_time - collect[0].wall_time + collect[0].value + learn[0].value
+    return {"env_steps": int(steps[-1][0]) if steps else 0, "wall_min": round(wall / 60.0, 3)}
 
 
 def find_evals(evals_dir: str) -> dict[str, dict[str, dict[int, dict]]]:
@@ -99,7 +111,7 @@ def report_markdown(budgets: dict, table: dict, distances: tuple[float, ...], fi
 
     lines = ["# Methods at equal budgets", ""] + [f"- {k}: {v}" for k, v in meta.items()]
     lines += ["", "## Budget used by each run", "", "Each run ended at its env-step budget or its wall-time budget, "
-              "whichever came first. Env-steps and wall time from the run's first to its last TensorBoard point.", "",
+              "whichever came first. Wall time: the training loop's, without building the env.", "",
               "| method | seed | env-steps | wall time [min] | run |", "|---|---:|---:|---:|---|"]  # fmt: skip
     for method, seeds in budgets.items():
         for seed, b in sorted(seeds.items()):
