@@ -1,7 +1,10 @@
-"""Headless rollouts of a controller on any terrain, with statistics, an optional recording and a gait plot.
+"""Rollouts of a controller on any terrain, with statistics, Newton's viewers, recordings and a gait plot.
 
     python play.py                                                       # the newest trained policy on its terrain
     python play.py --controller cpg --terrain flat --num_envs 64 --steps 500
+    python play.py --viewer gl                                           # in a window (the default with a display)
+    python play.py --headless --video walk.mp4 --steps 1000              # a 20 s video, no display needed
+    python play.py --viewer usd --out walk.usd                           # a recording for usdview / Omniverse
     python play.py --controller cpg --terrain stepped --record rollout.npz --plot gait.png
     python play.py --checkpoint logs/.../model_299.pt                    # its controller and course from the file
     python play.py --checkpoint results/policies/cpg_rl_complex.pt --terrain stepped --env.terrain.step_rise 0.07
@@ -21,6 +24,12 @@ Controllers:
 All of them run in the same ``HexapodEnv``, so episodes end and restart as §2.4.4 says (fall, off course,
 success, timeout). The statistics cover each robot's first episode. ``--record PATH.npz`` stores, per
 control step, the arrays listed under ``Recorder``.
+
+Viewers (``hexnewton.viewer``, Newton's ``--viewer`` convention): ``gl`` an OpenGL window (the default when there is a
+display; ``--headless`` renders off-screen, through Mesa's software OpenGL on a machine without a GPU); ``--video
+PATH.mp4`` writes what ViewerGL renders, captioned with the task and the time; ``usd``, ``rerun`` and ``file`` write
+``--out PATH`` (``.usd``, ``.rrd``, ``.json``/``.bin``) for offline inspection and replay; ``null`` draws nothing (the
+default without a display). They show the first terrain's rollout, the first ``--robots_shown`` robots.
 """
 
 from __future__ import annotations
@@ -33,6 +42,7 @@ from dataclasses import replace
 from .cli import ArgumentParser, add_config_args, check_writable, config_overrides, positive_int, \
     run, terrain_name
 from .config import TERRAINS, HexConfig
+from .viewer import VIEWERS
 
 # controller -> env action mode; *_cpg are the skrl baselines (hexnewton.baselines)
 CONTROLLERS = {"cpg": "cpg", "cpg_rl": "cpg", "joint": "joint", "sac_cpg": "cpg", "td3_cpg": "cpg", "a2c_cpg": "cpg"}
@@ -40,7 +50,7 @@ BASELINES = ("sac_cpg", "td3_cpg", "a2c_cpg")
 
 
 def main(argv: list[str] | None = None) -> int:
-    p = ArgumentParser(prog="python play.py", description="Headless rollouts with statistics.")
+    p = ArgumentParser(prog="python play.py", description="Rollouts with statistics and Newton's viewers.")
     p.add_argument("--controller", choices=list(CONTROLLERS), default=None,
                    help="default: the checkpoint's (cpg_rl, joint or a baseline's); cpg is the fixed gait and takes no "
                         "checkpoint")
@@ -55,9 +65,14 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--device", default=None, help="cpu, cuda or cuda:N (default: cuda if present, else cpu)")
     p.add_argument("--seed", type=int, default=0, help="terrain and reset seed")
     p.add_argument("--record", metavar="PATH.npz", help="save the rollout (first terrain)")
-    p.add_argument("--video", metavar="PATH.mp4|.gif", help="render the first terrain's rollout headless (matplotlib)")
-    p.add_argument("--video_robots", type=positive_int, default=3, help="robots drawn in the video")
-    p.add_argument("--video_speed", type=positive_int, default=1, help="video playback speed (x real time)")
+    p.add_argument("--viewer", choices=VIEWERS, default=None,
+                   help="Newton viewer (default: gl with a display or --video, else null)")
+    p.add_argument("--headless", action="store_true", help="gl: render off-screen (implied by --video without a display)")
+    p.add_argument("--video", metavar="PATH.mp4", help="write the rendered frames as an .mp4 (ViewerGL)")
+    p.add_argument("--out", metavar="PATH", help="the recording of --viewer usd (.usd), rerun (.rrd) or file (.json/.bin)")
+    p.add_argument("--robots_shown", type=positive_int, default=3, help="robots shown by the viewer (the first lanes)")
+    p.add_argument("--video_speed", type=positive_int, default=1,
+                   help="playback speed (x real time): one frame every video_speed control steps")  # fmt: skip
     actions = p.add_mutually_exclusive_group()
     actions.add_argument("--stochastic", action="store_true",
                          help="cpg_rl / joint: sample actions from the policy's Gaussian as in training "
@@ -75,11 +90,14 @@ def main(argv: list[str] | None = None) -> int:
     for path, ext in ((args.record, ".npz"), (args.plot, ".png")):
         if path:
             check_writable(path, ext)
-    if args.video:
-        from .video import check_video_path
+    from .viewer import check_viewer_args, default_viewer, has_display
 
-        check_video_path(args.video)
-        check_writable(args.video, os.path.splitext(args.video)[1])
+    args.viewer = args.viewer or default_viewer(args.video, args.out)
+    args.headless = args.headless or (args.video is not None and not has_display())
+    check_viewer_args(args.viewer, args.headless, args.video, args.out)
+    for path in (args.video, args.out):
+        if path:
+            check_writable(path, os.path.splitext(path)[1])
     if args.controller == "cpg" and args.checkpoint:
         raise ValueError("--checkpoint is a trained policy's: the fixed CPG (--controller cpg) has none; use "
                          "--controller cpg_rl or joint, or leave --controller out")  # fmt: skip
@@ -93,12 +111,12 @@ def main(argv: list[str] | None = None) -> int:
                 raise
             args.checkpoint = SHIPPED_POLICY
         print(f"playing {args.checkpoint}")
-    trained, courses, ckpt = HexConfig(), args.terrain or ["flat"], None
+    trained, courses, ckpt, task = HexConfig(), args.terrain or ["flat"], None, None
     if args.checkpoint:
-        from .checkpoint import policy_checkpoint, trained_config
+        from .checkpoint import checkpoint_task, policy_checkpoint, trained_config
 
         ckpt, default = policy_checkpoint(args.checkpoint)  # fails before building a world
-        trained = trained_config(ckpt)
+        trained, task = trained_config(ckpt), checkpoint_task(ckpt)
         if args.controller is None:
             args.controller = default
         if (args.controller in BASELINES) != (default in BASELINES):
@@ -131,14 +149,21 @@ def main(argv: list[str] | None = None) -> int:
 
                 torch.manual_seed(args.seed)
         recorder = Recorder() if (args.record and i == 0) else None
-        video = None
-        if args.video and i == 0:
-            from .video import VideoRecorder
+        viewer = None
+        if args.viewer != "null" and i == 0:
+            from .viewer import RolloutViewer
 
-            video = VideoRecorder(robots=args.video_robots, speed=args.video_speed)
+            viewer = RolloutViewer(args.viewer, headless=args.headless, video=args.video, out=args.out,
+                                   robots=args.robots_shown, stride=args.video_speed,
+                                   title=(f"task {task}: " if task else "") + f"{args.controller} on {terrain}",
+                                   control_dt=cfg.task.control_dt)  # fmt: skip
         t0 = time.perf_counter()
-        stats = rollout(env, policy, args.steps, tuple(r for r in (recorder, video) if r is not None),
-                        progress=not args.no_progress and sys.stderr.isatty())  # fmt: skip
+        try:
+            stats = rollout(env, policy, args.steps, tuple(r for r in (recorder, viewer) if r is not None),
+                            progress=not args.no_progress and sys.stderr.isatty())  # fmt: skip
+        finally:
+            if viewer is not None:
+                viewer.close()
         wall = time.perf_counter() - t0
         label = args.controller if args.controller == "cpg" else f"{args.controller} ({args.checkpoint})"
         print(f"[{label}] " + format_stats(terrain, stats, stats["control_s"])
@@ -146,9 +171,12 @@ def main(argv: list[str] | None = None) -> int:
         if recorder is not None:
             recorder.save(args.record)
             print(f"recorded {args.steps} steps x {args.num_envs} envs to {args.record}")
-        if video is not None:
-            video.save(args.video, title=f"{args.controller} on {terrain}")
-            print(f"video of {len(video.frames)} frames written to {args.video}")
+        if viewer is not None:
+            wrote = [f"{viewer.frames} frames in ViewerGL{' (headless)' if args.headless else ''}" if args.viewer == "gl"
+                     else f"{viewer.frames} frames to {args.out}"]  # fmt: skip
+            if args.video:
+                wrote.append(f"video written to {args.video}")
+            print(f"viewer {args.viewer}: " + ", ".join(wrote))
     if args.plot:
         from .plotting import plot_gait
 

@@ -188,26 +188,3 @@ def test_play_bad_input_is_one_line(args, message):
     assert proc.returncode == 2
     err = [line for line in proc.stderr.splitlines() if line.strip() and "Warp CUDA" not in line]
     assert len(err) == 1 and message in err[0], proc.stderr
-
-
-@pytest.mark.parametrize("ext, extra, frames", [
-    (".gif", ["--controller", "cpg"], 6),
-    # a learnt policy sampling its actions, played twice as fast (every 4th control step)
-    (".mp4", ["--controller", "cpg_rl", "--checkpoint", os.path.join(ROOT, "results", "policies", "cpg_rl_flat.pt"),
-              "--stochastic", "--video_speed", "2"], 3),
-])  # fmt: skip
-def test_headless_video(tmp_path, ext, extra, frames):
-    """play.py --video renders without a display (matplotlib; .mp4 through imageio-ffmpeg's ffmpeg)."""
-    out = tmp_path / f"walk{ext}"
-    proc = subprocess.run([sys.executable, "play.py", "--terrain", "stepped", "--num_envs", "2", "--steps", "12",
-                           "--device", "cpu", "--video", str(out), "--no-progress", *extra], capture_output=True,
-                          text=True, timeout=600, cwd=ROOT)  # fmt: skip
-    assert proc.returncode == 0, proc.stderr[-2000:]
-    assert f"video of {frames} frames" in proc.stdout and out.stat().st_size > 2000
-
-
-def test_video_bad_name_fails_before_simulating(tmp_path):
-    proc = subprocess.run([sys.executable, "play.py", "--video", str(tmp_path / "walk.avi"), "--device", "cpu"],
-                          capture_output=True, text=True, timeout=600, cwd=ROOT)  # fmt: skip
-    err = [line for line in proc.stderr.splitlines() if line.strip() and "Warp CUDA" not in line]
-    assert proc.returncode == 2 and len(err) == 1 and "a video must be a .mp4 or .gif file" in err[0]
