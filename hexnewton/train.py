@@ -6,6 +6,7 @@
     python train.py --task rugged --env.reward.w_tilt 10 --agent.algorithm.learning_rate 5e-4
     python train.py --resume logs/hexnewton_rugged/2026-11-21_15-00-00/model_299.pt --max_iterations 100
     torchrun --nproc_per_node=2 train.py --task complex --num_envs 4096    # 4096 envs on each of 2 GPUs
+    python train.py --task rugged --video --video_interval 100             # a 4 s clip every 100 iterations
 
 Every field of the task's configs can be set from the command line: ``--env.<section>.<field>`` (HexConfig: robot,
 terrain, sim, cpg, task, reward, randomization) and ``--agent.<field>`` (AgentConfig: PPO, networks, distribution,
@@ -15,7 +16,9 @@ with the configs its checkpoint recorded, overrides on top.
 Each run writes ``logs/hexnewton_<task>/<date_time>/``: TensorBoard event files; ``model_<it>.pt`` checkpoints with
 the task, the configs and the action mode (``play.py``, ``evaluate`` and ``export`` need nothing else);
 ``model_best.pt``; ``config.json``; ``git/`` (hexnewton's commit and diff); at the end ``policy.onnx``, the
-deterministic policy with a dynamic batch dimension, checked against torch with onnxruntime.
+deterministic policy with a dynamic batch dimension, checked against torch with onnxruntime. With ``--video``,
+``videos/iteration_<k>.mp4``: ``--video_length`` control steps of the first robots as training plays them, from
+iteration 0 and every ``--video_interval`` iterations (Newton's ViewerGL, headless; ``hexnewton.viewer.VideoEnv``).
 """
 
 from __future__ import annotations
@@ -75,6 +78,10 @@ def parser(base, resumed: bool) -> ArgumentParser:
     p.add_argument("--resume", metavar="PATH", help="checkpoint to continue from (a new run directory is made)")
     p.add_argument("--log_dir", default="logs")
     p.add_argument("--experiment", default=None, help="default: hexnewton_<task>")
+    p.add_argument("--video", action="store_true",
+                   help="record clips of the training robots into the run's videos/ (headless ViewerGL, .mp4)")
+    p.add_argument("--video_length", type=positive_int, default=200, help="control steps per clip (default 200: 4 s)")
+    p.add_argument("--video_interval", type=positive_int, default=100, help="iterations between clips (default 100)")
     add_config_args(p, "env", base.env, skip=("sim.num_envs", "sim.device", "task.seed"),
                     title="--env.*: the environment (HexConfig, hexnewton/config.py)")
     add_config_args(p, "agent", base.agent, skip=("max_iterations",),
@@ -106,6 +113,10 @@ def main(argv: list[str] | None = None) -> int:
     from .runner import check_log_dir
 
     check_log_dir(args.log_dir)
+    if args.video:
+        from .viewer import check_viewer_args
+
+        check_viewer_args("gl", True, "clip.mp4", None)
 
     from .env import make_env
     from .runner import HexRunner, distributed_rank, seed_everything
@@ -135,6 +146,12 @@ def main(argv: list[str] | None = None) -> int:
         os.makedirs(run_dir)
         with open(os.path.join(run_dir, "config.json"), "w") as f:
             json.dump({"hexnewton": meta, "train": agent.to_rsl_rl(num_envs)}, f, indent=1, default=str)
+    videos = None
+    if args.video and rank.is_main:
+        from .viewer import VideoEnv
+
+        env = videos = VideoEnv(env, os.path.join(run_dir, "videos"), args.video_interval, args.video_length,
+                       agent.to_rsl_rl(num_envs)["num_steps_per_env"], title=f"task {base.name}: ")  # fmt: skip
     runner = HexRunner(env, agent, meta, run_dir if rank.is_main else None, device, rank)
     if ckpt is not None:
         from .checkpoint import load_into_runner
@@ -150,8 +167,14 @@ def main(argv: list[str] | None = None) -> int:
     where = f"rank {rank.rank} of {rank.world_size}, " if rank.world_size > 1 else ""
     print(f"training task {base.name}: {where}{num_envs} envs on {device}, {agent.max_iterations} iterations, "
           f"logs in {run_dir}")  # fmt: skip
+    if videos is not None:
+        videos.first_iteration = runner.current_learning_iteration
     t0 = time.time()
-    reason = runner.train(agent.max_iterations)
+    try:
+        reason = runner.train(agent.max_iterations)
+    finally:
+        if videos is not None:
+            videos.close()
     print(f"finished at iteration {runner.current_learning_iteration} after {time.time() - t0:.0f} s ({reason})")
     if not rank.is_main:
         return 0
@@ -167,6 +190,8 @@ def main(argv: list[str] | None = None) -> int:
     onnx_path = os.path.join(run_dir, "policy.onnx")
     err = runner.export(onnx_path)
     print(f"exported {onnx_path} (dynamic batch; onnxruntime vs torch max |diff| {err:.2e})")
+    if videos is not None:
+        print(f"{len(videos.clips)} training video(s) in {os.path.join(run_dir, 'videos')}")
     print(f"\nresults in {run_dir} (checkpoints, TensorBoard events, policy.onnx). Next:\n"
           f"  python play.py --checkpoint {final}\n"
           f"  python -m hexnewton.evaluate --controllers cpg cpg_rl --checkpoint cpg_rl={final} --terrains "

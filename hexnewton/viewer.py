@@ -25,6 +25,7 @@ libgl1 libgbm1``).
 
 from __future__ import annotations
 
+import importlib.util
 import math
 import os
 import sys
@@ -61,8 +62,6 @@ def _require(viewer: str) -> None:
     module, package = _NEEDS.get(viewer, (None, None))
     if module is None:
         return
-    import importlib.util
-
     if importlib.util.find_spec(module) is None:
         raise ValueError(f"--viewer {viewer} needs {package}: pip install -e \".[viewer]\" (or pip install {package})")
 
@@ -77,9 +76,7 @@ def check_viewer_args(viewer: str, headless: bool, video: str | None, out: str |
         if viewer != "gl":
             raise ValueError(f"--video renders through ViewerGL: use --viewer gl (not {viewer}), or --out for a "
                              "recording")  # fmt: skip
-        try:
-            import imageio_ffmpeg  # noqa: F401
-        except ImportError:
+        if importlib.util.find_spec("imageio_ffmpeg") is None:
             raise ValueError("writing .mp4 needs ffmpeg from imageio-ffmpeg: pip install -e \".[viewer]\"")
     if viewer in RECORDINGS:
         ends = RECORDINGS[viewer]
@@ -88,8 +85,6 @@ def check_viewer_args(viewer: str, headless: bool, video: str | None, out: str |
         if not out.endswith(ends):
             raise ValueError(f"{out}: a {viewer} recording must be a {' or '.join(ends)} file")
         if out.endswith(".bin"):
-            import importlib.util
-
             if importlib.util.find_spec("cbor2") is None:
                 raise ValueError(f"{out}: a .bin recording needs cbor2 (pip install cbor2), or write .json")
     elif out is not None:
@@ -104,7 +99,9 @@ def make_viewer(viewer: str, out: str | None = None, headless: bool = False, wid
                 fps: float = 50.0, num_frames: int | None = None):  # fmt: skip
     """One of Newton's viewers (``VIEWERS``), as Newton's examples make them (``newton.examples.init``)."""
     if viewer == "gl" and headless:
-        os.environ.setdefault("PYGLET_HEADLESS", "1")  # read once, when pyglet is first imported
+        os.environ["PYGLET_HEADLESS"] = "1"  # read once, when pyglet is first imported
+        if "pyglet" in sys.modules:  # imported already: its options count until its GL module loads
+            sys.modules["pyglet"].options["headless"] = True
     import newton.viewer
 
     if viewer == "gl":
@@ -271,3 +268,55 @@ class RolloutViewer:
             self.viewer.close()
         elif self.kind == "rerun":
             self.viewer.close()
+
+
+# ----------------------------------------------------------------------------------------------- during training
+class VideoEnv:
+    """A training env (rsl-rl VecEnv) that records a clip every ``interval`` iterations (Isaac Lab's and mjlab's
+    ``--video``): from the first control step of iterations 0, ``interval``, 2 ``interval``, ... the next ``length``
+    control steps go through a headless :class:`RolloutViewer` into ``folder/iteration_<k>.mp4``. Everything else is
+    the wrapped env's (attributes are read from and written to it)."""
+
+    def __init__(self, env, folder: str, interval: int, length: int, steps_per_iteration: int, robots: int = 3,
+                 title: str = "", width: int = 960, height: int = 540):  # fmt: skip
+        check_viewer_args("gl", True, "clip.mp4", None)
+        os.makedirs(folder, exist_ok=True)
+        attrs = dict(env=env, folder=folder, interval=interval, length=length, steps_per_iteration=steps_per_iteration,
+                     robots=robots, title=title, size=(width, height), first_iteration=0, clips=[], _step=0,
+                     _recorder=None, _left=0)  # fmt: skip
+        for name, value in attrs.items():
+            object.__setattr__(self, name, value)
+
+    def __getattr__(self, name: str):
+        return getattr(self.env, name)
+
+    def __setattr__(self, name: str, value) -> None:
+        if name in self.__dict__:
+            object.__setattr__(self, name, value)
+        else:
+            setattr(self.env, name, value)
+
+    def step(self, actions):
+        out = self.env.step(actions)
+        period = self.interval * self.steps_per_iteration
+        if self._recorder is None and self._step % period == 0:
+            iteration = self.first_iteration + self._step // self.steps_per_iteration
+            path = os.path.join(self.folder, f"iteration_{iteration}.mp4")
+            self._recorder = RolloutViewer("gl", headless=True, video=path, robots=self.robots, width=self.size[0],
+                                           height=self.size[1], control_dt=self.env.cfg.task.control_dt,
+                                           title=f"{self.title}iteration {iteration}")  # fmt: skip
+            self._left = self.length
+        if self._recorder is not None:
+            self._recorder.render(self.env.world, (self.length - self._left) * self.env.cfg.task.control_dt)
+            self._left -= 1
+            if self._left <= 0:
+                self.close()
+        self._step += 1
+        return out
+
+    def close(self) -> None:
+        """Finish the clip being recorded, if any."""
+        if self._recorder is not None:
+            self._recorder.close()
+            self.clips.append(self._recorder.video_path)
+            object.__setattr__(self, "_recorder", None)

@@ -2,6 +2,7 @@
 back and looked at, a USD recording opened with pxr, Newton's own recording replayed, and one-line errors."""
 
 import ctypes.util
+import importlib.util
 import os
 import subprocess
 import sys
@@ -20,9 +21,7 @@ FRAMES = 12
 
 def _gl_missing() -> str | None:
     """Why headless OpenGL cannot run here (None when it can)."""
-    try:
-        import pyglet  # noqa: F401
-    except ImportError:
+    if importlib.util.find_spec("pyglet") is None:
         return "pyglet is not installed (pip install -e '.[test]')"
     for lib in ("EGL", "GL"):
         if ctypes.util.find_library(lib) is None:
@@ -123,3 +122,31 @@ def test_viewer_choice_and_caption(monkeypatch):
     frame = np.full((240, 320, 3), 90, np.uint8)
     out = draw_caption(frame, ["task complex", "t = 1.00 s"])
     assert out.shape == frame.shape and (out != frame).any() and (out[120:] == frame[120:]).all()
+
+
+@needs_gl
+def test_training_clips_at_an_interval(tmp_path):
+    """train.py --video's env: a clip of ``length`` steps from the first step of every ``interval``-th iteration,
+    named by iteration; everything else reads and writes the wrapped env."""
+    import torch
+
+    from hexnewton.env import make_env
+    from hexnewton.policy import fixed_cpg_actions
+    from hexnewton.tasks import course
+    from hexnewton.viewer import VideoEnv
+
+    env = make_env(course("flat", None, {}, 2, "cpu", 0, seed=0), "cpg")
+    videos = VideoEnv(env, str(tmp_path / "videos"), interval=2, length=3, steps_per_iteration=2, width=320,
+                      height=240)  # fmt: skip
+    videos.first_iteration = 10  # a resumed run
+    videos.episode_length_buf = torch.zeros_like(env.episode_length_buf)
+    assert videos.episode_length_buf is env.episode_length_buf and videos.num_envs == 2
+    actions = fixed_cpg_actions(env)
+    with torch.inference_mode():
+        for _ in range(8):  # iterations 10..13: clips at 10 (steps 0-2) and 12 (steps 4-6)
+            videos.step(actions)
+    videos.close()
+    assert [os.path.basename(c) for c in videos.clips] == ["iteration_10.mp4", "iteration_12.mp4"]
+    for clip in videos.clips:
+        frames = _decode(clip)
+        assert frames.shape == (3, 240, 320, 3) and frames.std() > 20
