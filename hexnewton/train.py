@@ -78,6 +78,8 @@ def parser(base, resumed: bool) -> ArgumentParser:
     p.add_argument("--resume", metavar="PATH", help="checkpoint to continue from (a new run directory is made)")
     p.add_argument("--log_dir", default="logs")
     p.add_argument("--experiment", default=None, help="default: hexnewton_<task>")
+    p.add_argument("--headless", action="store_true",
+                   help="Isaac Lab's flag, accepted: training never opens a window (--video renders off-screen)")
     p.add_argument("--video", action="store_true",
                    help="record clips of the training robots into the run's videos/ (headless ViewerGL, .mp4)")
     p.add_argument("--video_length", type=positive_int, default=200, help="control steps per clip (default 200: 4 s)")
