@@ -139,6 +139,12 @@ class SimConfig:
     # rugged mesh a foot sees one contact per triangle within the gap: measured ~67 contacts per walking
     # robot at 0.01 m, ~39 at 0.005 m, ~26 at 0.002 m.
     rigid_gap: float = 0.005
+    # ours: contact detection band of the terrain shape [m]; None: rigid_gap. Newton adds the two shapes' gaps, so
+    # the default band between a foot and the terrain is 2 x rigid_gap = 1 cm
+    terrain_gap: float | None = None
+    # ours: Newton's speculative contacts (None: off). The band grows, for shapes approaching each other, by their
+    # closing speed x frame_dt, capped at this [m], so rigid_gap can be small without missing fast touch-downs
+    speculative_gap: float | None = None
     # per-world contact capacity handed to MuJoCo (nconmax; mujoco_warp pools it over all worlds) and
     # constraint rows per world (njmax; pyramidal friction cones take 4 rows per contact, plus joint
     # limits). A world may take more than its share of the contact pool: 352 rows overflowed once in

@@ -110,6 +110,10 @@ def validate_sim(cfg: SimConfig) -> None:
         raise HexnewtonError(f"substeps must be >= 1, got {cfg.substeps}")
     if not cfg.frame_dt > 0:
         raise HexnewtonError(f"frame_dt must be > 0, got {cfg.frame_dt}")
+    for name in ("rigid_gap", "terrain_gap", "speculative_gap"):
+        value = getattr(cfg, name)
+        if value is not None and not (math.isfinite(value) and value >= 0):
+            raise HexnewtonError(f"sim.{name} must be a non-negative number of metres, got {value}")
 
 
 @wp.kernel
@@ -258,7 +262,8 @@ class World:
         SolverMuJoCo.register_custom_attributes(scene)
         scene.rigid_gap = sim.rigid_gap
         scene.replicate(robot, n)
-        ground_cfg = newton.ModelBuilder.ShapeConfig(mu=cfg.robot.friction, gap=sim.rigid_gap)
+        terrain_gap = sim.rigid_gap if sim.terrain_gap is None else sim.terrain_gap
+        ground_cfg = newton.ModelBuilder.ShapeConfig(mu=cfg.robot.friction, gap=terrain_gap)
         self.terrain.add_to_builder(scene, ground_cfg)
 
         # spawn: env i stands at x = 0 in its own lane y_i, evenly spread over +-spawn_y_spread so that the
@@ -307,7 +312,10 @@ class World:
             self.model,
             rigid_contact_max=max_contacts,
             max_triangle_pairs=max(1_000_000, sim.triangle_pairs_per_env * n),
+            speculative_contact_gap_max=sim.speculative_gap,
         )
+        # speculative contacts need the time until the next detection: one frame
+        self._collide_dt = sim.frame_dt if sim.speculative_gap is not None else None
         self.contacts = self.pipeline.contacts()
         if wp.get_device(self.device).is_cuda:
             precompile(self.device)
@@ -414,7 +422,7 @@ class World:
     # ------------------------------------------------------------------ stepping
     def simulate_frame(self) -> None:
         """One physics frame (collision + substeps), uncaptured: callers may record it into their own graph."""
-        self.pipeline.collide(self.state_0, self.contacts)
+        self.pipeline.collide(self.state_0, self.contacts, dt=self._collide_dt)
         for i in range(self.substeps):
             if self.controller is not None:
                 self.controller(self)

@@ -29,9 +29,11 @@ def _upright(q: np.ndarray) -> np.ndarray:
 # the default physics (10 ms frame = 4 x 2.5 ms) and the 20 ms frame = 4 x 5 ms the shipped complex policy was
 # trained under (BENCHMARKS.md): both must pass the stability checks
 PHYSICS = [pytest.param({}, id="10ms"), pytest.param({"frame_dt": 0.02, "substeps": 4}, id="20ms")]
+# a narrower contact band with Newton's speculative contacts (SimConfig.terrain_gap, speculative_gap)
+SPECULATIVE = {"rigid_gap": 0.002, "terrain_gap": 0.0, "speculative_gap": 0.01}
 
 
-@pytest.mark.parametrize("physics", PHYSICS)
+@pytest.mark.parametrize("physics", PHYSICS + [pytest.param(SPECULATIVE, id="speculative")])
 @pytest.mark.parametrize("terrain", TERRAINS)
 def test_stands_two_seconds(terrain, physics):
     world = _world(terrain, **physics)
@@ -52,7 +54,7 @@ def test_stands_two_seconds(terrain, physics):
         np.testing.assert_allclose(q[:, 2], stand_height(world.cfg.robot), atol=0.01)
 
 
-@pytest.mark.parametrize("physics", PHYSICS)
+@pytest.mark.parametrize("physics", PHYSICS + [pytest.param(SPECULATIVE, id="speculative")])
 def test_tripod_walks_forward_on_flat(physics):
     world = _world("flat", **physics)
     world.set_controller(CPGController(world))  # the fixed tripod: 1.5 Hz, hip 0.3, knee 0.5, ankle 0.5
@@ -64,6 +66,19 @@ def test_tripod_walks_forward_on_flat(physics):
     assert (np.abs(q[:, 1] - world.spawn_xy[:, 1]) < 0.1).all()
     assert (_upright(q) > 0.9).all()
     assert world.check_contacts(on_overflow="raise").ok
+
+
+def test_speculative_contacts_narrow_the_band():
+    """Standing on rugged blocks, the speculative settings find fewer contact candidates than the default band (two
+    5 mm gaps), and bad gaps are one-line errors."""
+    counts = {}
+    for name, sim in (("default", {}), ("speculative", SPECULATIVE)):
+        world = _world("rugged", **sim)
+        world.step(50)
+        counts[name] = int(world.contacts.rigid_contact_count.numpy()[0])
+    assert 0 < counts["speculative"] < counts["default"], counts
+    with pytest.raises(HexnewtonError, match="sim.speculative_gap must be a non-negative"):
+        _world("flat", speculative_gap=-0.01)
 
 
 def test_torch_views_are_zero_copy():
