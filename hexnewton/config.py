@@ -25,6 +25,7 @@ LEG_NAMES = ("R1", "R2", "R3", "L1", "L2", "L3")
 JOINT_KINDS = ("hip", "knee", "ankle")
 JOINT_NAMES = tuple(f"{leg}_{kind}" for leg in LEG_NAMES for kind in JOINT_KINDS)
 TERRAINS = ("flat", "rugged", "stepped", "complex")
+TERRAIN_COLLISIONS = ("mesh", "mesh_boxes")
 
 
 @dataclass
@@ -115,6 +116,12 @@ class TerrainConfig:
     lane_width: float = 3.0
     # robots start evenly spread over levels 0 .. start_levels - 1 (legged_gym: max_init_terrain_level)
     start_levels: int = 1
+    # ours: how the terrain collides (flat is always an infinite ground plane). "mesh": one closed triangle mesh
+    # of the whole grid. "mesh_boxes": the same surface in parts: every strip of constant height across the whole
+    # width (of a curriculum lane, with levels > 0) -- run-ups, stair treads, landings, flat ground beyond the
+    # blocks -- as one static box, the rugged blocks as one mesh, all down to one common bottom. Fewer mesh
+    # lookups per robot (none on stepped); "mesh" stays the default until the GPU measures the difference.
+    collision: str = field(default="mesh", metadata={"choices": TERRAIN_COLLISIONS})
 
 
 @dataclass

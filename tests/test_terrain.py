@@ -18,6 +18,7 @@ from hexnewton.config import TERRAINS, TerrainConfig
 from hexnewton.terrain import (
     HeightField,
     HeightGrid,
+    Part,
     Terrain,
     build_height_grid,
     generate,
@@ -26,6 +27,7 @@ from hexnewton.terrain import (
     make_terrain,
     max_terrain_height_np,
     sample_heights,
+    split_strips,
     terrain_height,
     terrain_height_np,
 )
@@ -359,3 +361,95 @@ def test_patch_reaches_beyond_the_goal():
     far = terrain_for_goal(base, 5.5)
     assert far.x_max == 6.5 and build_height_grid(far).x1 == pytest.approx(6.5)
     assert terrain_for_goal(base, 6.2).x_max == 7.5
+
+
+# ----------------------------------------------------------------------------------------------------
+# mesh_boxes: the same surface as boxes (constant-height strips) plus meshes (rugged blocks)
+# ----------------------------------------------------------------------------------------------------
+
+
+def _top_of_shapes(builder: newton.ModelBuilder, ids: range, grid: HeightGrid) -> tuple[np.ndarray, list[float]]:
+    """Highest upward face of the static shapes ``ids`` over every cell centre of ``grid`` (-inf where none),
+    and each shape's bottom z. Boxes from their transform and half extents; meshes from their horizontal
+    upward-facing triangles (cell centres lie inside, or on a diagonal of, a top quad, never on a grid line)."""
+    top = np.full((grid.nx, grid.ny), -np.inf)
+    xc, yc = grid.cell_centers()
+    bottoms = []
+    for s in ids:
+        t, kind = builder.shape_transform[s], builder.shape_type[s]
+        assert builder.shape_body[s] == -1 and tuple(t[3:]) == (0.0, 0.0, 0.0, 1.0)
+        if kind == newton.GeoType.PLANE:
+            return np.full_like(top, float(t[2])), []
+        if kind == newton.GeoType.BOX:
+            hx, hy, hz = builder.shape_scale[s]
+            i = (xc > t[0] - hx) & (xc < t[0] + hx)
+            j = (yc > t[1] - hy) & (yc < t[1] + hy)
+            top[np.ix_(i, j)] = np.maximum(top[np.ix_(i, j)], t[2] + hz)
+            bottoms.append(t[2] - hz)
+            continue
+        assert kind == newton.GeoType.MESH
+        v = np.asarray(builder.shape_source[s].vertices, np.float64) + np.asarray(t[:3])
+        tri = v[np.asarray(builder.shape_source[s].indices).reshape(-1, 3)]
+        bottoms.append(v[:, 2].min())
+        e1, e2 = tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]
+        up = tri[(np.ptp(tri[:, :, 2], axis=1) == 0) & (e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0] > 0)]
+        # candidate cells: every cell centre in each triangle's bounding box
+        lo = np.ceil((up[:, :, :2].min(axis=1) - [grid.x0, grid.y0]) / grid.res - 0.5).astype(int)
+        hi = np.floor((up[:, :, :2].max(axis=1) - [grid.x0, grid.y0]) / grid.res - 0.5).astype(int) + 1
+        w = hi - lo
+        count = w[:, 0] * w[:, 1]
+        k = np.repeat(np.arange(len(up)), count)
+        local = np.arange(count.sum()) - np.repeat(np.cumsum(count) - count, count)
+        ci, cj = lo[k, 0] + local // w[k, 1], lo[k, 1] + local % w[k, 1]
+        p = np.stack([xc[ci], yc[cj]], axis=1)
+        inside = np.ones(len(k), dtype=bool)
+        for a, b in ((0, 1), (1, 2), (2, 0)):  # counter-clockwise seen from above: left of every edge
+            pa, pb = up[k, a, :2], up[k, b, :2]
+            cross = (pb[:, 0] - pa[:, 0]) * (p[:, 1] - pa[:, 1]) - (pb[:, 1] - pa[:, 1]) * (p[:, 0] - pa[:, 0])
+            inside &= cross >= -1e-9
+        np.maximum.at(top, (ci[inside], cj[inside]), up[k[inside], 0, 2])
+    return top, bottoms
+
+
+MESH_BOXES = [pytest.param(TerrainConfig(name=n, collision="mesh_boxes"), id=n) for n in TERRAINS] + [
+    pytest.param(TerrainConfig(name=n, collision="mesh_boxes", levels=3), id=f"{n}-levels3")
+    for n in ("stepped", "complex")]  # fmt: skip
+
+
+@pytest.mark.parametrize("cfg", MESH_BOXES)
+def test_mesh_boxes_reproduce_the_grid(cfg: TerrainConfig) -> None:
+    terrain = make_terrain(cfg)
+    builder = newton.ModelBuilder()
+    first = terrain.add_to_builder(builder, newton.ModelBuilder.ShapeConfig())
+    ids = range(first, builder.shape_count)
+    top, bottoms = _top_of_shapes(builder, ids, terrain.grid)
+    np.testing.assert_allclose(top, terrain.grid.heights, atol=1e-6)  # every cell covered, at its height
+    # one common bottom: the parts tile the patch without gaps underneath
+    if bottoms:
+        np.testing.assert_allclose(bottoms, terrain.grid.heights.min() - 0.1, atol=1e-6)
+    kinds = [builder.shape_type[s] for s in ids]
+    meshes = kinds.count(newton.GeoType.MESH)
+    if cfg.name == "flat":
+        assert kinds == [newton.GeoType.PLANE]
+    elif cfg.name == "stepped":
+        assert meshes == 0 and len(kinds) <= (20 if not cfg.levels else 20 * cfg.levels)
+    else:  # the rugged blocks as one mesh (lanes side by side merged), a few boxes
+        assert meshes == 1 and len(kinds) <= 20 * max(1, cfg.levels)
+    # the single mesh's surface by the same measure
+    if cfg.name != "flat":
+        ref = newton.ModelBuilder()
+        s = make_terrain(replace(cfg, collision="mesh")).add_to_builder(ref, newton.ModelBuilder.ShapeConfig())
+        np.testing.assert_allclose(_top_of_shapes(ref, range(s, s + 1), terrain.grid)[0], top, atol=1e-6)
+
+
+def test_split_strips_bands_and_bad_input() -> None:
+    h = np.zeros((6, 4), np.float32)
+    h[2:4, :2], h[2:4, 2:] = 0.1, 0.2  # a step of different rise in each of two bands
+    h[5, 1] = 0.05  # a rugged column at the end of band 0 (band 1's flat strip runs on to the end)
+    parts = split_strips(HeightGrid(h, 0.0, 0.0, 0.01), band=2)
+    assert parts == [Part(5, 6, 0, 2, False), Part(0, 2, 0, 4, True), Part(2, 4, 0, 2, True),
+                     Part(2, 4, 2, 4, True), Part(4, 5, 0, 2, True), Part(4, 6, 2, 4, True)]  # fmt: skip
+    with pytest.raises(ValueError, match="divide"):
+        split_strips(HeightGrid(h, 0.0, 0.0, 0.01), band=3)
+    with pytest.raises(ValueError, match="unknown terrain collision 'boxes'"):
+        make_terrain(TerrainConfig(name="rugged", collision="boxes"))

@@ -2,7 +2,7 @@
 
 ``make_terrain(cfg)`` builds a :class:`Terrain`: the exact piecewise-constant height grid
 (:mod:`.heightmap`), its compact closed collision mesh (:mod:`.mesh`, ``None`` for flat, which is an
-infinite ground plane at z = 0) and helpers to add it to a ``newton.ModelBuilder`` and to query
+infinite ground plane at z = 0; or boxes plus meshes of the same surface, :mod:`.parts`) and helpers to add it to a ``newton.ModelBuilder`` and to query
 heights on the host. :mod:`.query` provides the in-kernel height lookup (``HeightField``).
 """
 
@@ -17,6 +17,7 @@ import warp as wp
 from hexnewton.config import TerrainConfig
 from hexnewton.terrain.heightmap import HeightGrid, build_height_grid, complex_step_count, validate_config
 from hexnewton.terrain.mesh import grid_to_mesh
+from hexnewton.terrain.parts import Part, add_mesh_boxes, split_strips
 from hexnewton.terrain.query import (
     HeightField,
     height_field_from_grid,
@@ -31,7 +32,9 @@ from hexnewton.terrain.query import (
 __all__ = [
     "HeightField",
     "HeightGrid",
+    "Part",
     "Terrain",
+    "add_mesh_boxes",
     "build_height_grid",
     "complex_step_count",
     "generate",
@@ -42,6 +45,7 @@ __all__ = [
     "max_terrain_height_np",
     "sample_heights",
     "sample_heights_kernel",
+    "split_strips",
     "terrain_height",
     "terrain_height_np",
     "validate_config",
@@ -58,12 +62,18 @@ class Terrain:
     mesh: newton.Mesh | None
 
     def add_to_builder(self, builder: newton.ModelBuilder, cfg: newton.ModelBuilder.ShapeConfig) -> int:
-        """Add the terrain as a static shape; returns the shape index.
+        """Add the terrain as static shapes (body -1); returns the index of the first one.
 
-        flat: an infinite ground plane at z = 0; otherwise a static triangle mesh (body -1).
+        flat: an infinite ground plane at z = 0. Otherwise, by ``TerrainConfig.collision``: "mesh", one triangle
+        mesh; "mesh_boxes", the same surface as boxes for the constant-height strips plus meshes for the rugged
+        blocks (:func:`~hexnewton.terrain.parts.add_mesh_boxes`, consecutive shapes; with curriculum levels the
+        strips are one lane wide).
         """
         if self.mesh is None:
             return builder.add_ground_plane(cfg=cfg)
+        if self.cfg.collision == "mesh_boxes":
+            band = round(self.cfg.lane_width / self.grid.res) if self.cfg.levels else None
+            return add_mesh_boxes(self.grid, builder, cfg, self.name, band)[0]
         return builder.add_shape_mesh(-1, mesh=self.mesh, cfg=cfg, label=f"terrain_{self.name}")
 
     def height_at(self, x: np.ndarray | float, y: np.ndarray | float) -> np.ndarray:

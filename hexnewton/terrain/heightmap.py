@@ -16,7 +16,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from hexnewton.config import TERRAINS, TerrainConfig
+from hexnewton.config import TERRAIN_COLLISIONS, TERRAINS, TerrainConfig
 
 # Lengths must be integer multiples of the grid resolution to within this many metres.
 ALIGN_TOL = 1e-9
@@ -88,6 +88,8 @@ def validate_config(cfg: TerrainConfig) -> None:
     """Raise ``ValueError`` (one message per problem) if ``cfg`` cannot describe a grid terrain."""
     if cfg.name not in TERRAINS:
         raise _unknown_terrain(cfg.name)
+    _require(cfg.collision in TERRAIN_COLLISIONS,
+             f"unknown terrain collision '{cfg.collision}': choose one of {', '.join(TERRAIN_COLLISIONS)}")
     res = cfg.query_resolution
     for field_name in ("query_resolution", "block_size", "step_depth", "width", "rugged_half_width"):
         value = getattr(cfg, field_name)
