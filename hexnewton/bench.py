@@ -3,6 +3,7 @@
     python -m hexnewton.bench                         # default device, all terrains, N = 1024 (64 on CPU)
     python -m hexnewton.bench --num_envs 1024 4096 16384 --terrain flat complex --device cuda
     python -m hexnewton.bench --mode sim              # simulation only
+    python -m hexnewton.bench --mode sim --terrain stepped --env.terrain.collision mesh_boxes  # terrain settings
     python -m hexnewton.bench --append BENCHMARKS.md  # also append the table (date, device, git rev)
 
 Three measurements, each in robot-seconds simulated per wall second (robot-s/s) so they compare directly:
@@ -37,6 +38,7 @@ from .config import TERRAINS, HexConfig, SimConfig, TerrainConfig
 from .controller import CPGController
 from .report import git_rev
 from .sim import World, resolve_device
+from .terrain import validate_config
 
 
 @dataclass
@@ -56,13 +58,16 @@ class BenchResult:
     upright_frac: float
 
 
-def _config(terrain: str, num_envs: int, device: str, seed: int, sim: SimConfig | None = None) -> HexConfig:
+def _config(terrain: str, num_envs: int, device: str, seed: int, sim: SimConfig | None = None,
+            ground: TerrainConfig | None = None) -> HexConfig:  # fmt: skip
+    """``ground``: the other terrain settings (``--env.terrain.*``); ``terrain`` and ``seed`` replace its name, seed."""
     return HexConfig(sim=replace(sim or SimConfig(), num_envs=num_envs, device=device),
-                     terrain=TerrainConfig(name=terrain, seed=seed))  # fmt: skip
+                     terrain=replace(ground or TerrainConfig(), name=terrain, seed=seed))  # fmt: skip
 
 
-def bench_one(terrain: str, num_envs: int, device: str, frames: int, sim: SimConfig, seed: int = 0) -> BenchResult:
-    cfg = _config(terrain, num_envs, device, seed, sim)
+def bench_one(terrain: str, num_envs: int, device: str, frames: int, sim: SimConfig, seed: int = 0,
+              ground: TerrainConfig | None = None) -> BenchResult:  # fmt: skip
+    cfg = _config(terrain, num_envs, device, seed, sim, ground)
     t0 = time.perf_counter()
     world = World(cfg)
     rng = np.random.default_rng(seed)
@@ -128,13 +133,13 @@ def _device_memory(device: str) -> int:
 
 
 def bench_env(terrain: str, num_envs: int, device: str, steps: int, seed: int = 0,
-              sim: SimConfig | None = None) -> PipelineResult:
+              sim: SimConfig | None = None, ground: TerrainConfig | None = None) -> PipelineResult:
     """``steps`` timed ``HexapodEnv.step`` calls with uniform random actions (drawn before the timing)."""
     import torch
 
     from .env import make_env
 
-    cfg = _config(terrain, num_envs, device, seed, sim)
+    cfg = _config(terrain, num_envs, device, seed, sim, ground)
     env = make_env(cfg)
     gen = torch.Generator(device=env._obs_t.device).manual_seed(seed)
     actions = torch.rand((8, num_envs, env.num_actions), generator=gen, device=env._obs_t.device) * 2 - 1
@@ -156,7 +161,7 @@ PHASES = (("env.step", "env", "step"), ("policy act", "alg", "act"), ("storage",
 
 
 def bench_train(terrain: str, num_envs: int, device: str, iterations: int, seed: int = 0, profile: bool = False,
-                sim: SimConfig | None = None, agent=None,
+                sim: SimConfig | None = None, agent=None, ground: TerrainConfig | None = None,
                 ) -> tuple[PipelineResult, dict[str, float] | None]:  # fmt: skip
     """``iterations`` timed PPO iterations of ``agent`` (default: ``AgentConfig()``) after one untimed warm-up iteration
     (two with ``torch.compile``, whose first update compiles).
@@ -174,7 +179,7 @@ def bench_train(terrain: str, num_envs: int, device: str, iterations: int, seed:
     seed_everything(seed)
     cuda = device.startswith("cuda")
     used0 = _device_memory(device) if cuda else 0
-    cfg = _config(terrain, num_envs, device, seed, sim)
+    cfg = _config(terrain, num_envs, device, seed, sim, ground)
     env = make_env(cfg)
     tcfg = (agent or AgentConfig()).to_rsl_rl(num_envs)
     # a TensorBoard writer as in train.py: rsl-rl's logger only does its per-step bookkeeping with one
@@ -229,7 +234,7 @@ def is_out_of_memory(exc: BaseException) -> bool:
 
 
 def largest_that_fits(terrain: str, start: int, device: str, frames: int, sim: SimConfig,
-                      limit: int = 1 << 20) -> list[BenchResult]:  # fmt: skip
+                      limit: int = 1 << 20, ground: TerrainConfig | None = None) -> list[BenchResult]:  # fmt: skip
     """Sim-only results at 2x, 4x, ... ``start`` envs until an allocation fails (or ``limit``); the last one
     is the largest env count that fits on ``device``."""
     import gc
@@ -238,7 +243,7 @@ def largest_that_fits(terrain: str, start: int, device: str, frames: int, sim: S
     while n * 2 <= limit:
         n *= 2
         try:
-            out.append(bench_one(terrain, n, device, frames, sim))
+            out.append(bench_one(terrain, n, device, frames, sim, ground=ground))
         except Exception as exc:
             if not is_out_of_memory(exc):
                 raise
@@ -315,6 +320,8 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--json", metavar="PATH", help="write the raw results as JSON")
     add_config_args(p, "env.sim", SimConfig(), skip=("num_envs", "device"),
                     title="--env.sim.*: the physics (SimConfig), as train.py's")
+    add_config_args(p, "env.terrain", TerrainConfig(), skip=("name", "seed"),
+                    title="--env.terrain.*: the terrain's other settings (TerrainConfig; --terrain names it)")
     add_config_args(p, "agent", AgentConfig(), title="--agent.*: train mode's learner (AgentConfig), as train.py's")
     args = p.parse_args(argv)
     agent = apply_overrides(AgentConfig(), config_overrides(args, "agent"))
@@ -324,6 +331,9 @@ def main(argv: list[str] | None = None) -> int:
     envs = args.num_envs or ([1024] if gpu else [64])
     frames = args.frames or (400 if gpu else 100)
     sim = apply_overrides(SimConfig(), config_overrides(args, "env.sim"))
+    ground = apply_overrides(TerrainConfig(), config_overrides(args, "env.terrain"))
+    for name in args.terrain:
+        validate_config(replace(ground, name=name))
     command = "python -m hexnewton.bench " + " ".join(sys.argv[1:] if argv is None else argv)
     results, pipeline, profiles = [], [], []
     env_steps = args.env_steps or (200 if gpu else 25)
@@ -331,7 +341,7 @@ def main(argv: list[str] | None = None) -> int:
     for terrain in args.terrain:
         for n in envs:
             if "sim" in args.mode:
-                r = bench_one(terrain, n, device, frames, sim)
+                r = bench_one(terrain, n, device, frames, sim, ground=ground)
                 print(f"{terrain:8s} N={n:6d} sim   {r.robot_s_per_s:12,.0f} robot-s/s  ({r.robot_frames_per_s:,.0f} "
                       f"robot-frames/s, build {r.build_s:.1f} s, capture {r.capture_s:.1f} s, overflow: {r.overflow})",
                       flush=True)  # fmt: skip
@@ -339,13 +349,13 @@ def main(argv: list[str] | None = None) -> int:
             if "env" in args.mode or "train" in args.mode:
                 pr = PipelineResult(terrain, n)
                 if "env" in args.mode:
-                    e = bench_env(terrain, n, device, env_steps, sim=sim)
+                    e = bench_env(terrain, n, device, env_steps, sim=sim, ground=ground)
                     pr.env_steps_per_s, pr.env_robot_s_per_s = e.env_steps_per_s, e.env_robot_s_per_s
                     print(f"{terrain:8s} N={n:6d} env   {e.env_robot_s_per_s:12,.0f} robot-s/s  "
                           f"({e.env_steps_per_s:,.0f} env-steps/s)", flush=True)  # fmt: skip
                 if "train" in args.mode:
                     t, prof = bench_train(terrain, n, device, iterations, profile=args.profile, sim=sim,
-                                          agent=agent)
+                                          agent=agent, ground=ground)
                     for k in ("train_steps_per_s", "train_robot_s_per_s", "train_iteration_s", "memory_per_env_kb"):
                         setattr(pr, k, getattr(t, k))
                     print(f"{terrain:8s} N={n:6d} train {t.train_robot_s_per_s:12,.0f} robot-s/s  "
@@ -357,7 +367,7 @@ def main(argv: list[str] | None = None) -> int:
                             f"{k} {v * 1e3:.1f} ms ({v / total:.0%})" for k, v in prof.items()), flush=True)  # fmt: skip
                 pipeline.append(pr)
         if args.largest:
-            results += largest_that_fits(terrain, max(envs), device, frames, sim)
+            results += largest_that_fits(terrain, max(envs), device, frames, sim, ground=ground)
     md = table(results, sim, command) if results else (
         f"### Throughput, {datetime.date.today().isoformat()}, {device_name(device)}, git {git_rev()}\n\n`{command}`\n\n")
     if pipeline:
