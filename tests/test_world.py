@@ -237,7 +237,8 @@ def test_bench_largest_that_fits(monkeypatch):
     """--largest doubles the env count until an allocation fails; other errors are not swallowed."""
     from hexnewton import bench
 
-    def fake(terrain, n, device, frames, sim):
+    def fake(terrain, n, device, frames, sim, ground=None):
+        assert ground is None or ground.collision == "mesh_boxes"  # the terrain settings are passed on
         if n > 16:
             raise RuntimeError(f"Warp error: Failed to allocate {n * 10**9} bytes on device 'cuda:0'")
         return bench.BenchResult(terrain=terrain, num_envs=n, **{k: 0 for k in FIELDS})
@@ -245,9 +246,11 @@ def test_bench_largest_that_fits(monkeypatch):
     FIELDS = [f for f in bench.BenchResult.__dataclass_fields__ if f not in ("terrain", "num_envs")]
     monkeypatch.setattr(bench, "bench_one", fake)
     assert [r.num_envs for r in bench.largest_that_fits("flat", 4, "cuda:0", 5, SimConfig())] == [8, 16]
+    boxes = TerrainConfig(collision="mesh_boxes")
+    assert len(bench.largest_that_fits("stepped", 4, "cuda:0", 5, SimConfig(), ground=boxes)) == 2
     assert bench.is_out_of_memory(MemoryError()) and bench.is_out_of_memory(RuntimeError("CUDA out of memory"))
 
-    def broken(*a):
+    def broken(*a, **k):
         raise RuntimeError("kernel launch failed")
 
     monkeypatch.setattr(bench, "bench_one", broken)
