@@ -2,8 +2,8 @@
 
 ``make_terrain(cfg)`` builds a :class:`Terrain`: the exact piecewise-constant height grid
 (:mod:`.heightmap`), its compact closed collision mesh (:mod:`.mesh`, ``None`` for flat, which is an
-infinite ground plane at z = 0; or boxes plus meshes of the same surface, :mod:`.parts`) and helpers to add it to a ``newton.ModelBuilder`` and to query
-heights on the host. :mod:`.query` provides the in-kernel height lookup (``HeightField``).
+infinite ground plane at z = 0; or boxes plus meshes of the same surface, :mod:`.parts`) and helpers to add
+it to a ``newton.ModelBuilder`` and to query heights on the host. :mod:`.query` provides the in-kernel height lookup (``HeightField``).
 """
 
 from __future__ import annotations
