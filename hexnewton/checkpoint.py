@@ -46,11 +46,14 @@ def read_checkpoint(path: str, map_location: str = "cpu"):
     return ckpt
 
 
-def load_checkpoint(path: str, map_location: str = "cpu") -> dict:
-    """An rsl-rl checkpoint (``train.py``) read by :func:`read_checkpoint`, with one-line errors for missing, corrupt,
-    unsafe or wrong-type files."""
-    ckpt = read_checkpoint(path, map_location)
-    if isinstance(ckpt, dict) and ckpt.get("format", "").startswith("hexnewton-skrl"):
+def is_baseline_checkpoint(ckpt) -> bool:
+    """Whether a file read by :func:`read_checkpoint` is a skrl baseline's (``python -m hexnewton.baselines``)."""
+    return isinstance(ckpt, dict) and str(ckpt.get("format", "")).startswith("hexnewton-skrl")
+
+
+def check_rsl_rl_checkpoint(ckpt, path: str) -> dict:
+    """``ckpt`` (read from ``path``) if it is an rsl-rl checkpoint (``train.py``); a one-line error otherwise."""
+    if is_baseline_checkpoint(ckpt):
         raise ValueError(f"{path} is a skrl baseline checkpoint (python -m hexnewton.baselines): evaluate it as "
                          f"controller {ckpt.get('algo')}_cpg")
     if not isinstance(ckpt, dict) or "actor_state_dict" not in ckpt:
@@ -58,17 +61,23 @@ def load_checkpoint(path: str, map_location: str = "cpu") -> dict:
     return ckpt
 
 
+def load_checkpoint(path: str, map_location: str = "cpu") -> dict:
+    """An rsl-rl checkpoint (``train.py``) read by :func:`read_checkpoint`, with one-line errors for missing, corrupt,
+    unsafe or wrong-type files."""
+    return check_rsl_rl_checkpoint(read_checkpoint(path, map_location), path)
+
+
 def policy_checkpoint(path: str) -> tuple[dict, str]:
     """Any trained policy's checkpoint (an rsl-rl one from ``train.py`` or a skrl baseline's from ``python -m
-    hexnewton.baselines``) read as data only, with the controller that runs it by default (``cpg_rl``, ``joint``,
-    ``sac_cpg``, ``td3_cpg``, ``a2c_cpg``)."""
+    hexnewton.baselines``) read once, as data only, with the controller that runs it by default (``cpg_rl``,
+    ``joint``, ``sac_cpg``, ``td3_cpg``, ``a2c_cpg``)."""
     ckpt = read_checkpoint(path)
-    if isinstance(ckpt, dict) and str(ckpt.get("format", "")).startswith("hexnewton-skrl"):
-        from .baselines import load_baseline_checkpoint
+    if is_baseline_checkpoint(ckpt):
+        from .baselines import check_baseline_checkpoint
 
-        ckpt = load_baseline_checkpoint(path)
+        ckpt = check_baseline_checkpoint(ckpt, path)
         return ckpt, f"{ckpt['algo']}_cpg"
-    ckpt = load_checkpoint(path)
+    ckpt = check_rsl_rl_checkpoint(ckpt, path)
     return ckpt, "joint" if checkpoint_meta(ckpt).get("action_mode", "cpg") == "joint" else "cpg_rl"
 
 

@@ -121,14 +121,16 @@ def main(argv: list[str] | None = None) -> int:
     checkpoints = _pairs(args.checkpoint, "--checkpoint")
     runs = _pairs(args.runs, "--runs")
     from .baselines import load_baseline_checkpoint
-    from .checkpoint import load_checkpoint, policy_checkpoint, trained_config
+    from .checkpoint import load_checkpoint, trained_config
 
-    for ctrl in args.controllers:  # fail before any simulation
+    read = {}  # path -> checkpoint: every learnt policy's file is checked before any simulation
+    for ctrl in args.controllers:
         for terrain in args.terrains:
+            path = checkpoint_for(checkpoints, ctrl, terrain) if ctrl not in FIXED else None
             if ctrl in BASELINES:
-                load_baseline_checkpoint(checkpoint_for(checkpoints, ctrl, terrain))
-            elif ctrl not in FIXED:
-                load_checkpoint(checkpoint_for(checkpoints, ctrl, terrain))
+                read[path] = load_baseline_checkpoint(path)
+            elif path is not None:
+                read[path] = load_checkpoint(path)
     from .curves import read_curve
 
     for spec in runs.values():
@@ -141,7 +143,7 @@ def main(argv: list[str] | None = None) -> int:
     learnt = [checkpoint_for(checkpoints, c, args.terrains[0]) for c in args.controllers if c not in FIXED]
     fixed_physics = physics
     if not physics and learnt:
-        sim = trained_config(policy_checkpoint(learnt[0])[0]).sim
+        sim = trained_config(read[learnt[0]]).sim
         fixed_physics = {"sim.frame_dt": sim.frame_dt, "sim.substeps": sim.substeps}
     out = args.out or os.path.join("eval", datetime.datetime.now().strftime("%Y-%m-%d_%H-%M-%S"))
     if os.path.exists(out):

@@ -472,7 +472,11 @@ def load_baseline_checkpoint(path: str, map_location: str = "cpu") -> dict:
     missing, damaged or other file."""
     from ..checkpoint import read_checkpoint
 
-    ckpt = read_checkpoint(path, map_location)
+    return check_baseline_checkpoint(read_checkpoint(path, map_location), path)
+
+
+def check_baseline_checkpoint(ckpt, path: str) -> dict:
+    """``ckpt`` (read from ``path``) if it is a baseline checkpoint; a one-line error otherwise."""
     if not isinstance(ckpt, dict) or ckpt.get("format") != FORMAT or "policy" not in ckpt.get("modules", {}):
         what = "an rsl-rl checkpoint (train.py)" if isinstance(ckpt, dict) and "actor_state_dict" in ckpt else "not one"
         raise ValueError(f"{path} is not a skrl baseline checkpoint from python -m hexnewton.baselines ({what})")
@@ -516,14 +520,6 @@ def load_baseline_policy(env, path: str, controller: str, stochastic: bool = Fal
 
 
 # ----------------------------------------------------------------------------------------------------- training
-class TrainingStopped(Exception):
-    """Ctrl-C or SIGTERM during training: the loop ends and the run is saved."""
-
-
-def _stop(signum, frame):
-    raise TrainingStopped(signal.Signals(signum).name)
-
-
 @dataclass
 class Budget:
     """When a run ends: ``env_steps`` over all envs or ``max_minutes`` of wall time, whichever comes first."""
@@ -615,6 +611,8 @@ class BaselineTrainer:
         import torch
         from torch.utils.tensorboard import SummaryWriter
 
+        from ..runner import TrainingStopped, _stop  # the signal handling train.py's runner uses
+
         timesteps = max(1, math.ceil(budget.env_steps / self.hex_env.num_envs))
         self.trainer_cfg.timesteps = timesteps
         agent, env = self.agent, self.env
@@ -682,6 +680,6 @@ class BaselineTrainer:
 
 
 __all__ = ["A2CConfig", "ALGOS", "BaselineConfig", "BaselineTrainer", "Budget", "CONTROLLERS", "FORMAT", "LABELS",
-           "NetworkConfig", "PRESETS", "SACConfig", "TD3Config", "agent_config", "config_from_dict",
-           "deterministic_action", "load_baseline_checkpoint", "load_baseline_policy", "make_agent", "make_models",
-           "save_checkpoint", "stage_changes", "wrap_env"]
+           "NetworkConfig", "PRESETS", "SACConfig", "TD3Config", "agent_config", "check_baseline_checkpoint",
+           "config_from_dict", "deterministic_action", "load_baseline_checkpoint", "load_baseline_policy",
+           "make_agent", "make_models", "save_checkpoint", "stage_changes", "wrap_env"]
