@@ -46,7 +46,7 @@ import warp as wp
 from rsl_rl.env import VecEnv
 from tensordict import TensorDict
 
-from .config import HexConfig, control_decimation
+from .config import ACTION_MODES, HexConfig, control_decimation
 from .controller import CPGController
 from .errors import HexnewtonError
 from .kernels.cpg import joint_actions_kernel, scale_actions_kernel
@@ -73,7 +73,6 @@ from .kernels.randomization import delay_actions_kernel, observation_noise_kerne
 from .robot import BASE_Q
 from .sim import World, capture_graph
 
-ACTION_MODES = ("cpg", "joint")
 RING = 1024  # finished episodes the logged rates average over
 # the ring's columns: one per episode end (its status code - 1), then distance, length and curriculum level
 ENDS = sorted(TERMINATIONS, key=lambda end: end.code)

@@ -16,7 +16,7 @@ sets any field of that course's config (HexConfig).
 
 Controllers:
 - ``cpg``: the paper's fixed-parameter "CPG" baseline (§3.3). The two-Hopf CPG and the mapping run with the
-  constant parameters of ``CPGConfig`` (``fixed_*``).
+  constant parameters of ``CPGConfig`` (``fixed_*``); ``cpg_swept`` with the swept gait (``config.FIXED_GAITS``).
 - ``cpg_rl``: a trained CPG_RL policy, acting deterministically (its distribution's mean).
 - ``joint``: a trained pure-DRL policy that sets the 18 joint targets directly.
 - ``sac_cpg``, ``td3_cpg``, ``a2c_cpg``: the skrl baselines (``python -m hexnewton.baselines``), deterministic.
@@ -42,11 +42,8 @@ from dataclasses import replace
 from .cli import ArgumentParser, add_config_args, check_writable, config_overrides, positive_int, \
     run, terrain_name
 from .config import TERRAINS, HexConfig
+from .rollout import BASELINES, CONTROLLERS, FIXED
 from .viewer import VIEWERS
-
-# controller -> env action mode; *_cpg are the skrl baselines (hexnewton.baselines)
-CONTROLLERS = {"cpg": "cpg", "cpg_rl": "cpg", "joint": "joint", "sac_cpg": "cpg", "td3_cpg": "cpg", "a2c_cpg": "cpg"}
-BASELINES = ("sac_cpg", "td3_cpg", "a2c_cpg")
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -98,10 +95,10 @@ def main(argv: list[str] | None = None) -> int:
     for path in (args.video, args.out):
         if path:
             check_writable(path, os.path.splitext(path)[1])
-    if args.controller == "cpg" and args.checkpoint:
-        raise ValueError("--checkpoint is a trained policy's: the fixed CPG (--controller cpg) has none; use "
-                         "--controller cpg_rl or joint, or leave --controller out")  # fmt: skip
-    if args.controller != "cpg" and args.checkpoint is None:
+    if args.controller in FIXED and args.checkpoint:
+        raise ValueError(f"--checkpoint is a trained policy's: the fixed CPG (--controller {args.controller}) has "
+                         "none; use --controller cpg_rl or joint, or leave --controller out")  # fmt: skip
+    if args.controller not in FIXED and args.checkpoint is None:
         from .checkpoint import SHIPPED_POLICY, newest_checkpoint
 
         try:
@@ -125,9 +122,8 @@ def main(argv: list[str] | None = None) -> int:
     mode = CONTROLLERS[args.controller]
 
     from .env import make_env
-    from .policy import fixed_cpg_actions, load_policy
-    from .rollout import Recorder, rollout
     from .metrics import format_stats
+    from .rollout import Recorder, controller_policy, rollout
     from .tasks import course
 
     for i, ground in enumerate(courses):
@@ -135,19 +131,11 @@ def main(argv: list[str] | None = None) -> int:
                      seed=args.seed, reset_yaw=0.0, goal_distance=trained.task.goal_distance)
         terrain = cfg.terrain.name
         env = make_env(cfg, mode)
-        if args.controller == "cpg":
-            actions = fixed_cpg_actions(env)
-            policy = lambda obs: actions  # noqa: E731
-        elif args.controller in BASELINES:
-            from .baselines import load_baseline_policy
+        policy = controller_policy(env, args.controller, args.checkpoint, ckpt, args.stochastic, args.expected)
+        if args.stochastic and args.controller not in FIXED and args.controller not in BASELINES:
+            import torch
 
-            policy = load_baseline_policy(env, args.checkpoint, args.controller, args.stochastic, ckpt)
-        else:
-            policy = load_policy(env, args.checkpoint, mode, args.stochastic, args.expected, ckpt)
-            if args.stochastic:
-                import torch
-
-                torch.manual_seed(args.seed)
+            torch.manual_seed(args.seed)
         recorder = Recorder() if (args.record and i == 0) else None
         viewer = None
         if args.viewer != "null" and i == 0:
@@ -165,7 +153,7 @@ def main(argv: list[str] | None = None) -> int:
             if viewer is not None:
                 viewer.close()
         wall = time.perf_counter() - t0
-        label = args.controller if args.controller == "cpg" else f"{args.controller} ({args.checkpoint})"
+        label = args.controller if args.controller in FIXED else f"{args.controller} ({args.checkpoint})"
         print(f"[{label}] " + format_stats(terrain, stats, stats["control_s"])
               + f"  [{wall:.1f} s wall, {env.device}]")  # fmt: skip
         if recorder is not None:

@@ -146,6 +146,23 @@ class Episode:
     segments: dict  # complex course: mean parameters (physical units) on the blocks and on the stairs, all rounds
 
 
+def controller_policy(env, controller: str, checkpoint: str | None = None, ckpt: dict | None = None,
+                      stochastic: bool = False, expected: bool = False, fixed_params: np.ndarray | None = None):
+    """``policy(obs) -> actions`` of ``controller`` in ``env``: a fixed gait's constant actions (``fixed_params``: one
+    gait per env), a skrl baseline's or a trained rsl-rl policy's (``checkpoint``, already read as ``ckpt`` if given;
+    deterministic unless ``stochastic``/``expected``)."""
+    from .policy import fixed_cpg_actions, load_policy
+
+    if controller in FIXED:
+        actions = fixed_cpg_actions(env, FIXED[controller], fixed_params)
+        return lambda obs: actions
+    if controller in BASELINES:
+        from .baselines import load_baseline_policy
+
+        return load_baseline_policy(env, checkpoint, controller, stochastic, ckpt)
+    return load_policy(env, checkpoint, CONTROLLERS[controller], stochastic, expected, ckpt)
+
+
 def run_rounds(controller: str, checkpoint: str | None, terrain: str, rounds: int, device: str | None,
                max_steps: int, progress: bool = True, seed: int = EVAL_TERRAIN_SEED, overrides: dict | None = None,
                stochastic: bool = False, expected: bool = False, fixed_params: np.ndarray | None = None) -> Episode:
@@ -159,7 +176,6 @@ def run_rounds(controller: str, checkpoint: str | None, terrain: str, rounds: in
     neutral values with that reflex; a policy needs its own posture for it."""
     from .checkpoint import load_checkpoint, trained_config
     from .env import make_env
-    from .policy import fixed_cpg_actions, load_policy
     from .tasks import course
 
     mode = CONTROLLERS[controller]
@@ -179,15 +195,7 @@ def run_rounds(controller: str, checkpoint: str | None, terrain: str, rounds: in
     cfg = course(terrain, trained, overrides, rounds, device, seed, seed=seed + START_SEED_OFFSET)
     ground = cfg.terrain
     env = make_env(cfg, mode)
-    if controller in FIXED:
-        actions = fixed_cpg_actions(env, FIXED[controller], fixed_params)
-        policy = lambda obs: actions  # noqa: E731
-    elif controller in BASELINES:
-        from .baselines import load_baseline_policy
-
-        policy = load_baseline_policy(env, checkpoint, controller, stochastic, ckpt)
-    else:
-        policy = load_policy(env, checkpoint, mode, stochastic, expected, ckpt)
+    policy = controller_policy(env, controller, checkpoint, ckpt, stochastic, expected, fixed_params)
     if stochastic:
         import torch
 

@@ -27,8 +27,8 @@ import copy
 from dataclasses import dataclass, field, replace
 
 from .agent import AgentConfig, paper_agent
-from .config import CPGConfig, HexConfig, RandomizationConfig, RewardConfig, SimConfig, TaskConfig, TerrainConfig, \
-    terrain_for_goal
+from .config import ACTION_MODES, CPGConfig, HexConfig, RandomizationConfig, RewardConfig, SimConfig, TaskConfig, \
+    TerrainConfig, terrain_for_goal
 
 #: The stability shaping of the variant chosen on validation rounds among six (RESULTS.md, "Stable gaits"): fewest
 #: falls, lowest rugged pitch and roll variance; 2 / 0.02 / 0.05 (with a 0.03 s filter) fell 18x as often on rugged
@@ -38,8 +38,6 @@ STABLE_SHAPING = dict(w_tilt=5.0, w_ang_vel=0.05, w_action_rate=0.1)
 #: The stable-gait curriculum of the complex recipe (RESULTS.md, "Stable gaits"): (first iteration, changes) of the
 #: reflex gain (``posture_reflex``) and the reward weights, applied from that iteration on.
 STABLE_STAGES = ((382, dict(posture_reflex=2.0, w_tilt=15.0, w_ang_vel=0.1)), (744, dict(w_tilt=40.0, w_ang_vel=0.3)))
-
-ACTION_MODES = ("cpg", "joint")
 
 
 @dataclass
