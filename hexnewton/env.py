@@ -46,6 +46,7 @@ import warp as wp
 from rsl_rl.env import VecEnv
 from tensordict import TensorDict
 
+from . import startup
 from .config import ACTION_MODES, HexConfig, control_decimation
 from .controller import CPGController
 from .errors import HexnewtonError
@@ -190,6 +191,7 @@ class HexapodEnv(VecEnv):
         wp.synchronize_device(dev)
         self.graph = None
         self.common_step_counter = 0
+        startup.mark("env buffers")
 
     # ------------------------------------------------------------------ rsl-rl VecEnv API
     @property
@@ -232,7 +234,10 @@ class HexapodEnv(VecEnv):
             self._control_step()
             return
         if self.graph is None:
+            first = self.common_step_counter == 0
             self._capture()
+            if first:
+                startup.mark("first step and graph capture")
         wp.capture_launch(self.graph)
 
     def _capture(self) -> None:

@@ -18,6 +18,7 @@ import time
 import numpy as np
 from rsl_rl.runners import OnPolicyRunner
 
+from . import startup
 from .checkpoint import load_checkpoint, load_into_runner
 from .policy import export_onnx
 
@@ -183,6 +184,8 @@ class HexRunner(OnPolicyRunner):
         self._rsl_log, self.logger.log = self.logger.log, self._after_iteration
         self._rsl_init_writer, self.logger.init_logging_writer = self.logger.init_logging_writer, self._init_writer
         self._stage, self._time_up, self._t0 = None, False, time.time()
+        self.first_iteration_s = None  # seconds from the process's start to the end of the first iteration
+        startup.mark("runner")
 
     # -------------------------------------------------------------- checkpoints
     def save(self, path: str, infos: dict | None = None) -> None:
@@ -217,6 +220,11 @@ class HexRunner(OnPolicyRunner):
         with contextlib.redirect_stdout(io.StringIO()):
             self._rsl_log(*args, **kwargs)
         stats = self.env.episode_stats()
+        if self.first_iteration_s is None:
+            startup.mark("first iteration")
+            self.first_iteration_s = startup.since_start()
+            if self.rank.is_main:
+                print(startup.summary(), flush=True)
         if self.rank.is_main:
             print(progress_line(kwargs, stats, time.time() - self._t0), flush=True)
             self.best.update(stats, self.current_learning_iteration, self.save)

@@ -30,6 +30,7 @@ import warp as wp
 import newton
 from newton.solvers import SolverMuJoCo
 
+from . import startup
 from .errors import HexnewtonError
 from .config import HexConfig, SimConfig
 from .robot import BASE_Q, BASE_QD, NUM_JOINTS, build_hexapod, leg_bounds, stand_height
@@ -254,8 +255,10 @@ class World:
         self.frame_dt = sim.frame_dt
         self.sim_dt = sim.frame_dt / sim.substeps
         self.substeps = sim.substeps
+        startup.mark("python and imports")
 
         self.terrain = terrain if terrain is not None else make_terrain(cfg.terrain)
+        startup.mark("terrain")
         robot = build_hexapod(cfg.robot, gap=sim.rigid_gap)
 
         scene = newton.ModelBuilder()
@@ -281,8 +284,10 @@ class World:
         q[:, 2] = self.spawn_z
         scene.joint_q[:] = q.reshape(-1).tolist()
 
+        startup.mark("scene")
         with wp.ScopedDevice(self.device):
             self.model = scene.finalize(device=self.device)
+        startup.mark("finalize")
         self.model.rigid_gap = sim.rigid_gap
         self.height_field = self.terrain.height_field(self.device)
         # lanes (fixed) and each episode's actual start (written by every reset)
@@ -295,6 +300,7 @@ class World:
         self.control = self.model.control()
         newton.eval_fk(self.model, self.model.joint_q, self.model.joint_qd, self.state_0)
 
+        startup.mark("model arrays")
         self.solver = SolverMuJoCo(
             self.model,
             use_mujoco_contacts=False,
@@ -308,6 +314,7 @@ class World:
         # iteration-cap hits are reported by check_contacts(), not printed per world by mujoco_warp
         self.solver.mjw_model.opt.warn_overflow &= ~NOT_CONVERGED_BITS
         max_contacts = self.solver.get_max_contact_count()
+        startup.mark("solver")
         self.pipeline = newton.CollisionPipeline(
             self.model,
             rigid_contact_max=max_contacts,
@@ -317,8 +324,10 @@ class World:
         # speculative contacts need the time until the next detection: one frame
         self._collide_dt = sim.frame_dt if sim.speculative_gap is not None else None
         self.contacts = self.pipeline.contacts()
+        startup.mark("collision pipeline")
         if wp.get_device(self.device).is_cuda:
             precompile(self.device)
+            startup.mark("kernels")
         self.observables = self.solver.observables({SolverMuJoCo.ObservableKind.OVERFLOW})
         self._overflow_world = wp.zeros(n, dtype=wp.int32, device=self.device)
         self._overflow_global = wp.zeros(1, dtype=wp.int32, device=self.device)
@@ -348,6 +357,7 @@ class World:
         if cfg.randomization.enabled:
             self.randomize(seed=cfg.task.seed)
         wp.synchronize_device(self.device)
+        startup.mark("world buffers")
 
     def randomize(self, seed: int = 0) -> dict[str, np.ndarray]:
         """Draw each env's physical properties from ``cfg.randomization`` (``RandomizationConfig``) and hand them

@@ -177,9 +177,16 @@ def main(argv: list[str] | None = None) -> int:
     finally:
         if videos is not None:
             videos.close()
-    print(f"finished at iteration {runner.current_learning_iteration} after {time.time() - t0:.0f} s ({reason})")
+    train_s = time.time() - t0
+    print(f"finished at iteration {runner.current_learning_iteration} after {train_s:.0f} s ({reason})")
     if not rank.is_main:
         return 0
+    from . import startup
+
+    timing = {"startup_phases_s": startup.phases(), "first_iteration_s": runner.first_iteration_s,
+              "train_s": train_s, "iterations": runner.current_learning_iteration + 1,
+              "env_steps": (runner.current_learning_iteration + 1) * num_envs * agent.num_steps_per_env,
+              "wall_s_to_result": None}  # fmt: skip
     from .runner import training_success
 
     stats = env.episode_stats()
@@ -192,6 +199,11 @@ def main(argv: list[str] | None = None) -> int:
     onnx_path = os.path.join(run_dir, "policy.onnx")
     err = runner.export(onnx_path)
     print(f"exported {onnx_path} (dynamic batch; onnxruntime vs torch max |diff| {err:.2e})")
+    timing["wall_s_to_result"] = startup.since_start()
+    timing["result"] = final
+    with open(os.path.join(run_dir, "timing.json"), "w") as f:
+        json.dump(timing, f, indent=1)
+    print(f"{timing['wall_s_to_result']:.0f} s from process start to the exported result")
     if videos is not None:
         print(f"{len(videos.clips)} training video(s) in {os.path.join(run_dir, 'videos')}")
     print(f"\nresults in {run_dir} (checkpoints, TensorBoard events, policy.onnx). Next:\n"

@@ -1,0 +1,69 @@
+"""Where a command's start-up goes: named phases, each timed from the end of the one before, the first from the
+process's own start (``/proc/self/stat``), so that imports and the interpreter count too.
+
+    from hexnewton import startup
+    startup.mark("terrain")          # the time since the last mark (or since the process started) is "terrain"
+    print(startup.summary())          # "start-up 21.4 s: python and imports 4.1, terrain 0.3, ..."
+
+The physics world marks its build phases (terrain, scene, finalize, solver, collision pipeline, kernels), the env
+its graph capture (the first step: lazy kernel loads and solver allocations), the runner the first iteration;
+``train.py`` prints the summary after the first iteration and writes every phase into the run's ``timing.json``.
+Plain Python: no Warp, no torch.
+"""
+
+from __future__ import annotations
+
+import os
+import time
+
+
+def process_start() -> float:
+    """The process's start as a ``time.time()`` value (Linux: from ``/proc``; elsewhere: this module's import)."""
+    try:
+        with open("/proc/self/stat") as f:
+            fields = f.read().rsplit(")", 1)[1].split()
+        ticks = os.sysconf("SC_CLK_TCK")
+        with open("/proc/uptime") as f:
+            uptime = float(f.read().split()[0])
+        return time.time() - uptime + int(fields[19]) / ticks  # field 22 of stat: start time after boot
+    except (OSError, ValueError, IndexError):
+        return _IMPORTED
+
+
+_IMPORTED = time.time()
+START = process_start()
+_phases: dict[str, float] = {}
+_last = START
+
+
+def mark(name: str) -> float:
+    """End the phase ``name`` now; returns its seconds (a name marked twice adds up)."""
+    global _last
+    now = time.time()
+    seconds = now - _last
+    _phases[name] = _phases.get(name, 0.0) + seconds
+    _last = now
+    return seconds
+
+
+def phases() -> dict[str, float]:
+    """The phases so far, in order, in seconds."""
+    return dict(_phases)
+
+
+def since_start() -> float:
+    """Seconds since the process started."""
+    return time.time() - START
+
+
+def summary() -> str:
+    """One line: the seconds since the process started and each phase's."""
+    parts = ", ".join(f"{k} {v:.1f}" for k, v in _phases.items())
+    return f"start-up {since_start():.1f} s from process start: {parts}"
+
+
+def reset() -> None:
+    """Forget the phases and start timing from now (tests; a second env in one process)."""
+    global _last
+    _phases.clear()
+    _last = time.time()

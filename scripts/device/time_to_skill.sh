@@ -1,0 +1,100 @@
+#!/bin/bash
+# The time-to-skill measurements (results/time_to_skill/, BENCHMARKS.md "Start-up" and "Terrain contact"), one
+# subcommand per device call, after the wheel chunks and `gpu.sh install` (scripts/device/README.md):
+#
+#   bash scripts/device/time_to_skill.sh startup       # `train.py --task complex` to its first iterations, twice:
+#                                                      # a cold Warp kernel cache, then the warm one; phase tables
+#   bash scripts/device/time_to_skill.sh contact       # sim-only complex and stepped at 16384 envs under each terrain
+#                                                      # contact setting, the task's physics (20 ms frame, 4 substeps)
+#   bash scripts/device/time_to_skill.sh train NAME SEED [ARGS...]   # `python train.py --task complex --seed SEED
+#                                                      # ARGS` alone, in the background, timed from its process start
+#   bash scripts/device/time_to_skill.sh wait SECONDS NAME...        # until those runs end
+#   bash scripts/device/time_to_skill.sh eval SECONDS ROUNDS NAME... # each run's result on ROUNDS test rounds per
+#                                                      # terrain, with the fixed CPG, in one evaluate job per run
+#   bash scripts/device/time_to_skill.sh pack NAME...  # logs, timing.json, results, result checkpoints -> $OUT
+#
+# Every output lands in $OUT/<what>/ (at most 8 files come back per call: pack what you need).
+set -u
+export PYTHONPATH=/opt/site${PYTHONPATH:+:$PYTHONPATH} PYTHONUNBUFFERED=1
+OUT=${OUT:-out}
+RUNS=${RUNS:-/root/tts}
+mkdir -p "$OUT" "$RUNS"
+cmd=${1:-}; shift || true
+gpu_name() { nvidia-smi --query-gpu=name --format=csv,noheader | head -1; }
+case "$cmd" in
+startup)
+  mkdir -p "$OUT/startup"
+  gpu_name > "$OUT/startup/gpu.txt"
+  for cache in cold warm; do
+    [ "$cache" = cold ] && rm -rf /root/.cache/warp
+    t0=$(date +%s.%N)
+    python train.py --task complex --max_iterations 3 --log_dir "$RUNS/startup" --experiment "$cache" \
+      > "$OUT/startup/$cache.log" 2>&1
+    echo "exit $? after $(awk "BEGIN {print $(date +%s.%N) - $t0}") s (shell)" >> "$OUT/startup/$cache.log"
+    grep -E "^start-up|from process start|^exit" "$OUT/startup/$cache.log"
+    cp "$(ls -d "$RUNS/startup/$cache"/*/ | tail -1)/timing.json" "$OUT/startup/timing_$cache.json"
+  done
+  tar czf /root/warpcache.tgz -C /root/.cache warp && ls -la /root/warpcache.tgz
+  ;;
+contact)
+  mkdir -p "$OUT/contact"
+  gpu_name > "$OUT/contact/gpu.txt"
+  base="--device cuda --num_envs 16384 --mode sim --frames 200 --env.sim.frame_dt 0.02 --env.sim.substeps 4"
+  for setting in mesh mesh_boxes mesh+speculative mesh_boxes+speculative; do
+    args="--env.terrain.collision ${setting%%+*}"
+    case $setting in *speculative) args="$args --env.sim.rigid_gap 0.002 --env.sim.terrain_gap 0 --env.sim.speculative_gap 0.01";; esac
+    python -m hexnewton.bench $base --terrain complex stepped $args --json "$OUT/contact/$setting.json" \
+      > "$OUT/contact/$setting.log" 2>&1
+    echo "== $setting ($args)"; grep -E "robot-s/s|overflow|Error" "$OUT/contact/$setting.log" | head -6
+  done
+  ;;
+train)
+  name=$1 seed=$2; shift 2
+  mkdir -p "$RUNS/$name"
+  # setsid: the run outlives this call; the shell's clock gives the wall time from process start
+  { echo 't0=$(date +%s.%N)'
+    printf 'python train.py --task complex --seed %q' "$seed"; printf ' %q' "$@"
+    printf ' --log_dir %q --experiment %q > %q 2>&1\n' "$RUNS" "$name" "$RUNS/$name.log"
+    printf 'echo "exit $? wall $(awk "BEGIN {print $(date +%%s.%%N) - $t0}") s" >> %q\n' "$RUNS/$name.log"
+  } > "$RUNS/$name.sh"
+  setsid bash "$RUNS/$name.sh" > /dev/null 2>&1 < /dev/null &
+  echo "started $name: $(sed -n 2p "$RUNS/$name.sh")"
+  ;;
+wait)
+  limit=$1; shift
+  while [ "$SECONDS" -lt "$limit" ]; do
+    busy=0
+    for name in "$@"; do grep -q "^exit " "$RUNS/$name.log" 2>/dev/null || busy=1; done
+    [ "$busy" = 0 ] && break
+    sleep 5
+  done
+  for name in "$@"; do
+    echo "== $name"; grep -E "^(start-up|iteration [0-9]+: curriculum|finished|best|exit|.*from process start)" \
+      "$RUNS/$name.log" | tail -8; grep -E "^iteration [0-9]+/" "$RUNS/$name.log" | tail -2
+  done
+  ;;
+eval)
+  limit=$1 rounds=$2; shift 2
+  for name in "$@"; do
+    ckpt=$(sed -n 's/^  python play.py --checkpoint //p' "$RUNS/$name.log" | tail -1)
+    [ -z "$ckpt" ] && { echo "$name: no result"; continue; }
+    ( timeout -k 10 "$limit" python -m hexnewton.evaluate --controllers cpg cpg_rl --checkpoint "cpg_rl=$ckpt" \
+        --terrains rugged stepped complex --rounds "$rounds" --seed 2000 --out "$RUNS/eval_$name" --no-progress \
+        > "$RUNS/eval_$name.log" 2>&1; echo "exit $?" >> "$RUNS/eval_$name.log" ) &
+  done
+  wait
+  for name in "$@"; do echo "== $name"; tail -2 "$RUNS/eval_$name.log"; grep -E "^\| " "$RUNS/eval_$name/report.md" 2>/dev/null | head -14; done
+  ;;
+pack)
+  mkdir -p "$OUT/runs"
+  for name in "$@"; do
+    run=$(ls -d "$RUNS/$name"/*/ 2>/dev/null | tail -1)
+    ckpt=$(sed -n 's/^  python play.py --checkpoint //p' "$RUNS/$name.log" | tail -1)
+    tar czf "$OUT/runs/$name.tgz" -C "$RUNS" "$name.log" $( [ -d "$RUNS/eval_$name" ] && echo "eval_$name" ) \
+      -C "$run" config.json timing.json $(cd "$run" && ls events.* policy.onnx 2>/dev/null) \
+      $( [ -n "$ckpt" ] && echo "$(basename "$ckpt")" )
+    echo "packed $name ($(du -h "$OUT/runs/$name.tgz" | cut -f1))"
+  done
+  ;;
+*) echo "usage: see the header of $0"; exit 2 ;;
+esac
