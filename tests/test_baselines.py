@@ -109,9 +109,9 @@ def test_stages_follow_the_ppo_schedule_in_steps_per_env():
     from hexnewton.tasks import task
 
     stages = task("complex").agent.stages
-    assert stage_changes(stages, 382 * 24 - 1, 24) == (-1, {})
-    assert stage_changes(stages, 382 * 24, 24)[0] == 0
-    index, changes = stage_changes(stages, 744 * 24, 24)
+    assert stage_changes(stages, 100 * 24 - 1, 24) == (-1, {})
+    assert stage_changes(stages, 100 * 24, 24)[0] == 0
+    index, changes = stage_changes(stages, 200 * 24, 24)
     assert index == 1 and changes["posture_reflex"] == 2.0 and changes["w_tilt"] == 40.0
 
 

@@ -597,12 +597,14 @@ def test_tasks_hold_the_recipes():
     stability shaping), the complex course's posture and curriculum, Table 1 and Table 2 in ``paper``; every task has
     a Gymnasium id, and ``task`` hands out copies."""
     from hexnewton.agent import AgentConfig
-    from hexnewton.tasks import STABLE_STAGES, TASKS, task
+    from hexnewton.tasks import LONG_STABLE_STAGES, STABLE_STAGES, TASKS, task
 
     c = task("complex")
     assert (c.env.terrain.levels, c.env.terrain.start_levels, c.env.cpg.a2_range, c.env.randomization.enabled,
             c.env.sim.frame_dt, c.env.cpg.param_tau) == (10, 3, (0.9, 1.3), True, 0.02, 0.1)  # fmt: skip
-    assert c.env.cpg.posture and c.agent.stages == STABLE_STAGES and c.agent.max_iterations == 1062
+    assert c.env.cpg.posture and c.agent.stages == STABLE_STAGES and c.agent.max_iterations == 300
+    assert c.env.terrain.collision == "mesh_boxes"
+    assert task("complex-5m").agent.stages == LONG_STABLE_STAGES and task("stairs-8cm").agent.max_iterations == 1062
     assert (c.env.reward.w_tilt, c.env.reward.w_action_rate) == (5.0, 0.1)
     r = task("rugged")
     assert not r.env.cpg.posture and r.agent.stages == () and r.agent.max_iterations == 300

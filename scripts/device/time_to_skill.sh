@@ -40,8 +40,8 @@ contact)
   mkdir -p "$OUT/contact"
   gpu_name > "$OUT/contact/gpu.txt"
   base="--device cuda --num_envs 16384 --mode sim --frames 200 --env.sim.frame_dt 0.02 --env.sim.substeps 4"
-  for setting in mesh mesh_boxes mesh+speculative mesh_boxes+speculative; do
-    args="--env.terrain.collision ${setting%%+*}"
+  for setting in mesh mesh_boxes mesh_speculative mesh_boxes_speculative; do
+    args="--env.terrain.collision ${setting%_speculative}"
     case $setting in *speculative) args="$args --env.sim.rigid_gap 0.002 --env.sim.terrain_gap 0 --env.sim.speculative_gap 0.01";; esac
     python -m hexnewton.bench $base --terrain complex stepped $args --json "$OUT/contact/$setting.json" \
       > "$OUT/contact/$setting.log" 2>&1
@@ -74,16 +74,23 @@ wait)
   done
   ;;
 eval)
+  # the policy on the three terrains, and the fixed CPG on rugged ground under the policy's physics (20 ms frame,
+  # 4 substeps), each an evaluate job of ROUNDS test rounds per terrain, all at once
   limit=$1 rounds=$2; shift 2
   for name in "$@"; do
     ckpt=$(sed -n 's/^  python play.py --checkpoint //p' "$RUNS/$name.log" | tail -1)
     [ -z "$ckpt" ] && { echo "$name: no result"; continue; }
-    ( timeout -k 10 "$limit" python -m hexnewton.evaluate --controllers cpg cpg_rl --checkpoint "cpg_rl=$ckpt" \
-        --terrains rugged stepped complex --rounds "$rounds" --seed 2000 --out "$RUNS/eval_$name" --no-progress \
+    ( timeout -k 10 "$limit" python -m hexnewton.evaluate --controllers cpg_rl --checkpoint "cpg_rl=$ckpt" \
+        --terrains rugged stepped complex --rounds "$rounds" --out "$RUNS/eval_$name" --no-progress \
         > "$RUNS/eval_$name.log" 2>&1; echo "exit $?" >> "$RUNS/eval_$name.log" ) &
   done
+  if [ ! -d "$RUNS/eval_cpg" ]; then
+    ( timeout -k 10 "$limit" python -m hexnewton.evaluate --controllers cpg --terrains rugged --rounds "$rounds" \
+        --env.sim.frame_dt 0.02 --env.sim.substeps 4 --out "$RUNS/eval_cpg" --no-progress > "$RUNS/eval_cpg.log" 2>&1
+      echo "exit $?" >> "$RUNS/eval_cpg.log" ) &
+  fi
   wait
-  for name in "$@"; do echo "== $name"; tail -2 "$RUNS/eval_$name.log"; grep -E "^\| " "$RUNS/eval_$name/report.md" 2>/dev/null | head -14; done
+  for name in "$@" cpg; do echo "== $name"; tail -1 "$RUNS/eval_$name.log"; grep -E "^\| " "$RUNS/eval_$name/report.md" 2>/dev/null | head -10; done
   ;;
 pack)
   mkdir -p "$OUT/runs"
