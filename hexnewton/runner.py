@@ -28,9 +28,12 @@ def progress_line(log_kwargs: dict, stats: dict, elapsed: float) -> str:
     it, total = log_kwargs.get("it", 0), log_kwargs.get("total_it", 0)
     step_s = log_kwargs.get("collect_time", 0.0) + log_kwargs.get("learn_time", 0.0)
     level = f"  level {stats['mean_level']:.1f}" if "mean_level" in stats else ""
-    return (f"iteration {it}/{total - 1}  success {stats['success_rate']:.3f}  fell {stats['fell_rate']:.3f}  "
-            f"off course {stats['off_course_rate']:.3f}  distance {stats['distance_m']:.2f} m{level}  "
-            f"{step_s:.2f} s/it  {datetime.timedelta(seconds=int(elapsed))}")  # fmt: skip
+    if not stats.get("episodes"):  # no episode has ended yet: nothing to rate
+        outcome = "no episode ended yet"
+    else:
+        outcome = (f"success {stats['success_rate']:.3f}  fell {stats['fell_rate']:.3f}  off course "
+                   f"{stats['off_course_rate']:.3f}  distance {stats['distance_m']:.2f} m")  # fmt: skip
+    return f"iteration {it}/{total - 1}  {outcome}{level}  {step_s:.2f} s/it  {datetime.timedelta(seconds=int(elapsed))}"
 
 
 class TrainingStopped(Exception):

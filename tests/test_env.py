@@ -699,6 +699,49 @@ def test_curriculum_stages_change_reflex_and_weights_in_one_run(tmp_path, capsys
     assert "training task complex" in out and "iteration 3: curriculum stage 3 of 3" in out
 
 
+def test_training_reports_its_start_up_and_writes_timing(trained):
+    """After the first iteration train.py prints where the start-up went (phases from the process's start), and the
+    run's timing.json records them with the training time and the result it exported."""
+    logs, out = trained
+    line = next(x for x in out.splitlines() if x.startswith("start-up "))
+    for phase in ("python and imports", "terrain", "finalize", "solver", "first step and graph capture",
+                  "first iteration"):  # fmt: skip
+        assert f"{phase} " in line
+    run_dir = glob.glob(str(logs / "hexnewton_flat" / "*"))[0]
+    timing = json.load(open(os.path.join(run_dir, "timing.json")))
+    assert timing["iterations"] == 2 and timing["env_steps"] == 2 * 16 * 24
+    assert 0 < timing["first_iteration_s"] < timing["wall_s_to_result"]
+    assert sum(timing["startup_phases_s"].values()) == pytest.approx(timing["first_iteration_s"], abs=0.5)
+    assert os.path.isfile(timing["result"])
+
+
+def test_progress_line_says_when_no_episode_has_ended():
+    from hexnewton.runner import progress_line
+
+    stats = {"success_rate": float("nan"), "fell_rate": float("nan"), "off_course_rate": float("nan"),
+             "distance_m": float("nan"), "episodes": 0}  # fmt: skip
+    line = progress_line({"it": 0, "total_it": 300}, stats, 1.0)
+    assert "no episode ended yet" in line and "nan" not in line
+    line = progress_line({"it": 9, "total_it": 300}, {**stats, "success_rate": 0.5, "episodes": 3}, 1.0)
+    assert "success 0.500" in line
+
+
+def test_newest_checkpoint_is_the_runs_result(tmp_path):
+    """play.py's default: the newest run's model_best.pt where it kept one (train.py's result then), else its last
+    numbered checkpoint."""
+    from hexnewton.checkpoint import newest_checkpoint
+
+    old, new = tmp_path / "hexnewton_flat" / "2026-01-01_00-00-00", tmp_path / "hexnewton_rugged" / "2026-01-02_00-00-00"
+    for run, names in ((old, ("model_0.pt", "model_best.pt")), (new, ("model_2.pt", "model_10.pt"))):
+        run.mkdir(parents=True)
+        for name in names:
+            (run / name).write_bytes(b"")
+    assert newest_checkpoint(str(tmp_path), "hexnewton_*") == str(new / "model_10.pt")
+    (new / "model_best.pt").write_bytes(b"")
+    assert newest_checkpoint(str(tmp_path), "hexnewton_*") == str(new / "model_best.pt")
+    assert newest_checkpoint(str(tmp_path), "hexnewton_flat") == str(old / "model_best.pt")
+
+
 def test_best_checkpoint_keeps_the_best_iteration(tmp_path):
     """model_best.pt follows the training success once enough episodes are in (a quarter of the ring; with a
     curriculum, played on the last level), and only a real improvement saves again."""
