@@ -21,21 +21,23 @@ differs):
   feels the coupling strength of the pair.
 
 Frequency compensation. Locked in the tripod, every neighbour's Delta_ji equals r sin(phi_i) = y_i (all radii are
-equal), so oscillator i receives K y_i with K = delta * sum_j w_ji: K = delta for ``two`` and ``six_mean``, 5 delta
-for ``six_sum``. That term adds K sin(phi) cos(phi) to dphi/dt, so a cycle lasts 2 pi / sqrt(w^2 - K^2 / 4): the
-kernel's derivation with delta replaced by K. Every network therefore integrates with omega_c = sqrt(omega^2 +
-K^2 / 4) (``kernels/reference.network_omega``; K = delta is the kernel's own), and all three run at the commanded
-omega (the report lists the measured frequency of each converged cycle). Uncompensated, ``six_sum`` would not
-oscillate at all below omega = K / 2 = 12.5 rad/s (2 Hz) with delta = 5: dphi/dt would vanish on the cycle. The same
-term adds K r sin^2(phi) to dr/dt, so the converged radius ripples within a cycle, between sqrt(mu) and about
-sqrt(mu + K / alpha): 1.00-1.05 for K = 5, 1.00-1.22 for K = 25 (mu = 1). The phase speed varies within a cycle
-by +-K / 2 about omega_c, so ``six_sum``'s output is far from a sine (Fig. 1a).
+equal), so oscillator i receives K y_i with K = delta * sum_j c_ji (c_ji: the weight of the link j -> i): K = delta
+for ``two`` and ``six_mean``, 5 delta for ``six_sum``. That term adds K sin(phi) cos(phi) to dphi/dt, so a cycle
+lasts 2 pi / sqrt(w^2 - K^2 / 4): the kernel's derivation with delta replaced by K. Every network therefore
+integrates with omega_c = sqrt(omega^2 + K^2 / 4) (``kernels/reference.network_omega``; K = delta is the kernel's
+own), and all three run at the commanded omega (the report lists the measured frequency of each converged cycle).
+Uncompensated, ``six_sum`` would not oscillate at all below omega = K / 2 = 12.5 rad/s (2 Hz) with delta = 5:
+dphi/dt would vanish on the cycle. The same term adds K r sin^2(phi) to dr/dt, so the converged radius ripples
+within a cycle, between sqrt(mu) and about sqrt(mu + K / alpha): 1.00-1.05 for K = 5, 1.00-1.22 for K = 25 (mu = 1).
+The phase speed varies within a cycle by +-K / 2 about omega_c, so ``six_sum``'s output is far from a sine
+(Fig. 1a).
 
-What sets the speed. Averaged over a cycle, the phases obey dphi_i/dt = omega + (delta w / 2) sum_j sin(phi_j -
-theta_ji - phi_i), w the link weight: near the tripod, errors decay at delta w / 2 times the coupling graph's
-Laplacian eigenvalue, n for a complete graph of n. That is delta for the pair, 3 delta for ``six_sum`` and 0.6 delta
-for ``six_mean``: six fully coupled oscillators lock more slowly than the pair only when w < 1/3, i.e. when each
-link is weaker than a third of the pair's. Far from the lock (random starts) the six need longer still.
+What sets the speed. Averaged over a cycle, the phases obey dphi_i/dt = omega + (delta c / 2) sum_j sin(phi_j -
+theta_ji - phi_i), c the weight of every link: near the tripod, errors decay at delta c / 2 times the coupling
+graph's Laplacian eigenvalue, n for a complete graph of n. That is delta for the pair, 3 delta for ``six_sum`` and
+0.6 delta for ``six_mean``: six fully coupled oscillators lock more slowly than the pair only when c < 1/3, i.e. when
+each link is weaker than a third of the pair's. From random starts, far from the lock, the six lag further behind
+these rates (the report's ratios of the medians).
 
 Convergence. A state has converged when (1) every oscillator's radius lies within ``--amp_tol`` (1 %) of the
 network's own converged cycle at the same phase (the cycle from the locked start, after ``SETTLE_S`` seconds, radius
