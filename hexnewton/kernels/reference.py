@@ -3,7 +3,9 @@
 The kernel tests compare each Warp kernel with its reference here, and the deployment runtime
 (``hexnewton.deploy``) runs the same functions on the robot's computer: the Hopf oscillators (Eq. 3, RK4),
 the mapping function (Eq. 4) and the action scaling (all in ``kernels/cpg.py``) and the base quaternion's
-roll/pitch/yaw. The kernel modules' docstrings explain the maths; this module only holds the NumPy versions.
+roll/pitch/yaw. The kernel modules' docstrings explain the maths; this module only holds the NumPy versions. The
+n-oscillator network (``hopf_network_*``, the six-oscillator comparison of ``hexnewton.cpg_figure``, explained there)
+shares the kernel's single-oscillator right-hand side, :func:`hopf_unit_rhs_np`.
 """
 
 import math
@@ -22,28 +24,25 @@ def initial_cpg_state(mu: float, theta: float) -> tuple[float, float, float, flo
     return (r, 0.0, r * math.cos(-theta), r * math.sin(-theta))
 
 
+def hopf_unit_rhs_np(x, y, drive, omega, alpha, mu, duty, steepness):
+    """One Eq. 3 oscillator: (dx/dt, dy/dt) of the state (x, y) given its coupling input ``drive`` (delta times the sum
+    of its Delta_ji); the swing/stance blend of ``omega`` keyed on x. Arrays broadcast."""
+    z = np.clip(steepness * x / np.sqrt(mu), -60.0, 60.0)
+    w = omega / (2 * (1 - duty)) / (1 + np.exp(-z)) + omega / (2 * duty) / (1 + np.exp(z))
+    g = alpha * (mu - x**2 - y**2)
+    return g * x - w * y, w * x + g * y + drive
+
+
 def hopf_rhs_np(s, omega, alpha, mu, delta, theta, duty, steepness):
     """Float64 reference of :func:`hopf_rhs`; ``s`` is (N, 4), ``omega`` (N,)."""
     s = np.asarray(s, np.float64)
     omega = np.asarray(omega, np.float64)
     x0, y0, x1, y1 = s.T
-
-    def blend(x):
-        z = np.clip(steepness * x / np.sqrt(mu), -60.0, 60.0)
-        return omega / (2 * (1 - duty)) / (1 + np.exp(-z)) + omega / (2 * duty) / (1 + np.exp(z))
-
-    g0, g1 = alpha * (mu - x0**2 - y0**2), alpha * (mu - x1**2 - y1**2)
-    w0, w1 = blend(x0), blend(x1)
     c, sn = np.cos(theta), np.sin(theta)
-    return np.stack(
-        [
-            g0 * x0 - w0 * y0,
-            w0 * x0 + g0 * y0 + delta * (y1 * c + x1 * sn),
-            g1 * x1 - w1 * y1,
-            w1 * x1 + g1 * y1 + delta * (y0 * c - x0 * sn),
-        ],
-        axis=1,
-    )
+    args = (omega, alpha, mu, duty, steepness)
+    dx0, dy0 = hopf_unit_rhs_np(x0, y0, delta * (y1 * c + x1 * sn), *args)
+    dx1, dy1 = hopf_unit_rhs_np(x1, y1, delta * (y0 * c - x0 * sn), *args)
+    return np.stack([dx0, dy0, dx1, dy1], axis=1)
 
 
 def hopf_cpg_reference(params_target, params, state, gain, alpha, mu, delta, theta, duty, steepness, dt):
@@ -60,6 +59,45 @@ def hopf_cpg_reference(params_target, params, state, gain, alpha, mu, delta, the
     s = s + dt / 6.0 * (k1 + 2 * k2 + 2 * k3 + k4)
     d = hopf_rhs_np(s, *args)
     return params, s, d[:, [1, 3]]
+
+
+def tripod_theta(groups, theta):
+    """Coupling phases theta_ji, (n, n) indexed [j, i], of oscillators that run in ``groups`` (group g at phase
+    -g theta): theta_ji = theta (g_i - g_j), so Delta_ji pulls phi_i toward phi_j - theta_ji. Groups (0, 1) give the
+    kernel's pair, theta_10 = -theta and theta_01 = theta; ``LEG_OSCILLATOR`` gives the six legs' tripods."""
+    g = np.asarray(groups, np.float64)
+    return theta * (g[None, :] - g[:, None])
+
+
+def network_omega(omega, delta, weights):
+    """The frequency each oscillator of a network integrates with, (N, n): sqrt(omega^2 + (delta k_i)^2 / 4), where
+    k_i = sum_j weights[j, i] (``hexnewton.cpg_figure`` derives it; k = 1 is the kernel's compensation)."""
+    k = np.asarray(weights, np.float64).sum(axis=0)
+    return np.sqrt(np.asarray(omega, np.float64)[:, None] ** 2 + 0.25 * (delta * k[None, :]) ** 2)
+
+
+def hopf_network_rhs_np(s, omega, alpha, mu, delta, theta_ji, weights, duty, steepness):
+    """Eq. 3 for n coupled oscillators: the time derivative of ``s`` (N, n, 2), each oscillator (x_i, y_i) driven by
+    delta * sum_j weights[j, i] Delta_ji with Delta_ji = y_j cos(theta_ji) - x_j sin(theta_ji); ``omega`` (N, n)."""
+    s = np.asarray(s, np.float64)
+    x, y = s[..., 0], s[..., 1]
+    w = np.asarray(weights, np.float64)
+    drive = delta * (y @ (w * np.cos(theta_ji)) - x @ (w * np.sin(theta_ji)))
+    dx, dy = hopf_unit_rhs_np(x, y, drive, omega, alpha, mu, duty, steepness)
+    return np.stack([dx, dy], axis=-1)
+
+
+def hopf_network_reference(state, omega, alpha, mu, delta, theta_ji, weights, duty, steepness, dt):
+    """One RK4 step of the network of :func:`hopf_network_rhs_np` at the commanded ``omega`` (N,), compensated per
+    oscillator by :func:`network_omega`: returns (state (N, n, 2), dy/dt (N, n) at the new state)."""
+    args = (network_omega(omega, delta, weights), alpha, mu, delta, theta_ji, weights, duty, steepness)
+    s = np.asarray(state, np.float64)
+    k1 = hopf_network_rhs_np(s, *args)
+    k2 = hopf_network_rhs_np(s + 0.5 * dt * k1, *args)
+    k3 = hopf_network_rhs_np(s + 0.5 * dt * k2, *args)
+    k4 = hopf_network_rhs_np(s + dt * k3, *args)
+    s = s + dt / 6.0 * (k1 + 2 * k2 + 2 * k3 + k4)
+    return s, hopf_network_rhs_np(s, *args)[..., 1]
 
 
 def mapping_offsets_np(state, dy, params, mu, rpy=None, reflex=0.0, tilt_max=0.0):
