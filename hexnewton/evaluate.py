@@ -4,6 +4,8 @@
         --terrains rugged stepped complex --rounds 25 --out eval/paper
     python -m hexnewton.evaluate ... --checkpoint cpg_rl:rugged=A.pt cpg_rl:stepped=B.pt   # one policy per terrain
     python -m hexnewton.evaluate ... --runs cpg_rl=logs/.../run joint=logs/.../run       # adds Fig. 5a
+    python -m hexnewton.evaluate ... --sweep terrain.step_rise 0.06 0.08 0.10          # a capability curve
+    python -m hexnewton.evaluate ... --sweep default                                   # the default set of curves
 
 Protocol. A round is one robot walking toward the target 3.5 m ahead, from its own start pose, until its
 first episode ends (goal, fall, off course) or the episode limit (``TaskConfig.max_episode_steps``,
@@ -26,7 +28,11 @@ each distance. Outputs in ``--out``:
 - ``fig_<terrain>.png`` (Figs. 6-8: pitch and roll over time for round 0, box plots over all rounds, XY
   trajectories);
 - ``fig_params.png`` (Fig. 5b: CPG_RL's parameters against the fixed CPG's along round 0);
-- ``fig_learning.png`` (Fig. 5a: reward against env-steps and against wall time) with ``--runs``.
+- ``fig_learning.png`` (Fig. 5a: reward against env-steps and against wall time) with ``--runs``;
+- ``fig_sweep_<name>.png`` and a table per ``--sweep``: success at the last distance and falls against the swept
+  value for every controller, also under ``sweeps`` in ``results.json`` (one entry per value: rounds, success, time,
+  falls, pitch / roll variance and p99.9). A sweep point is the course with one field at one value
+  (:func:`hexnewton.rollout.sweep_overrides`, the mechanism of ``--perturbations`` and ``--env.*``).
 
 Controllers: ``cpg`` (fixed parameters), ``cpg_rl`` and ``joint`` (rsl-rl checkpoints from ``train.py``),
 ``sac_cpg`` / ``td3_cpg`` / ``a2c_cpg`` (skrl checkpoints from ``python -m hexnewton.baselines``, deterministic action
@@ -46,9 +52,12 @@ import numpy as np
 from .cli import ArgumentParser, add_config_args, apply_overrides, config_overrides, positive_int, run, terrain_name
 from .config import FIXED_GAITS, HexConfig, TaskConfig, control_decimation, gait_params
 from .metrics import DISTANCES, gait_quality, round_metrics, summarize
-from .rollout import BASELINES, CONTROLLERS, EVAL_TERRAIN_SEED, FIXED, LABELS, PERTURBATIONS, START_SEED_OFFSET, \
-    perturbation, run_rounds
-from .report import _pct, merge_reports, plot_learning, plot_params, plot_terrain, report_markdown
+from .rollout import BASELINES, CONTROLLERS, DEFAULT_SWEEPS, EVAL_TERRAIN_SEED, FIXED, LABELS, PERTURBATIONS, \
+    START_SEED_OFFSET, perturbation, run_rounds, sweep_overrides
+from .report import _pct, merge_reports, plot_learning, plot_params, plot_sweep, plot_terrain, report_markdown
+
+#: what a sweep point keeps of an evaluation's summary
+SWEEP_METRICS = ("rounds", "fall_rate", "pitch_var_deg2", "roll_var_deg2", "pitch_p999_deg", "roll_p999_deg")
 
 
 def _pairs(items: list[str] | None, what: str) -> dict[str, str]:
@@ -69,6 +78,50 @@ def checkpoint_for(checkpoints: dict[str, str], controller: str, terrain: str) -
     return path
 
 
+def sweep_specs(sweeps: list[list[str]] | None, terrains: list[str]) -> list[tuple[str, str, str, tuple[float, ...]]]:
+    """``--sweep`` flags as (name, field, terrain, values): ``default`` is :data:`DEFAULT_SWEEPS`; ``FIELD V1 V2 ...``
+    runs on each of ``terrains`` (named ``FIELD`` with one terrain, ``FIELD@TERRAIN`` with several). Every point is
+    checked against the config tree before anything runs; ValueError (one line) otherwise."""
+    out = []
+    for spec in sweeps or []:
+        if spec == ["default"]:
+            out += list(DEFAULT_SWEEPS)
+            continue
+        field, raw = spec[0], spec[1:]
+        if not raw:
+            raise ValueError(f"--sweep {field}: give the values to sweep (--sweep FIELD V1 V2 ...), or --sweep default")
+        try:
+            values = tuple(float(v) for v in raw)
+        except ValueError:
+            raise ValueError(f"--sweep {field}: values must be numbers, got {' '.join(raw)}")
+        for v in values:
+            apply_overrides(HexConfig(), sweep_overrides(field, v))  # an unknown field fails here
+        out += [(field if len(terrains) == 1 else f"{field}@{t}", field, t, values) for t in terrains]
+    names = [name for name, *_ in out]
+    if len(set(names)) != len(names):
+        raise ValueError("--sweep: each field once (--sweep default holds " + ", ".join(n for n, *_ in DEFAULT_SWEEPS) + ")")
+    return out
+
+
+def run_sweeps(specs, controllers, evaluate_one, last: float, out: str) -> dict:
+    """Every controller at every point of every sweep (``evaluate_one(ctrl, terrain, overrides)``): success at
+    ``last`` metres, falls, pitch / roll variance and p99.9, time to ``last``; one figure per sweep in ``out``."""
+    sweeps = {}
+    for name, field, terrain, values in specs:
+        curves = {ctrl: [] for ctrl in controllers}
+        for value in values:
+            for ctrl in controllers:
+                s, _, _ = evaluate_one(ctrl, terrain, sweep_overrides(field, value))
+                point = {"value": value, f"success_{last:g}m": s[f"success_{last:g}m"],
+                         f"time_to_{last:g}m_s": s[f"time_to_{last:g}m_s"], **{k: s[k] for k in SWEEP_METRICS}}
+                curves[ctrl].append(point)
+                print(f"[sweep {name} = {value:g}] {terrain:8s} {LABELS[ctrl]:8s} {last:g} m "
+                      f"{_pct(point[f'success_{last:g}m'])}  falls {_pct(point['fall_rate'])}", flush=True)  # fmt: skip
+        sweeps[name] = {"field": field, "terrain": terrain, "values": list(values), "curves": curves}
+        plot_sweep(os.path.join(out, f"fig_sweep_{name.replace('@', '_')}.png"), name, sweeps[name], last)
+    return sweeps
+
+
 def main(argv: list[str] | None = None) -> int:
     p = ArgumentParser(prog="python -m hexnewton.evaluate", description="The paper's evaluation and report.")
     p.add_argument("--controllers", nargs="+", default=["cpg", "cpg_rl"], choices=list(CONTROLLERS))
@@ -82,6 +135,11 @@ def main(argv: list[str] | None = None) -> int:
                    help="success distances [m] (Table 3: 0.5 1 2 3)")
     p.add_argument("--swept_gait", type=float, nargs=4, metavar=("OMEGA", "A1", "A2", "A3"), default=None,
                    help="the cpg_swept controller's gait (default config.FIXED_GAITS['swept'], from hexnewton.cpg_sweep)")
+    p.add_argument("--sweep", nargs="+", action="append", metavar="FIELD V",
+                   help="capability curve: every controller on --terrains at each value of FIELD (a config field, "
+                        "e.g. terrain.step_rise 0.06 0.08 0.10; randomization.* fields apply to every robot; "
+                        "motor_strength scales gains and effort); 'default': the set in rollout.DEFAULT_SWEEPS, each "
+                        "on its own course. Repeat for several curves")  # fmt: skip
     p.add_argument("--perturbations", nargs="+", default=[], metavar="NAME",
                    help="also run every controller under these named perturbations beyond the training ranges, one "
                         f"robustness table per controller: {', '.join(PERTURBATIONS)}")
@@ -138,6 +196,7 @@ def main(argv: list[str] | None = None) -> int:
             raise ValueError(f"no mean episode reward logged under {spec}")
     for name in args.perturbations:
         perturbation(name)
+    sweeps = sweep_specs(args.sweep, args.terrains)
     physics = {k: v for k, v in env_overrides.items() if k.startswith("sim.")}
     # the fixed gaits walk under the first learnt policy's physics (the same run, the same simulator) unless told
     learnt = [checkpoint_for(checkpoints, c, args.terrains[0]) for c in args.controllers if c not in FIXED]
@@ -192,6 +251,7 @@ def main(argv: list[str] | None = None) -> int:
                 print(f"[{name}] {terrain:8s} {LABELS[ctrl]:8s} " + "  ".join(
                     f"{d:g} m {_pct(s[f'success_{d:g}m'])}" for d in distances) + f"  falls {s['ended'].get('fell', 0)}",
                     flush=True)  # fmt: skip
+    swept = run_sweeps(sweeps, args.controllers, evaluate_one, distances[-1], out) if sweeps else {}
     wall = time.perf_counter() - t0
     meta = {"device": device, "rounds": args.rounds, "max_steps": args.max_steps,
             "distances": list(distances), "goal_distance": goal_distance, "overrides": env_overrides,
@@ -203,9 +263,9 @@ def main(argv: list[str] | None = None) -> int:
             "unseen": "terrain seed and start poses differ from training (train.py: terrain seed 0, seed 1)",
             "wall_s": round(wall, 1)}  # fmt: skip
     with open(os.path.join(out, "results.json"), "w") as f:
-        json.dump({"meta": meta, "results": results, "robustness": robustness}, f, indent=1)
+        json.dump({"meta": meta, "results": results, "robustness": robustness, "sweeps": swept}, f, indent=1)
     with open(os.path.join(out, "report.md"), "w") as f:
-        f.write(report_markdown(results, meta, robustness))
+        f.write(report_markdown(results, meta, robustness, swept))
     if runs:
         plot_learning(os.path.join(out, "fig_learning.png"), runs)
     print(f"report in {out}/ (report.md, results.json, figures) after {wall:.0f} s")

@@ -31,9 +31,10 @@ def _pct(v: float | None) -> str:
     return "—" if v is None else f"{100 * v:.0f}%"
 
 
-def report_markdown(results: dict, meta: dict, robustness: dict | None = None) -> str:
+def report_markdown(results: dict, meta: dict, robustness: dict | None = None, sweeps: dict | None = None) -> str:
     """Table 3's shape (ours beside the paper's), stability and gait quality per terrain and controller, the
-    parameters on blocks and stairs, then one robustness table per controller (``robustness[name][ctrl][terrain]``)."""
+    parameters on blocks and stairs, one robustness table per controller (``robustness[name][ctrl][terrain]``), then
+    one table per capability sweep (``sweeps[name]``, :func:`hexnewton.evaluate.run_sweeps`)."""
     lines = ["# hexnewton evaluation", ""]
     lines += [f"- {k}: {v}" for k, v in meta.items()]
     distances = tuple(meta.get("distances", DISTANCES))
@@ -103,7 +104,47 @@ def report_markdown(results: dict, meta: dict, robustness: dict | None = None) -
                 cells = " | ".join(_pct(s[f"success_{d:g}m"]) for d in distances)
                 lines.append(f"| {name} | {terrain} | {cells} | {s['ended'].get('fell', 0)} / {s['rounds']} | "
                              f"{f(s['pitch_var_deg2'])} | {f(s['pitch_p999_deg'])} |")  # fmt: skip
-    return "\n".join(lines) + "\n"
+    return "\n".join(lines + sweep_markdown(sweeps or {}, distances[-1])) + "\n"
+
+
+def sweep_markdown(sweeps: dict, last: float) -> list[str]:
+    """One table per capability sweep: each value, each controller's success, falls, pitch / roll variance, time."""
+    lines = []
+    for name, sw in sweeps.items():
+        lines += ["", f"## Capability curve: {name} (`{sw['field']}` on {sw['terrain']} ground, fig_sweep_"
+                  f"{name.replace('@', '_')}.png)", "", f"| value | method | rounds | {last:g} m | falls | pitch / roll var "
+                  f"[deg²] | time to {last:g} m [s] |", "|---:|---|---:|---:|---:|---|---:|"]  # fmt: skip
+        for k, value in enumerate(sw["values"]):
+            for ctrl, points in sw["curves"].items():
+                p = points[k]
+                t = p[f"time_to_{last:g}m_s"]
+                var = " / ".join("—" if p[m] is None else f"{p[m]:.1f}" for m in ("pitch_var_deg2", "roll_var_deg2"))
+                lines.append(f"| {value:g} | {LABELS.get(ctrl, ctrl)} | {p['rounds']} | {_pct(p[f'success_{last:g}m'])} | "
+                             f"{_pct(p['fall_rate'])} | {var} | {'—' if t is None else f'{t:.1f}'} |")  # fmt: skip
+    return lines
+
+
+def plot_sweep(path: str, name: str, sweep: dict, last: float) -> None:
+    """A capability curve: success at ``last`` metres and falls against the swept value, one line per controller."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(1, 2, figsize=(10, 3.6))
+    for ctrl, points in sweep["curves"].items():
+        xs = [p["value"] for p in points]
+        axes[0].plot(xs, [100 * p[f"success_{last:g}m"] for p in points], "o-", label=LABELS.get(ctrl, ctrl))
+        axes[1].plot(xs, [100 * p["fall_rate"] for p in points], "o-", label=LABELS.get(ctrl, ctrl))
+    axes[0].set(ylabel=f"reached {last:g} m [%]", ylim=(-3, 103))
+    axes[1].set(ylabel="fell [%]")
+    for ax in axes:
+        ax.set(xlabel=f"{sweep['field']} ({sweep['terrain']})", title=name)
+        ax.grid(alpha=0.3)
+    axes[0].legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=90)
+    plt.close(fig)
 
 
 def plot_terrain(path: str, terrain: str, episodes: dict[str, Episode], metrics: dict[str, dict]) -> None:
@@ -217,7 +258,9 @@ def merge_reports(dirs: list[str], out: str) -> int:
         raise ValueError(f"{out} exists: choose a new --out (nothing is overwritten)")
     results: dict = {}
     robustness: dict = {}
+    sweeps: dict = {}
     for r in runs:
+        sweeps.update(r.get("sweeps", {}))
         for terrain, by_ctrl in r["results"].items():
             results.setdefault(terrain, {}).update(by_ctrl)
         for name, by_ctrl in r.get("robustness", {}).items():
@@ -227,9 +270,9 @@ def merge_reports(dirs: list[str], out: str) -> int:
             "wall_s": round(sum(r["meta"].get("wall_s", 0.0) for r in runs), 1)}  # fmt: skip
     os.makedirs(out)
     with open(os.path.join(out, "results.json"), "w") as f:
-        json.dump({"meta": meta, "results": results, "robustness": robustness}, f, indent=1)
+        json.dump({"meta": meta, "results": results, "robustness": robustness, "sweeps": sweeps}, f, indent=1)
     with open(os.path.join(out, "report.md"), "w") as f:
-        f.write(report_markdown(results, meta, robustness))
+        f.write(report_markdown(results, meta, robustness, sweeps))
     print(f"merged {len(dirs)} evaluations into {out}/ (report.md, results.json)")
     return 0
 

@@ -41,6 +41,38 @@ PERTURBATIONS = {
 }  # fmt: skip
 
 
+#: Capability curves (``evaluate --sweep default``): (name, swept field, the course it is walked on, values). Each point
+#: changes one thing from the nominal robot on that course; ``motor_strength`` scales the PD gains and the effort
+#: limits together, ``push`` pushes every 3 s, ``action_delay`` makes every env's actions one control step late.
+DEFAULT_SWEEPS = (
+    ("step_rise", "terrain.step_rise", "stepped", (0.04, 0.06, 0.07, 0.08, 0.09, 0.10)),
+    ("tread_depth", "terrain.step_depth", "stepped", (0.15, 0.18, 0.20, 0.22, 0.25)),
+    ("block_height", "terrain.block_height_max", "rugged", (0.04, 0.06, 0.08, 0.10)),
+    ("friction", "randomization.friction", "complex", (0.2, 0.3, 0.5, 0.9)),
+    ("payload", "randomization.payload", "complex", (0.0, 0.5, 1.0, 1.5)),
+    ("motor_strength", "motor_strength", "complex", (0.4, 0.5, 0.6, 0.8, 1.0)),
+    ("push", "randomization.push_velocity", "complex", (0.0, 0.3, 0.6, 0.9)),
+    ("action_delay", "randomization.latency_share", "complex", (0.0, 1.0)),
+)  # fmt: skip
+
+
+def sweep_overrides(field: str, value: float) -> dict:
+    """The config overrides of one sweep point (``evaluate --sweep FIELD V ...``): ``field`` at ``value`` with
+    everything else as in the course. A ``randomization.*`` field applies to every robot (a range becomes
+    ``(value, value)``) with the nominal robot otherwise, as :func:`perturbation` does; ``motor_strength`` scales
+    ``kp_scale`` and ``effort_scale`` together; any other HexConfig field is set as given."""
+    if field == "motor_strength":
+        rz = {"kp_scale": (value, value), "effort_scale": (value, value)}
+    elif field.startswith("randomization."):
+        key = field.split(".", 1)[1]
+        rz = {key: (value, value) if isinstance(_NOMINAL.get(key), tuple) else value}
+        if key == "push_velocity":
+            rz["push_interval"] = 3.0
+    else:
+        return {field: value}
+    return {"randomization.enabled": True, **{f"randomization.{k}": v for k, v in {**_NOMINAL, **rz}.items()}}
+
+
 def perturbation(name: str) -> dict:
     """A named perturbation (``PERTURBATIONS``) as config overrides for :func:`run_rounds`."""
     if name not in PERTURBATIONS:

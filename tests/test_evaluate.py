@@ -280,3 +280,58 @@ def test_fixed_gait_sweep_and_robustness_on_a_tiny_run(tmp_path):
     bad = subprocess.run([sys.executable, "-m", "hexnewton.cpg_sweep", "--a2", "2.0", "--out", str(tmp_path / "b")],
                          capture_output=True, text=True, timeout=300, cwd=ROOT)  # fmt: skip
     assert bad.returncode == 2 and "leaves the parameter ranges" in bad.stderr and not (tmp_path / "b").exists()
+
+
+def test_sweep_points_change_one_thing():
+    """A sweep point is the course with one field at one value: terrain fields as given, randomisation fields on every
+    robot with the nominal robot otherwise, motor strength on gains and effort together; ``default`` is the set."""
+    from hexnewton.evaluate import sweep_specs
+    from hexnewton.rollout import DEFAULT_SWEEPS, perturbation, sweep_overrides
+
+    assert sweep_overrides("terrain.step_rise", 0.08) == {"terrain.step_rise": 0.08}
+    friction = sweep_overrides("randomization.friction", 0.3)
+    assert friction == perturbation("friction_0.3")
+    motors = sweep_overrides("motor_strength", 0.5)
+    assert motors["randomization.kp_scale"] == motors["randomization.effort_scale"] == (0.5, 0.5)
+    assert motors["randomization.payload"] == (0.0, 0.0) and motors["randomization.enabled"]
+    assert sweep_overrides("randomization.push_velocity", 0.6)["randomization.push_interval"] == 3.0
+    specs = sweep_specs([["default"], ["terrain.step_depth", "0.2", "0.3"]], ["stepped", "complex"])
+    assert [s[0] for s in specs[:len(DEFAULT_SWEEPS)]] == [s[0] for s in DEFAULT_SWEEPS]
+    assert specs[-2:] == [("terrain.step_depth@stepped", "terrain.step_depth", "stepped", (0.2, 0.3)),
+                          ("terrain.step_depth@complex", "terrain.step_depth", "complex", (0.2, 0.3))]
+    assert {s[0] for s in DEFAULT_SWEEPS} >= {"step_rise", "tread_depth", "block_height", "friction", "payload",
+                                               "motor_strength", "push", "action_delay"}  # fmt: skip
+    for args, message in (([["terrain.nope", "1"]], "terrain.nope"), ([["terrain.step_rise"]], "give the values"),
+                          ([["terrain.step_rise", "high"]], "must be numbers"),
+                          ([["default"], ["terrain.step_rise", "0.1"]], None)):  # fmt: skip
+        if message is None:
+            sweep_specs(args, ["rugged"])  # a field of the default set on another course is its own curve
+            continue
+        with pytest.raises(ValueError, match=message):
+            sweep_specs(args, ["stepped"])
+
+
+def test_capability_sweep_on_a_tiny_run(tmp_path):
+    """``evaluate --sweep FIELD V1 V2``: every controller at each value, one entry per value with its rounds counted,
+    in results.json, the report and one figure per sweep; bad sweeps end with one line and exit 2."""
+    out = tmp_path / "sweep"
+    policy = os.path.join(ROOT, "results", "policies", "cpg_rl_complex.pt")
+    cmd = [sys.executable, "-m", "hexnewton.evaluate", "--controllers", "cpg", "cpg_rl", "--checkpoint",
+           f"cpg_rl={policy}", "--terrains", "stepped", "--rounds", "2", "--max_steps", "20", "--device", "cpu",
+           "--sweep", "terrain.step_rise", "0.06", "0.1", "--sweep", "motor_strength", "0.5", "--out", str(out)]  # fmt: skip
+    proc = subprocess.run(cmd, capture_output=True, text=True, timeout=900, cwd=ROOT)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    res = json.loads((out / "results.json").read_text())
+    rise = res["sweeps"]["terrain.step_rise"]
+    assert rise["terrain"] == "stepped" and rise["values"] == [0.06, 0.1] and set(rise["curves"]) == {"cpg", "cpg_rl"}
+    for points in rise["curves"].values():
+        assert [p["value"] for p in points] == [0.06, 0.1] and all(p["rounds"] == 2 for p in points)
+        assert {"success_3m", "fall_rate", "pitch_var_deg2", "roll_var_deg2", "time_to_3m_s"} <= set(points[0])
+    assert len(res["sweeps"]["motor_strength"]["curves"]["cpg"]) == 1
+    assert (out / "fig_sweep_terrain.step_rise.png").stat().st_size > 2000
+    assert "## Capability curve: terrain.step_rise" in (out / "report.md").read_text()
+    p = subprocess.run([sys.executable, "-m", "hexnewton.evaluate", "--controllers", "cpg", "--sweep", "terrain.nope",
+                        "1", "--device", "cpu", "--out", str(tmp_path / "x")], capture_output=True, text=True,
+                       timeout=300, cwd=ROOT)  # fmt: skip
+    err = [line for line in p.stderr.splitlines() if line.strip() and "Warp CUDA" not in line]
+    assert p.returncode == 2 and len(err) == 1 and "terrain.nope" in err[0] and not (tmp_path / "x").exists()
