@@ -130,8 +130,8 @@ class Rank:
 
 
 def distributed_rank(environ: dict, device: str | None) -> Rank:
-    """Read torchrun's WORLD_SIZE / RANK / LOCAL_RANK. Each rank trains its own env batch on
-    ``cuda:LOCAL_RANK`` (rsl-rl's distributed mode: NCCL, gradients averaged, rank 0 logs and saves)."""
+    """Read torchrun's WORLD_SIZE / RANK / LOCAL_RANK. Each rank trains its own env batch on ``cuda:LOCAL_RANK``
+    (NCCL), or on the CPU with ``device`` "cpu" (Gloo: tests, CI); gradients are averaged, rank 0 logs and saves."""
     try:
         world = int(environ.get("WORLD_SIZE", "1"))
         rank, local = int(environ.get("RANK", "0")), int(environ.get("LOCAL_RANK", "0"))
@@ -141,8 +141,10 @@ def distributed_rank(environ: dict, device: str | None) -> Rank:
         return Rank(device=device)
     if not 0 <= rank < world or not 0 <= local < world:
         raise ValueError(f"RANK {rank} / LOCAL_RANK {local} must lie in [0, WORLD_SIZE={world})")
+    if device == "cpu":
+        return Rank(rank, local, world, "cpu")
     if device is not None and not device.startswith("cuda"):
-        raise ValueError(f"distributed training runs on CUDA (rsl-rl uses NCCL), not on '{device}'")
+        raise ValueError(f"distributed training runs on cuda (one GPU per rank) or cpu, not on '{device}'")
     return Rank(rank, local, world, f"cuda:{local}")
 
 
@@ -175,11 +177,12 @@ class HexRunner(OnPolicyRunner):
     (``AgentConfig.stages``) and stops on ``max_minutes`` / ``target_success`` (:func:`stop_reason`)."""
 
     def __init__(self, env, agent, meta: dict, log_dir: str | None, device: str, rank: Rank = Rank()):
+        self.rank = rank  # before rsl-rl's set-up, which calls _configure_multi_gpu
         with contextlib.redirect_stdout(io.StringIO()):  # rsl-rl prints both networks in full
             super().__init__(env, agent.to_rsl_rl(env.num_envs), log_dir=log_dir, device=device)
         # the run's git/ folder records hexnewton's commit and diff (rsl-rl's default looks for its own repo)
         self.logger.git_status_repos = [os.path.dirname(os.path.abspath(__file__))]
-        self.agent, self.meta, self.rank = agent, meta, rank
+        self.agent, self.meta = agent, meta
         self.run_dir = log_dir
         self.levels = env.cfg.terrain.levels
         self.best = BestCheckpoint(log_dir or "", self.levels)
@@ -189,6 +192,43 @@ class HexRunner(OnPolicyRunner):
         self._stage, self._time_up, self._t0 = None, False, time.time()
         self.first_iteration_s = None  # seconds from the process's start to the end of the first iteration
         startup.mark("runner")
+
+    def _configure_multi_gpu(self) -> None:
+        """rsl-rl's multi-process set-up (``cfg["multi_gpu"]``, ranks, the process group) from this run's
+        :class:`Rank`, with the backend its device needs: NCCL on ``cuda:LOCAL_RANK``, Gloo on the CPU (rsl-rl 5.5.1
+        itself always takes NCCL and CUDA)."""
+        import torch
+        import torch.distributed as td
+
+        r = self.rank
+        self.gpu_world_size, self.is_distributed = r.world_size, r.world_size > 1
+        self.gpu_local_rank, self.gpu_global_rank = r.local_rank, r.rank
+        if not self.is_distributed:
+            self.cfg["multi_gpu"] = None
+            return
+        self.cfg["multi_gpu"] = {"global_rank": r.rank, "local_rank": r.local_rank, "world_size": r.world_size}
+        cuda = str(self.device).startswith("cuda")
+        if self.device != (f"cuda:{r.local_rank}" if cuda else "cpu"):
+            raise ValueError(f"rank {r.rank} runs on cuda:{r.local_rank} or cpu, not on {self.device}")
+        if not td.is_initialized():
+            td.init_process_group(backend="nccl" if cuda else "gloo", rank=r.rank, world_size=r.world_size)
+        if cuda:
+            torch.cuda.set_device(r.local_rank)
+
+    def rank_spread(self) -> float:
+        """The largest difference between any rank's actor and critic parameters and rank 0's (0 in a run of one
+        process). Every rank must call it: it broadcasts and reduces."""
+        if not self.is_distributed:
+            return 0.0
+        import torch
+        import torch.distributed as td
+
+        mine = torch.cat([p.detach().flatten() for m in (self.alg.actor, self.alg.critic) for p in m.parameters()])
+        ref = mine.clone()
+        td.broadcast(ref, src=0)
+        spread = (mine - ref).abs().max().reshape(1)
+        td.all_reduce(spread, op=td.ReduceOp.MAX)
+        return float(spread)
 
     # -------------------------------------------------------------- checkpoints
     def save(self, path: str, infos: dict | None = None) -> None:

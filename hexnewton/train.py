@@ -179,6 +179,12 @@ def main(argv: list[str] | None = None) -> int:
             videos.close()
     train_s = time.time() - t0
     print(f"finished at iteration {runner.current_learning_iteration} after {train_s:.0f} s ({reason})")
+    if rank.world_size > 1:
+        spread = runner.rank_spread()
+        if rank.is_main:
+            print(f"parameters of the {rank.world_size} ranks agree to {spread:.1e}")
+        if spread > 1e-5:
+            raise RuntimeError(f"the ranks' parameters differ by {spread:.2e}: the gradients were not shared")
     if not rank.is_main:
         return 0
     from . import startup

@@ -524,7 +524,8 @@ def test_interrupt_saves_and_exports(tmp_path):
 
 
 def test_torchrun_ranks_devices_and_seeds():
-    """torchrun's variables pick cuda:LOCAL_RANK and rank-offset seeds; a plain run is unchanged (no GPU needed)."""
+    """torchrun's variables pick cuda:LOCAL_RANK (or the CPU when asked) and rank-offset seeds; a plain run is
+    unchanged (no GPU needed)."""
     from hexnewton.runner import distributed_rank
 
     assert distributed_rank({}, None).device is None and distributed_rank({}, "cpu").world_size == 1
@@ -536,16 +537,35 @@ def test_torchrun_ranks_devices_and_seeds():
     r3 = distributed_rank({"WORLD_SIZE": "4", "RANK": "3", "LOCAL_RANK": "1"}, None)  # 2 nodes x 2 GPUs
     assert r3.device == "cuda:1" and r3.rank == 3
     for environ, device, message in (({"WORLD_SIZE": "2", "RANK": "2", "LOCAL_RANK": "0"}, None, "must lie in"),
-                                     ({"WORLD_SIZE": "2", "RANK": "1", "LOCAL_RANK": "1"}, "cpu", "runs on CUDA"),
+                                     ({"WORLD_SIZE": "2", "RANK": "1", "LOCAL_RANK": "1"}, "mps", "runs on cuda"),
                                      ({"WORLD_SIZE": "two"}, None, "integers")):  # fmt: skip
         with pytest.raises(ValueError, match=message):
             distributed_rank(environ, device)
-    # the CLI: a CPU device under torchrun's variables is one line, exit 2
+    r1 = distributed_rank({"WORLD_SIZE": "2", "RANK": "1", "LOCAL_RANK": "1"}, "cpu")
+    assert (r1.device, r1.rank, r1.world_size) == ("cpu", 1, 2)
+    # the CLI: a device no rank can run on is one line, exit 2
     env = dict(os.environ, WORLD_SIZE="2", RANK="1", LOCAL_RANK="1")
-    proc = subprocess.run([sys.executable, "train.py", "--device", "cpu"], capture_output=True, text=True, env=env,
+    proc = subprocess.run([sys.executable, "train.py", "--device", "mps"], capture_output=True, text=True, env=env,
                           timeout=300)  # fmt: skip
     err = [line for line in proc.stderr.splitlines() if line.strip() and "Warp CUDA" not in line]
-    assert proc.returncode == 2 and len(err) == 1 and "runs on CUDA" in err[0], proc.stderr[-1500:]
+    assert proc.returncode == 2 and len(err) == 1 and "runs on cuda" in err[0], proc.stderr[-1500:]
+
+
+def test_torchrun_two_cpu_processes_train_as_one(tmp_path):
+    """``torchrun --nproc_per_node=2 train.py --device cpu``: two processes (Gloo) train two iterations with their
+    gradients averaged; their parameters agree at the end, and only rank 0 writes a run directory."""
+    cmd = ["torchrun", "--standalone", "--nproc_per_node=2", "train.py", "--task", "flat", "--num_envs", "4",
+           "--max_iterations", "2", "--device", "cpu", "--log_dir", str(tmp_path)]  # fmt: skip
+    proc = subprocess.run(cmd, capture_output=True, text=True, timeout=900, cwd=ROOT)
+    assert proc.returncode == 0, proc.stdout[-2000:] + proc.stderr[-3000:]
+    assert "rank 0 of 2" in proc.stdout and "rank 1 of 2" in proc.stdout
+    agree = re.search(r"parameters of the 2 ranks agree to (\S+)", proc.stdout)
+    assert agree and float(agree.group(1)) <= 1e-6, proc.stdout[-2000:]
+    runs = glob.glob(str(tmp_path / "hexnewton_flat" / "*"))
+    assert len(runs) == 1 and os.path.isfile(os.path.join(runs[0], "model_1.pt"))
+    from hexnewton.checkpoint import checkpoint_meta, load_checkpoint
+
+    assert checkpoint_meta(load_checkpoint(os.path.join(runs[0], "model_1.pt")))["world_size"] == 2
 
 
 def test_stop_reason_is_one_decision_for_all_ranks():

@@ -339,7 +339,7 @@ def test_add_to_builder_and_finalize() -> None:
     flat = make_terrain(TerrainConfig(name="flat"))
     assert flat.mesh is None
     plane = flat.add_to_builder(builder, shape_cfg)
-    terrain = make_terrain(TerrainConfig(name="complex", x_max=3.0, width=0.5))
+    terrain = make_terrain(TerrainConfig(name="complex", x_max=3.0, width=0.5, collision="mesh"))
     shape = terrain.add_to_builder(builder, shape_cfg)
     assert builder.shape_type[plane] == newton.GeoType.PLANE
     assert builder.shape_type[shape] == newton.GeoType.MESH and builder.shape_body[shape] == -1
