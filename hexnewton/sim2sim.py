@@ -358,14 +358,15 @@ def newton_reference(path: str | None) -> dict:
 
 #: What differs between the two simulators besides the engine itself (docs/deployment.md explains each).
 MODEL_DIFFERENCES = (
-    "collision: MuJoCo's own detection at every 5 ms step, boxes for blocks and treads; training: Newton's "
-    "collision pipeline once per 20 ms frame (contacts re-evaluated at its 4 substeps) on the same boxes plus a mesh "
-    "of the blocks, 5 mm detection gap",
-    "contact: MuJoCo's default soft contact (solref 0.02 s, solimp 0.9-0.95), friction 0.9, pyramidal cone, condim 3; "
-    "training: mujoco_warp with Newton's contact stiffness and damping per shape",
-    "joint limits: MuJoCo's default limit constraint; training: a 1000 N m/rad, 10 N m s/rad limit spring",
-    "solver: MuJoCo's defaults (Newton, 100 iterations); training: Newton solver, 10 iterations, 10 line-search "
-    "iterations; both implicitfast, 5 ms steps",
+    "collision: MuJoCo's own detection at every 5 ms step, every 2 cm block and every tread a box (sphere-box, "
+    "capsule-box contacts); training: Newton's collision pipeline once per 20 ms frame (contacts re-evaluated at its 4 "
+    "substeps, 5 mm detection gap) on boxes for the treads and one triangle mesh of the blocks",
+    "contact: the same soft contact on both sides (solref 0.02 s / damping ratio 1, solimp 0.9-0.95, friction 0.9, "
+    "pyramidal cone, condim 3, no margin; read from the training world's mujoco_warp model)",
+    "joint limits: MuJoCo's default limit constraint (solref 0.02 s, ratio 1); training: Newton's 1000 N m/rad, "
+    "10 N m s/rad limit spring as solref ~(0.021 s, 0.49); the CPG's targets stay inside the limits",
+    "solver: Newton solver and implicitfast at 5 ms on both sides; MuJoCo's 100-iteration cap against training's 10 "
+    "does not bind (MuJoCo converges in ~2 iterations per step, scripts/sim2sim_side_by_side.py)",
     "sensing: encoders, IMU quaternion and odometry are MuJoCo's exact values (as training's noise-free evaluation); "
     "the terrain reading comes from ray casts, equal to training's grid query at the same cells",
     "starts: the same lanes, offsets, yaw and joint noise ranges, drawn by NumPy from the start seed where Newton "
