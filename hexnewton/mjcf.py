@@ -70,8 +70,8 @@ def leg_xml(cfg: RobotConfig, leg: int, prefix: str) -> str:
         quat = f' quat="{_v(_yaw_quat(leg_yaw(cfg, leg)))}"' if k == 0 else ""
         out.append(
             f'<body name="{name}_{link}" pos="{_v(joint_at[k])}"{quat}>'
-            f'<joint name="{name}_{kinds[k]}" type="hinge" axis="{_v(axes[k])}" range="{lower[k]:.12g} {upper[k]:.12g}" '
-            f'armature="{cfg.armature:.9g}"/>'
+            f'<joint name="{name}_{kinds[k]}" type="hinge" axis="{_v(axes[k])}" '
+            f'range="{lower[k]:.12g} {upper[k]:.12g}" armature="{cfg.armature:.9g}"/>'
             f'<inertial pos="{_v(com)}" mass="{mass:.9g}" diaginertia="{_v(rod_inertia(mass, length, r, axis_i))}"/>'
             + geoms[k])  # fmt: skip
         close.append("</body>")
@@ -88,7 +88,8 @@ def robot_xml(cfg: RobotConfig, prefix: str = "", pos=(0.0, 0.0, 0.15), yaw: flo
     return (f'<body name="{prefix}torso" pos="{_v(pos)}" quat="{_v(_yaw_quat(yaw))}">'
             f'<freejoint name="{prefix}base"/>'
             f'<inertial pos="0 0 0" mass="{m:.9g}" diaginertia="{_v(box_inertia(m, sx, sy, sz))}"/>'
-            f'<geom name="{prefix}torso" type="box" size="{_v((sx / 2, sy / 2, sz / 2))}" {_ROBOT} rgba=".35 .45 .6 1"/>'
+            f'<geom name="{prefix}torso" type="box" size="{_v((sx / 2, sy / 2, sz / 2))}" {_ROBOT} '
+            f'rgba=".35 .45 .6 1"/>'
             f'<site name="{prefix}imu"/>{legs}</body>')  # fmt: skip
 
 

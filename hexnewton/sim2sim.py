@@ -2,7 +2,7 @@
 
     python -m hexnewton.sim2sim results/controllers/cpg_rl_complex --terrains rugged stepped complex --rounds 100 \\
         --out results/sim2sim
-    python -m hexnewton.sim2sim BUNDLE --terrains rugged --rounds 1 --video walk.mp4 --out /tmp/s2s   # one round, filmed
+    python -m hexnewton.sim2sim BUNDLE --terrains rugged --rounds 1 --video walk.mp4 --out /tmp/s2s  # one round filmed
     python -m hexnewton.sim2sim BUNDLE --terrains complex --rounds 1 --viewer --out /tmp/s2s         # MuJoCo's viewer
 
 The robot and the terrain are a MuJoCo model written from the project's descriptions (:mod:`hexnewton.mjcf`): MuJoCo's
@@ -207,7 +207,7 @@ class Rounds:
                 self.m.geom_group[g] = 0 if name.startswith(f"r{k}_") else 3
 
     def sensors(self) -> dict:
-        """The robots' readings now: joint encoders and velocities (N, 18), IMU quaternion (N, 4) as (x, y, z, w)."""
+        """The robots' current readings: joint encoders and velocities (N, 18), IMU quaternion (N, 4), x y z w."""
         s = self.d.sensordata.reshape(self.n, 40)
         return {"quat": s[:, [1, 2, 3, 0]].copy(), "joint_pos": s[:, 4:22].copy(), "joint_vel": s[:, 22:40].copy()}
 
@@ -223,7 +223,7 @@ class Rounds:
 
     def control_step(self) -> None:
         """One control step: policy (if any) on the first substep's readings, then the CPG substeps, each followed
-        by one MuJoCo step (``mj_step1``: sensors of the state now; the targets; ``mj_step2``: integrate)."""
+        by one MuJoCo step (``mj_step1``: sensors of the current state; the targets; ``mj_step2``: integrate)."""
         for k in range(self.substeps):
             self.mj.mj_step1(self.m, self.d)
             r = self.sensors()
@@ -409,8 +409,9 @@ def target_lines(bundle_res: dict, fixed_res: dict, newton: dict) -> list[str]:
         r_p = m["pitch_var_deg2"] / n["pitch_var_deg2"] - 1
         r_r = m["roll_var_deg2"] / n["roll_var_deg2"] - 1
         ok = abs(d_s) <= 10 and abs(r_p) <= 0.25 and abs(r_r) <= 0.25
-        out.append(f"- fixed CPG on {terrain}: success {d_s:+.1f} points (within 10), pitch variance {100 * r_p:+.0f} %, "
-                   f"roll variance {100 * r_r:+.0f} % (within 25 %) of Newton's: **{'met' if ok else 'not met'}**")
+        out.append(f"- fixed CPG on {terrain}: success {d_s:+.1f} points (within 10), pitch variance "
+                   f"{100 * r_p:+.0f} %, roll variance {100 * r_r:+.0f} % (within 25 %) of Newton's: "
+                   f"**{'met' if ok else 'not met'}**")
     return out
 
 
@@ -491,7 +492,8 @@ def run_all(args, newton: dict) -> int:
 
     cmd = f"{PROG} " + " ".join(args.argv)
     meta = {"command": f"`{cmd}`", "MuJoCo": mujoco.__version__, "git": git_rev(),
-            "rounds per terrain": args.rounds, "terrain seed / start seed": f"{args.seed} / {args.seed + START_SEED_OFFSET}",
+            "rounds per terrain": args.rounds,
+            "terrain seed / start seed": f"{args.seed} / {args.seed + START_SEED_OFFSET}",
             "machine": f"CPU ({os.cpu_count()} cores)", "wall time": f"{time.perf_counter() - t0:.0f} s"}  # fmt: skip
     os.makedirs(args.out)
     with open(os.path.join(args.out, "results.json"), "w") as f:
@@ -507,7 +509,8 @@ def run_all(args, newton: dict) -> int:
 
 def _line(label: str, terrain: str, s: dict) -> str:
     return (f"{label} on {terrain}: {s['rounds']} rounds, {100 * s['success_3m']:.0f} % at 3 m, falls "
-            f"{100 * s['fall_rate']:.0f} %, pitch / roll var {s['pitch_var_deg2']:.1f} / {s['roll_var_deg2']:.1f} deg², "
+            f"{100 * s['fall_rate']:.0f} %, pitch / roll var {s['pitch_var_deg2']:.1f} / {s['roll_var_deg2']:.1f} "
+            "deg², "
             f"{s['control_steps']} control steps in {s['wall_s']:.0f} s")
 
 

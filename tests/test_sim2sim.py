@@ -61,8 +61,8 @@ def test_mjcf_is_the_newton_robot():
     inertia = nm.body_inertia.numpy()
     np.testing.assert_allclose(m.body_inertia[1:], np.stack([np.diag(i) for i in inertia]), rtol=1e-5)
     # joint limits, armature, names in the observation's order
-    np.testing.assert_allclose(m.jnt_range[1:], np.c_[nm.joint_limit_lower.numpy()[6:], nm.joint_limit_upper.numpy()[6:]],
-                               atol=1e-6)  # fmt: skip
+    limits = np.c_[nm.joint_limit_lower.numpy()[6:], nm.joint_limit_upper.numpy()[6:]]
+    np.testing.assert_allclose(m.jnt_range[1:], limits, atol=1e-6)
     np.testing.assert_allclose(m.dof_armature[6:], nm.joint_armature.numpy()[6:], rtol=1e-6)
     assert [mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_JOINT, j) for j in range(1, 19)] == list(JOINT_NAMES)
 
@@ -73,8 +73,8 @@ def test_servos_and_sensors_follow_the_robot_config():
     nm, _ = _newton_robot(cfg, np.r_[0, 0, 0.2, 0, 0, 0, 1, np.tile(cfg.stand_pose, 6)])
     assert m.nu == 18 and m.nsensordata == 4 + 36
     np.testing.assert_allclose(m.actuator_gainprm[:, 0], nm.joint_target_ke.numpy()[6:], rtol=1e-6)
-    np.testing.assert_allclose(m.actuator_biasprm[:, 1:3], np.c_[-nm.joint_target_ke.numpy()[6:],
-                                                                 -nm.joint_target_kd.numpy()[6:]], rtol=1e-6)  # fmt: skip
+    bias = np.c_[-nm.joint_target_ke.numpy()[6:], -nm.joint_target_kd.numpy()[6:]]
+    np.testing.assert_allclose(m.actuator_biasprm[:, 1:3], bias, rtol=1e-6)
     np.testing.assert_allclose(m.actuator_forcerange, np.c_[-nm.joint_effort_limit.numpy()[6:],
                                                             nm.joint_effort_limit.numpy()[6:]], rtol=1e-6)  # fmt: skip
     assert m.opt.timestep == 0.005 and m.opt.integrator == mujoco.mjtIntegrator.mjINT_IMPLICITFAST
