@@ -87,16 +87,22 @@ def expected_clipped_action(mean, std) -> np.ndarray:
 
 
 class Controller:
-    """The exported CPG_RL hierarchy for ``num_robots`` robots (batched like the simulator)."""
+    """The exported CPG_RL hierarchy for ``num_robots`` robots (batched like the simulator). ``bundle``: a bundle's
+    folder, or a ``controller.json``-shaped dict without a policy (a fixed gait: the CPG runs ``initial_params``;
+    :func:`hexnewton.sim2sim.fixed_cpg_spec`)."""
 
-    def __init__(self, bundle: str, num_robots: int = 1, providers: list[str] | None = None,
+    def __init__(self, bundle: str | dict, num_robots: int = 1, providers: list[str] | None = None,
                  stochastic: bool = False, seed: int | None = None, expected: bool = False):
-        import onnxruntime as ort
+        if isinstance(bundle, dict):  # a controller.json's contents without a policy: the CPG at its initial_params
+            self.spec = spec = bundle
+            self.session = None
+        else:
+            import onnxruntime as ort
 
-        self.spec = spec = load_spec(bundle)
-        self.session = ort.InferenceSession(os.path.join(bundle, "policy.onnx"),
-                                            providers=providers or ["CPUExecutionProvider"])  # fmt: skip
-        self._input = self.session.get_inputs()[0].name
+            self.spec = spec = load_spec(bundle)
+            self.session = ort.InferenceSession(os.path.join(bundle, "policy.onnx"),
+                                                providers=providers or ["CPUExecutionProvider"])  # fmt: skip
+            self._input = self.session.get_inputs()[0].name
         self.n = int(num_robots)
         self.layout = {name: (a, b) for name, a, b in spec["obs_layout"]}
         self.num_obs = int(spec["num_obs"])
@@ -156,6 +162,8 @@ class Controller:
     def act(self, obs: np.ndarray) -> np.ndarray:
         """The policy's actions (N, num_actions) for observations (N, num_obs): the mean, sampled around it, or the
         expected clipped action (:func:`expected_clipped_action`)."""
+        if self.session is None:
+            raise ValueError("this controller has no policy (built from a spec): it runs its initial_params")
         mean = self.session.run(None, {self._input: np.asarray(obs, np.float32)})[0]
         if self.expected:
             return expected_clipped_action(mean, self.action_std)

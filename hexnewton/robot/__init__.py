@@ -1,10 +1,10 @@
-"""The paper's hexapod as a Newton articulation."""
+"""The paper's hexapod: its geometry (:mod:`.geometry`, plain Python) and the Newton articulation (:mod:`.hexapod`,
+loaded on first use of ``build_hexapod``, so that the geometry imports without Warp or Newton)."""
 
-from .hexapod import (
+from .geometry import (
     BASE_Q,
     BASE_QD,
     NUM_JOINTS,
-    build_hexapod,
     hip_mount,
     joint_limits,
     leg_bounds,
@@ -25,3 +25,11 @@ __all__ = [
     "stand_height",
     "torso_mass",
 ]
+
+
+def __getattr__(name: str):
+    if name == "build_hexapod":
+        from .hexapod import build_hexapod
+
+        return build_hexapod
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -21,76 +21,27 @@ import warp as wp
 import newton
 
 from ..config import LEG_NAMES, RobotConfig
-
-#: Free-joint coordinates per robot (position xyz + quaternion xyzw) and velocities (linear + angular).
-BASE_Q = 7
-BASE_QD = 6
-NUM_JOINTS = 18
-
-
-def leg_yaw(cfg: RobotConfig, leg: int) -> float:
-    """Yaw [rad] of the leg's outward neutral direction in the body frame (leg index in LEG_NAMES order)."""
-    row = leg % 3
-    splay = math.radians(cfg.mount_splay_deg[row])
-    # right legs point to -y, left legs to +y; front legs splay toward +x on both sides
-    return -math.pi / 2 + splay if leg < 3 else math.pi / 2 - splay
-
-
-def hip_mount(cfg: RobotConfig, leg: int) -> tuple[float, float, float]:
-    """Hip joint position in the body frame [m]."""
-    x, y = cfg.hip_mounts[leg % 3]
-    return (x, -y if leg < 3 else y, 0.0)
+from .geometry import (  # noqa: F401  (re-exported: hexnewton.robot's names)
+    BASE_Q,
+    BASE_QD,
+    NUM_JOINTS,
+    PITCH_AXIS,
+    box_inertia,
+    hip_axis,
+    hip_mount,
+    joint_limits,
+    leg_bounds,
+    leg_links,
+    leg_yaw,
+    rod_inertia,
+    stand_height,
+    torso_mass,
+    validate,
+)
 
 
-def torso_mass(cfg: RobotConfig) -> float:
-    return cfg.total_mass - 6.0 * (cfg.coxa_mass + cfg.femur_mass + cfg.tibia_mass)
-
-
-def _box_inertia(m: float, sx: float, sy: float, sz: float) -> wp.mat33:
-    return wp.mat33(
-        m * (sy * sy + sz * sz) / 12.0, 0.0, 0.0,
-        0.0, m * (sx * sx + sz * sz) / 12.0, 0.0,
-        0.0, 0.0, m * (sx * sx + sy * sy) / 12.0,
-    )  # fmt: skip
-
-
-def _rod_inertia(m: float, length: float, radius: float, axis: int) -> wp.mat33:
-    """Solid-cylinder inertia about its centre, long axis along ``axis`` (0 = x, 2 = z)."""
-    i_long = 0.5 * m * radius * radius
-    i_trans = m * (3.0 * radius * radius + length * length) / 12.0
-    d = [i_trans, i_trans, i_trans]
-    d[axis] = i_long
-    return wp.mat33(d[0], 0.0, 0.0, 0.0, d[1], 0.0, 0.0, 0.0, d[2])
-
-
-def stand_height(cfg: RobotConfig) -> float:
-    """Torso-origin height above flat ground in the neutral standing pose [m] (feet touching)."""
-    _, knee, ankle = cfg.stand_pose
-    # femur raised by `knee`, tibia at angle (knee + ankle) from vertical in the leg plane
-    return -cfg.femur_length * math.sin(knee) + cfg.tibia_length * math.cos(knee + ankle) + cfg.foot_radius
-
-
-def validate(cfg: RobotConfig) -> None:
-    """Raise ValueError with one clear line for a physically meaningless robot config."""
-    for name in ("hip_length", "femur_length", "tibia_length", "total_mass", "leg_radius", "foot_radius"):
-        if not getattr(cfg, name) > 0:
-            raise ValueError(f"robot.{name} must be > 0, got {getattr(cfg, name)}")
-    if torso_mass(cfg) <= 0:
-        raise ValueError("robot.total_mass must exceed the six legs' mass")
-    for kind, (lo, hi), q in zip(("hip", "knee", "ankle"), joint_limits(cfg)[:3], cfg.stand_pose):
-        if not lo <= q <= hi:
-            raise ValueError(f"robot.stand_pose {kind}={q} lies outside its limits [{lo}, {hi}]")
-
-
-def joint_limits(cfg: RobotConfig) -> list[tuple[float, float]]:
-    """(lower, upper) per joint in JOINT_NAMES order."""
-    return [cfg.hip_limit, cfg.knee_limit, cfg.ankle_limit] * 6
-
-
-def leg_bounds(cfg: RobotConfig) -> tuple[tuple[float, float, float], tuple[float, float, float]]:
-    """(lower, upper) limits of one leg's (hip, knee, ankle), the same on every leg."""
-    return (cfg.hip_limit[0], cfg.knee_limit[0], cfg.ankle_limit[0]), (cfg.hip_limit[1], cfg.knee_limit[1],
-                                                                         cfg.ankle_limit[1])
+def _mat33(diag: tuple[float, float, float]) -> wp.mat33:
+    return wp.mat33(diag[0], 0.0, 0.0, 0.0, diag[1], 0.0, 0.0, 0.0, diag[2])
 
 
 def build_hexapod(cfg: RobotConfig | None = None, gap: float | None = None) -> newton.ModelBuilder:
@@ -117,7 +68,7 @@ def build_hexapod(cfg: RobotConfig | None = None, gap: float | None = None) -> n
     torso = b.add_link(
         xform=wp.transform(wp.vec3(0.0, 0.0, base_z), wp.quat_identity()),
         mass=torso_m,
-        inertia=_box_inertia(torso_m, sx, sy, sz),
+        inertia=_mat33(box_inertia(torso_m, sx, sy, sz)),
         label="torso",
         lock_inertia=True,
     )
@@ -141,33 +92,26 @@ def build_hexapod(cfg: RobotConfig | None = None, gap: float | None = None) -> n
         yaw = leg_yaw(cfg, leg)
         q_leg = wp.quat_from_axis_angle(wp.vec3(0.0, 0.0, 1.0), yaw)
         mount = wp.vec3(*hip_mount(cfg, leg))
-        hip_axis = (0.0, 0.0, 1.0) if leg < 3 else (0.0, 0.0, -1.0)
-        pitch_axis = (0.0, -1.0, 0.0)
         # initial world poses only seed the builder; eval_fk from joint_q is authoritative
         p_world = wp.vec3(mount[0], mount[1], base_z)
 
-        # links: (name, mass, length, com, long axis 0 = x / 2 = z); joints: (name, parent offset, axis, limits,
-        # standing angle). The tibia hangs along its local -z; coxa and femur run along the leg frame's +x.
-        links = (
-            ("coxa", cfg.coxa_mass, cfg.hip_length, wp.vec3(cfg.hip_length / 2, 0.0, 0.0), 0),
-            ("femur", cfg.femur_mass, cfg.femur_length, wp.vec3(cfg.femur_length / 2, 0.0, 0.0), 0),
-            ("tibia", cfg.tibia_mass, cfg.tibia_length, wp.vec3(0.0, 0.0, -cfg.tibia_length / 2), 2),
-        )
+        # joints: (name, parent offset, axis, limits, standing angle); links: geometry.leg_links
         joint_specs = (
-            ("hip", wp.transform(mount, q_leg), hip_axis, cfg.hip_limit, hip_q),
-            ("knee", wp.transform(wp.vec3(cfg.hip_length, 0.0, 0.0), wp.quat_identity()), pitch_axis,
+            ("hip", wp.transform(mount, q_leg), hip_axis(leg), cfg.hip_limit, hip_q),
+            ("knee", wp.transform(wp.vec3(cfg.hip_length, 0.0, 0.0), wp.quat_identity()), PITCH_AXIS,
              cfg.knee_limit, knee_q),
-            ("ankle", wp.transform(wp.vec3(cfg.femur_length, 0.0, 0.0), wp.quat_identity()), pitch_axis,
+            ("ankle", wp.transform(wp.vec3(cfg.femur_length, 0.0, 0.0), wp.quat_identity()), PITCH_AXIS,
              cfg.ankle_limit, ankle_q),
         )  # fmt: skip
         parent = torso
         bodies = []
-        for (link, mass, length, com, long_axis), (kind, parent_xform, axis, limit, q0) in zip(links, joint_specs):
+        for (link, mass, length, com, long_axis), (kind, parent_xform, axis, limit, q0) in zip(leg_links(cfg),
+                                                                                              joint_specs):
             body = b.add_link(
                 xform=wp.transform(p_world, q_leg),
-                com=com,
+                com=wp.vec3(*com),
                 mass=mass,
-                inertia=_rod_inertia(mass, length, r, long_axis),
+                inertia=_mat33(rod_inertia(mass, length, r, long_axis)),
                 label=f"{name}_{link}",
                 lock_inertia=True,
             )

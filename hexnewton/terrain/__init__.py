@@ -3,31 +3,40 @@
 ``make_terrain(cfg)`` builds a :class:`Terrain`: the exact piecewise-constant height grid
 (:mod:`.heightmap`), its compact closed collision mesh (:mod:`.mesh`, ``None`` for flat, which is an
 infinite ground plane at z = 0; or boxes plus meshes of the same surface, :mod:`.parts`) and helpers to add
-it to a ``newton.ModelBuilder`` and to query heights on the host. :mod:`.query` provides the in-kernel height lookup (``HeightField``).
+it to a ``newton.ModelBuilder`` and to query heights on the host. The grids and their box decomposition load without
+Warp or Newton (the MuJoCo model, :mod:`hexnewton.mjcf`, is built from them). :mod:`.query` provides the in-kernel
+height lookup (``HeightField``).
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
+from typing import TYPE_CHECKING
 
-import newton
 import numpy as np
-import warp as wp
 
 from hexnewton.config import TerrainConfig
 from hexnewton.terrain.heightmap import HeightGrid, build_height_grid, complex_step_count, validate_config
 from hexnewton.terrain.mesh import grid_to_mesh
 from hexnewton.terrain.parts import Part, add_mesh_boxes, split_strips
-from hexnewton.terrain.query import (
-    HeightField,
-    height_field_from_grid,
-    max_terrain_height,
-    max_terrain_height_np,
-    sample_heights,
-    sample_heights_kernel,
-    terrain_height,
-    terrain_height_np,
-)
+
+if TYPE_CHECKING:
+    import newton
+    import warp as wp
+
+#: names of :mod:`.query` (Warp structs and kernels with their NumPy references), imported on first use so that the
+#: height grids and their box decomposition load without Warp or Newton
+_QUERY = ("HeightField", "height_field_from_grid", "max_terrain_height", "max_terrain_height_np", "sample_heights",
+          "sample_heights_kernel", "terrain_height", "terrain_height_np")
+
+
+def __getattr__(name: str):
+    if name in _QUERY:
+        from hexnewton.terrain import query
+
+        return getattr(query, name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
 
 __all__ = [
     "HeightField",
@@ -78,14 +87,20 @@ class Terrain:
 
     def height_at(self, x: np.ndarray | float, y: np.ndarray | float) -> np.ndarray:
         """Terrain height at (x, y) (float64, broadcast shape); off-patch points see the edge cell."""
+        from hexnewton.terrain.query import terrain_height_np
+
         return terrain_height_np(self.grid, x, y)
 
     def height_field(self, device: wp.DeviceLike = None) -> HeightField:
         """The grid as a device :class:`HeightField` for in-kernel queries."""
+        from hexnewton.terrain.query import height_field_from_grid
+
         return height_field_from_grid(self.grid, device)
 
 
 def _mesh_from_grid(grid: HeightGrid) -> newton.Mesh:
+    import newton
+
     vertices, indices = grid_to_mesh(grid)
     # a static terrain needs no mass properties
     return newton.Mesh(vertices, indices, compute_inertia=False)

@@ -9,19 +9,22 @@ The height grid is cut along x into strips, band by band along y (the whole widt
 
 Equal parts of neighbouring bands (same columns, same box height) are merged. Every part reaches down to the same
 bottom, ``min(height) - base_depth``, so the parts tile the patch without gaps and their union has the surface of
-the single mesh. Pure NumPy apart from :func:`add_mesh_boxes`.
+the single mesh. Pure NumPy apart from :func:`add_mesh_boxes` (which loads Newton and Warp when called).
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 
-import newton
+from typing import TYPE_CHECKING
+
 import numpy as np
-import warp as wp
 
 from hexnewton.terrain.heightmap import HeightGrid
 from hexnewton.terrain.mesh import grid_to_mesh
+
+if TYPE_CHECKING:
+    import newton
 
 
 @dataclass(frozen=True)
@@ -81,6 +84,9 @@ def add_mesh_boxes(grid: HeightGrid, builder: newton.ModelBuilder, cfg: newton.M
     """Add the parts of :func:`split_strips` as static shapes (body -1): boxes from the common bottom
     ``min(height) - base_depth`` up to their height, closed meshes down to the same bottom. Returns the shape
     indices (consecutive), meshes first."""
+    import newton
+    import warp as wp
+
     if not base_depth > 0:
         raise ValueError(f"base_depth must be positive, got {base_depth!r}")
     h = np.asarray(grid.heights, dtype=np.float32)

@@ -1,0 +1,144 @@
+"""Sim2sim in C MuJoCo (hexnewton.mjcf, hexnewton.sim2sim): the MJCF is the Newton robot, the terrain and the height
+scanner are the training's grid, a shipped bundle walks closed loop, and the command line's outputs and errors."""
+
+from __future__ import annotations
+
+import json
+import os
+
+import numpy as np
+import pytest
+
+mujoco = pytest.importorskip("mujoco")
+
+from hexnewton.config import JOINT_NAMES, RobotConfig, TerrainConfig  # noqa: E402
+from hexnewton.kernels.reference import RUNNING  # noqa: E402
+from hexnewton.mjcf import build_model, robot_xml  # noqa: E402
+from hexnewton.sim2sim import HEADLINE, PROG, HeightScanner, Rounds, fixed_cpg_spec, main  # noqa: E402
+from hexnewton.terrain.heightmap import build_height_grid  # noqa: E402
+
+BUNDLE = os.path.join(os.path.dirname(__file__), "..", "results", "controllers", "cpg_rl_complex")
+
+
+def _newton_robot(cfg: RobotConfig, q: np.ndarray):
+    """Newton's robot (build_hexapod) on the CPU at joint coordinates ``q`` (25,): model and body poses (N, 7)."""
+    import newton
+    import warp as wp
+
+    from hexnewton.robot import build_hexapod
+
+    model = build_hexapod(cfg).finalize(device="cpu")
+    state = model.state()
+    newton.eval_fk(model, wp.array(q, dtype=wp.float32, device="cpu"), model.joint_qd, state)
+    return model, state.body_q.numpy()
+
+
+def _mujoco_robot(cfg: RobotConfig, q: np.ndarray):
+    m = mujoco.MjModel.from_xml_string(f"<mujoco><compiler angle='radian' autolimits='true'/><worldbody>"
+                                       f"{robot_xml(cfg)}</worldbody></mujoco>")  # fmt: skip
+    d = mujoco.MjData(m)
+    d.qpos[:] = np.r_[q[:3], q[6], q[3:6], q[7:]]  # MuJoCo's free joint quaternion is (w, x, y, z)
+    mujoco.mj_kinematics(m, d)
+    return m, d
+
+
+def test_mjcf_is_the_newton_robot():
+    cfg = RobotConfig()
+    rng = np.random.default_rng(0)
+    lo, hi = np.array([cfg.hip_limit, cfg.knee_limit, cfg.ankle_limit] * 6).T
+    yaw = 0.4
+    q = np.r_[0.1, -0.2, 0.3, 0.0, 0.0, np.sin(yaw / 2), np.cos(yaw / 2), rng.uniform(lo, hi)]
+    nm, body_q = _newton_robot(cfg, q)
+    m, d = _mujoco_robot(cfg, q)
+    assert m.nbody - 1 == nm.body_count == 19 and m.njnt - 1 == 18
+    # every body frame (joint positions, link lengths, mounts, splay, axes and their signs) at a random pose
+    np.testing.assert_allclose(d.xpos[1:], body_q[:, :3], atol=1e-5)
+    np.testing.assert_allclose(np.abs(np.sum(d.xquat[1:][:, [1, 2, 3, 0]] * body_q[:, 3:], axis=1)), 1.0, atol=1e-5)
+    # masses, centres of mass, inertias
+    np.testing.assert_allclose(m.body_mass[1:], nm.body_mass.numpy(), rtol=1e-6)
+    np.testing.assert_allclose(m.body_mass[1:].sum(), cfg.total_mass, rtol=1e-9)
+    np.testing.assert_allclose(m.body_ipos[1:], nm.body_com.numpy(), atol=1e-7)
+    inertia = nm.body_inertia.numpy()
+    np.testing.assert_allclose(m.body_inertia[1:], np.stack([np.diag(i) for i in inertia]), rtol=1e-5)
+    # joint limits, armature, names in the observation's order
+    limits = np.c_[nm.joint_limit_lower.numpy()[6:], nm.joint_limit_upper.numpy()[6:]]
+    np.testing.assert_allclose(m.jnt_range[1:], limits, atol=1e-6)
+    np.testing.assert_allclose(m.dof_armature[6:], nm.joint_armature.numpy()[6:], rtol=1e-6)
+    assert [mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_JOINT, j) for j in range(1, 19)] == list(JOINT_NAMES)
+
+
+def test_servos_and_sensors_follow_the_robot_config():
+    cfg = RobotConfig()
+    m = build_model(cfg, None, [(0.0, 0.0, 0.2, 0.0)], 0.005)
+    nm, _ = _newton_robot(cfg, np.r_[0, 0, 0.2, 0, 0, 0, 1, np.tile(cfg.stand_pose, 6)])
+    assert m.nu == 18 and m.nsensordata == 4 + 36
+    np.testing.assert_allclose(m.actuator_gainprm[:, 0], nm.joint_target_ke.numpy()[6:], rtol=1e-6)
+    bias = np.c_[-nm.joint_target_ke.numpy()[6:], -nm.joint_target_kd.numpy()[6:]]
+    np.testing.assert_allclose(m.actuator_biasprm[:, 1:3], bias, rtol=1e-6)
+    np.testing.assert_allclose(m.actuator_forcerange, np.c_[-nm.joint_effort_limit.numpy()[6:],
+                                                            nm.joint_effort_limit.numpy()[6:]], rtol=1e-6)  # fmt: skip
+    assert m.opt.timestep == 0.005 and m.opt.integrator == mujoco.mjtIntegrator.mjINT_IMPLICITFAST
+
+
+def test_terrain_boxes_and_scanner_are_the_height_grid():
+    from hexnewton.terrain import max_terrain_height_np, terrain_height_np
+
+    grid = build_height_grid(TerrainConfig(name="complex", seed=3))
+    m = build_model(RobotConfig(), grid, [], 0.005)
+    d = mujoco.MjData(m)
+    mujoco.mj_forward(m, d)
+    rng = np.random.default_rng(1)
+    x, y = rng.uniform(-0.9, 3.2, 60), rng.uniform(-1.0, 1.0, 60)
+    # the collision boxes: a vertical ray onto the boxes (geom group 0) lands on the cell's height
+    top = np.array([2.0 - mujoco.mj_ray(m, d, np.array([a, b, 2.0]), np.array([0, 0, -1.0]),
+                                        np.array([1, 0, 0, 0, 0, 0], np.uint8), 1, -1, None) for a, b in zip(x, y)])
+    np.testing.assert_allclose(top, terrain_height_np(grid, x, y), atol=1e-6)
+    # the scanner: ground under a point and the highest cell of the +-30 cm window, as the training's grid query
+    scan = HeightScanner(m, d, grid)
+    np.testing.assert_allclose([scan.height(a, b) for a, b in zip(x, y)], terrain_height_np(grid, x, y), atol=1e-6)
+    np.testing.assert_allclose([scan.reading(a, b) for a, b in zip(x[:8], y[:8])],
+                               max_terrain_height_np(grid, x[:8], y[:8], 0.3) - terrain_height_np(grid, x[:8], y[:8]),
+                               atol=1e-6)  # fmt: skip
+
+
+def test_shipped_bundle_walks_forward_in_mujoco():
+    r = Rounds(BUNDLE, "flat", 2)
+    x0 = r.d.qpos.reshape(2, 25)[:, 0].copy()
+    for _ in range(200):  # 4 s
+        r.control_step()
+        status, rpy = r.status()
+        assert (status == RUNNING).all(), status
+    q = r.d.qpos.reshape(2, 25)
+    assert (q[:, 0] - x0 > 0.3).all(), q[:, 0]
+    assert (np.abs(rpy[:, :2]) < 0.3).all() and (q[:, 2] > 0.1).all()
+
+
+def test_fixed_cpg_runs_through_the_runtime():
+    spec = fixed_cpg_spec()
+    r = Rounds(spec, "flat", 1)
+    assert not r.policy and r.ctrl.params[0].tolist() == pytest.approx(spec["initial_params"])
+    for _ in range(100):
+        r.control_step()
+    assert r.d.qpos[0] > 0.1 and (r.status()[0] == RUNNING).all()
+
+
+def test_cli_writes_results_and_rejects_bad_input(tmp_path, capsys):
+    from hexnewton.cli import run
+
+    out = str(tmp_path / "s2s")
+    args = [BUNDLE, "--terrains", "flat", "--rounds", "2", "--max_steps", "20", "--fixed_terrains", "--out", out]
+    assert run(main, PROG, args) == 0
+    with open(os.path.join(out, "results.json")) as f:
+        res = json.load(f)
+    assert list(res) == ["flat"] and set(res["flat"]) == set(HEADLINE) and res["flat"]["rounds"] == 2
+    assert os.path.isfile(os.path.join(out, "report.md")) and os.path.isfile(os.path.join(out, "details.json"))
+    capsys.readouterr()
+    assert run(main, PROG, args) == 2  # --out exists
+    assert "exists" in capsys.readouterr().err
+    assert run(main, PROG, [str(tmp_path), "--out", str(tmp_path / "x")]) == 2  # not a bundle
+    with pytest.raises(SystemExit) as e:
+        run(main, PROG, [BUNDLE, "--rounds", "0", "--out", str(tmp_path / "y")])
+    assert e.value.code == 2
+    assert run(main, PROG, [BUNDLE, "--video", str(tmp_path / "v.avi"), "--out", str(tmp_path / "z")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 3 and all(line.startswith(PROG) for line in err)
