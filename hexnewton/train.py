@@ -171,7 +171,7 @@ def main(argv: list[str] | None = None) -> int:
           f"logs in {run_dir}")  # fmt: skip
     if videos is not None:
         videos.first_iteration = runner.current_learning_iteration
-    t0 = time.time()
+    t0, first_it = time.time(), runner.current_learning_iteration
     try:
         reason = runner.train(agent.max_iterations)
     finally:
@@ -189,9 +189,10 @@ def main(argv: list[str] | None = None) -> int:
         return 0
     from . import startup
 
+    iterations = runner.current_learning_iteration + 1 - first_it  # this run's (a resumed one starts later)
     timing = {"startup_phases_s": startup.phases(), "first_iteration_s": runner.first_iteration_s,
-              "train_s": train_s, "iterations": runner.current_learning_iteration + 1,
-              "env_steps": (runner.current_learning_iteration + 1) * num_envs * agent.num_steps_per_env,
+              "train_s": train_s, "iterations": iterations,
+              "env_steps": iterations * num_envs * agent.num_steps_per_env * rank.world_size,
               "wall_s_to_result": None}  # fmt: skip
     from .runner import training_success
 
