@@ -70,6 +70,11 @@ def sweep_overrides(field: str, value: float) -> dict:
             rz["push_interval"] = 3.0
     else:
         return {field: value}
+    return on_every_robot(rz)
+
+
+def on_every_robot(rz: dict) -> dict:
+    """``RandomizationConfig`` fields ``rz`` applied to every robot, the nominal robot otherwise, as overrides."""
     return {"randomization.enabled": True, **{f"randomization.{k}": v for k, v in {**_NOMINAL, **rz}.items()}}
 
 
@@ -80,7 +85,7 @@ def perturbation(name: str) -> dict:
     rz, terrain = PERTURBATIONS[name]
     out = {f"terrain.{k}": v for k, v in terrain.items()}
     if rz:
-        out.update({"randomization.enabled": True, **{f"randomization.{k}": v for k, v in {**_NOMINAL, **rz}.items()}})
+        out.update(on_every_robot(rz))
     return out
 BASELINES = ("sac_cpg", "td3_cpg", "a2c_cpg")  # controllers trained by hexnewton.baselines (skrl)
 

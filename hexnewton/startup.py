@@ -61,9 +61,3 @@ def summary() -> str:
     parts = ", ".join(f"{k} {v:.1f}" for k, v in _phases.items())
     return f"start-up {since_start():.1f} s from process start: {parts}"
 
-
-def reset() -> None:
-    """Forget the phases and start timing from now (tests; a second env in one process)."""
-    global _last
-    _phases.clear()
-    _last = time.time()
