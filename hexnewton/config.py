@@ -354,9 +354,9 @@ class RandomizationConfig:
     """Domain randomisation for sim-to-real (ours). Off by default and in the paper's setting.
 
     Drawn once per env when the world is built (uniform in each range): foot-ground friction, base payload,
-    leg link masses, PD gains and effort limits. Every step: observation noise. Actions act one control step
-    late in a share of the envs (actuation latency). Every ``push_interval`` seconds: a push, a random
-    horizontal change of the base velocity."""
+    leg link masses, PD gains and effort limits, and where set the foot radius and the contact time constant. Every
+    step: observation noise. Actions act one control step late in a share of the envs (actuation latency). Every
+    ``push_interval`` seconds: a push, a random horizontal change of the base velocity."""
 
     enabled: bool = False
     friction: tuple[float, float] = (0.4, 1.2)  # friction coefficient of the robot's contacts (default 0.9)
@@ -365,6 +365,11 @@ class RandomizationConfig:
     kp_scale: tuple[float, float] = (0.8, 1.2)
     kd_scale: tuple[float, float] = (0.8, 1.2)
     effort_scale: tuple[float, float] = (0.8, 1.2)
+    # contact geometry and softness (None: the robot's own): the foot sphere's radius [m] (nominal 12 mm; its centre
+    # stays at the tibia's end) and the time constant [s] of the robot's contacts with the ground (MuJoCo's solref,
+    # damping ratio 1; nominal 0.02)
+    foot_radius: tuple[float, float] | None = None
+    contact_timeconst: tuple[float, float] | None = None
     latency_share: float = 0.5  # share of envs whose actions take effect one control step (20 ms) late
     # uniform observation noise amplitudes: joint positions [rad], joint velocities [rad/s], target [m],
     # quaternion components, max terrain height [m] (CPG parameters are the controller's own: no noise)

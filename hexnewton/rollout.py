@@ -26,7 +26,10 @@ LABELS = {"cpg": "CPG", "cpg_swept": "CPG (swept)", "cpg_rl": "CPG_RL", "joint":
 #: changes one thing; everything else is the nominal robot. Values: (RandomizationConfig fields, TerrainConfig fields).
 _NOMINAL = dict(friction=(0.9, 0.9), payload=(0.0, 0.0), link_mass_scale=(1.0, 1.0), kp_scale=(1.0, 1.0),
                 kd_scale=(1.0, 1.0), effort_scale=(1.0, 1.0), latency_share=0.0, noise_joint_pos=0.0,
-                noise_joint_vel=0.0, noise_target=0.0, noise_quat=0.0, noise_height=0.0, push_velocity=0.0)
+                noise_joint_vel=0.0, noise_target=0.0, noise_quat=0.0, noise_height=0.0, push_velocity=0.0,
+                foot_radius=None, contact_timeconst=None)
+#: the RandomizationConfig fields that are per-env ranges (a sweep point sets such a field to (value, value))
+_RANGES = {k for k, v in _NOMINAL.items() if isinstance(v, tuple)} | {"foot_radius", "contact_timeconst"}
 PERTURBATIONS = {
     "nominal": ({}, {}),
     "friction_0.3": ({"friction": (0.3, 0.3)}, {}),
@@ -65,7 +68,7 @@ def sweep_overrides(field: str, value: float) -> dict:
         rz = {"kp_scale": (value, value), "effort_scale": (value, value)}
     elif field.startswith("randomization."):
         key = field.split(".", 1)[1]
-        rz = {key: (value, value) if isinstance(_NOMINAL.get(key), tuple) else value}
+        rz = {key: (value, value) if key in _RANGES else value}
         if key == "push_velocity":
             rz["push_interval"] = 3.0
     else:

@@ -15,7 +15,8 @@ need nothing but the checkpoint. Adding a task is one :func:`register` call belo
 
 The recipe of the paper's terrains (ours; RESULTS.md says what each part does): a terrain curriculum (10 lanes of
 rising difficulty, robots start on the first 3), a knee-lift floor (A2 in 0.9-1.3 rad: a high-stepping gait from the
-start), domain randomisation, the 20 ms physics frame, a 0.1 s filter on the CPG parameters and the stability shaping
+start), domain randomisation (with the foot radius and contact softness, :data:`FOOT_CONTACT_RANGES`), the 20 ms
+physics frame, a 0.1 s filter on the CPG parameters and the stability shaping
 (:data:`STABLE_SHAPING`). The complex course adds the body posture and the stable-gait curriculum
 (:data:`STABLE_STAGES`, 300 iterations: 172 s from process start to the exported policy on one H100,
 results/time_to_skill). ``paper`` is Table 1's reward and Table 2's PPO on the complex course, with
@@ -35,6 +36,10 @@ from .config import ACTION_MODES, CPGConfig, HexConfig, RandomizationConfig, Rew
 #: falls, lowest rugged pitch and roll variance; 2 / 0.02 / 0.05 (with a 0.03 s filter) fell 18x as often on rugged
 #: ground, 20 / 0.2 / 0.1 20x.
 STABLE_SHAPING = dict(w_tilt=5.0, w_ang_vel=0.05, w_action_rate=0.1)
+#: the recipe's contact randomisation: feet of 10-14 mm radius (nominal 12) and contact time constants of 10-30 ms
+#: (nominal 20), so that training meets feet that fit between the 2 cm blocks and sink deeper into them
+#: (results/sim2sim: such wedged feet stop robots in C MuJoCo)
+FOOT_CONTACT_RANGES = dict(foot_radius=(0.010, 0.014), contact_timeconst=(0.010, 0.030))
 
 #: The stable-gait curriculum of the complex recipe (RESULTS.md, "Stable gaits"; results/time_to_skill): (first
 #: iteration, changes) of the reflex gain (``posture_reflex``) and the reward weights, applied from that iteration on;
@@ -130,7 +135,7 @@ def _recipe(terrain: str, goal_distance: float = TaskConfig.goal_distance, postu
         cpg=CPGConfig(a2_range=(0.9, 1.3), param_tau=0.1, posture=posture),
         task=TaskConfig(goal_distance=goal_distance, seed=1),
         reward=RewardConfig(**STABLE_SHAPING),
-        randomization=RandomizationConfig(enabled=True),
+        randomization=RandomizationConfig(enabled=True, **FOOT_CONTACT_RANGES),
     )
 
 
@@ -161,5 +166,5 @@ register(Task("complex-joint", "pure DRL on the complex course: the 18 joint tar
               "terrain, physics and reward without the CPG", _recipe("complex"), action_mode="joint"))
 
 
-__all__ = ["ACTION_MODES", "LONG_STABLE_STAGES", "STABLE_SHAPING", "STABLE_STAGES", "TASKS", "Task", "course", "register", "task",
+__all__ = ["ACTION_MODES", "FOOT_CONTACT_RANGES", "LONG_STABLE_STAGES", "STABLE_SHAPING", "STABLE_STAGES", "TASKS", "Task", "course", "register", "task",
            "task_table"]

@@ -51,6 +51,9 @@ def _base_task(argv: list[str] | None):
     from .tasks import TASKS, Task
 
     ckpt = load_checkpoint(known.resume)  # fails before building anything
+    if "critic_state_dict" not in ckpt or "optimizer_state_dict" not in ckpt:
+        raise ValueError(f"{known.resume} holds the policy only (no critic or optimiser): resume from a run's "
+                         "model_<iteration>.pt")  # fmt: skip
     meta = checkpoint_meta(ckpt)
     cfg = trained_config(ckpt)
     name = checkpoint_task(ckpt) or cfg.terrain.name

@@ -357,6 +357,7 @@ def test_bad_checkpoints_are_one_line_errors(trained, tmp_path):
         (["train.py", "--resume", str(corrupt), "--task", "flat"], "continues the checkpoint's own task"),
         (["train.py", "--resume", str(corrupt)], "cannot read checkpoint"),
         (["train.py", "--resume", str(truncated)], "cannot read checkpoint"),
+        (["train.py", "--resume", "results/policies/cpg_rl_complex.pt"], "holds the policy only"),
         (["play.py", "--controller", "cpg_rl", "--checkpoint", str(truncated)], "cannot read checkpoint"),
         (["play.py", "--controller", "pid"], "invalid choice: 'pid'"),
         (["train.py", "--num_envs", "abc"], "positive integer"),

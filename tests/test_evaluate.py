@@ -295,6 +295,8 @@ def test_sweep_points_change_one_thing():
     assert motors["randomization.kp_scale"] == motors["randomization.effort_scale"] == (0.5, 0.5)
     assert motors["randomization.payload"] == (0.0, 0.0) and motors["randomization.enabled"]
     assert sweep_overrides("randomization.push_velocity", 0.6)["randomization.push_interval"] == 3.0
+    feet = sweep_overrides("randomization.foot_radius", 0.01)
+    assert feet["randomization.foot_radius"] == (0.01, 0.01) and feet["randomization.contact_timeconst"] is None
     specs = sweep_specs([["default"], ["terrain.step_depth", "0.2", "0.3"]], ["stepped", "complex"])
     assert [s[0] for s in specs[:len(DEFAULT_SWEEPS)]] == [s[0] for s in DEFAULT_SWEEPS]
     assert specs[-2:] == [("terrain.step_depth@stepped", "terrain.step_depth", "stepped", (0.2, 0.3)),

@@ -115,3 +115,47 @@ def test_evaluation_under_perturbed_conditions():
     ep = run_rounds("cpg", None, "flat", 3, DEV, 20, progress=False,
                     overrides={"task.reset_yaw": 0.0, "randomization.enabled": True, "task.goal_distance": 5.5})
     assert ep.pos.shape == (20, 3, 2) and np.isfinite(ep.pos).all() and ep.pos[-1, :, 0].min() > 0
+
+
+def test_foot_radius_and_contact_timeconst_reach_both_simulators():
+    """The drawn foot radius sizes each env's foot spheres for Newton's collision and MuJoCo, and the drawn time
+    constant is the solref of that env's robot-ground contacts after MuJoCo's averaging with the ground's."""
+    from hexnewton.sim import World
+
+    rz = RandomizationConfig(enabled=True, foot_radius=(0.010, 0.014), contact_timeconst=(0.015, 0.03))
+    cfg = HexConfig(sim=replace(SimConfig(), num_envs=4, device=DEV), randomization=rz)
+    w = World(cfg)
+    d, m, solver = w.randomized, w.model, w.solver
+    for key, (lo, hi) in (("foot_radius", rz.foot_radius), ("contact_timeconst", rz.contact_timeconst)):
+        assert d[key].shape == (4,) and np.all((d[key] >= lo) & (d[key] <= hi)) and d[key].std() > 0
+    feet = np.array([str(s).endswith("_foot") for s in m.shape_label])
+    world = m.shape_world.numpy()
+    np.testing.assert_allclose(m.shape_scale.numpy()[feet, 0], d["foot_radius"][world[feet]], rtol=1e-6)
+    geom_shape = solver.mjc_geom_to_newton_shape.numpy()  # (worlds, geoms) -> Newton shape or -1
+    size = solver.mjw_model.geom_size.numpy()[:, :, 0]
+    for e in range(4):
+        foot_geoms = [g for g, s in enumerate(geom_shape[e]) if s >= 0 and feet[s]]
+        assert len(foot_geoms) == 6
+        np.testing.assert_allclose(size[e, foot_geoms], d["foot_radius"][e], rtol=1e-6)
+    w.step(10)  # standing on flat ground: every contact is robot-ground
+    data = solver.mjw_data
+    nc = int(data.nacon.numpy()[0])
+    assert nc > 0
+    solref, contact_world = data.contact.solref.numpy()[:nc], data.contact.worldid.numpy()[:nc]
+    np.testing.assert_allclose(solref[:, 0], d["contact_timeconst"][contact_world], rtol=1e-4)
+    np.testing.assert_allclose(solref[:, 1], 1.0, rtol=1e-4)
+
+
+def test_larger_feet_stand_higher():
+    """Newton's collision uses the drawn radius: 4 mm more foot radius lifts the standing torso by about 4 mm."""
+    from hexnewton.sim import World
+
+    heights = []
+    for r in (0.010, 0.014):
+        rz = RandomizationConfig(enabled=True, foot_radius=(r, r), friction=(0.9, 0.9), payload=(0.0, 0.0),
+                                 link_mass_scale=(1.0, 1.0), kp_scale=(1.0, 1.0), kd_scale=(1.0, 1.0),
+                                 effort_scale=(1.0, 1.0))  # fmt: skip
+        w = World(HexConfig(sim=replace(SimConfig(), num_envs=2, device=DEV), randomization=rz))
+        w.step(50)
+        heights.append(w.base_pos()[:, 2])
+    np.testing.assert_allclose(heights[1] - heights[0], 0.004, atol=0.001)

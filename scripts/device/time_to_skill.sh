@@ -8,6 +8,7 @@
 #                                                      # contact setting, the task's physics (20 ms frame, 4 substeps)
 #   bash scripts/device/time_to_skill.sh train NAME SEED [ARGS...]   # `python train.py --task complex --seed SEED
 #                                                      # ARGS` alone, in the background, timed from its process start
+#                                                      # (ARGS starting with --resume CKPT: that checkpoint's task)
 #   bash scripts/device/time_to_skill.sh wait SECONDS NAME...        # until those runs end
 #   bash scripts/device/time_to_skill.sh eval SECONDS ROUNDS NAME... # each run's result on ROUNDS test rounds per
 #                                                      # terrain, with the fixed CPG, in one evaluate job per run
@@ -53,7 +54,8 @@ train)
   mkdir -p "$RUNS/$name"
   # setsid: the run outlives this call; the shell's clock gives the wall time from process start
   { echo 't0=$(date +%s.%N)'
-    printf 'python train.py --task complex --seed %q' "$seed"; printf ' %q' "$@"
+    task="--task complex"; [ "${1:-}" = "--resume" ] && task=""
+    printf 'python train.py %s --seed %q' "$task" "$seed"; printf ' %q' "$@"
     printf ' --log_dir %q --experiment %q > %q 2>&1\n' "$RUNS" "$name" "$RUNS/$name.log"
     printf 'echo "exit $? wall $(awk "BEGIN {print $(date +%%s.%%N) - $t0}") s" >> %q\n' "$RUNS/$name.log"
   } > "$RUNS/$name.sh"
