@@ -108,7 +108,8 @@ def _field_parser(hint, choices=None):
     origin = typing.get_origin(hint)
     if origin is tuple and args and all(a in (int, float) for a in args if a is not Ellipsis):
         parse, what = scalars[args[0]]
-        nargs = "+" if Ellipsis in args else len(args)
+        # an optional fixed-length tuple takes its numbers or the single word none (checked by config_overrides)
+        nargs = "+" if Ellipsis in args or optional else len(args)
         return nullable(parse, what), nargs, ("INT" if args[0] is int else "X")
     # anything else (tuples of tuples, the curriculum's stages): a Python literal
     return nullable(ast.literal_eval, "a Python literal such as ((1, 2), (3, 4))"), None, "LITERAL"
@@ -134,16 +135,35 @@ def add_config_args(parser, prefix: str, obj, skip: tuple[str, ...] = (), title:
                 continue
             convert, nargs, metavar = _field_parser(hints[f.name], f.metadata.get("choices"))
             shown = "none" if value is None else " ".join(map(str, value)) if nargs and value else value
+            args = typing.get_args(hints[f.name])
+            inner = next((a for a in args if typing.get_origin(a) is tuple), None)
+            if nargs == "+" and inner is not None and Ellipsis not in typing.get_args(inner):
+                _FIXED_LENGTH[f"override:{prefix}:{sub}"] = len(typing.get_args(inner))
             group.add_argument(f"--{prefix}.{sub}", dest=f"override:{prefix}:{sub}", type=convert, nargs=nargs,
                                metavar=metavar, default=argparse.SUPPRESS, help=f"(default: {shown})")  # fmt: skip
 
     walk(obj, "")
 
 
+#: dest -> length of the optional fixed-length tuple fields (``foot_radius: tuple[float, float] | None``)
+_FIXED_LENGTH: dict[str, int] = {}
+
+
 def config_overrides(args, prefix: str) -> dict:
-    """{path: value} of the ``--<prefix>.*`` options that were given (see :func:`add_config_args`)."""
+    """{path: value} of the ``--<prefix>.*`` options that were given (see :func:`add_config_args`); ValueError for an
+    optional fixed-length tuple given neither its count of numbers nor the single word none."""
     tag = f"override:{prefix}:"
-    return {k[len(tag):]: (tuple(v) if isinstance(v, list) else v) for k, v in vars(args).items() if k.startswith(tag)}
+    out = {}
+    for k, v in vars(args).items():
+        if not k.startswith(tag):
+            continue
+        if isinstance(v, list) and k in _FIXED_LENGTH:
+            if v == [None]:
+                v = None
+            elif None in v or len(v) != _FIXED_LENGTH[k]:
+                raise ValueError(f"--{prefix}.{k[len(tag):]}: give {_FIXED_LENGTH[k]} numbers or none")
+        out[k[len(tag):]] = tuple(v) if isinstance(v, list) else v
+    return out
 
 
 def apply_overrides(obj, overrides: dict):

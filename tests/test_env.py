@@ -672,6 +672,12 @@ def test_config_overrides_are_generated_from_the_dataclasses():
     assert apply_overrides(AgentConfig(), agent).to_rsl_rl(8)["actor"]["hidden_dims"] == [64, 64]
     with pytest.raises(ValueError, match="no field 'sim.warp'"):
         apply_overrides(HexConfig(), {"sim.warp": 1})
+    # an optional pair takes two numbers or none
+    for given, want in ((["0.01", "0.014"], (0.01, 0.014)), (["none"], None)):
+        args = p.parse_args(["--env.randomization.foot_radius", *given])
+        assert config_overrides(args, "env") == {"randomization.foot_radius": want}
+    with pytest.raises(ValueError, match="foot_radius: give 2 numbers or none"):
+        config_overrides(p.parse_args(["--env.randomization.foot_radius", "0.01"]), "env")
 
 
 def test_gymnasium_makes_a_task_by_its_id():

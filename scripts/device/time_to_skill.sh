@@ -55,7 +55,7 @@ train)
   # setsid: the run outlives this call; the shell's clock gives the wall time from process start
   { echo 't0=$(date +%s.%N)'
     task="--task complex"; [ "${1:-}" = "--resume" ] && task=""
-    printf 'python train.py %s --seed %q' "$task" "$seed"; printf ' %q' "$@"
+    printf 'python train.py %s --seed %q' "$task" "$seed"; [ $# -gt 0 ] && printf ' %q' "$@"
     printf ' --log_dir %q --experiment %q > %q 2>&1\n' "$RUNS" "$name" "$RUNS/$name.log"
     printf 'echo "exit $? wall $(awk "BEGIN {print $(date +%%s.%%N) - $t0}") s" >> %q\n' "$RUNS/$name.log"
   } > "$RUNS/$name.sh"
