@@ -30,14 +30,11 @@ import time
 from dataclasses import asdict, dataclass, replace
 
 import numpy as np
-import warp as wp
 
 from .agent import AgentConfig
-from .cli import ArgumentParser, add_config_args, apply_overrides, config_overrides, positive_int, run, terrain_name
-from .config import TERRAINS, HexConfig, SimConfig, TerrainConfig
-from .controller import CPGController
+from .cli import ArgumentParser, add_config_args, config_overrides, positive_int, run, terrain_name
+from .config import TERRAINS, HexConfig, SimConfig, TerrainConfig, apply_overrides
 from .report import git_rev
-from .sim import World, resolve_device
 from .terrain import validate_config
 
 
@@ -67,6 +64,13 @@ def _config(terrain: str, num_envs: int, device: str, seed: int, sim: SimConfig 
 
 def bench_one(terrain: str, num_envs: int, device: str, frames: int, sim: SimConfig, seed: int = 0,
               ground: TerrainConfig | None = None) -> BenchResult:  # fmt: skip
+    """The physics world alone: ``frames`` timed frames of ``num_envs`` robots walking under the CPG controller, each
+    with the fixed gait scaled by a random factor in [0.7, 1.3]; contact overflow checked after the timed frames."""
+    import warp as wp
+
+    from .controller import CPGController
+    from .sim import World
+
     cfg = _config(terrain, num_envs, device, seed, sim, ground)
     t0 = time.perf_counter()
     world = World(cfg)
@@ -126,6 +130,7 @@ def _device_memory(device: str) -> int:
     import gc
 
     import torch
+    import warp as wp
 
     gc.collect()
     torch.cuda.empty_cache()
@@ -136,6 +141,7 @@ def bench_env(terrain: str, num_envs: int, device: str, steps: int, seed: int = 
               sim: SimConfig | None = None, ground: TerrainConfig | None = None) -> PipelineResult:
     """``steps`` timed ``HexapodEnv.step`` calls with uniform random actions (drawn before the timing)."""
     import torch
+    import warp as wp
 
     from .env import make_env
 
@@ -171,6 +177,7 @@ def bench_train(terrain: str, num_envs: int, device: str, iterations: int, seed:
     import copy
 
     import torch
+    import warp as wp
     from rsl_rl.runners import OnPolicyRunner
 
     from .env import make_env
@@ -220,6 +227,8 @@ def bench_train(terrain: str, num_envs: int, device: str, iterations: int, seed:
 
 def _timed_learn(runner, env, iterations: int) -> float:
     """Wall time of ``iterations`` more PPO iterations, the device idle before and after."""
+    import warp as wp
+
     wp.synchronize_device(env.device)
     t0 = time.perf_counter()
     runner.learn(iterations)
@@ -280,7 +289,10 @@ def pipeline_table(sim_results: list[BenchResult], results: list[PipelineResult]
 
 
 def device_name(device: str) -> str:
+    """The device's name for the tables: the GPU's, or the CPU's with a note on Warp's single-threaded kernels."""
     if device.startswith("cuda"):
+        import warp as wp
+
         return wp.get_device(device).name
     return f"CPU ({platform.processor() or platform.machine()}, Warp CPU kernels single-threaded)"
 
@@ -302,7 +314,8 @@ def table(results: list[BenchResult], sim: SimConfig, command: str) -> str:
     return head + "\n".join(rows) + "\n"
 
 
-def main(argv: list[str] | None = None) -> int:
+def parser() -> ArgumentParser:
+    """The command line of ``python -m hexnewton.bench``."""
     p = ArgumentParser(prog="python -m hexnewton.bench", description=__doc__.split("\n")[0])
     p.add_argument("--device", default=None, help="cpu, cuda or cuda:N (default: cuda if present, else cpu)")
     p.add_argument("--num_envs", type=positive_int, nargs="+", default=None)
@@ -323,8 +336,59 @@ def main(argv: list[str] | None = None) -> int:
     add_config_args(p, "env.terrain", TerrainConfig(), skip=("name", "seed"),
                     title="--env.terrain.*: the terrain's other settings (TerrainConfig; --terrain names it)")
     add_config_args(p, "agent", AgentConfig(), title="--agent.*: train mode's learner (AgentConfig), as train.py's")
-    args = p.parse_args(argv)
+    return p
+
+
+def bench_pipeline(terrain: str, n: int, device: str, modes: list[str], env_steps: int, iterations: int,
+                   profile: bool, sim: SimConfig, agent: AgentConfig, ground: TerrainConfig,
+                   ) -> tuple[PipelineResult, dict[str, float] | None]:  # fmt: skip
+    """The env-step (``env`` in ``modes``) and training (``train``) throughput of ``n`` envs on ``terrain``, each
+    printed as it is measured; with ``profile`` also the training phases' seconds per iteration (else None)."""
+    pr, prof = PipelineResult(terrain, n), None
+    if "env" in modes:
+        e = bench_env(terrain, n, device, env_steps, sim=sim, ground=ground)
+        pr.env_steps_per_s, pr.env_robot_s_per_s = e.env_steps_per_s, e.env_robot_s_per_s
+        print(f"{terrain:8s} N={n:6d} env   {e.env_robot_s_per_s:12,.0f} robot-s/s  "
+              f"({e.env_steps_per_s:,.0f} env-steps/s)", flush=True)  # fmt: skip
+    if "train" in modes:
+        t, prof = bench_train(terrain, n, device, iterations, profile=profile, sim=sim, agent=agent, ground=ground)
+        for k in ("train_steps_per_s", "train_robot_s_per_s", "train_iteration_s", "memory_per_env_kb"):
+            setattr(pr, k, getattr(t, k))
+        print(f"{terrain:8s} N={n:6d} train {t.train_robot_s_per_s:12,.0f} robot-s/s  ({t.train_steps_per_s:,.0f} "
+              f"env-steps/s, {t.train_iteration_s:.2f} s/iteration)", flush=True)  # fmt: skip
+        if prof is not None:
+            total = sum(prof.values())
+            print(f"{terrain:8s} N={n:6d} profile (synced, {total:.3f} s/iteration): " + ", ".join(
+                f"{k} {v * 1e3:.1f} ms ({v / total:.0%})" for k, v in prof.items()), flush=True)  # fmt: skip
+    return pr, prof
+
+
+def profile_table(profiles: list[dict]) -> str:
+    """The training phases' time per iteration (``--profile``), one row per terrain and env count."""
+    md = "| terrain | envs | " + " | ".join(name for name, _, _ in PHASES) + " | other |\n"
+    md += "|---|---:|" + "---:|" * (len(PHASES) + 1) + "\n"
+    for pr in profiles:
+        md += f"| {pr['terrain']} | {pr['num_envs']} | " + " | ".join(
+            f"{pr[name] * 1e3:.1f} ms" for name in [p[0] for p in PHASES] + ["other"]) + " |\n"  # fmt: skip
+    return md
+
+
+def markdown(results: list[BenchResult], pipeline: list[PipelineResult], profiles: list[dict], sim: SimConfig,
+             command: str, device: str) -> str:
+    """Every table of a run: sim-only (or a heading without one), env-step and training, phases."""
+    md = table(results, sim, command) if results else (f"### Throughput, {datetime.date.today().isoformat()}, "
+                                                        f"{device_name(device)}, git {git_rev()}\n\n`{command}`\n\n")
+    if pipeline:
+        md += "\n" + pipeline_table(results, pipeline)
+    if profiles:
+        md += "\n" + profile_table(profiles)
+    return md
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = parser().parse_args(argv)
     agent = apply_overrides(AgentConfig(), config_overrides(args, "agent"))
+    from .sim import resolve_device
 
     device = resolve_device(args.device)
     gpu = device.startswith("cuda")
@@ -347,37 +411,14 @@ def main(argv: list[str] | None = None) -> int:
                       flush=True)  # fmt: skip
                 results.append(r)
             if "env" in args.mode or "train" in args.mode:
-                pr = PipelineResult(terrain, n)
-                if "env" in args.mode:
-                    e = bench_env(terrain, n, device, env_steps, sim=sim, ground=ground)
-                    pr.env_steps_per_s, pr.env_robot_s_per_s = e.env_steps_per_s, e.env_robot_s_per_s
-                    print(f"{terrain:8s} N={n:6d} env   {e.env_robot_s_per_s:12,.0f} robot-s/s  "
-                          f"({e.env_steps_per_s:,.0f} env-steps/s)", flush=True)  # fmt: skip
-                if "train" in args.mode:
-                    t, prof = bench_train(terrain, n, device, iterations, profile=args.profile, sim=sim,
-                                          agent=agent, ground=ground)
-                    for k in ("train_steps_per_s", "train_robot_s_per_s", "train_iteration_s", "memory_per_env_kb"):
-                        setattr(pr, k, getattr(t, k))
-                    print(f"{terrain:8s} N={n:6d} train {t.train_robot_s_per_s:12,.0f} robot-s/s  "
-                          f"({t.train_steps_per_s:,.0f} env-steps/s, {t.train_iteration_s:.2f} s/iteration)", flush=True)  # fmt: skip
-                    if prof is not None:
-                        profiles.append({"terrain": terrain, "num_envs": n, **prof})
-                        total = sum(prof.values())
-                        print(f"{terrain:8s} N={n:6d} profile (synced, {total:.3f} s/iteration): " + ", ".join(
-                            f"{k} {v * 1e3:.1f} ms ({v / total:.0%})" for k, v in prof.items()), flush=True)  # fmt: skip
+                pr, prof = bench_pipeline(terrain, n, device, args.mode, env_steps, iterations, args.profile, sim,
+                                          agent, ground)  # fmt: skip
+                if prof is not None:
+                    profiles.append({"terrain": terrain, "num_envs": n, **prof})
                 pipeline.append(pr)
         if args.largest:
             results += largest_that_fits(terrain, max(envs), device, frames, sim, ground=ground)
-    md = table(results, sim, command) if results else (
-        f"### Throughput, {datetime.date.today().isoformat()}, {device_name(device)}, git {git_rev()}\n\n`{command}`\n\n")
-    if pipeline:
-        md += "\n" + pipeline_table(results, pipeline)
-    if profiles:
-        md += "\n| terrain | envs | " + " | ".join(name for name, _, _ in PHASES) + " | other |\n"
-        md += "|---|---:|" + "---:|" * (len(PHASES) + 1) + "\n"
-        for pr in profiles:
-            md += f"| {pr['terrain']} | {pr['num_envs']} | " + " | ".join(
-                f"{pr[name] * 1e3:.1f} ms" for name in [p[0] for p in PHASES] + ["other"]) + " |\n"  # fmt: skip
+    md = markdown(results, pipeline, profiles, sim, command, device)
     print()
     print(md)
     if args.append:

@@ -6,7 +6,7 @@
 dict), ``agent`` (the :class:`~hexnewton.agent.AgentConfig`), ``world_size``. Checkpoints written before the task
 registry carry ``preset``, ``distribution`` and ``std_max`` instead of ``agent``; both load. The skrl baselines
 (:mod:`hexnewton.baselines`) write their own format with the same ``infos["hexnewton"]`` entry (``baseline`` holds
-their learner's config); :func:`policy_checkpoint` reads either kind.
+their learner's config); :func:`hexnewton.policy.policy_checkpoint` reads either kind.
 """
 
 from __future__ import annotations
@@ -65,20 +65,6 @@ def load_checkpoint(path: str, map_location: str = "cpu") -> dict:
     """An rsl-rl checkpoint (``train.py``) read by :func:`read_checkpoint`, with one-line errors for missing, corrupt,
     unsafe or wrong-type files."""
     return check_rsl_rl_checkpoint(read_checkpoint(path, map_location), path)
-
-
-def policy_checkpoint(path: str) -> tuple[dict, str]:
-    """Any trained policy's checkpoint (an rsl-rl one from ``train.py`` or a skrl baseline's from ``python -m
-    hexnewton.baselines``) read once, as data only, with the controller that runs it by default (``cpg_rl``,
-    ``joint``, ``sac_cpg``, ``td3_cpg``, ``a2c_cpg``)."""
-    ckpt = read_checkpoint(path)
-    if is_baseline_checkpoint(ckpt):
-        from .baselines import check_baseline_checkpoint
-
-        ckpt = check_baseline_checkpoint(ckpt, path)
-        return ckpt, f"{ckpt['algo']}_cpg"
-    ckpt = check_rsl_rl_checkpoint(ckpt, path)
-    return ckpt, "joint" if checkpoint_meta(ckpt).get("action_mode", "cpg") == "joint" else "cpg_rl"
 
 
 def load_into_runner(runner, ckpt: dict, load_cfg: dict | None = None) -> None:

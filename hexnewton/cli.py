@@ -43,6 +43,16 @@ def check_writable(path: str, ext: str) -> None:
         raise ValueError(f"cannot write {path}: {parent} is not a writable directory")
 
 
+def check_new_dir(path: str) -> None:
+    """Fail before any simulation unless ``path`` is a folder that does not exist yet and can be made (nothing is
+    overwritten)."""
+    if os.path.exists(path):
+        raise ValueError(f"{path} exists: choose a new --out (nothing is overwritten)")
+    parent = os.path.dirname(os.path.abspath(path))
+    if not os.path.isdir(parent) or not os.access(parent, os.W_OK):
+        raise ValueError(f"cannot create {path}: {parent} is not a writable directory")
+
+
 def run(main: Callable[[list[str] | None], int | None], prog: str, argv: list[str] | None = None) -> int:
     """Run ``main``; user errors (HexnewtonError, ValueError) become one stderr line and exit status 2, file
     system errors one line and exit status 1."""
@@ -163,22 +173,4 @@ def config_overrides(args, prefix: str) -> dict:
             elif None in v or len(v) != _FIXED_LENGTH[k]:
                 raise ValueError(f"--{prefix}.{k[len(tag):]}: give {_FIXED_LENGTH[k]} numbers or none")
         out[k[len(tag):]] = tuple(v) if isinstance(v, list) else v
-    return out
-
-
-def apply_overrides(obj, overrides: dict):
-    """``obj`` (a dataclass tree) with ``{"sim.frame_dt": 0.02, ...}`` set; ValueError for a path it does not have."""
-    import dataclasses
-
-    out = obj
-    for path, value in overrides.items():
-        def put(o, keys):
-            names = {f.name for f in dataclasses.fields(o)}
-            if keys[0] not in names:
-                raise ValueError(f"{type(obj).__name__} has no field '{path}'")
-            if len(keys) == 1:
-                return dataclasses.replace(o, **{keys[0]: value})
-            return dataclasses.replace(o, **{keys[0]: put(getattr(o, keys[0]), keys[1:])})
-
-        out = put(out, path.split("."))
     return out

@@ -437,3 +437,21 @@ def dataclass_from_dict(cls, values: dict):
 def config_from_dict(d: dict) -> HexConfig:
     """Rebuild a :class:`HexConfig` from ``dataclasses.asdict`` output (a checkpoint's or config.json's "config")."""
     return dataclass_from_dict(HexConfig, d or {})
+
+
+def apply_overrides(obj, overrides: dict):
+    """``obj`` (a dataclass tree) with ``{"sim.frame_dt": 0.02, ...}`` set; ValueError for a path it does not have."""
+    import dataclasses
+
+    out = obj
+    for path, value in overrides.items():
+        def put(o, keys):
+            names = {f.name for f in dataclasses.fields(o)}
+            if keys[0] not in names:
+                raise ValueError(f"{type(obj).__name__} has no field '{path}'")
+            if len(keys) == 1:
+                return dataclasses.replace(o, **{keys[0]: value})
+            return dataclasses.replace(o, **{keys[0]: put(getattr(o, keys[0]), keys[1:])})
+
+        out = put(out, path.split("."))
+    return out

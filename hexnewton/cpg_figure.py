@@ -70,7 +70,7 @@ import time
 
 import numpy as np
 
-from .cli import ArgumentParser, positive_int, run
+from .cli import ArgumentParser, check_new_dir, positive_int, run
 from .config import LEG_NAMES, LEG_OSCILLATOR, CPGConfig, TaskConfig
 from .kernels.reference import hopf_cpg_reference, hopf_network_reference, network_omega, tripod_theta
 
@@ -333,11 +333,7 @@ def _task_steps() -> list[float]:
 
 
 def _check(args) -> None:
-    if os.path.exists(args.out):
-        raise ValueError(f"{args.out} exists: choose a new --out (nothing is overwritten)")
-    parent = os.path.dirname(os.path.abspath(args.out))
-    if not os.path.isdir(parent) or not os.access(parent, os.W_OK):
-        raise ValueError(f"cannot create {args.out}: {parent} is not a writable directory")
+    check_new_dir(args.out)
     if not all(0.0 < d <= 0.01 for d in args.dt):
         raise ValueError(f"--dt {args.dt}: each step must lie in (0, 0.01] s (RK4 stays stable there)")
     if not all(0.0 < w <= 50.0 for w in args.omega):

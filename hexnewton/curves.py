@@ -148,6 +148,30 @@ def plot_fig5a(path: str, methods: dict[str, list[str]]) -> dict:
     return summary
 
 
+def plot_learning(path: str, runs: dict[str, str]) -> None:
+    """Fig. 5a: mean episode reward against env-steps and against wall time, one curve per controller."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from .rollout import LABELS
+
+    fig, axes = plt.subplots(1, 2, figsize=(11, 3.8))
+    for ax, x in zip(axes, ("env_steps", "wall_time")):
+        for ctrl, spec in runs.items():
+            curve = read_curve(spec, x).get("Train/mean_reward")
+            if curve:
+                xs, v = zip(*curve)
+                ax.plot(xs, v, label=LABELS.get(ctrl, ctrl))
+        ax.set(xlabel="env-steps" if x == "env_steps" else "wall time [min]", ylabel="mean episode reward")
+        ax.grid(alpha=0.3)
+    axes[0].legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=90)
+    plt.close(fig)
+
+
 def main(argv: list[str] | None = None) -> int:
     p = ArgumentParser(prog="python -m hexnewton.curves", description=__doc__.split("\n")[0])
     p.add_argument("runs", nargs="*", help="run directories; DIR1,DIR2 joins a resumed run's pieces")

@@ -49,12 +49,12 @@ import time
 
 import numpy as np
 
-from .cli import ArgumentParser, add_config_args, apply_overrides, config_overrides, positive_int, run, terrain_name
-from .config import FIXED_GAITS, HexConfig, TaskConfig, control_decimation, gait_params
+from .cli import ArgumentParser, add_config_args, check_new_dir, config_overrides, positive_int, run, terrain_name
+from .config import FIXED_GAITS, HexConfig, TaskConfig, apply_overrides, control_decimation, gait_params
 from .metrics import DISTANCES, gait_quality, round_metrics, summarize
-from .rollout import BASELINES, CONTROLLERS, DEFAULT_SWEEPS, EVAL_TERRAIN_SEED, FIXED, LABELS, PERTURBATIONS, \
-    START_SEED_OFFSET, perturbation, run_rounds, sweep_overrides
-from .report import _pct, merge_reports, plot_learning, plot_params, plot_sweep, plot_terrain, report_markdown
+from .rollout import CONTROLLERS, DEFAULT_SWEEPS, EVAL_TERRAIN_SEED, FIXED, LABELS, PERTURBATIONS, START_SEED_OFFSET, \
+    perturbation, read_controller_checkpoint, run_rounds, sweep_overrides
+from .report import merge_reports, percent, plot_params, plot_sweep, plot_terrain, report_markdown
 
 #: what a sweep point keeps of an evaluation's summary
 SWEEP_METRICS = ("rounds", "fall_rate", "pitch_var_deg2", "roll_var_deg2", "pitch_p999_deg", "roll_p999_deg")
@@ -116,13 +116,15 @@ def run_sweeps(specs, controllers, evaluate_one, last: float, out: str) -> dict:
                          f"time_to_{last:g}m_s": s[f"time_to_{last:g}m_s"], **{k: s[k] for k in SWEEP_METRICS}}
                 curves[ctrl].append(point)
                 print(f"[sweep {name} = {value:g}] {terrain:8s} {LABELS[ctrl]:8s} {last:g} m "
-                      f"{_pct(point[f'success_{last:g}m'])}  falls {_pct(point['fall_rate'])}", flush=True)  # fmt: skip
+                      f"{percent(point[f'success_{last:g}m'])}  falls {percent(point['fall_rate'])}",
+                      flush=True)  # fmt: skip
         sweeps[name] = {"field": field, "terrain": terrain, "values": list(values), "curves": curves}
         plot_sweep(os.path.join(out, f"fig_sweep_{name.replace('@', '_')}.png"), name, sweeps[name], last)
     return sweeps
 
 
-def main(argv: list[str] | None = None) -> int:
+def parser() -> ArgumentParser:
+    """The command line of ``python -m hexnewton.evaluate``."""
     p = ArgumentParser(prog="python -m hexnewton.evaluate", description="The paper's evaluation and report.")
     p.add_argument("--controllers", nargs="+", default=["cpg", "cpg_rl"], choices=list(CONTROLLERS))
     p.add_argument("--checkpoint", nargs="+", metavar="CTRL[:TERRAIN]=PATH", help="policy of cpg_rl / joint / sac_cpg / td3_cpg / a2c_cpg")
@@ -164,60 +166,62 @@ def main(argv: list[str] | None = None) -> int:
                           "--env.randomization.enabled true, --env.cpg.posture_reflex 2: a fixed gait gets the body "
                           "posture with that reflex). sim.* and cpg.* default to each policy's own (its checkpoint's); "
                           "task.reset_yaw is the start yaw noise")  # fmt: skip
-    args = p.parse_args(argv)
-    env_overrides = config_overrides(args, "env")
-    goal_distance = env_overrides.get("task.goal_distance", TaskConfig.goal_distance)
-    course = apply_overrides(HexConfig(), env_overrides)  # fail before any output folder is made
-    control_decimation(course.task.control_dt, course.sim.frame_dt)
-    if args.merge:
-        return merge_reports(args.merge, args.out or os.path.join("eval", datetime.datetime.now().strftime(
-            "%Y-%m-%d_%H-%M-%S")))
-    distances = tuple(sorted(set(args.distances)))
+    return p
+
+
+def default_out() -> str:
+    """``eval/<date_time>``."""
+    return os.path.join("eval", datetime.datetime.now().strftime("%Y-%m-%d_%H-%M-%S"))
+
+
+def success_distances(given: list[float], goal_distance: float) -> tuple[float, ...]:
+    """The success distances, sorted and each once; ValueError for one that a round cannot reach before its goal."""
+    distances = tuple(sorted(set(given)))
     if not all(0 < d <= goal_distance - TaskConfig.goal_radius + 1e-9 for d in distances):
         raise ValueError(f"--distances must lie in (0, goal_distance - {TaskConfig.goal_radius:g}] = "
                          f"(0, {goal_distance - TaskConfig.goal_radius:g}] m (set --env.task.goal_distance)")  # fmt: skip
-    checkpoints = _pairs(args.checkpoint, "--checkpoint")
-    runs = _pairs(args.runs, "--runs")
-    from .baselines import load_baseline_checkpoint
-    from .checkpoint import load_checkpoint, trained_config
+    return distances
 
-    read = {}  # path -> checkpoint: every learnt policy's file is checked before any simulation
-    for ctrl in args.controllers:
-        for terrain in args.terrains:
-            path = checkpoint_for(checkpoints, ctrl, terrain) if ctrl not in FIXED else None
-            if ctrl in BASELINES:
-                read[path] = load_baseline_checkpoint(path)
-            elif path is not None:
-                read[path] = load_checkpoint(path)
+
+def read_checkpoints(checkpoints: dict[str, str], controllers: list[str], terrains: list[str]) -> dict[str, dict]:
+    """{path: checkpoint} of every learnt policy on every terrain, each file read and checked before any simulation."""
+    read = {}
+    for ctrl in controllers:
+        for terrain in terrains:
+            if ctrl not in FIXED:
+                path = checkpoint_for(checkpoints, ctrl, terrain)
+                read[path] = read_controller_checkpoint(ctrl, path)
+    return read
+
+
+def check_runs(runs: dict[str, str]) -> None:
+    """ValueError unless every ``--runs`` training run logged its mean episode reward (Fig. 5a)."""
     from .curves import read_curve
 
     for spec in runs.values():
         if "Train/mean_reward" not in read_curve(spec, "env_steps"):
             raise ValueError(f"no mean episode reward logged under {spec}")
-    for name in args.perturbations:
-        perturbation(name)
-    sweeps = sweep_specs(args.sweep, args.terrains)
-    physics = {k: v for k, v in env_overrides.items() if k.startswith("sim.")}
-    # the fixed gaits walk under the first learnt policy's physics (the same run, the same simulator) unless told
-    learnt = [checkpoint_for(checkpoints, c, args.terrains[0]) for c in args.controllers if c not in FIXED]
-    fixed_physics = physics
-    if not physics and learnt:
-        sim = trained_config(read[learnt[0]]).sim
-        fixed_physics = {"sim.frame_dt": sim.frame_dt, "sim.substeps": sim.substeps}
-    out = args.out or os.path.join("eval", datetime.datetime.now().strftime("%Y-%m-%d_%H-%M-%S"))
-    if os.path.exists(out):
-        raise ValueError(f"{out} exists: choose a new --out (nothing is overwritten)")
-    parent = os.path.dirname(os.path.abspath(out))
-    if not os.path.isdir(parent) or not os.access(parent, os.W_OK):
-        raise ValueError(f"cannot create {out}: {parent} is not a writable directory")
 
-    from .sim import resolve_device
 
-    device = resolve_device(args.device)
+def fixed_gait_physics(physics: dict, checkpoints: dict[str, str], controllers: list[str], terrain: str,
+                       read: dict[str, dict]) -> dict:
+    """The physics overrides of the fixed gaits: ``physics`` (``--env.sim.*``) if given, else the first learnt
+    policy's frame and substeps (the same run, the same simulator), else none."""
+    from .checkpoint import trained_config
+
+    learnt = [checkpoint_for(checkpoints, c, terrain) for c in controllers if c not in FIXED]
+    if physics or not learnt:
+        return physics
+    sim = trained_config(read[learnt[0]]).sim
+    return {"sim.frame_dt": sim.frame_dt, "sim.substeps": sim.substeps}
+
+
+def evaluator(args, checkpoints: dict[str, str], env_overrides: dict, fixed_physics: dict, device: str,
+              distances: tuple[float, ...]):
+    """``evaluate_one(ctrl, terrain, perturbed=None) -> (summary, episode, metrics)``: ``args.rounds`` rounds of one
+    controller on one course, ``perturbed`` (a perturbation's or a sweep point's overrides) on top of ``--env.*``."""
     progress = not args.no_progress and sys.stderr.isatty()
-    results: dict[str, dict[str, dict]] = {}
-    os.makedirs(out)
-    t0 = time.perf_counter()
+
     def evaluate_one(ctrl: str, terrain: str, perturbed: dict | None = None):
         ck = None if ctrl in FIXED else checkpoint_for(checkpoints, ctrl, terrain)
         gait = gait_params(*args.swept_gait) if ctrl == "cpg_swept" and args.swept_gait else None
@@ -229,18 +233,32 @@ def main(argv: list[str] | None = None) -> int:
         s.update(gait_quality(m, ep.ang_rate, ep.dparam, ep.daction), segments=ep.segments, checkpoint=ck)
         return s, ep, m
 
+    return evaluate_one
+
+
+def evaluate_terrains(args, evaluate_one, distances: tuple[float, ...], out: str) -> dict[str, dict[str, dict]]:
+    """Every controller on every terrain: one line each, the terrain's figures in ``out`` (Figs. 6-8; Fig. 5b for the
+    first terrain). Returns {terrain: {controller: summary}}."""
+    results: dict[str, dict[str, dict]] = {}
     for terrain in args.terrains:
         episodes, metrics = {}, {}
         for ctrl in args.controllers:
             s, ep, m = evaluate_one(ctrl, terrain)
             results.setdefault(terrain, {})[ctrl] = s
             episodes[ctrl], metrics[ctrl] = ep, m
-            print(f"{terrain:8s} {LABELS[ctrl]:8s} " + "  ".join(f"{d:g} m {_pct(s[f'success_{d:g}m'])}" for d in distances)
+            print(f"{terrain:8s} {LABELS[ctrl]:8s} " + "  ".join(f"{d:g} m {percent(s[f'success_{d:g}m'])}"
+                                                                 for d in distances)
                   + f"  ({s['rounds']} rounds, {len(ep.done)} steps)", flush=True)  # fmt: skip
         # figures now, so that only one terrain's trajectories are held at a time (1000 rounds x 7000 steps)
         plot_terrain(os.path.join(out, f"fig_{terrain}.png"), terrain, episodes, metrics)
         if terrain == args.terrains[0] and any(not np.isnan(ep.params).all() for ep in episodes.values()):
             plot_params(os.path.join(out, "fig_params.png"), terrain, episodes)
+    return results
+
+
+def evaluate_perturbations(args, evaluate_one, distances: tuple[float, ...]) -> dict[str, dict[str, dict[str, dict]]]:
+    """Every controller on every terrain under each ``--perturbations`` name, one line each. Returns {perturbation:
+    {controller: {terrain: summary}}}."""
     robustness: dict[str, dict[str, dict[str, dict]]] = {}
     for name in args.perturbations:
         perturbed = perturbation(name)
@@ -249,8 +267,41 @@ def main(argv: list[str] | None = None) -> int:
                 s, _, _ = evaluate_one(ctrl, terrain, perturbed)
                 robustness.setdefault(name, {}).setdefault(ctrl, {})[terrain] = s
                 print(f"[{name}] {terrain:8s} {LABELS[ctrl]:8s} " + "  ".join(
-                    f"{d:g} m {_pct(s[f'success_{d:g}m'])}" for d in distances) + f"  falls {s['ended'].get('fell', 0)}",
-                    flush=True)  # fmt: skip
+                    f"{d:g} m {percent(s[f'success_{d:g}m'])}" for d in distances)
+                    + f"  falls {s['ended'].get('fell', 0)}", flush=True)  # fmt: skip
+    return robustness
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = parser().parse_args(argv)
+    env_overrides = config_overrides(args, "env")
+    goal_distance = env_overrides.get("task.goal_distance", TaskConfig.goal_distance)
+    course = apply_overrides(HexConfig(), env_overrides)  # fail before any output folder is made
+    control_decimation(course.task.control_dt, course.sim.frame_dt)
+    if args.merge:
+        return merge_reports(args.merge, args.out or default_out())
+    distances = success_distances(args.distances, goal_distance)
+    checkpoints = _pairs(args.checkpoint, "--checkpoint")
+    runs = _pairs(args.runs, "--runs")
+    read = read_checkpoints(checkpoints, args.controllers, args.terrains)  # every learnt policy's file, checked
+    check_runs(runs)
+    for name in args.perturbations:
+        perturbation(name)
+    sweeps = sweep_specs(args.sweep, args.terrains)
+    physics = {k: v for k, v in env_overrides.items() if k.startswith("sim.")}
+    # the fixed gaits walk under the first learnt policy's physics (the same run, the same simulator) unless told
+    fixed_physics = fixed_gait_physics(physics, checkpoints, args.controllers, args.terrains[0], read)
+    out = args.out or default_out()
+    check_new_dir(out)
+
+    from .sim import resolve_device
+
+    device = resolve_device(args.device)
+    os.makedirs(out)
+    t0 = time.perf_counter()
+    evaluate_one = evaluator(args, checkpoints, env_overrides, fixed_physics, device, distances)
+    results = evaluate_terrains(args, evaluate_one, distances, out)
+    robustness = evaluate_perturbations(args, evaluate_one, distances)
     swept = run_sweeps(sweeps, args.controllers, evaluate_one, distances[-1], out) if sweeps else {}
     wall = time.perf_counter() - t0
     meta = {"device": device, "rounds": args.rounds, "max_steps": args.max_steps,
@@ -267,6 +318,8 @@ def main(argv: list[str] | None = None) -> int:
     with open(os.path.join(out, "report.md"), "w") as f:
         f.write(report_markdown(results, meta, robustness, swept))
     if runs:
+        from .curves import plot_learning
+
         plot_learning(os.path.join(out, "fig_learning.png"), runs)
     print(f"report in {out}/ (report.md, results.json, figures) after {wall:.0f} s")
     return 0

@@ -16,11 +16,10 @@ import hashlib
 import json
 import os
 import sys
-from argparse import ArgumentParser
 
 import numpy as np
 
-from .cli import positive_int, run
+from .cli import ArgumentParser, positive_int, run
 from .config import JOINT_NAMES, RandomizationConfig, TaskConfig, TerrainConfig, config_from_dict
 from .deploy import FORMAT, replay
 

@@ -29,7 +29,7 @@ class HexnewtonGymEnv(gym.Env):
                  overrides: dict | None = None):
         from dataclasses import replace
 
-        from .cli import apply_overrides
+        from .config import apply_overrides
         from .env import make_env
         from .tasks import task as get_task
 

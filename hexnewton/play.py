@@ -46,7 +46,8 @@ from .rollout import BASELINES, CONTROLLERS, FIXED
 from .viewer import VIEWERS
 
 
-def main(argv: list[str] | None = None) -> int:
+def parser() -> ArgumentParser:
+    """The command line of ``python play.py``."""
     p = ArgumentParser(prog="python play.py", description="Rollouts with statistics and Newton's viewers.")
     p.add_argument("--controller", choices=list(CONTROLLERS), default=None,
                    help="default: the checkpoint's (cpg_rl, joint or a baseline's); cpg is the fixed gait and takes no "
@@ -83,7 +84,12 @@ def main(argv: list[str] | None = None) -> int:
                     skip=("sim.num_envs", "sim.device", "task.seed", "terrain.seed", "terrain.name"),
                     title="--env.*: a field of the course (HexConfig); sim.* and cpg.* default to the policy's own, "
                           "task.reset_yaw to 0 (every robot starts facing its goal; training uses 0.2)")  # fmt: skip
-    args = p.parse_args(argv)
+    return p
+
+
+def check_outputs(args) -> None:
+    """Fail before any simulation if an output could not be written; choose the viewer (``--viewer`` or the default
+    for a display, ``--video`` and ``--out``) and whether it renders off-screen."""
     for path, ext in ((args.record, ".npz"), (args.plot, ".png")):
         if path:
             check_writable(path, ext)
@@ -95,6 +101,11 @@ def main(argv: list[str] | None = None) -> int:
     for path in (args.video, args.out):
         if path:
             check_writable(path, os.path.splitext(path)[1])
+
+
+def choose_checkpoint(args) -> None:
+    """``args.checkpoint`` for a learnt controller given none: the newest under ``--log_dir``, else the shipped
+    policy; ValueError for a fixed gait given one."""
     if args.controller in FIXED and args.checkpoint:
         raise ValueError(f"--checkpoint is a trained policy's: the fixed CPG (--controller {args.controller}) has "
                          "none; use --controller cpg_rl or joint, or leave --controller out")  # fmt: skip
@@ -108,63 +119,81 @@ def main(argv: list[str] | None = None) -> int:
                 raise
             args.checkpoint = SHIPPED_POLICY
         print(f"playing {args.checkpoint}")
-    trained, courses, ckpt, task = HexConfig(), args.terrain or ["flat"], None, None
-    if args.checkpoint:
-        from .checkpoint import checkpoint_task, policy_checkpoint, trained_config
 
-        ckpt, default = policy_checkpoint(args.checkpoint)  # fails before building a world
-        trained, task = trained_config(ckpt), checkpoint_task(ckpt)
-        if args.controller is None:
-            args.controller = default
-        if (args.controller in BASELINES) != (default in BASELINES):
-            raise ValueError(f"{args.checkpoint} is run by controller {default}, not {args.controller}")
-        courses = args.terrain or [trained.terrain]  # the policy's own course
-    mode = CONTROLLERS[args.controller]
 
+def read_policy(args):
+    """(the config the policy was trained with, the courses to play, its checkpoint, its task) for ``args.checkpoint``
+    (read once, before any world is built; ``args.controller`` defaults to the one that runs it), or the defaults for
+    a fixed gait."""
+    if not args.checkpoint:
+        return HexConfig(), args.terrain or ["flat"], None, None
+    from .checkpoint import checkpoint_task, trained_config
+    from .policy import policy_checkpoint
+
+    ckpt, default = policy_checkpoint(args.checkpoint)  # fails before building a world
+    trained, task = trained_config(ckpt), checkpoint_task(ckpt)
+    if args.controller is None:
+        args.controller = default
+    if (args.controller in BASELINES) != (default in BASELINES):
+        raise ValueError(f"{args.checkpoint} is run by controller {default}, not {args.controller}")
+    return trained, args.terrain or [trained.terrain], ckpt, task  # the policy's own course
+
+
+def play_course(args, ground, first: bool, trained: HexConfig, ckpt: dict | None, task: str | None) -> None:
+    """One course's rollout of the controller with its statistics; on the ``first`` course also the recording and
+    the viewer."""
     from .env import make_env
     from .metrics import format_stats
     from .rollout import Recorder, controller_policy, rollout
     from .tasks import course
 
-    for i, ground in enumerate(courses):
-        cfg = course(ground, trained, config_overrides(args, "env"), args.num_envs, args.device, args.seed,
-                     seed=args.seed, reset_yaw=0.0, goal_distance=trained.task.goal_distance)
-        terrain = cfg.terrain.name
-        env = make_env(cfg, mode)
-        policy = controller_policy(env, args.controller, args.checkpoint, ckpt, args.stochastic, args.expected)
-        if args.stochastic and args.controller not in FIXED and args.controller not in BASELINES:
-            import torch
+    cfg = course(ground, trained, config_overrides(args, "env"), args.num_envs, args.device, args.seed,
+                 seed=args.seed, reset_yaw=0.0, goal_distance=trained.task.goal_distance)
+    terrain = cfg.terrain.name
+    env = make_env(cfg, CONTROLLERS[args.controller])
+    policy = controller_policy(env, args.controller, args.checkpoint, ckpt, args.stochastic, args.expected)
+    if args.stochastic and args.controller not in FIXED and args.controller not in BASELINES:
+        import torch
 
-            torch.manual_seed(args.seed)
-        recorder = Recorder() if (args.record and i == 0) else None
-        viewer = None
-        if args.viewer != "null" and i == 0:
-            from .viewer import RolloutViewer
+        torch.manual_seed(args.seed)
+    recorder = Recorder() if (args.record and first) else None
+    viewer = None
+    if args.viewer != "null" and first:
+        from .viewer import RolloutViewer
 
-            viewer = RolloutViewer(args.viewer, headless=args.headless, video=args.video, out=args.out,
-                                   robots=args.robots_shown, stride=args.video_speed,
-                                   title=(f"task {task}: " if task else "") + f"{args.controller} on {terrain}",
-                                   control_dt=cfg.task.control_dt)  # fmt: skip
-        t0 = time.perf_counter()
-        try:
-            stats = rollout(env, policy, args.steps, tuple(r for r in (recorder, viewer) if r is not None),
-                            progress=not args.no_progress and sys.stderr.isatty())  # fmt: skip
-        finally:
-            if viewer is not None:
-                viewer.close()
-        wall = time.perf_counter() - t0
-        label = args.controller if args.controller in FIXED else f"{args.controller} ({args.checkpoint})"
-        print(f"[{label}] " + format_stats(terrain, stats, stats["control_s"])
-              + f"  [{wall:.1f} s wall, {env.device}]")  # fmt: skip
-        if recorder is not None:
-            recorder.save(args.record)
-            print(f"recorded {args.steps} steps x {args.num_envs} envs to {args.record}")
+        viewer = RolloutViewer(args.viewer, headless=args.headless, video=args.video, out=args.out,
+                               robots=args.robots_shown, stride=args.video_speed,
+                               title=(f"task {task}: " if task else "") + f"{args.controller} on {terrain}",
+                               control_dt=cfg.task.control_dt)  # fmt: skip
+    t0 = time.perf_counter()
+    try:
+        stats = rollout(env, policy, args.steps, tuple(r for r in (recorder, viewer) if r is not None),
+                        progress=not args.no_progress and sys.stderr.isatty())  # fmt: skip
+    finally:
         if viewer is not None:
-            wrote = [f"{viewer.frames} frames in ViewerGL{' (headless)' if args.headless else ''}" if args.viewer == "gl"
-                     else f"{viewer.frames} frames to {args.out}"]  # fmt: skip
-            if args.video:
-                wrote.append(f"video written to {args.video}")
-            print(f"viewer {args.viewer}: " + ", ".join(wrote))
+            viewer.close()
+    wall = time.perf_counter() - t0
+    label = args.controller if args.controller in FIXED else f"{args.controller} ({args.checkpoint})"
+    print(f"[{label}] " + format_stats(terrain, stats, stats["control_s"])
+          + f"  [{wall:.1f} s wall, {env.device}]")  # fmt: skip
+    if recorder is not None:
+        recorder.save(args.record)
+        print(f"recorded {args.steps} steps x {args.num_envs} envs to {args.record}")
+    if viewer is not None:
+        wrote = [f"{viewer.frames} frames in ViewerGL{' (headless)' if args.headless else ''}" if args.viewer == "gl"
+                 else f"{viewer.frames} frames to {args.out}"]  # fmt: skip
+        if args.video:
+            wrote.append(f"video written to {args.video}")
+        print(f"viewer {args.viewer}: " + ", ".join(wrote))
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = parser().parse_args(argv)
+    check_outputs(args)
+    choose_checkpoint(args)
+    trained, courses, ckpt, task = read_policy(args)
+    for i, ground in enumerate(courses):
+        play_course(args, ground, i == 0, trained, ckpt, task)
     if args.plot:
         from .plotting import plot_gait
 

@@ -18,6 +18,9 @@ def gait_trajectory(cfg: HexConfig, cycles: float = 2.0, device: str = "cpu"):
 
     Returns (t (T,), cpg state (T, 4), joint targets (T, 18)) at the physics substep rate.
     """
+    from .sim import init_warp
+
+    init_warp()
     c, r = cfg.cpg, cfg.robot
     dt = cfg.sim.frame_dt / cfg.sim.substeps
     params = wp.array(np.asarray([c.fixed_params()], np.float32), device=device)

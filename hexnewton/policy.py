@@ -1,6 +1,6 @@
-"""Trained policies as callables ``obs -> actions``: loading a checkpoint's actor into an rsl-rl runner, the
-deterministic / sampled / expected action, the Gaussian's std, the fixed CPG baselines as constant actions, and the
-ONNX export of the deterministic policy.
+"""Trained policies as callables ``obs -> actions``: which controller runs a checkpoint (rsl-rl's or a skrl
+baseline's), loading a checkpoint's actor into an rsl-rl runner, the deterministic / sampled / expected action, the
+Gaussian's std, the fixed CPG baselines as constant actions, and the ONNX export of the deterministic policy.
 """
 
 from __future__ import annotations
@@ -14,7 +14,8 @@ import warnings
 
 import numpy as np
 
-from .checkpoint import check_compatible, checkpoint_agent, load_checkpoint, load_into_runner
+from .checkpoint import check_compatible, check_rsl_rl_checkpoint, checkpoint_agent, checkpoint_meta, \
+    is_baseline_checkpoint, load_checkpoint, load_into_runner, read_checkpoint
 
 
 def action_std(policy) -> list[float] | None:
@@ -50,6 +51,20 @@ def fixed_cpg_actions(env, gait: str = "default", params: np.ndarray | None = No
     p = env.cfg.cpg.fixed_params(gait) if params is None else env.cfg.cpg.with_posture(params)
     a = np.broadcast_to(np.clip(params_to_actions(p, lo, hi), -1.0, 1.0), (env.num_envs, len(lo)))
     return torch.tensor(np.ascontiguousarray(a), dtype=torch.float32, device=env._obs_t.device)
+
+
+def policy_checkpoint(path: str) -> tuple[dict, str]:
+    """Any trained policy's checkpoint (an rsl-rl one from ``train.py`` or a skrl baseline's from ``python -m
+    hexnewton.baselines``) read once, as data only, with the controller that runs it by default (``cpg_rl``,
+    ``joint``, ``sac_cpg``, ``td3_cpg``, ``a2c_cpg``)."""
+    ckpt = read_checkpoint(path)
+    if is_baseline_checkpoint(ckpt):
+        from .baselines import check_baseline_checkpoint
+
+        ckpt = check_baseline_checkpoint(ckpt, path)
+        return ckpt, f"{ckpt['algo']}_cpg"
+    ckpt = check_rsl_rl_checkpoint(ckpt, path)
+    return ckpt, "joint" if checkpoint_meta(ckpt).get("action_mode", "cpg") == "joint" else "cpg_rl"
 
 
 def load_runner(env, path: str, action_mode: str, ckpt: dict | None = None):

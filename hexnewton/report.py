@@ -1,6 +1,6 @@
 """The evaluation's report and figures: ``report.md`` (Table 3's shape with the paper's numbers beside ours, stability
-and gait quality, robustness), ``results.json``, Figs. 5-8 as PNG (matplotlib), and the merge of evaluations run
-apart.
+and gait quality, robustness), ``results.json``, Figs. 5b-8 as PNG (matplotlib; Fig. 5a, the learning
+curves, is :mod:`hexnewton.curves`'s), and the merge of evaluations run apart.
 """
 
 from __future__ import annotations
@@ -27,7 +27,8 @@ PAPER_TABLE3 = {
 }  # fmt: skip
 
 
-def _pct(v: float | None) -> str:
+def percent(v: float | None) -> str:
+    """A rate as a whole percentage (``0.96`` -> ``96%``); a dash for none."""
     return "—" if v is None else f"{100 * v:.0f}%"
 
 
@@ -46,7 +47,7 @@ def report_markdown(results: dict, meta: dict, robustness: dict | None = None, s
         for ctrl, s in by_ctrl.items():
             paper = PAPER_TABLE3.get(terrain, {}).get(LABELS[ctrl])
             ref = " / ".join(f"{p}%" for p in paper) if paper else "—"
-            cells = " | ".join(_pct(s[f"success_{d:g}m"]) for d in distances)
+            cells = " | ".join(percent(s[f"success_{d:g}m"]) for d in distances)
             lines.append(f"| {terrain} | {LABELS[ctrl]} | {cells} | {ref} |")
     lines += ["", "## Stability (§3.3; angles in degrees over every step of every round)", "",
               "| terrain | method | rounds | pitch mean / var / peak | roll mean / var / peak | Y dev. mean / max [m] "
@@ -101,7 +102,7 @@ def report_markdown(results: dict, meta: dict, robustness: dict | None = None, s
                   "|---|---|" + "---:|" * (len(distances) + 3)]  # fmt: skip
         for name, by_ctrl in robustness.items():
             for terrain, s in by_ctrl.get(ctrl, {}).items():
-                cells = " | ".join(_pct(s[f"success_{d:g}m"]) for d in distances)
+                cells = " | ".join(percent(s[f"success_{d:g}m"]) for d in distances)
                 lines.append(f"| {name} | {terrain} | {cells} | {s['ended'].get('fell', 0)} / {s['rounds']} | "
                              f"{f(s['pitch_var_deg2'])} | {f(s['pitch_p999_deg'])} |")  # fmt: skip
     return "\n".join(lines + sweep_markdown(sweeps or {}, distances[-1])) + "\n"
@@ -119,8 +120,9 @@ def sweep_markdown(sweeps: dict, last: float) -> list[str]:
                 p = points[k]
                 t = p[f"time_to_{last:g}m_s"]
                 var = " / ".join("—" if p[m] is None else f"{p[m]:.1f}" for m in ("pitch_var_deg2", "roll_var_deg2"))
-                lines.append(f"| {value:g} | {LABELS.get(ctrl, ctrl)} | {p['rounds']} | {_pct(p[f'success_{last:g}m'])} | "
-                             f"{_pct(p['fall_rate'])} | {var} | {'—' if t is None else f'{t:.1f}'} |")  # fmt: skip
+                lines.append(f"| {value:g} | {LABELS.get(ctrl, ctrl)} | {p['rounds']} | "
+                             f"{percent(p[f'success_{last:g}m'])} | {percent(p['fall_rate'])} | {var} | "
+                             f"{'—' if t is None else f'{t:.1f}'} |")  # fmt: skip
     return lines
 
 
@@ -210,30 +212,6 @@ def plot_params(path: str, terrain: str, episodes: dict[str, Episode]) -> None:
         ax.grid(alpha=0.3)
     axes[0].legend(fontsize=8)
     fig.suptitle(f"CPG parameters along round 0 on {terrain}")
-    fig.tight_layout()
-    fig.savefig(path, dpi=90)
-    plt.close(fig)
-
-
-def plot_learning(path: str, runs: dict[str, str]) -> None:
-    """Fig. 5a: mean episode reward against env-steps and against wall time, one curve per controller."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    from .curves import read_curve
-
-    fig, axes = plt.subplots(1, 2, figsize=(11, 3.8))
-    for ax, x in zip(axes, ("env_steps", "wall_time")):
-        for ctrl, spec in runs.items():
-            curve = read_curve(spec, x).get("Train/mean_reward")
-            if curve:
-                xs, v = zip(*curve)
-                ax.plot(xs, v, label=LABELS.get(ctrl, ctrl))
-        ax.set(xlabel="env-steps" if x == "env_steps" else "wall time [min]", ylabel="mean episode reward")
-        ax.grid(alpha=0.3)
-    axes[0].legend(fontsize=8)
     fig.tight_layout()
     fig.savefig(path, dpi=90)
     plt.close(fig)

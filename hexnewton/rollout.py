@@ -10,6 +10,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .config import JOINT_NAMES, PARAM_NAMES, HexConfig
+from .kernels.reference import quat_rotate_inv_np
 from .metrics import first_episode_stats
 
 EVAL_TERRAIN_SEED = 1000
@@ -203,6 +204,76 @@ def controller_policy(env, controller: str, checkpoint: str | None = None, ckpt:
     return load_policy(env, checkpoint, CONTROLLERS[controller], stochastic, expected, ckpt)
 
 
+def read_controller_checkpoint(controller: str, checkpoint: str | None) -> dict | None:
+    """The checkpoint of a learnt ``controller`` (a skrl baseline's or an rsl-rl one) read as data only, with one-line
+    errors for a missing or wrong file; None for a fixed gait."""
+    if controller in BASELINES:
+        from .baselines import load_baseline_checkpoint
+
+        return load_baseline_checkpoint(checkpoint)
+    if controller in ("cpg_rl", "joint"):
+        from .checkpoint import load_checkpoint
+
+        return load_checkpoint(checkpoint)
+    return None
+
+
+class RoundLog:
+    """The host arrays of an :class:`Episode`, one control step at a time: positions, attitudes, ends and body rates of
+    every round; in CPG mode round 0's parameters, every round's parameter change and, on the complex course (the
+    blocks end at ``split_x``), the mean parameters on the blocks and on the stairs."""
+
+    def __init__(self, cfg: HexConfig, rounds: int, mode: str, split_x: float | None = None):
+        self.rounds, self.mode, self.split_x = rounds, mode, split_x
+        self.lo, self.hi = (np.asarray(b, np.float64) for b in cfg.cpg.param_ranges())
+        npar = cfg.cpg.num_params
+        self.seg_sum, self.seg_n = {"blocks": np.zeros(npar), "stairs": np.zeros(npar)}, {"blocks": 0, "stairs": 0}
+        self.pos, self.rpy, self.done, self.status, self.params = [], [], [], [], []
+        self.ang_rate, self.dparam, self.daction = [], [], []
+        self.finished = np.zeros(rounds, bool)
+        self.prev_p = self.prev_t = None
+
+    def change(self, now: np.ndarray, before: np.ndarray | None) -> np.ndarray:
+        """Mean |change| of the CPG parameters (15, or 18 with the posture) since the last step, in fractions of
+        their ranges (NaN at the start)."""
+        if before is None:
+            return np.full(self.rounds, np.nan, np.float32)
+        return (np.abs(now - before) / (self.hi - self.lo)).mean(axis=1).astype(np.float32)
+
+    def add(self, env, st: np.ndarray, q: np.ndarray, p: np.ndarray, r: np.ndarray) -> None:
+        """One control step of :func:`stepped` (status, state, position, roll/pitch/yaw)."""
+        self.pos.append(p[:, :2])
+        self.rpy.append(r)
+        self.done.append(st != 0)
+        self.status.append(st.copy())
+        qd = env.last_qd.numpy()
+        self.ang_rate.append(quat_rotate_inv_np(q[:, 3:7], qd[:, 3:6])[:, :2].astype(np.float32))
+        if self.mode == "cpg":
+            pr, tg = env.last_params.numpy(), env.controller.params_target.numpy()
+            self.params.append(pr[0].copy())
+            self.dparam.append(self.change(pr, self.prev_p))
+            self.daction.append(self.change(tg, self.prev_t))
+            self.prev_p, self.prev_t = pr.copy(), tg.copy()
+            if self.split_x is not None:
+                alive = ~self.finished
+                for seg, sel in (("blocks", alive & (p[:, 0] < self.split_x)),
+                                 ("stairs", alive & (p[:, 0] >= self.split_x))):  # fmt: skip
+                    self.seg_sum[seg] += pr[sel].sum(axis=0)
+                    self.seg_n[seg] += int(sel.sum())
+        else:
+            self.params.append(np.full(len(PARAM_NAMES), np.nan))
+            self.dparam.append(np.full(self.rounds, np.nan, np.float32))
+            self.daction.append(np.full(self.rounds, np.nan, np.float32))
+        self.finished |= st != 0
+
+    def episode(self, dt: float) -> Episode:
+        """The steps so far as an :class:`Episode` (control period ``dt``)."""
+        segments = {seg: (self.seg_sum[seg] / self.seg_n[seg]).tolist() for seg in self.seg_sum if self.seg_n[seg]}
+        return Episode(np.stack(self.pos), np.stack(self.rpy), np.stack(self.done), np.stack(self.status),
+                       np.stack(self.params), dt, np.stack(self.ang_rate), np.stack(self.dparam),
+                       np.stack(self.daction), segments)  # fmt: skip
+
+
 def run_rounds(controller: str, checkpoint: str | None, terrain: str, rounds: int, device: str | None,
                max_steps: int, progress: bool = True, seed: int = EVAL_TERRAIN_SEED, overrides: dict | None = None,
                stochastic: bool = False, expected: bool = False, fixed_params: np.ndarray | None = None) -> Episode:
@@ -214,18 +285,12 @@ def run_rounds(controller: str, checkpoint: str | None, terrain: str, rounds: in
     expected clipped action of its Gaussian. ``fixed_params`` (N, 15) gives a fixed controller one gait per round
     (``hexnewton.cpg_sweep``). ``cpg.posture_reflex`` in ``overrides`` gives a fixed gait the body posture at its
     neutral values with that reflex; a policy needs its own posture for it."""
-    from .checkpoint import load_checkpoint, trained_config
+    from .checkpoint import trained_config
     from .env import make_env
     from .tasks import course
 
     mode = CONTROLLERS[controller]
-    ckpt = None
-    if controller in BASELINES:
-        from .baselines import load_baseline_checkpoint
-
-        ckpt = load_baseline_checkpoint(checkpoint)
-    elif controller in ("cpg_rl", "joint"):
-        ckpt = load_checkpoint(checkpoint)
+    ckpt = read_controller_checkpoint(controller, checkpoint)
     trained = trained_config(ckpt) if ckpt is not None else HexConfig()
     overrides = dict(overrides or {})
     if "cpg.posture_reflex" in overrides and mode == "cpg":
@@ -233,56 +298,16 @@ def run_rounds(controller: str, checkpoint: str | None, terrain: str, rounds: in
             raise ValueError(f"{checkpoint} has no body posture: a posture_reflex needs a policy trained with it")
         overrides["cpg.posture"] = True
     cfg = course(terrain, trained, overrides, rounds, device, seed, seed=seed + START_SEED_OFFSET)
-    ground = cfg.terrain
     env = make_env(cfg, mode)
     policy = controller_policy(env, controller, checkpoint, ckpt, stochastic, expected, fixed_params)
     if stochastic:
         import torch
 
         torch.manual_seed(seed + START_SEED_OFFSET)
-    from .kernels.reference import quat_rotate_inv_np
-
-    lo, hi = (np.asarray(b, np.float64) for b in cfg.cpg.param_ranges())
-    split_x = ground.complex_rugged_length if terrain == "complex" else None
-    npar = cfg.cpg.num_params
-    seg_sum, seg_n = {"blocks": np.zeros(npar), "stairs": np.zeros(npar)}, {"blocks": 0, "stairs": 0}
-    pos, rpy, done, status, params, ang_rate, dparam, daction = [], [], [], [], [], [], [], []
-    finished = np.zeros(rounds, bool)
-    prev_p = prev_t = None
-
-    def change(now: np.ndarray, before: np.ndarray | None) -> np.ndarray:
-        """Mean |change| of the CPG parameters (15, or 18 with the posture) since the last step, in fractions of
-        their ranges (NaN at the start)."""
-        if before is None:
-            return np.full(rounds, np.nan, np.float32)
-        return (np.abs(now - before) / (hi - lo)).mean(axis=1).astype(np.float32)
-
+    log = RoundLog(cfg, rounds, mode, cfg.terrain.complex_rugged_length if terrain == "complex" else None)
     for _, st, q, p, r in stepped(env, policy, max_steps, f"{LABELS[controller]} on {terrain}", progress):
-        pos.append(p[:, :2])
-        rpy.append(r)
-        done.append(st != 0)
-        status.append(st.copy())
-        qd = env.last_qd.numpy()
-        ang_rate.append(quat_rotate_inv_np(q[:, 3:7], qd[:, 3:6])[:, :2].astype(np.float32))
-        if mode == "cpg":
-            pr, tg = env.last_params.numpy(), env.controller.params_target.numpy()
-            params.append(pr[0].copy())
-            dparam.append(change(pr, prev_p))
-            daction.append(change(tg, prev_t))
-            prev_p, prev_t = pr.copy(), tg.copy()
-            if split_x is not None:
-                alive = ~finished
-                for seg, sel in (("blocks", alive & (p[:, 0] < split_x)), ("stairs", alive & (p[:, 0] >= split_x))):
-                    seg_sum[seg] += pr[sel].sum(axis=0)
-                    seg_n[seg] += int(sel.sum())
-        else:
-            params.append(np.full(len(PARAM_NAMES), np.nan))
-            dparam.append(np.full(rounds, np.nan, np.float32))
-            daction.append(np.full(rounds, np.nan, np.float32))
-        finished |= st != 0
-        if finished.all():
+        log.add(env, st, q, p, r)
+        if log.finished.all():
             break
     env.world.check_contacts()
-    segments = {seg: (seg_sum[seg] / seg_n[seg]).tolist() for seg in seg_sum if seg_n[seg]}
-    return Episode(np.stack(pos), np.stack(rpy), np.stack(done), np.stack(status), np.stack(params),
-                   cfg.task.control_dt, np.stack(ang_rate), np.stack(dparam), np.stack(daction), segments)  # fmt: skip
+    return log.episode(cfg.task.control_dt)

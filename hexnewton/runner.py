@@ -21,6 +21,8 @@ from rsl_rl.runners import OnPolicyRunner
 from . import startup
 from .checkpoint import load_checkpoint, load_into_runner
 from .policy import export_onnx
+from .stopping import TrainingStopped, catch_stop_signals
+
 
 def progress_line(log_kwargs: dict, stats: dict, elapsed: float) -> str:
     """One console line per iteration: the iteration, the last training episodes' outcome (``env.episode_stats()``),
@@ -34,15 +36,6 @@ def progress_line(log_kwargs: dict, stats: dict, elapsed: float) -> str:
         outcome = (f"success {stats['success_rate']:.3f}  fell {stats['fell_rate']:.3f}  off course "
                    f"{stats['off_course_rate']:.3f}  distance {stats['distance_m']:.2f} m")  # fmt: skip
     return f"iteration {it}/{total - 1}  {outcome}{level}  {step_s:.2f} s/it  {datetime.timedelta(seconds=int(elapsed))}"
-
-
-class TrainingStopped(Exception):
-    """Raised by the signal handler (Ctrl-C, SIGTERM) or at the end of an iteration (--max_minutes,
-    --target_success) to end training cleanly."""
-
-
-def _stop(signum, frame):
-    raise TrainingStopped(signal.Signals(signum).name)
 
 
 def training_success(stats: dict, levels: int) -> float | None:
@@ -302,7 +295,7 @@ class HexRunner(OnPolicyRunner):
         save what was learnt in every case. Returns why it ended."""
         self.enter_stage(self.current_learning_iteration)
         self._t0 = time.time()
-        handlers = {sig: signal.signal(sig, _stop) for sig in (signal.SIGINT, signal.SIGTERM)}
+        handlers = catch_stop_signals()
         handlers[signal.SIGALRM] = signal.signal(signal.SIGALRM, lambda *_: setattr(self, "_time_up", True))
         if self.agent.max_minutes:
             signal.setitimer(signal.ITIMER_REAL, 60.0 * self.agent.max_minutes)

@@ -55,10 +55,12 @@ class ContactOverflowError(HexnewtonError):
 def init_warp() -> None:
     """``wp.init()`` without the notice Warp's native library prints on every start of a machine without a CUDA driver
     ("Warp CUDA warning: Could not find or load the NVIDIA CUDA driver ...": the CPU machines this runs on by design);
-    anything else it writes to stderr passes through."""
+    anything else it writes to stderr passes through. Warp logs warnings and errors only: no init banner, no
+    per-module compile lines."""
     import sys
     import tempfile
 
+    wp.config.log_level = wp.LOG_WARNING
     if wp._src.context.runtime is not None:
         return
     sys.stderr.flush()
@@ -252,7 +254,7 @@ class World:
         sim = cfg.sim
         validate_sim(sim)
         self.device = resolve_device(sim.device)
-        self.num_envs = n = int(sim.num_envs)
+        self.num_envs = int(sim.num_envs)
         self.frame_dt = sim.frame_dt
         self.sim_dt = sim.frame_dt / sim.substeps
         self.substeps = sim.substeps
@@ -260,6 +262,32 @@ class World:
 
         self.terrain = terrain if terrain is not None else make_terrain(cfg.terrain)
         startup.mark("terrain")
+        scene = self._build_scene()
+        startup.mark("scene")
+        with wp.ScopedDevice(self.device):
+            self.model = scene.finalize(device=self.device)
+        startup.mark("finalize")
+        self._init_model_arrays()
+        startup.mark("model arrays")
+        self._init_physics()
+        precompile(self.device)
+        startup.mark("kernels")
+        self._init_buffers()
+        self._bind_views()
+        self.sim_time = 0.0
+        self.graph = None
+        self.controller: Callable[[World], None] | None = None
+        self.randomized: dict[str, np.ndarray] = {}
+        if cfg.randomization.enabled:
+            self.randomize(seed=cfg.task.seed)
+        wp.synchronize_device(self.device)
+        startup.mark("world buffers")
+
+    def _build_scene(self) -> newton.ModelBuilder:
+        """The scene: ``num_envs`` hexapods, each in its own world, and the shared terrain. Env i stands at x = 0 in
+        its own lane y_i, the lanes evenly spread over +-spawn_y_spread so that the robots meet different blocks, its
+        torso ``spawn_clearance`` above the highest terrain under its footprint."""
+        cfg, sim, n = self.cfg, self.cfg.sim, self.num_envs
         robot = build_hexapod(cfg.robot, gap=sim.rigid_gap)
 
         scene = newton.ModelBuilder()
@@ -270,8 +298,6 @@ class World:
         ground_cfg = newton.ModelBuilder.ShapeConfig(mu=cfg.robot.friction, gap=terrain_gap)
         self.terrain.add_to_builder(scene, ground_cfg)
 
-        # spawn: env i stands at x = 0 in its own lane y_i, evenly spread over +-spawn_y_spread so that the
-        # robots meet different blocks; torso spawn_height above the highest terrain under its footprint
         self.spawn_xy = np.zeros((n, 2))
         if n > 1:
             self.spawn_xy[:, 1] = np.linspace(-sim.spawn_y_spread, sim.spawn_y_spread, n)
@@ -284,12 +310,12 @@ class World:
         q[:, 0:2] = self.spawn_xy
         q[:, 2] = self.spawn_z
         scene.joint_q[:] = q.reshape(-1).tolist()
+        return scene
 
-        startup.mark("scene")
-        with wp.ScopedDevice(self.device):
-            self.model = scene.finalize(device=self.device)
-        startup.mark("finalize")
-        self.model.rigid_gap = sim.rigid_gap
+    def _init_model_arrays(self) -> None:
+        """The finalized model's height field, spawn arrays, states (forward kinematics of the spawn poses) and
+        control."""
+        self.model.rigid_gap = self.cfg.sim.rigid_gap
         self.height_field = self.terrain.height_field(self.device)
         # lanes (fixed) and each episode's actual start (written by every reset)
         self.spawn_xy_wp = wp.array(self.spawn_xy.astype(np.float32), dtype=wp.vec2, device=self.device)
@@ -301,7 +327,9 @@ class World:
         self.control = self.model.control()
         newton.eval_fk(self.model, self.model.joint_q, self.model.joint_qd, self.state_0)
 
-        startup.mark("model arrays")
+    def _init_physics(self) -> None:
+        """The MuJoCo solver and Newton's collision pipeline with the contact capacity the solver takes."""
+        sim = self.cfg.sim
         self.solver = SolverMuJoCo(
             self.model,
             use_mujoco_contacts=False,
@@ -319,15 +347,18 @@ class World:
         self.pipeline = newton.CollisionPipeline(
             self.model,
             rigid_contact_max=max_contacts,
-            max_triangle_pairs=max(1_000_000, sim.triangle_pairs_per_env * n),
+            max_triangle_pairs=max(1_000_000, sim.triangle_pairs_per_env * self.num_envs),
             speculative_contact_gap_max=sim.speculative_gap,
         )
         # speculative contacts need the time until the next detection: one frame
         self._collide_dt = sim.frame_dt if sim.speculative_gap is not None else None
         self.contacts = self.pipeline.contacts()
         startup.mark("collision pipeline")
-        precompile(self.device)
-        startup.mark("kernels")
+
+    def _init_buffers(self) -> None:
+        """The step's and the resets' buffers: overflow flags, reset masks, the solver's constraint rows per world,
+        the reset counter, the standing pose and joint limits as kernels take them, the non-finite flags."""
+        n = self.num_envs
         self.observables = self.solver.observables({SolverMuJoCo.ObservableKind.OVERFLOW})
         self._overflow_world = wp.zeros(n, dtype=wp.int32, device=self.device)
         self._overflow_global = wp.zeros(1, dtype=wp.int32, device=self.device)
@@ -343,21 +374,12 @@ class World:
         self.reset_counter = wp.zeros(1, dtype=wp.int32, device=self.device)
         self._prev_x_scratch = wp.zeros(n, dtype=wp.float32, device=self.device)
         # one leg's standing pose and (hip, knee, ankle) limits, as kernels take them
-        lower, upper = leg_bounds(cfg.robot)
-        self.stand_pose, self.joint_lower, self.joint_upper = (wp.vec3(*cfg.robot.stand_pose), wp.vec3(*lower),
+        robot = self.cfg.robot
+        lower, upper = leg_bounds(robot)
+        self.stand_pose, self.joint_lower, self.joint_upper = (wp.vec3(*robot.stand_pose), wp.vec3(*lower),
                                                                wp.vec3(*upper))  # fmt: skip
         self._bad = wp.zeros(n, dtype=wp.bool, device=self.device)
         self.nonfinite_resets = 0
-
-        self._bind_views()
-        self.sim_time = 0.0
-        self.graph = None
-        self.controller: Callable[[World], None] | None = None
-        self.randomized: dict[str, np.ndarray] = {}
-        if cfg.randomization.enabled:
-            self.randomize(seed=cfg.task.seed)
-        wp.synchronize_device(self.device)
-        startup.mark("world buffers")
 
     def randomize(self, seed: int = 0) -> dict[str, np.ndarray]:
         """Draw each env's physical properties from ``cfg.randomization`` (``RandomizationConfig``) and hand them

@@ -30,7 +30,6 @@ Outputs in ``--out`` (which must not exist): ``results.json`` (``{terrain: metri
 from __future__ import annotations
 
 import json
-import math
 import os
 import sys
 import time

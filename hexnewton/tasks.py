@@ -29,7 +29,7 @@ from dataclasses import dataclass, field, replace
 
 from .agent import AgentConfig, paper_agent
 from .config import ACTION_MODES, CPGConfig, HexConfig, RandomizationConfig, RewardConfig, SimConfig, TaskConfig, \
-    TerrainConfig, terrain_for_goal
+    TerrainConfig, apply_overrides, terrain_for_goal
 
 #: The stability shaping of the variant chosen on validation rounds among six (RESULTS.md, "Stable gaits"): fewest
 #: falls, lowest rugged pitch and roll variance; 2 / 0.02 / 0.05 (with a 0.03 s filter) fell 18x as often on rugged
@@ -103,8 +103,6 @@ def course(terrain: str | TerrainConfig, trained: HexConfig | None = None, overr
     (``trained``: a checkpoint's config; the defaults for the fixed CPG) and ``TaskConfig`` with ``task_fields``;
     then ``overrides`` ({"terrain.step_rise": 0.07, ...}), ``num_envs`` robots on ``device``, terrain seed
     ``terrain_seed`` and the patch long enough for the goal."""
-    from .cli import apply_overrides
-
     trained = trained or HexConfig()
     ground = TerrainConfig(name=terrain) if isinstance(terrain, str) else replace(terrain, levels=0, start_levels=1)
     cfg = HexConfig(sim=trained.sim, cpg=trained.cpg, task=replace(TaskConfig(), **task_fields), terrain=ground)

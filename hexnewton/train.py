@@ -30,7 +30,8 @@ import os
 import sys
 import time
 
-from .cli import ArgumentParser, add_config_args, apply_overrides, config_overrides, positive_int, run
+from .cli import ArgumentParser, add_config_args, config_overrides, positive_int, run
+from .config import apply_overrides
 
 
 def _base_task(argv: list[str] | None):
@@ -63,6 +64,8 @@ def _base_task(argv: list[str] | None):
 
 
 def parser(base, resumed: bool) -> ArgumentParser:
+    """The command line of ``python train.py``, its defaults those of ``base`` (the task, or a ``resumed``
+    checkpoint's configs)."""
     from .tasks import TASKS
 
     p = ArgumentParser(prog="python train.py", description="Train a task's controller with rsl-rl PPO.",
@@ -94,14 +97,9 @@ def parser(base, resumed: bool) -> ArgumentParser:
     return p
 
 
-def main(argv: list[str] | None = None) -> int:
-    base, ckpt = _base_task(argv)
-    args = parser(base, ckpt is not None).parse_args(argv)
-    if args.list_tasks:
-        from .tasks import task_table
-
-        print(task_table())
-        return 0
+def configs(args, base, ckpt: dict | None):
+    """The run's environment and learner configs: the task's (or the resumed checkpoint's) with the command line's
+    overrides, checked before anything is built."""
     env_cfg = apply_overrides(base.env, config_overrides(args, "env"))
     agent = apply_overrides(base.agent, config_overrides(args, "agent"))
     if args.max_iterations is not None:
@@ -115,6 +113,11 @@ def main(argv: list[str] | None = None) -> int:
     if agent.stages and not (env_cfg.cpg.posture and base.action_mode == "cpg"):
         raise ValueError("agent.stages change the levelling reflex of the body posture: set --env.cpg.posture true "
                          "or --agent.stages '()'")  # fmt: skip
+    return env_cfg, agent
+
+
+def check_outputs(args) -> None:
+    """Fail before any simulation if the run's logs or its videos could not be written."""
     from .runner import check_log_dir
 
     check_log_dir(args.log_dir)
@@ -123,8 +126,11 @@ def main(argv: list[str] | None = None) -> int:
 
         check_viewer_args("gl", True, "clip.mp4", None)
 
-    from .env import make_env
-    from .runner import HexRunner, distributed_rank, seed_everything
+
+def rank_config(args, env_cfg):
+    """This process's torchrun rank and its config: the device resolved, ``--num_envs`` (default 4096 on CUDA, 64 on
+    the CPU), the rank's own seeds (seeded here)."""
+    from .runner import distributed_rank, seed_everything
     from .sim import resolve_device
 
     rank = distributed_rank(dict(os.environ), args.device)
@@ -135,71 +141,80 @@ def main(argv: list[str] | None = None) -> int:
     cfg = dataclasses.replace(env_cfg, sim=dataclasses.replace(env_cfg.sim, num_envs=num_envs, device=device),
                               terrain=dataclasses.replace(env_cfg.terrain, seed=terrain_seed),
                               task=dataclasses.replace(env_cfg.task, seed=seed))  # fmt: skip
-    env = make_env(cfg, base.action_mode)
-    if ckpt is not None:
-        from .checkpoint import check_compatible
+    return rank, cfg
 
-        check_compatible(ckpt, args.resume, env.num_obs, env.num_actions, base.action_mode)
-    experiment = args.experiment or f"hexnewton_{base.name}"
+
+def make_run_dir(args, meta: dict, train_cfg: dict, rank) -> str:
+    """``log_dir/experiment/<date_time>``; rank 0 makes it (nothing is overwritten) and writes its config.json: the
+    run's metadata and rsl-rl's ``train_cfg``."""
+    experiment = args.experiment or f"hexnewton_{meta['task']}"
     run_dir = os.path.join(args.log_dir, experiment, datetime.datetime.now().strftime("%Y-%m-%d_%H-%M-%S"))
-    meta = {"task": base.name, "action_mode": base.action_mode, "num_obs": env.num_obs,
-            "num_actions": env.num_actions, "config": dataclasses.asdict(cfg), "agent": dataclasses.asdict(agent),
-            "world_size": rank.world_size}  # fmt: skip
     if rank.is_main:  # only rank 0 writes logs, checkpoints and the export
         if os.path.exists(run_dir):
-            raise ValueError(f"{run_dir} exists: nothing is overwritten (start again in a second, or change --experiment)")
+            raise ValueError(f"{run_dir} exists: nothing is overwritten (start again in a second, or change "
+                             "--experiment)")  # fmt: skip
         os.makedirs(run_dir)
         with open(os.path.join(run_dir, "config.json"), "w") as f:
-            json.dump({"hexnewton": meta, "train": agent.to_rsl_rl(num_envs)}, f, indent=1, default=str)
+            json.dump({"hexnewton": meta, "train": train_cfg}, f, indent=1, default=str)
+    return run_dir
+
+
+def make_runner(args, env, agent, meta: dict, run_dir: str, rank, ckpt: dict | None):
+    """The run's :class:`~hexnewton.runner.HexRunner` (resumed from ``ckpt`` if given) and, with ``--video`` on rank 0,
+    the :class:`~hexnewton.viewer.VideoEnv` it trains through (else None)."""
+    from .runner import HexRunner
+
+    cfg = env.cfg
     videos = None
     if args.video and rank.is_main:
         from .viewer import VideoEnv
 
+        steps_per_iteration = agent.to_rsl_rl(cfg.sim.num_envs)["num_steps_per_env"]
         env = videos = VideoEnv(env, os.path.join(run_dir, "videos"), args.video_interval, args.video_length,
-                       agent.to_rsl_rl(num_envs)["num_steps_per_env"], title=f"task {base.name}: ")  # fmt: skip
-    runner = HexRunner(env, agent, meta, run_dir if rank.is_main else None, device, rank)
+                                steps_per_iteration, title=f"task {meta['task']}: ")  # fmt: skip
+    runner = HexRunner(env, agent, meta, run_dir if rank.is_main else None, cfg.sim.device, rank)
     if ckpt is not None:
-        from .checkpoint import load_into_runner
-        from .policy import fix_action_std
+        resume(runner, ckpt, args, agent)
+    return runner, videos
 
-        load_into_runner(runner, ckpt)
-        # rsl-rl stores the last finished iteration and would start again from it: continue after it instead
-        runner.current_learning_iteration += 1
-        if "distribution.init_std" in config_overrides(args, "agent") and agent.distribution.name == "gaussian":
-            fix_action_std(runner.alg.get_policy(), agent.distribution.init_std)  # the checkpoint brought its own
-        print(f"resumed from {args.resume}: continuing at iteration {runner.current_learning_iteration}, "
-              f"learning rate {runner.alg.learning_rate:.2e}")
-    where = f"rank {rank.rank} of {rank.world_size}, " if rank.world_size > 1 else ""
-    print(f"training task {base.name}: {where}{num_envs} envs on {device}, {agent.max_iterations} iterations, "
-          f"logs in {run_dir}")  # fmt: skip
-    if videos is not None:
-        videos.first_iteration = runner.current_learning_iteration
-    t0, first_it = time.time(), runner.current_learning_iteration
-    try:
-        reason = runner.train(agent.max_iterations)
-    finally:
-        if videos is not None:
-            videos.close()
-    train_s = time.time() - t0
-    print(f"finished at iteration {runner.current_learning_iteration} after {train_s:.0f} s ({reason})")
-    if rank.world_size > 1:
-        spread = runner.rank_spread()
-        if rank.is_main:
-            print(f"parameters of the {rank.world_size} ranks agree to {spread:.1e}")
-        if spread > 1e-5:
-            raise RuntimeError(f"the ranks' parameters differ by {spread:.2e}: the gradients were not shared")
-    if not rank.is_main:
-        return 0
+
+def resume(runner, ckpt: dict, args, agent) -> None:
+    """Load the checkpoint's models, optimiser and iteration into ``runner`` and continue after its iteration; a
+    Gaussian's ``--agent.distribution.init_std`` replaces the std the checkpoint brought."""
+    from .checkpoint import load_into_runner
+    from .policy import fix_action_std
+
+    load_into_runner(runner, ckpt)
+    # rsl-rl stores the last finished iteration and would start again from it: continue after it instead
+    runner.current_learning_iteration += 1
+    if "distribution.init_std" in config_overrides(args, "agent") and agent.distribution.name == "gaussian":
+        fix_action_std(runner.alg.get_policy(), agent.distribution.init_std)  # the checkpoint brought its own
+    print(f"resumed from {args.resume}: continuing at iteration {runner.current_learning_iteration}, "
+          f"learning rate {runner.alg.learning_rate:.2e}")
+
+
+def check_ranks_agree(runner, rank) -> None:
+    """RuntimeError unless every torchrun rank ended with the same parameters (the gradients were shared)."""
+    spread = runner.rank_spread()
+    if rank.is_main:
+        print(f"parameters of the {rank.world_size} ranks agree to {spread:.1e}")
+    if spread > 1e-5:
+        raise RuntimeError(f"the ranks' parameters differ by {spread:.2e}: the gradients were not shared")
+
+
+def finish(args, runner, cfg, agent, rank, run_dir: str, videos, train_s: float, first_it: int) -> None:
+    """Rank 0 after training: the last episodes, the policy to ship (the best iteration's or the last) exported as
+    ONNX, ``timing.json``, and the commands that use the result."""
     from . import startup
+    from .runner import training_success
 
+    num_envs = cfg.sim.num_envs
     iterations = runner.current_learning_iteration + 1 - first_it  # this run's (a resumed one starts later)
     timing = {"startup_phases_s": startup.phases(), "first_iteration_s": runner.first_iteration_s,
               "train_s": train_s, "iterations": iterations,
               "env_steps": iterations * num_envs * agent.num_steps_per_env * rank.world_size,
               "wall_s_to_result": None}  # fmt: skip
-    from .runner import training_success
-
-    stats = env.episode_stats()
+    stats = runner.env.episode_stats()
     print("last episodes: " + ", ".join(f"{k} {v:.3f}" for k, v in stats.items()))
     final = runner.final_policy()
     if final == runner.best.path:
@@ -222,6 +237,50 @@ def main(argv: list[str] | None = None) -> int:
           f"{cfg.terrain.name}\n"
           f"  python -m hexnewton.export --checkpoint {final} --out bundle/\n"
           f"  tensorboard --logdir {args.log_dir}")  # fmt: skip
+
+
+def main(argv: list[str] | None = None) -> int:
+    base, ckpt = _base_task(argv)
+    args = parser(base, ckpt is not None).parse_args(argv)
+    if args.list_tasks:
+        from .tasks import task_table
+
+        print(task_table())
+        return 0
+    env_cfg, agent = configs(args, base, ckpt)
+    check_outputs(args)
+
+    from .env import make_env
+
+    rank, cfg = rank_config(args, env_cfg)
+    env = make_env(cfg, base.action_mode)
+    if ckpt is not None:
+        from .checkpoint import check_compatible
+
+        check_compatible(ckpt, args.resume, env.num_obs, env.num_actions, base.action_mode)
+    meta = {"task": base.name, "action_mode": base.action_mode, "num_obs": env.num_obs,
+            "num_actions": env.num_actions, "config": dataclasses.asdict(cfg), "agent": dataclasses.asdict(agent),
+            "world_size": rank.world_size}  # fmt: skip
+    run_dir = make_run_dir(args, meta, agent.to_rsl_rl(cfg.sim.num_envs), rank)
+    runner, videos = make_runner(args, env, agent, meta, run_dir, rank, ckpt)
+    where = f"rank {rank.rank} of {rank.world_size}, " if rank.world_size > 1 else ""
+    print(f"training task {base.name}: {where}{cfg.sim.num_envs} envs on {cfg.sim.device}, {agent.max_iterations} "
+          f"iterations, logs in {run_dir}")  # fmt: skip
+    if videos is not None:
+        videos.first_iteration = runner.current_learning_iteration
+    t0, first_it = time.time(), runner.current_learning_iteration
+    try:
+        reason = runner.train(agent.max_iterations)
+    finally:
+        if videos is not None:
+            videos.close()
+    train_s = time.time() - t0
+    print(f"finished at iteration {runner.current_learning_iteration} after {train_s:.0f} s ({reason})")
+    if rank.world_size > 1:
+        check_ranks_agree(runner, rank)
+    if not rank.is_main:
+        return 0
+    finish(args, runner, cfg, agent, rank, run_dir, videos, train_s, first_it)
     return 0
 
 

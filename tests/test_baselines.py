@@ -30,8 +30,9 @@ def test_baseline_trains_saves_and_runs_the_rounds(algo, tmp_path, capsys):
     """12 vector steps of 8 envs (updates from the 3rd), a checkpoint of tensors and plain data with the task's
     config, TensorBoard points against env-steps, then two evaluation rounds with the deterministic action."""
     from hexnewton.baselines import load_baseline_checkpoint
-    from hexnewton.checkpoint import checkpoint_meta, policy_checkpoint, trained_config
+    from hexnewton.checkpoint import checkpoint_meta, trained_config
     from hexnewton.curves import read_curve
+    from hexnewton.policy import policy_checkpoint
     from hexnewton.rollout import run_rounds
     from hexnewton.tasks import task
 

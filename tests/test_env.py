@@ -653,7 +653,8 @@ def test_config_overrides_are_generated_from_the_dataclasses():
     """Every field of the env and agent trees is a flag; values are typed (tuples, optionals, choices, literals);
     only the given ones are overrides."""
     from hexnewton.agent import AgentConfig
-    from hexnewton.cli import ArgumentParser, add_config_args, apply_overrides, config_overrides
+    from hexnewton.cli import ArgumentParser, add_config_args, config_overrides
+    from hexnewton.config import apply_overrides
 
     p = ArgumentParser(prog="t")
     add_config_args(p, "env", HexConfig(), skip=("sim.num_envs",))

@@ -285,15 +285,15 @@ def _mlp(sizes: list[int], activation: str):
     return nn.Sequential(*layers)
 
 
-def make_models(algo: str, cfg: BaselineConfig, observation_space, action_space, device) -> dict:
-    """skrl models of ``algo``: ``policy`` and the critics (with targets) or the value network."""
+def _actor_classes(cfg: BaselineConfig, spaces: dict) -> tuple[type, type, type]:
+    """The skrl actor models (SAC's squashed Gaussian, TD3's tanh actor, A2C's Gaussian) with ``cfg.model``'s hidden
+    layers on ``spaces`` (observation and action spaces, device)."""
     import torch
     import torch.nn.functional as F
     from skrl.models.torch import DeterministicMixin, GaussianMixin, Model
     from torch.distributions import Normal
 
     hidden, activation = list(cfg.model.hidden_dims), cfg.model.activation
-    spaces = dict(observation_space=observation_space, action_space=action_space, device=device)
 
     class SquashedGaussianActor(Model):
         """SAC's actor: a = tanh(u), u ~ N(mean(s), std(s)); ``log_prob`` with the tanh correction; ``mean_actions``
@@ -350,6 +350,16 @@ def make_models(algo: str, cfg: BaselineConfig, observation_space, action_space,
             mean = self.net(inputs["observations"])
             return mean, {"log_std": self.log_std_param.expand_as(mean)}
 
+    return SquashedGaussianActor, TanhActor, GaussianActor
+
+
+def _critic_classes(cfg: BaselineConfig, spaces: dict) -> tuple[type, type]:
+    """The skrl critic models Q(s, a) (SAC, TD3) and V(s) (A2C) with ``cfg.model``'s hidden layers on ``spaces``."""
+    import torch
+    from skrl.models.torch import DeterministicMixin, Model
+
+    hidden, activation = list(cfg.model.hidden_dims), cfg.model.activation
+
     class QCritic(DeterministicMixin, Model):
         """Q(s, a)."""
 
@@ -372,6 +382,14 @@ def make_models(algo: str, cfg: BaselineConfig, observation_space, action_space,
         def compute(self, inputs, role=""):
             return self.net(inputs["observations"]), {}
 
+    return QCritic, ValueCritic
+
+
+def make_models(algo: str, cfg: BaselineConfig, observation_space, action_space, device) -> dict:
+    """skrl models of ``algo``: ``policy`` and the critics (with targets) or the value network."""
+    spaces = dict(observation_space=observation_space, action_space=action_space, device=device)
+    SquashedGaussianActor, TanhActor, GaussianActor = _actor_classes(cfg, spaces)
+    QCritic, ValueCritic = _critic_classes(cfg, spaces)
     if algo == "a2c":
         return {"policy": GaussianActor(), "value": ValueCritic()}
     critics = {"critic_1": QCritic(), "critic_2": QCritic(), "target_critic_1": QCritic(), "target_critic_2": QCritic()}
@@ -611,7 +629,7 @@ class BaselineTrainer:
         import torch
         from torch.utils.tensorboard import SummaryWriter
 
-        from ..runner import TrainingStopped, _stop  # the signal handling train.py's runner uses
+        from ..stopping import TrainingStopped, catch_stop_signals  # the signal handling train.py's runner uses
 
         timesteps = max(1, math.ceil(budget.env_steps / self.hex_env.num_envs))
         self.trainer_cfg.timesteps = timesteps
@@ -620,7 +638,7 @@ class BaselineTrainer:
         agent.enable_training_mode(True)
         writer = SummaryWriter(log_dir=self.run_dir)
         returns = EpisodeReturns(self.hex_env.num_envs, self.hex_env._obs_t.device)
-        handlers = {sig: signal.signal(sig, _stop) for sig in (signal.SIGINT, signal.SIGTERM)}
+        handlers = catch_stop_signals()
         t0 = time.monotonic()
         deadline = t0 + 60.0 * budget.max_minutes if budget.max_minutes else math.inf
         reason = f"{budget.env_steps} env-steps"

@@ -19,7 +19,8 @@ import json
 import os
 import sys
 
-from ..cli import ArgumentParser, add_config_args, apply_overrides, config_overrides, positive_int, run
+from ..cli import ArgumentParser, add_config_args, config_overrides, positive_int, run
+from ..config import apply_overrides
 
 
 def _chosen(argv: list[str] | None) -> tuple[str, str | None, str]:

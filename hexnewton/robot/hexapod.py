@@ -60,88 +60,10 @@ def build_hexapod(cfg: RobotConfig | None = None, gap: float | None = None) -> n
 
     leg_shape = newton.ModelBuilder.ShapeConfig(density=0.0, mu=cfg.friction)
     leg_shape.collision_filter_parent = True
-    torso_shape = newton.ModelBuilder.ShapeConfig(density=0.0, mu=cfg.friction)
-
-    base_z = cfg.spawn_height
-    torso_m = torso_mass(cfg)
-    sx, sy, sz = cfg.torso_size
-    torso = b.add_link(
-        xform=wp.transform(wp.vec3(0.0, 0.0, base_z), wp.quat_identity()),
-        mass=torso_m,
-        inertia=_mat33(box_inertia(torso_m, sx, sy, sz)),
-        label="torso",
-        lock_inertia=True,
-    )
-    b.add_shape_box(torso, hx=sx / 2, hy=sy / 2, hz=sz / 2, cfg=torso_shape, label="torso")
+    torso = _add_torso(b, cfg, newton.ModelBuilder.ShapeConfig(density=0.0, mu=cfg.friction))
     joints = [b.add_joint_free(child=torso, label="base")]
-
-    hip_q, knee_q, ankle_q = cfg.stand_pose
-    drive = dict(
-        target_ke=cfg.joint_ke,
-        target_kd=cfg.joint_kd,
-        effort_limit=cfg.effort_limit,
-        armature=cfg.armature,
-        limit_ke=cfg.limit_ke,
-        limit_kd=cfg.limit_kd,
-    )
-    r = cfg.leg_radius
-    # capsules run along their local z; rotate local z onto the leg frame's +x
-    z_to_x = wp.quat_from_axis_angle(wp.vec3(0.0, 1.0, 0.0), math.pi / 2)
-
-    for leg, name in enumerate(LEG_NAMES):
-        yaw = leg_yaw(cfg, leg)
-        q_leg = wp.quat_from_axis_angle(wp.vec3(0.0, 0.0, 1.0), yaw)
-        mount = wp.vec3(*hip_mount(cfg, leg))
-        # initial world poses only seed the builder; eval_fk from joint_q is authoritative
-        p_world = wp.vec3(mount[0], mount[1], base_z)
-
-        # joints: (name, parent offset, axis, limits, standing angle); links: geometry.leg_links
-        joint_specs = (
-            ("hip", wp.transform(mount, q_leg), hip_axis(leg), cfg.hip_limit, hip_q),
-            ("knee", wp.transform(wp.vec3(cfg.hip_length, 0.0, 0.0), wp.quat_identity()), PITCH_AXIS,
-             cfg.knee_limit, knee_q),
-            ("ankle", wp.transform(wp.vec3(cfg.femur_length, 0.0, 0.0), wp.quat_identity()), PITCH_AXIS,
-             cfg.ankle_limit, ankle_q),
-        )  # fmt: skip
-        parent = torso
-        bodies = []
-        for (link, mass, length, com, long_axis), (kind, parent_xform, axis, limit, q0) in zip(leg_links(cfg),
-                                                                                              joint_specs):
-            body = b.add_link(
-                xform=wp.transform(p_world, q_leg),
-                com=wp.vec3(*com),
-                mass=mass,
-                inertia=_mat33(rod_inertia(mass, length, r, long_axis)),
-                label=f"{name}_{link}",
-                lock_inertia=True,
-            )
-            joints.append(
-                b.add_joint_revolute(
-                    parent, body, parent_xform=parent_xform, child_xform=wp.transform_identity(), axis=axis,
-                    limit_lower=limit[0], limit_upper=limit[1], target_q=q0, label=f"{name}_{kind}", **drive,
-                )
-            )  # fmt: skip
-            bodies.append(body)
-            parent = body
-        _, femur, tibia = bodies
-        # collision shapes: femur capsule, tibia capsule ending in a foot sphere (coxa hides in the torso)
-        b.add_shape_capsule(
-            femur,
-            xform=wp.transform(wp.vec3(cfg.femur_length / 2, 0.0, 0.0), z_to_x),
-            radius=r, half_height=cfg.femur_length / 2 - r, cfg=leg_shape, label=f"{name}_femur",
-        )  # fmt: skip
-        b.add_shape_capsule(
-            tibia,
-            xform=wp.transform(wp.vec3(0.0, 0.0, -(cfg.tibia_length - cfg.foot_radius) / 2), wp.quat_identity()),
-            radius=r, half_height=max((cfg.tibia_length - cfg.foot_radius) / 2 - r, 1e-3),
-            cfg=leg_shape, label=f"{name}_shin",
-        )  # fmt: skip
-        b.add_shape_sphere(
-            tibia,
-            xform=wp.transform(wp.vec3(0.0, 0.0, -cfg.tibia_length), wp.quat_identity()),
-            radius=cfg.foot_radius, cfg=leg_shape, label=f"{name}_foot",
-        )  # fmt: skip
-
+    for leg in range(len(LEG_NAMES)):
+        joints += _add_leg(b, cfg, leg, torso, leg_shape)
     b.add_articulation(joints, label="hexapod")
 
     # self-collision off: filter every pair of the robot's own shapes
@@ -152,8 +74,101 @@ def build_hexapod(cfg: RobotConfig | None = None, gap: float | None = None) -> n
 
     # neutral standing pose: free joint at spawn height, legs in stand_pose
     q = np.asarray(b.joint_q, dtype=np.float64)
-    q[0:3] = (0.0, 0.0, base_z)
+    q[0:3] = (0.0, 0.0, cfg.spawn_height)
     q[3:7] = (0.0, 0.0, 0.0, 1.0)
     q[BASE_Q:] = np.tile(cfg.stand_pose, 6)
     b.joint_q[:] = q.tolist()
     return b
+
+
+def _add_torso(b: newton.ModelBuilder, cfg: RobotConfig, shape: newton.ModelBuilder.ShapeConfig) -> int:
+    """The torso link (a box, ``cfg.spawn_height`` above z = 0) and its collision box; returns the link."""
+    torso_m = torso_mass(cfg)
+    sx, sy, sz = cfg.torso_size
+    torso = b.add_link(
+        xform=wp.transform(wp.vec3(0.0, 0.0, cfg.spawn_height), wp.quat_identity()),
+        mass=torso_m,
+        inertia=_mat33(box_inertia(torso_m, sx, sy, sz)),
+        label="torso",
+        lock_inertia=True,
+    )
+    b.add_shape_box(torso, hx=sx / 2, hy=sy / 2, hz=sz / 2, cfg=shape, label="torso")
+    return torso
+
+
+def _add_leg(b: newton.ModelBuilder, cfg: RobotConfig, leg: int, torso: int,
+             shape: newton.ModelBuilder.ShapeConfig) -> list[int]:
+    """Leg ``leg`` (``LEG_NAMES`` order) on ``torso``: coxa, femur and tibia links on the hip, knee and ankle joints
+    (PD-driven, at the standing pose), and the femur's, shin's and foot's collision shapes; returns its joints."""
+    name = LEG_NAMES[leg]
+    hip_q, knee_q, ankle_q = cfg.stand_pose
+    drive = dict(
+        target_ke=cfg.joint_ke,
+        target_kd=cfg.joint_kd,
+        effort_limit=cfg.effort_limit,
+        armature=cfg.armature,
+        limit_ke=cfg.limit_ke,
+        limit_kd=cfg.limit_kd,
+    )
+    yaw = leg_yaw(cfg, leg)
+    q_leg = wp.quat_from_axis_angle(wp.vec3(0.0, 0.0, 1.0), yaw)
+    mount = wp.vec3(*hip_mount(cfg, leg))
+    # initial world poses only seed the builder; eval_fk from joint_q is authoritative
+    p_world = wp.vec3(mount[0], mount[1], cfg.spawn_height)
+
+    # joints: (name, parent offset, axis, limits, standing angle); links: geometry.leg_links
+    joint_specs = (
+        ("hip", wp.transform(mount, q_leg), hip_axis(leg), cfg.hip_limit, hip_q),
+        ("knee", wp.transform(wp.vec3(cfg.hip_length, 0.0, 0.0), wp.quat_identity()), PITCH_AXIS,
+         cfg.knee_limit, knee_q),
+        ("ankle", wp.transform(wp.vec3(cfg.femur_length, 0.0, 0.0), wp.quat_identity()), PITCH_AXIS,
+         cfg.ankle_limit, ankle_q),
+    )  # fmt: skip
+    parent = torso
+    bodies, joints = [], []
+    for (link, mass, length, com, long_axis), (kind, parent_xform, axis, limit, q0) in zip(leg_links(cfg),
+                                                                                          joint_specs):
+        body = b.add_link(
+            xform=wp.transform(p_world, q_leg),
+            com=wp.vec3(*com),
+            mass=mass,
+            inertia=_mat33(rod_inertia(mass, length, cfg.leg_radius, long_axis)),
+            label=f"{name}_{link}",
+            lock_inertia=True,
+        )
+        joints.append(
+            b.add_joint_revolute(
+                parent, body, parent_xform=parent_xform, child_xform=wp.transform_identity(), axis=axis,
+                limit_lower=limit[0], limit_upper=limit[1], target_q=q0, label=f"{name}_{kind}", **drive,
+            )
+        )  # fmt: skip
+        bodies.append(body)
+        parent = body
+    _, femur, tibia = bodies
+    _add_leg_shapes(b, cfg, name, femur, tibia, shape)
+    return joints
+
+
+def _add_leg_shapes(b: newton.ModelBuilder, cfg: RobotConfig, name: str, femur: int, tibia: int,
+                    shape: newton.ModelBuilder.ShapeConfig) -> None:
+    """A leg's collision shapes: the femur capsule and the tibia capsule ending in the foot sphere (the coxa hides in
+    the torso)."""
+    r = cfg.leg_radius
+    # capsules run along their local z; rotate local z onto the leg frame's +x
+    z_to_x = wp.quat_from_axis_angle(wp.vec3(0.0, 1.0, 0.0), math.pi / 2)
+    b.add_shape_capsule(
+        femur,
+        xform=wp.transform(wp.vec3(cfg.femur_length / 2, 0.0, 0.0), z_to_x),
+        radius=r, half_height=cfg.femur_length / 2 - r, cfg=shape, label=f"{name}_femur",
+    )  # fmt: skip
+    b.add_shape_capsule(
+        tibia,
+        xform=wp.transform(wp.vec3(0.0, 0.0, -(cfg.tibia_length - cfg.foot_radius) / 2), wp.quat_identity()),
+        radius=r, half_height=max((cfg.tibia_length - cfg.foot_radius) / 2 - r, 1e-3),
+        cfg=shape, label=f"{name}_shin",
+    )  # fmt: skip
+    b.add_shape_sphere(
+        tibia,
+        xform=wp.transform(wp.vec3(0.0, 0.0, -cfg.tibia_length), wp.quat_identity()),
+        radius=cfg.foot_radius, cfg=shape, label=f"{name}_foot",
+    )  # fmt: skip

@@ -24,6 +24,8 @@ if TYPE_CHECKING:
     import newton
     import warp as wp
 
+    from hexnewton.terrain.query import HeightField
+
 #: names of :mod:`.query` (Warp structs and kernels with their NumPy references), imported on first use so that the
 #: height grids and their box decomposition load without Warp or Newton
 _QUERY = ("HeightField", "height_field_from_grid", "max_terrain_height", "max_terrain_height_np", "sample_heights",

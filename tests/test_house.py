@@ -1,0 +1,201 @@
+"""The package's house rules, read from its source (AST) and checked in a few fresh interpreters: one-way imports, no
+private names across modules, library modules free of the command lines, light command-line start-up (``--help`` and
+argument errors without Warp or Newton), a deployment runtime without Warp, Newton or torch, short functions."""
+
+import ast
+import json
+import os
+import subprocess
+import sys
+
+import pytest
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+PACKAGE = os.path.join(ROOT, "hexnewton")
+#: the longest function or method allowed in the package (def line to last line, decorators excluded)
+MAX_FUNCTION_LINES = 80
+#: modules with a ``main`` that are libraries first: the deployment runtime (its ``main`` replays a bundle)
+LIBRARIES_WITH_MAIN = {"hexnewton.deploy"}
+#: command-line modules without a ``main`` of their own: the argument parsing shared by the command lines
+COMMAND_LINE_HELPERS = {"hexnewton.cli"}
+HEAVY = ("warp", "newton")
+
+
+def _module_name(path: str) -> str:
+    name = os.path.relpath(path, ROOT)[: -len(".py")].replace(os.sep, ".")
+    return name[: -len(".__init__")] if name.endswith(".__init__") else name
+
+
+def _modules() -> dict[str, str]:
+    """{module name: path} of every module of the package (a package's ``__init__.py`` is the package itself)."""
+    out = {}
+    for folder, _, files in os.walk(PACKAGE):
+        for f in files:
+            if f.endswith(".py"):
+                out[_module_name(os.path.join(folder, f))] = os.path.join(folder, f)
+    return out
+
+
+MODULES = _modules()
+TREES = {name: ast.parse(open(path).read(), path) for name, path in MODULES.items()}
+
+
+def _imports(name: str) -> list[tuple[str, str | None, int]]:
+    """(imported hexnewton module, imported name or None for the module itself, line) of every import statement in
+    module ``name``, function-local ones included."""
+    path = MODULES[name]
+    package = name if path.endswith("__init__.py") else name.rpartition(".")[0]
+    out = []
+    for node in ast.walk(TREES[name]):
+        if isinstance(node, ast.Import):
+            out += [(a.name, None, node.lineno) for a in node.names if a.name.split(".")[0] == "hexnewton"]
+        elif isinstance(node, ast.ImportFrom):
+            if node.level:
+                parts = package.split(".")
+                base = ".".join(parts[: len(parts) - node.level + 1] + ([node.module] if node.module else []))
+            else:
+                base = node.module or ""
+            if base.split(".")[0] != "hexnewton":
+                continue
+            for a in node.names:
+                sub = f"{base}.{a.name}"
+                out.append((sub, None, node.lineno) if sub in MODULES else (base, a.name, node.lineno))
+    return out
+
+
+GRAPH = {name: {target for target, _, _ in _imports(name) if target in MODULES and target != name} for name in MODULES}
+COMMAND_LINES = {name for name, tree in TREES.items() if name not in LIBRARIES_WITH_MAIN and any(
+    isinstance(n, ast.FunctionDef) and n.name == "main" for n in tree.body)} | COMMAND_LINE_HELPERS  # fmt: skip
+
+
+def test_every_import_resolves():
+    """The checks below see every arrow: each import of a hexnewton module names a module of the package."""
+    missing = [f"{name}:{line} imports {target}" for name in MODULES for target, _, line in _imports(name)
+               if target not in MODULES]  # fmt: skip
+    assert not missing, missing
+
+
+def test_no_import_cycle():
+    """The modules' imports (function-local ones too) form no circle."""
+    state: dict[str, int] = {}  # 1: on the current path, 2: done
+    path: list[str] = []
+    cycles = []
+
+    def visit(name: str) -> None:
+        state[name] = 1
+        path.append(name)
+        for target in sorted(GRAPH[name]):
+            if state.get(target) == 1:
+                cycles.append(" -> ".join(path[path.index(target):] + [target]))
+            elif target not in state:
+                visit(target)
+        path.pop()
+        state[name] = 2
+
+    for name in sorted(MODULES):
+        if name not in state:
+            visit(name)
+    assert not cycles, cycles
+
+
+def test_no_private_name_imported_from_another_module():
+    private = [f"{name}:{line} imports {target}.{what}" for name in MODULES for target, what, line in _imports(name)
+               if what is not None and what.startswith("_")]  # fmt: skip
+    assert not private, private
+
+
+def test_library_modules_import_no_command_line_module():
+    """Only command lines import command lines (and ``cli``, their argument parsing)."""
+    assert {"hexnewton.train", "hexnewton.evaluate", "hexnewton.baselines.__main__", "hexnewton.cli"} <= COMMAND_LINES
+    wrong = [f"{name}:{line} imports {target}" for name in sorted(set(MODULES) - COMMAND_LINES)
+             for target, _, line in _imports(name) if target in COMMAND_LINES]  # fmt: skip
+    assert not wrong, wrong
+
+
+def test_functions_are_short():
+    long = []
+    for name, tree in TREES.items():
+        for node in ast.walk(tree):
+            if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
+                lines = node.end_lineno - node.lineno + 1
+                if lines > MAX_FUNCTION_LINES:
+                    long.append(f"{name}:{node.lineno} {node.name} ({lines} lines)")
+    assert not long, f"longer than {MAX_FUNCTION_LINES} lines: {long}"
+
+
+def _python(code: str) -> dict:
+    """Run ``code`` in a fresh interpreter in the repository root; its last stdout line, as JSON."""
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300, cwd=ROOT)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    return json.loads(proc.stdout.strip().splitlines()[-1])
+
+
+def test_import_hexnewton_loads_neither_warp_nor_newton():
+    loaded = _python("import json, sys\nimport hexnewton\n"
+                     f"print(json.dumps([m for m in {HEAVY!r} if m in sys.modules]))")  # fmt: skip
+    assert loaded == []
+
+
+#: each command line: (how to run it, a bad argument)
+CLIS = {"train.py": ("path", ["--num_envs", "-1"]), "play.py": ("path", ["--num_envs", "-1"])}
+CLIS.update({name.removesuffix(".__main__"): ("module", ["--not_a_flag", "1"])  # python -m hexnewton.baselines
+             for name in sorted(COMMAND_LINES - COMMAND_LINE_HELPERS)})  # fmt: skip
+CLI_PROBE = """
+import contextlib, io, json, runpy, sys
+
+how, target, cases = sys.argv[1], sys.argv[2], json.loads(sys.argv[3])
+out = []
+for argv in cases:
+    sys.argv = [target, *argv]
+    err, code = io.StringIO(), None
+    with contextlib.redirect_stdout(io.StringIO()) as text, contextlib.redirect_stderr(err):
+        try:
+            runpy.run_path(target, run_name="__main__") if how == "path" else runpy.run_module(
+                target, run_name="__main__", alter_sys=True)
+        except SystemExit as exc:
+            code = exc.code
+    out.append({"argv": argv, "code": code, "stdout": text.getvalue(), "stderr": err.getvalue(),
+                "loaded": [m for m in HEAVY if m in sys.modules]})
+print(json.dumps(out))
+"""
+
+
+@pytest.mark.parametrize("cli", list(CLIS))
+def test_command_line_help_and_argument_errors_load_neither_warp_nor_newton(cli):
+    """``--help`` prints the usage and exits 0; a bad argument is one stderr line and exit status 2, no traceback;
+    neither imports Warp or Newton (the heavy imports wait until the arguments are parsed)."""
+    how, bad = CLIS[cli]
+    cases = [["--help"], bad] + ([["--task", "complex", "--help"]] if cli == "train.py" else [])
+    code = f"HEAVY = {HEAVY!r}\n" + CLI_PROBE
+    proc = subprocess.run([sys.executable, "-c", code, how, cli, json.dumps(cases)], capture_output=True, text=True,
+                          timeout=300, cwd=ROOT)  # fmt: skip
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    help_, error, *more = json.loads(proc.stdout.strip().splitlines()[-1])
+    for case in (help_, *more):
+        assert case["code"] in (0, None) and "usage:" in case["stdout"], case
+        assert case["loaded"] == [], case
+    assert error["code"] == 2 and error["loaded"] == [], error
+    lines = error["stderr"].strip().splitlines()
+    assert len(lines) == 1 and ": error: " in lines[0] and "Traceback" not in error["stderr"], error["stderr"]
+    if more:  # the task registry answers without Warp: the task's own values are the defaults shown
+        assert "--env.terrain.name" in more[0]["stdout"] and "complex" in more[0]["stdout"]
+
+
+def test_deploy_runtime_loads_neither_warp_newton_nor_torch():
+    """``import hexnewton.deploy`` and its controllers (a bundle with its ONNX policy, a fixed gait's spec) run on
+    NumPy and onnxruntime alone; its replay command's ``--help`` too."""
+    from hexnewton.sim2sim import fixed_cpg_spec
+
+    bundle = os.path.join(ROOT, "results", "controllers", "cpg_rl_flat")
+    code = (
+        "import json, sys\n"
+        "from hexnewton import deploy\n"
+        f"deploy.Controller(json.loads({json.dumps(json.dumps(fixed_cpg_spec()))}), num_robots=2)\n"
+        f"if {os.path.isdir(bundle)!r}: deploy.Controller({bundle!r}, num_robots=2)\n"
+        "try:\n"
+        "    deploy.main(['--help'])\n"
+        "except SystemExit:\n"
+        "    pass\n"
+        f"print(json.dumps([m for m in {(*HEAVY, 'torch')!r} if m in sys.modules]))\n"
+    )
+    assert _python(code) == []
