@@ -340,14 +340,17 @@ class Viewer:
 
 
 def newton_reference(path: str | None) -> dict:
-    """The committed Newton numbers ``{"cpg_rl" | "cpg": {terrain: summary}}`` of an evaluation results.json (its
-    ``test`` section, as results/stable_gait's), with the file and the policy they were measured for."""
+    """The committed Newton numbers ``{"cpg_rl" | "cpg": {terrain: summary}}`` of an evaluation: ``evaluate``'s own
+    results.json (its ``results``) or a study's (its ``test`` section, as results/stable_gait's), with the file and
+    the policy they were measured for."""
     if not path:
         return {}
     with open(path) as f:
         data = json.load(f)
-    test = data.get("test", data)
-    out = {"file": path, "policy": data.get("policy"), "device": data.get("device"), "commands": data.get("commands")}
+    meta = data.get("meta", {})
+    test = data.get("test") or data.get("results") or data
+    out = {"file": path, "policy": data.get("policy", meta.get("checkpoint")), "commands": data.get("commands"),
+           "device": data.get("device", meta.get("device"))}  # fmt: skip
     for terrain, per in test.items():
         for ctrl in ("cpg_rl", "cpg"):
             if isinstance(per, dict) and ctrl in per:

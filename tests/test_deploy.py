@@ -242,7 +242,7 @@ def test_checkpoints_load_as_data_only(tmp_path):
     proc = _run(["-m", "hexnewton.export", "--checkpoint", str(evil), "--out", str(tmp_path / "b")])
     assert proc.returncode == 2 and "could run code" in proc.stderr and len(proc.stderr.strip().splitlines()) == 1
     assert not marker.exists()
-    onnx_file = os.path.join(ROOT, "results", "policies", "cpg_rl_flat.onnx")
+    onnx_file = os.path.join(ROOT, "results", "controllers", "cpg_rl_flat", "policy.onnx")
     onnx = _run(["-m", "hexnewton.export", "--checkpoint", onnx_file, "--out", str(tmp_path / "c")])
     assert onnx.returncode == 2 and "is an ONNX policy" in onnx.stderr
 

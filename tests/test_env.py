@@ -420,8 +420,8 @@ def test_curve_axes_and_resumed_pieces(trained):
 
 @pytest.mark.parametrize("name", ["cpg_rl_flat", "cpg_rl_rugged"])
 def test_shipped_policies_fit_the_environment(name):
-    """results/policies holds the GPU-trained actors (RESULTS.md); they must keep matching the observation
-    layout and action count, in torch and in ONNX."""
+    """results/policies holds the GPU-trained actors and results/controllers their bundles (RESULTS.md); they must
+    keep matching the observation layout and action count, in torch and in ONNX."""
     import os
 
     import onnxruntime as ort
@@ -429,10 +429,11 @@ def test_shipped_policies_fit_the_environment(name):
     from hexnewton.checkpoint import check_compatible, load_checkpoint
     from hexnewton.kernels.mdp import OBS_DIM
 
-    base = os.path.join(os.path.dirname(__file__), "..", "results", "policies", name)
-    ckpt = load_checkpoint(base + ".pt")
-    check_compatible(ckpt, base + ".pt", OBS_DIM["cpg"], 15, "cpg")
-    sess = ort.InferenceSession(base + ".onnx", providers=["CPUExecutionProvider"])
+    results = os.path.join(os.path.dirname(__file__), "..", "results")
+    pt = os.path.join(results, "policies", name + ".pt")
+    check_compatible(load_checkpoint(pt), pt, OBS_DIM["cpg"], 15, "cpg")
+    sess = ort.InferenceSession(os.path.join(results, "controllers", name, "policy.onnx"),
+                                providers=["CPUExecutionProvider"])
     out = sess.run(None, {sess.get_inputs()[0].name: np.zeros((3, OBS_DIM["cpg"]), np.float32)})[0]
     assert out.shape == (3, 15) and np.isfinite(out).all()
 

@@ -142,3 +142,19 @@ def test_cli_writes_results_and_rejects_bad_input(tmp_path, capsys):
     assert run(main, PROG, [BUNDLE, "--video", str(tmp_path / "v.avi"), "--out", str(tmp_path / "z")]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 3 and all(line.startswith(PROG) for line in err)
+
+
+def test_newton_reference_reads_both_results_layouts(tmp_path):
+    """``--newton`` takes evaluate's own results.json (``meta`` + ``results``) and a study's (``test``)."""
+    import json
+
+    from hexnewton.sim2sim import newton_reference
+
+    summary = {"rounds": 10, "success_3m": 0.9}
+    own = tmp_path / "own.json"
+    own.write_text(json.dumps({"meta": {"device": "cuda:0"}, "results": {"rugged": {"cpg_rl": summary}}}))
+    study = tmp_path / "study.json"
+    study.write_text(json.dumps({"device": "H200", "policy": "p.pt", "test": {"rugged": {"cpg": summary}}}))
+    a, b = newton_reference(str(own)), newton_reference(str(study))
+    assert a["cpg_rl"] == {"rugged": summary} and a["device"] == "cuda:0" and "cpg" not in a
+    assert b["cpg"] == {"rugged": summary} and b["device"] == "H200" and b["policy"] == "p.pt"
