@@ -50,7 +50,7 @@ from . import startup
 from .config import ACTION_MODES, HexConfig, control_decimation
 from .controller import CPGController
 from .errors import HexnewtonError
-from .kernels.cpg import joint_actions_kernel, scale_actions_kernel
+from .kernels.cpg import joint_actions_kernel
 from .kernels.curriculum import curriculum_kernel, placement_kernel, start_levels
 from .kernels.mdp import (
     LAYOUTS,
@@ -284,9 +284,7 @@ class HexapodEnv(VecEnv):
                                                   t.seed + 104729, w.reset_counter],
                       outputs=[w.joint_qd_wp], device=dev)  # fmt: skip
         if self.controller is not None:
-            wp.launch(scale_actions_kernel, dim=(n, self.num_actions),
-                      inputs=[actions, self.controller.lower, self.controller.upper],
-                      outputs=[self.controller.params_target], device=dev)  # fmt: skip
+            self.controller.set_actions(actions)
         else:
             wp.launch(joint_actions_kernel, dim=(n, self.num_actions),
                       inputs=[actions, w.stand_pose, w.joint_lower, w.joint_upper, t.joint_action_scale, BASE_Q],
