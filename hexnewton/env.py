@@ -9,7 +9,8 @@ single captured graph (a CUDA graph on GPU, Warp's capture on CPU) of Warp kerne
             -> randomised resets of finished envs and observations (kernels/mdp.py)
 
 With ``RandomizationConfig.enabled`` the step also delays the actions of "late" envs, pushes bases and adds
-observation noise (kernels/randomization.py); the per-env physical draws are ``World.randomize``.
+observation noise (kernels/randomization.py); the per-env physical draws are
+``randomization.randomize_physics``.
 
 torch sees every buffer zero-copy (``wp.to_torch``), and nothing goes back to the host inside a step. What
 ``step`` and ``get_observations`` return are device copies of those buffers, made after the graph: rsl-rl keeps
@@ -71,6 +72,7 @@ from .kernels.mdp import (
     rewards_kernel,
 )
 from .kernels.randomization import delay_actions_kernel, observation_noise_kernel, push_kernel
+from .randomization import randomize_physics
 from .robot import BASE_Q
 from .sim import World, capture_graph
 
@@ -132,6 +134,8 @@ class HexapodEnv(VecEnv):
         self.cfg = cfg
         self.action_mode = action_mode
         self.world = world = World(cfg)
+        # each env's physical draws (friction, masses, gains, contacts), once, before anything is stepped
+        self.physical_draws = randomize_physics(world, cfg.task.seed) if cfg.randomization.enabled else {}
         task = cfg.task
         self.decimation = control_decimation(task.control_dt, world.frame_dt)
         self.num_envs = n = world.num_envs

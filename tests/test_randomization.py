@@ -73,7 +73,7 @@ def pair():
 
 def test_physical_draws_reach_mujoco(pair):
     env, _ = pair
-    d, m, n = env.world.randomized, env.world.solver.mjw_model, 8
+    d, m, n = env.physical_draws, env.world.solver.mjw_model, 8
     for key, rng in (("friction", RZ.friction), ("payload", RZ.payload), ("kp_scale", RZ.kp_scale),
                      ("effort_scale", RZ.effort_scale), ("link_mass_scale", RZ.link_mass_scale)):  # fmt: skip
         assert d[key].shape == (n,) and np.all((d[key] >= rng[0]) & (d[key] <= rng[1])) and d[key].std() > 0
@@ -120,12 +120,13 @@ def test_evaluation_under_perturbed_conditions():
 def test_foot_radius_and_contact_timeconst_reach_both_simulators():
     """The drawn foot radius sizes each env's foot spheres for Newton's collision and MuJoCo, and the drawn time
     constant is the solref of that env's robot-ground contacts after MuJoCo's averaging with the ground's."""
+    from hexnewton.randomization import randomize_physics
     from hexnewton.sim import World
 
     rz = RandomizationConfig(enabled=True, foot_radius=(0.010, 0.014), contact_timeconst=(0.015, 0.03))
     cfg = HexConfig(sim=replace(SimConfig(), num_envs=4, device=DEV), randomization=rz)
     w = World(cfg)
-    d, m, solver = w.randomized, w.model, w.solver
+    d, m, solver = randomize_physics(w, seed=3), w.model, w.solver
     for key, (lo, hi) in (("foot_radius", rz.foot_radius), ("contact_timeconst", rz.contact_timeconst)):
         assert d[key].shape == (4,) and np.all((d[key] >= lo) & (d[key] <= hi)) and d[key].std() > 0
     feet = np.array([str(s).endswith("_foot") for s in m.shape_label])
@@ -148,6 +149,7 @@ def test_foot_radius_and_contact_timeconst_reach_both_simulators():
 
 def test_larger_feet_stand_higher():
     """Newton's collision uses the drawn radius: 4 mm more foot radius lifts the standing torso by about 4 mm."""
+    from hexnewton.randomization import randomize_physics
     from hexnewton.sim import World
 
     heights = []
@@ -156,6 +158,7 @@ def test_larger_feet_stand_higher():
                                  link_mass_scale=(1.0, 1.0), kp_scale=(1.0, 1.0), kd_scale=(1.0, 1.0),
                                  effort_scale=(1.0, 1.0))  # fmt: skip
         w = World(HexConfig(sim=replace(SimConfig(), num_envs=2, device=DEV), randomization=rz))
+        randomize_physics(w)
         w.step(50)
         heights.append(w.base_pos()[:, 2])
     np.testing.assert_allclose(heights[1] - heights[0], 0.004, atol=0.001)

@@ -1,4 +1,5 @@
-"""Per-step domain randomisation (``RandomizationConfig``; the per-env physical draws are ``World.randomize``).
+"""Per-step domain randomisation (``RandomizationConfig``; the per-env physical draws are
+``hexnewton.randomization.randomize_physics``).
 
 - ``delay_actions_kernel``: actuation latency. Envs flagged ``late`` act on the previous control step's
   actions (20 ms late); the others on this step's.
