@@ -208,6 +208,17 @@ class HexRunner(OnPolicyRunner):
         if cuda:
             torch.cuda.set_device(r.local_rank)
 
+    def leave_group(self) -> None:
+        """Every rank at the end of a torchrun run: wait for the others, then close the process group (a process that
+        exits with its Gloo group open can abort in the group's teardown)."""
+        if not self.is_distributed:
+            return
+        import torch.distributed as td
+
+        if td.is_initialized():
+            td.barrier()
+            td.destroy_process_group()
+
     def rank_spread(self) -> float:
         """The largest difference between any rank's actor and critic parameters and rank 0's (0 in a run of one
         process). Every rank must call it: it broadcasts and reduces."""

@@ -278,6 +278,7 @@ def main(argv: list[str] | None = None) -> int:
     print(f"finished at iteration {runner.current_learning_iteration} after {train_s:.0f} s ({reason})")
     if rank.world_size > 1:
         check_ranks_agree(runner, rank)
+        runner.leave_group()
     if not rank.is_main:
         return 0
     finish(args, runner, cfg, agent, rank, run_dir, videos, train_s, first_it)

@@ -1,0 +1,74 @@
+"""The task registry and the generated config flags (hexnewton/tasks.py, cli.py)."""
+
+
+import pytest
+
+from hexnewton.config import HexConfig, RewardConfig
+
+
+def test_tasks_hold_the_recipes():
+    """The registry's tasks: the terrain recipe (curriculum, knee-lift floor, randomisation, 20 ms frame, 0.1 s filter,
+    stability shaping), the complex course's posture and curriculum, Table 1 and Table 2 in ``paper``; every task has
+    a Gymnasium id, and ``task`` hands out copies."""
+    from hexnewton.agent import AgentConfig
+    from hexnewton.tasks import LONG_STABLE_STAGES, STABLE_STAGES, TASKS, task
+
+    c = task("complex")
+    assert (c.env.terrain.levels, c.env.terrain.start_levels, c.env.cpg.a2_range, c.env.randomization.enabled,
+            c.env.sim.frame_dt, c.env.cpg.param_tau) == (10, 3, (0.9, 1.3), True, 0.02, 0.1)  # fmt: skip
+    assert c.env.cpg.posture and c.agent.stages == STABLE_STAGES and c.agent.max_iterations == 300
+    assert c.env.terrain.collision == "mesh_boxes"
+    assert task("complex-5m").agent.stages == LONG_STABLE_STAGES and task("stairs-8cm").agent.max_iterations == 1062
+    assert (c.env.reward.w_tilt, c.env.reward.w_action_rate) == (5.0, 0.1)
+    r = task("rugged")
+    assert not r.env.cpg.posture and r.agent.stages == () and r.agent.max_iterations == 300
+    f = task("flat")
+    assert (f.env.terrain.levels, f.env.randomization.enabled, f.env.sim.frame_dt) == (0, False, 0.01)
+    assert f.env.reward == RewardConfig() and f.agent == AgentConfig()
+    p = task("paper")
+    assert p.env.reward == RewardConfig().paper_reward() and p.env.reward.goal_bonus == 0 and p.env.reward.w_tilt == 0
+    a = p.agent.to_rsl_rl(1024)["algorithm"]
+    assert (a["learning_rate"], a["schedule"], a["gamma"], a["lam"], a["clip_param"]) == (1e-4, "fixed", 0.99, 0.95, 0.2)
+    assert a["num_mini_batches"] == 1024 * 24 // 512  # Table 2's batch of 512
+    assert p.agent.model.activation == "relu" and p.agent.model.hidden_dims == (256, 256, 256, 256)
+    assert not p.env.cpg.posture and p.env.terrain.levels == 0 and not p.env.randomization.enabled
+    s8 = task("stairs-8cm")
+    assert (s8.env.terrain.step_rise, s8.env.task.goal_distance, s8.env.terrain.x_max) == (0.08, 5.5, 6.5)
+    assert task("complex-5m").env.task.goal_distance == 5.5 and task("complex-joint").action_mode == "joint"
+    c.env.reward.w_tilt = 99.0
+    assert task("complex").env.reward.w_tilt == 5.0  # a copy
+    assert len({t.gym_id for t in TASKS.values()}) == len(TASKS) and TASKS["complex-5m"].gym_id == "Hexnewton-Complex-5m-v0"
+    with pytest.raises(ValueError, match="unknown task 'moon'"):
+        task("moon")
+
+
+def test_config_overrides_are_generated_from_the_dataclasses():
+    """Every field of the env and agent trees is a flag; values are typed (tuples, optionals, choices, literals);
+    only the given ones are overrides."""
+    from hexnewton.agent import AgentConfig
+    from hexnewton.cli import ArgumentParser, add_config_args, config_overrides
+    from hexnewton.config import apply_overrides
+
+    p = ArgumentParser(prog="t")
+    add_config_args(p, "env", HexConfig(), skip=("sim.num_envs",))
+    add_config_args(p, "agent", AgentConfig())
+    flags = {o for a in p._actions for o in a.option_strings}
+    assert "--env.reward.w_tilt" in flags and "--agent.algorithm.learning_rate" in flags
+    assert "--env.sim.num_envs" not in flags  # a conventional flag of its own
+    args = p.parse_args(["--env.cpg.a2_range", "0.5", "1.0", "--env.randomization.enabled", "true",
+                         "--agent.distribution.std_max", "none", "--agent.model.hidden_dims", "64", "64",
+                         "--agent.stages", "((3, {'w_tilt': 2.0}),)", "--env.terrain.name", "rugged"])  # fmt: skip
+    env, agent = config_overrides(args, "env"), config_overrides(args, "agent")
+    assert env == {"cpg.a2_range": (0.5, 1.0), "randomization.enabled": True, "terrain.name": "rugged"}
+    assert agent == {"distribution.std_max": None, "model.hidden_dims": (64, 64), "stages": ((3, {"w_tilt": 2.0}),)}
+    cfg = apply_overrides(HexConfig(), env)
+    assert cfg.cpg.a2_range == (0.5, 1.0) and cfg.randomization.enabled and cfg.terrain.name == "rugged"
+    assert apply_overrides(AgentConfig(), agent).to_rsl_rl(8)["actor"]["hidden_dims"] == [64, 64]
+    with pytest.raises(ValueError, match="no field 'sim.warp'"):
+        apply_overrides(HexConfig(), {"sim.warp": 1})
+    # an optional pair takes two numbers or none
+    for given, want in ((["0.01", "0.014"], (0.01, 0.014)), (["none"], None)):
+        args = p.parse_args(["--env.randomization.foot_radius", *given])
+        assert config_overrides(args, "env") == {"randomization.foot_radius": want}
+    with pytest.raises(ValueError, match="foot_radius: give 2 numbers or none"):
+        config_overrides(p.parse_args(["--env.randomization.foot_radius", "0.01"]), "env")

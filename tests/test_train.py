@@ -1,0 +1,276 @@
+"""train.py and the runner (hexnewton/train.py, runner.py, stopping.py): checkpoints, ONNX and TensorBoard, seeding,
+resume, interruption, torchrun ranks, stop rules, the stable-gait stages, start-up timing, the progress line, the
+best checkpoint."""
+
+import glob
+import json
+import os
+import re
+import signal
+import subprocess
+import sys
+import time
+
+import pytest
+import torch
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+
+
+def test_training_writes_checkpoint_onnx_and_tensorboard(trained):
+    logs, out = trained
+    run_dir = glob.glob(str(logs / "hexnewton_flat" / "*"))[0]
+    files = {p.rsplit("/", 1)[1] for p in glob.glob(run_dir + "/*")}
+    assert {"model_0.pt", "model_1.pt", "policy.onnx", "config.json"} <= files
+    assert any(f.startswith("events.out.tfevents") for f in files)
+    assert "onnxruntime vs torch" in out
+    import onnx
+
+    model = onnx.load(run_dir + "/policy.onnx")  # one self-contained file, dynamic batch
+    assert not glob.glob(run_dir + "/*.onnx.data")
+    assert model.graph.input[0].type.tensor_type.shape.dim[0].dim_param
+    assert model.graph.input[0].type.tensor_type.shape.dim[1].dim_value == 59
+
+
+def _train(logs, *args, timeout=900):
+    task = [] if "--resume" in args else ["--task", "flat"]  # a resumed run continues its own task
+    cmd = [sys.executable, "train.py", "--num_envs", "8", "--device", "cpu", *task, "--log_dir", str(logs),
+           "--agent.num_steps_per_env", "8", *args]  # fmt: skip
+    proc = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout)
+    assert proc.returncode == 0, proc.stdout[-2000:] + proc.stderr[-3000:]
+    return proc.stdout
+
+
+def _run_dirs(logs, experiment):
+    return sorted(glob.glob(str(logs / experiment / "*")))
+
+
+def _actor(path):
+    return torch.load(path, weights_only=False)["actor_state_dict"]
+
+
+def test_same_seed_same_first_iteration_on_cpu(tmp_path):
+    """Seeds reach torch, numpy and the env's resets: the same seed gives the same first update."""
+    for name, seed in (("a", "3"), ("b", "3"), ("c", "4")):
+        _train(tmp_path, "--max_iterations", "1", "--seed", seed, "--experiment", name)
+    a, b, c = (_actor(glob.glob(str(tmp_path / n / "*" / "model_0.pt"))[0]) for n in "abc")
+    assert all(torch.equal(a[k], b[k]) for k in a)
+    assert not all(torch.equal(a[k], c[k]) for k in a)
+
+
+def test_resume_continues_iterations_and_learning_rate(tmp_path):
+    """2 iterations + resume 2 numbers its iterations like 4 straight ones and keeps the adapted learning rate and
+    the physics it was trained under."""
+    _train(tmp_path, "--max_iterations", "2", "--experiment", "part", "--env.sim.frame_dt", "0.02",
+           "--env.sim.substeps", "2", "--agent.distribution.name", "gaussian")  # fmt: skip
+    (first,) = _run_dirs(tmp_path, "part")
+    ck = torch.load(first + "/model_1.pt", weights_only=False)
+    lr_saved = ck["optimizer_state_dict"]["param_groups"][0]["lr"]
+    time.sleep(1.1)  # run directories are named by the second
+    out = _train(tmp_path, "--max_iterations", "2", "--experiment", "part", "--resume",
+                 first + "/model_1.pt", "--agent.distribution.init_std", "0.2",
+                 "--agent.distribution.learn_std", "false")  # fmt: skip
+    assert "continuing at iteration 2" in out
+    second = _run_dirs(tmp_path, "part")[1]
+    assert os.path.isfile(second + "/model_3.pt") and torch.load(second + "/model_3.pt", weights_only=False)["iter"] == 3
+    meta = json.loads(open(second + "/config.json").read())["hexnewton"]
+    sim = meta["config"]["sim"]
+    assert meta["agent"]["distribution"]["name"] == "gaussian"  # a resumed run keeps its action distribution
+    assert (sim["frame_dt"], sim["substeps"]) == (0.02, 2)  # from the checkpoint: no --env.sim.* on the resume
+    # agent.distribution.init_std on a resume replaced the checkpoint's learnt std
+    std = torch.load(second + "/model_3.pt", weights_only=False)["actor_state_dict"]["distribution.std_param"]
+    assert ck["actor_state_dict"]["distribution.std_param"].sub(0.2).abs().max() > 1e-3
+    torch.testing.assert_close(std, torch.full_like(std, 0.2))
+    lr = read_scalars_lr(second)
+    assert f"learning rate {lr_saved:.2e}" in out  # the resumed optimizer starts at the saved rate, not the preset's
+    steps = 2 * 4  # the default update's mini-batches x epochs: one adaptive x1.5 (or /1.5) step each at most
+    assert sorted(lr) == [2, 3] and lr_saved / 1.5**steps * 0.999 <= lr[2] <= lr_saved * 1.5**steps * 1.001
+    _train(tmp_path, "--max_iterations", "4", "--experiment", "straight")
+    assert sorted(read_scalars_lr(_run_dirs(tmp_path, "straight")[0])) == [0, 1, 2, 3]
+
+
+def read_scalars_lr(run_dir):
+    from tensorboard.backend.event_processing.event_accumulator import EventAccumulator
+
+    acc = EventAccumulator(run_dir)
+    acc.Reload()
+    return {e.step: e.value for e in acc.Scalars("Loss/learning_rate")}
+
+
+def test_interrupt_saves_and_exports(tmp_path):
+    """SIGINT in the middle of training: a final checkpoint and the ONNX policy are written, exit status 0."""
+    cmd = [sys.executable, "train.py", "--num_envs", "8", "--device", "cpu", "--task", "flat", "--log_dir",
+           str(tmp_path), "--agent.num_steps_per_env", "8", "--max_iterations", "100000", "--agent.save_interval", "1"]
+    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    deadline = time.time() + 600  # interrupt once training is under way (iteration 1 saved), whatever the load
+    while not glob.glob(str(tmp_path / "*" / "*" / "model_1.pt")) and time.time() < deadline:
+        time.sleep(0.5)
+    proc.send_signal(signal.SIGINT)
+    out, err = proc.communicate(timeout=600)
+    assert proc.returncode == 0, out[-2000:] + err[-3000:]
+    assert "stopped by SIGINT" in out
+    (run,) = glob.glob(str(tmp_path / "*" / "*"))
+    final = re.search(r"saving (model_\d+\.pt)", out).group(1)  # the checkpoint written on the interrupt
+    assert int(final[6:-3]) >= 1 and os.path.isfile(os.path.join(run, final))
+    assert os.path.isfile(run + "/policy.onnx")
+    assert not glob.glob(run + "/*.tmp")  # atomic saves leave no temporary file
+
+
+def test_torchrun_ranks_devices_and_seeds():
+    """torchrun's variables pick cuda:LOCAL_RANK (or the CPU when asked) and rank-offset seeds; a plain run is
+    unchanged (no GPU needed)."""
+    from hexnewton.runner import distributed_rank
+
+    assert distributed_rank({}, None).device is None and distributed_rank({}, "cpu").world_size == 1
+    r = distributed_rank({"WORLD_SIZE": "2", "RANK": "1", "LOCAL_RANK": "1"}, None)
+    assert (r.device, r.rank, r.world_size, r.is_main) == ("cuda:1", 1, 2, False)
+    assert r.seeds(7, 0) == (8, 1) and distributed_rank({}, None).seeds(7, 0) == (7, 0)
+    r0 = distributed_rank({"WORLD_SIZE": "2", "RANK": "0", "LOCAL_RANK": "0"}, "cuda")
+    assert r0.device == "cuda:0" and r0.is_main
+    r3 = distributed_rank({"WORLD_SIZE": "4", "RANK": "3", "LOCAL_RANK": "1"}, None)  # 2 nodes x 2 GPUs
+    assert r3.device == "cuda:1" and r3.rank == 3
+    for environ, device, message in (({"WORLD_SIZE": "2", "RANK": "2", "LOCAL_RANK": "0"}, None, "must lie in"),
+                                     ({"WORLD_SIZE": "2", "RANK": "1", "LOCAL_RANK": "1"}, "mps", "runs on cuda"),
+                                     ({"WORLD_SIZE": "two"}, None, "integers")):  # fmt: skip
+        with pytest.raises(ValueError, match=message):
+            distributed_rank(environ, device)
+    r1 = distributed_rank({"WORLD_SIZE": "2", "RANK": "1", "LOCAL_RANK": "1"}, "cpu")
+    assert (r1.device, r1.rank, r1.world_size) == ("cpu", 1, 2)
+    # the CLI: a device no rank can run on is one line, exit 2
+    env = dict(os.environ, WORLD_SIZE="2", RANK="1", LOCAL_RANK="1")
+    proc = subprocess.run([sys.executable, "train.py", "--device", "mps"], capture_output=True, text=True, env=env,
+                          timeout=300)  # fmt: skip
+    err = [line for line in proc.stderr.splitlines() if line.strip() and "Warp CUDA" not in line]
+    assert proc.returncode == 2 and len(err) == 1 and "runs on cuda" in err[0], proc.stderr[-1500:]
+
+
+def test_torchrun_two_cpu_processes_train_as_one(tmp_path):
+    """``torchrun --nproc_per_node=2 train.py --device cpu``: two processes (Gloo) train two iterations with their
+    gradients averaged; their parameters agree at the end, and only rank 0 writes a run directory."""
+    cmd = ["torchrun", "--standalone", "--nproc_per_node=2", "train.py", "--task", "flat", "--num_envs", "4",
+           "--max_iterations", "2", "--device", "cpu", "--log_dir", str(tmp_path)]  # fmt: skip
+    proc = subprocess.run(cmd, capture_output=True, text=True, timeout=900, cwd=ROOT)
+    assert proc.returncode == 0, proc.stdout[-2000:] + proc.stderr[-3000:]
+    assert "rank 0 of 2" in proc.stdout and "rank 1 of 2" in proc.stdout
+    agree = re.search(r"parameters of the 2 ranks agree to (\S+)", proc.stdout)
+    assert agree and float(agree.group(1)) <= 1e-6, proc.stdout[-2000:]
+    runs = glob.glob(str(tmp_path / "hexnewton_flat" / "*"))
+    assert len(runs) == 1 and os.path.isfile(os.path.join(runs[0], "model_1.pt"))
+    from hexnewton.checkpoint import checkpoint_meta, load_checkpoint
+
+    assert checkpoint_meta(load_checkpoint(os.path.join(runs[0], "model_1.pt")))["world_size"] == 2
+
+
+def test_stop_reason_is_one_decision_for_all_ranks():
+    """--max_minutes / --target_success under torchrun: every rank reaches the same decision from the sums over
+    the ranks (here a fake two-rank sum), so no rank leaves the others waiting in a collective."""
+    from hexnewton.env import RING
+    from hexnewton.runner import stop_reason
+
+    full = {"episodes": RING, "success_rate": 0.96, "top_level_episodes": RING // 4, "top_level_success_rate": 0.5}
+    assert stop_reason(False, full, 0.95, 0) == "target success 0.960 >= 0.95"
+    assert stop_reason(False, full, 0.95, 10) is None  # a curriculum counts the last level only
+    assert stop_reason(False, dict(full, episodes=RING - 1), 0.95, 0) is None  # ring not full yet
+    assert stop_reason(True, full, None, 0) == "the --max_minutes limit"
+    assert stop_reason(False, full, None, 0) is None
+    other = {"episodes": RING, "success_rate": 0.90, "top_level_episodes": RING // 4, "top_level_success_rate": 1.0}
+    sent = []
+    stop_reason(False, other, 0.9, 0, reduce=lambda v: sent.append(v) or v)  # what the other rank contributes
+    plus_other = lambda v: [a + b for a, b in zip(v, sent[0], strict=True)]  # noqa: E731
+    assert stop_reason(False, full, 0.95, 0, plus_other) is None  # (0.96 + 0.90) / 2 < 0.95
+    assert stop_reason(False, full, 0.92, 0, plus_other) == "target success 0.930 >= 0.92"
+    assert stop_reason(False, other, 0.95, 10) == "target success on the last level 1.000 >= 0.95"
+    time_up_elsewhere = lambda v: [a + b for a, b in zip(v, [1.0, 0.0, 0.0, 1.0], strict=True)]  # noqa: E731
+    assert stop_reason(False, full, 0.95, 0, time_up_elsewhere) == "the --max_minutes limit"
+
+
+@pytest.mark.parametrize("curriculum", [(), ("--env.terrain.levels", "2", "--env.terrain.start_levels", "2")])
+def test_target_success_stops_training(tmp_path, curriculum):
+    """--target_success (time-to-skill): with the goal 5 cm beyond reach every episode succeeds at once, so
+    training stops as soon as 1024 episodes have finished (with a curriculum: 256 on its last level), then saves
+    and exports."""
+    out = _train(tmp_path, "--env.task.goal_distance", "0.55", "--agent.target_success", "0.9", "--max_iterations", "100000",
+                 "--num_envs", "32", *curriculum)  # fmt: skip
+    assert ("stopped by target success on the last level" if curriculum else "stopped by target success") in out
+    (run,) = glob.glob(str(tmp_path / "*" / "*"))
+    assert os.path.isfile(run + "/policy.onnx") and len(glob.glob(run + "/model_*.pt")) >= 2
+
+
+def test_max_minutes_stops_at_an_iteration_boundary(tmp_path):
+    """--max_minutes: the alarm is acted on at the end of an iteration (as under torchrun), then save and export."""
+    out = _train(tmp_path, "--agent.max_minutes", "0.001", "--max_iterations", "100000", "--num_envs", "8")
+    it = re.search(r"stopped by the --max_minutes limit after iteration (\d+): saving", out)
+    assert it, out[-2000:]
+    (run,) = glob.glob(str(tmp_path / "*" / "*"))
+    assert os.path.isfile(run + "/policy.onnx") and os.path.isfile(f"{run}/model_{it.group(1)}.pt")
+
+
+def test_curriculum_stages_change_reflex_and_weights_in_one_run(tmp_path, capsys):
+    """The complex recipe's curriculum, on shortened stages (--agent.stages): each stage begins at its iteration, the
+    checkpoints carry the task, the gain and weights they were trained under; a resumed run continues in its
+    stage, on its own task."""
+    import torch
+
+    from hexnewton import train
+
+    stages = "((1, {'posture_reflex': 2.0, 'w_tilt': 15.0}), (2, {'w_tilt': 40.0, 'w_ang_vel': 0.3}))"
+    assert train.main(["--task", "complex", "--num_envs", "8", "--agent.num_steps_per_env", "4", "--max_iterations",
+                       "3", "--device", "cpu", "--log_dir", str(tmp_path), "--agent.stages", stages]) == 0  # fmt: skip
+    out = capsys.readouterr().out
+    assert "iteration 1: curriculum stage 2 of 3: posture_reflex 2, w_tilt 15" in out
+    assert "iteration 2: curriculum stage 3 of 3: posture_reflex 2, w_tilt 40, w_ang_vel 0.3" in out
+    last = sorted(tmp_path.glob("*/*/model_2.pt"))[-1]
+    meta = torch.load(last, weights_only=True)["infos"]["hexnewton"]
+    cfg = meta["config"]
+    assert meta["task"] == "complex" and meta["agent"]["max_iterations"] == 3
+    assert cfg["cpg"]["posture"] and cfg["cpg"]["posture_reflex"] == 2.0 and cfg["reward"]["w_tilt"] == 40.0
+    # resumed: the run goes on with its own task and configs, in the stage its iteration is in
+    assert train.main(["--resume", str(last), "--num_envs", "8", "--max_iterations", "1", "--device", "cpu",
+                       "--log_dir", str(tmp_path)]) == 0  # fmt: skip
+    out = capsys.readouterr().out
+    assert "training task complex" in out and "iteration 3: curriculum stage 3 of 3" in out
+
+
+def test_training_reports_its_start_up_and_writes_timing(trained):
+    """After the first iteration train.py prints where the start-up went (phases from the process's start), and the
+    run's timing.json records them with the training time and the result it exported."""
+    logs, out = trained
+    line = next(x for x in out.splitlines() if x.startswith("start-up "))
+    for phase in ("python and imports", "terrain", "finalize", "solver", "first step and graph capture",
+                  "first iteration"):  # fmt: skip
+        assert f"{phase} " in line
+    run_dir = glob.glob(str(logs / "hexnewton_flat" / "*"))[0]
+    timing = json.load(open(os.path.join(run_dir, "timing.json")))
+    assert timing["iterations"] == 2 and timing["env_steps"] == 2 * 16 * 24
+    assert 0 < timing["first_iteration_s"] < timing["wall_s_to_result"]
+    assert sum(timing["startup_phases_s"].values()) == pytest.approx(timing["first_iteration_s"], abs=0.5)
+    assert os.path.isfile(timing["result"])
+
+
+def test_progress_line_says_when_no_episode_has_ended():
+    from hexnewton.runner import progress_line
+
+    stats = {"success_rate": float("nan"), "fell_rate": float("nan"), "off_course_rate": float("nan"),
+             "distance_m": float("nan"), "episodes": 0}  # fmt: skip
+    line = progress_line({"it": 0, "total_it": 300}, stats, 1.0)
+    assert "no episode ended yet" in line and "nan" not in line
+    line = progress_line({"it": 9, "total_it": 300}, {**stats, "success_rate": 0.5, "episodes": 3}, 1.0)
+    assert "success 0.500" in line
+
+
+def test_best_checkpoint_keeps_the_best_iteration(tmp_path):
+    """model_best.pt follows the training success once enough episodes are in (a quarter of the ring; with a
+    curriculum, played on the last level), and only a real improvement saves again."""
+    from hexnewton.env import RING
+    from hexnewton.runner import BestCheckpoint, training_success
+
+    saved = []
+    best = BestCheckpoint(str(tmp_path), levels=0)
+    save = lambda path, infos: saved.append((path, infos["best_success"]))  # noqa: E731
+    for it, (rate, n) in enumerate([(0.9, RING // 8), (0.5, RING // 4), (0.8, RING), (0.802, RING), (0.7, RING)]):
+        best.update({"success_rate": rate, "episodes": n}, it, save)
+    assert [r for _, r in saved] == [0.5, 0.8] and best.iteration == 2 and best.rate == 0.8
+    assert saved[0][0] == str(tmp_path / "model_best.pt")
+    stats = {"top_level_success_rate": 0.9, "top_level_episodes": RING // 4, "success_rate": 0.1, "episodes": RING}
+    assert training_success(stats, levels=10) == 0.9 and training_success(stats, levels=0) == 0.1
+    assert training_success({**stats, "top_level_episodes": 3}, levels=10) is None
