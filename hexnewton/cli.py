@@ -118,7 +118,7 @@ def _field_parser(hint, choices=None):
     origin = typing.get_origin(hint)
     if origin is tuple and args and all(a in (int, float) for a in args if a is not Ellipsis):
         parse, what = scalars[args[0]]
-        # an optional fixed-length tuple takes its numbers or the single word none (checked by config_overrides)
+        # an optional fixed-length tuple takes its numbers or the single word none (checked by _NumbersOrNone)
         nargs = "+" if Ellipsis in args or optional else len(args)
         return nullable(parse, what), nargs, ("INT" if args[0] is int else "X")
     # anything else (tuples of tuples, the curriculum's stages): a Python literal
@@ -145,32 +145,33 @@ def add_config_args(parser, prefix: str, obj, skip: tuple[str, ...] = (), title:
                 continue
             convert, nargs, metavar = _field_parser(hints[f.name], f.metadata.get("choices"))
             shown = "none" if value is None else " ".join(map(str, value)) if nargs and value else value
-            args = typing.get_args(hints[f.name])
-            inner = next((a for a in args if typing.get_origin(a) is tuple), None)
-            if nargs == "+" and inner is not None and Ellipsis not in typing.get_args(inner):
-                _FIXED_LENGTH[f"override:{prefix}:{sub}"] = len(typing.get_args(inner))
+            inner = next((a for a in typing.get_args(hints[f.name]) if typing.get_origin(a) is tuple), None)
+            fixed = nargs == "+" and inner is not None and Ellipsis not in typing.get_args(inner)
+            extra = dict(action=_NumbersOrNone, length=len(typing.get_args(inner))) if fixed else {}
             group.add_argument(f"--{prefix}.{sub}", dest=f"override:{prefix}:{sub}", type=convert, nargs=nargs,
-                               metavar=metavar, default=argparse.SUPPRESS, help=f"(default: {shown})")  # fmt: skip
+                               metavar=metavar, default=argparse.SUPPRESS, help=f"(default: {shown})",
+                               **extra)  # fmt: skip
 
     walk(obj, "")
 
 
-#: dest -> length of the optional fixed-length tuple fields (``foot_radius: tuple[float, float] | None``)
-_FIXED_LENGTH: dict[str, int] = {}
+class _NumbersOrNone(argparse.Action):
+    """An optional fixed-length tuple field (``foot_radius: tuple[float, float] | None``): its ``length`` numbers
+    or the single word none; ValueError (one error line through :func:`run`) otherwise."""
+
+    def __init__(self, *args, length: int, **kwargs):
+        super().__init__(*args, **kwargs)
+        self.length = length
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        if values == [None]:
+            values = None
+        elif None in values or len(values) != self.length:
+            raise ValueError(f"{option_string}: give {self.length} numbers or none")
+        setattr(namespace, self.dest, values)
 
 
 def config_overrides(args, prefix: str) -> dict:
-    """{path: value} of the ``--<prefix>.*`` options that were given (see :func:`add_config_args`); ValueError for an
-    optional fixed-length tuple given neither its count of numbers nor the single word none."""
+    """{path: value} of the ``--<prefix>.*`` options that were given (see :func:`add_config_args`)."""
     tag = f"override:{prefix}:"
-    out = {}
-    for k, v in vars(args).items():
-        if not k.startswith(tag):
-            continue
-        if isinstance(v, list) and k in _FIXED_LENGTH:
-            if v == [None]:
-                v = None
-            elif None in v or len(v) != _FIXED_LENGTH[k]:
-                raise ValueError(f"--{prefix}.{k[len(tag):]}: give {_FIXED_LENGTH[k]} numbers or none")
-        out[k[len(tag):]] = tuple(v) if isinstance(v, list) else v
-    return out
+    return {k[len(tag):]: (tuple(v) if isinstance(v, list) else v) for k, v in vars(args).items() if k.startswith(tag)}

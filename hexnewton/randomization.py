@@ -55,6 +55,7 @@ def randomize_physics(world: World, seed: int = 0) -> dict[str, np.ndarray]:
                                       | newton.ModelFlags.JOINT_DOF_PROPERTIES | newton.ModelFlags.ACTUATOR_PROPERTIES)
     return draws
 
+
 def _contact_draws(world: World, rng: np.random.Generator, robot: np.ndarray, shape_world: np.ndarray) -> dict:
     """Each env's foot radius (``shape_scale`` of its ``*_foot`` spheres, their bounding radius with it) and its
     robot-ground contact time constant, where ``cfg.randomization`` sets them. MuJoCo averages the two geoms'

@@ -5,11 +5,12 @@ one robot per round on unseen seeds, the arrays behind every metric and figure).
 
 from __future__ import annotations
 
+import typing
 from dataclasses import dataclass
 
 import numpy as np
 
-from .config import JOINT_NAMES, PARAM_NAMES, HexConfig
+from .config import JOINT_NAMES, PARAM_NAMES, HexConfig, RandomizationConfig
 from .kernels.reference import quat_rotate_inv_np
 from .metrics import first_episode_stats
 
@@ -30,7 +31,8 @@ _NOMINAL = dict(friction=(0.9, 0.9), payload=(0.0, 0.0), link_mass_scale=(1.0, 1
                 noise_joint_vel=0.0, noise_target=0.0, noise_quat=0.0, noise_height=0.0, push_velocity=0.0,
                 foot_radius=None, contact_timeconst=None)
 #: the RandomizationConfig fields that are per-env ranges (a sweep point sets such a field to (value, value))
-_RANGES = {k for k, v in _NOMINAL.items() if isinstance(v, tuple)} | {"foot_radius", "contact_timeconst"}
+_RANGES = {name for name, hint in typing.get_type_hints(RandomizationConfig).items()
+           if tuple in (typing.get_origin(hint), *map(typing.get_origin, typing.get_args(hint)))}
 PERTURBATIONS = {
     "nominal": ({}, {}),
     "friction_0.3": ({"friction": (0.3, 0.3)}, {}),

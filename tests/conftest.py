@@ -1,5 +1,5 @@
 """Fixtures shared by the test files: one short CPU training run of the flat task (train.py, 2 iterations),
-made once per test session (per pytest worker)."""
+made once by each pytest worker."""
 
 import subprocess
 import sys
