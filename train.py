@@ -1,9 +1,9 @@
-"""Entry point: ``python train.py --num_envs N`` (see hexnewton/train.py)."""
+"""Entry point: ``python train.py --num_envs N`` (see hexnewton/apps/train.py)."""
 
 import sys
 
-from hexnewton.cli import run
-from hexnewton.train import main
+from hexnewton.apps.cli import run
+from hexnewton.apps.train import main
 
 if __name__ == "__main__":
     sys.exit(run(main, "python train.py"))

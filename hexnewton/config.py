@@ -113,7 +113,7 @@ class TerrainConfig:
     # lanes side by side along y, each lane_width wide (replacing ``width``); lane k (0-based) is this
     # terrain with its block heights and step rise scaled by (k + 1) / L, so the last lane is the terrain
     # above. Robots move up a lane after reaching the goal and down one after walking less than half of it
-    # (kernels/curriculum.py). 3 m = 2 x TaskConfig.max_abs_y: a robot leaves the course as it leaves its lane.
+    # (mdp/events.py). 3 m = 2 x TaskConfig.max_abs_y: a robot leaves the course as it leaves its lane.
     levels: int = 0
     lane_width: float = 3.0
     # robots start evenly spread over levels 0 .. start_levels - 1 (legged_gym: max_init_terrain_level)
@@ -173,7 +173,7 @@ class SimConfig:
 PARAM_NAMES = ("omega", "A1_R", "A1_L") + tuple(f"A2_{leg}" for leg in LEG_NAMES) + tuple(
     f"A3_{leg}" for leg in LEG_NAMES
 )
-#: The body-posture parameters (``CPGConfig.posture``, kernels/cpg.py), after the 15.
+#: The body-posture parameters (``CPGConfig.posture``, physics/cpg.py), after the 15.
 POSTURE_NAMES = ("P_h", "P_p", "P_r")
 #: Oscillator of each leg (R1, R2, R3, L1, L2, L3): tripod {R1, L2, R3} on 0, {L1, R2, L3} on 1 (§2.2).
 LEG_OSCILLATOR = (0, 1, 0, 1, 0, 1)
@@ -217,14 +217,14 @@ class CPGConfig:
     # their ranges: play, evaluate, export and --resume read them from the checkpoint.
     a2_range: tuple[float, float] = (0.0, 1.3)
     a3_range: tuple[float, float] = (0.0, 0.8)  # ankle tuck; 0.15 + 0.8 < pi/3 keeps it inside the limit
-    # ours: body posture (kernels/cpg.py), three more parameters after the 15: knee offsets [rad] for height
+    # ours: body posture (physics/cpg.py), three more parameters after the 15: knee offsets [rad] for height
     # (P_h) and for pitch and roll (P_p, P_r: +-range at the front/rear and right/left legs). Off: the paper's 15
     # parameters; train.py --posture turns it on. The knee's standing angle is 0.15 above its lower limit.
     posture: bool = False
     posture_height_range: tuple[float, float] = (-0.15, 0.15)
     posture_tilt_range: tuple[float, float] = (-0.3, 0.3)
     # ours: levelling reflex gain [rad of knee per rad of body tilt] on the posture's tilt terms, at every substep
-    # (kernels/cpg.py); 0 = off. Only with ``posture``.
+    # (physics/cpg.py); 0 = off. Only with ``posture``.
     posture_reflex: float = 0.0
     # ours: the fixed-parameter "CPG" baseline (§3.3), tuned to walk straight on flat ground
     fixed_omega: float = 3.0 * math.pi  # 1.5 Hz
@@ -234,7 +234,7 @@ class CPGConfig:
 
     def fixed_params(self, gait: str = "default") -> list[float]:
         """A fixed baseline's 15 parameters in PARAM_NAMES order: ``default`` (the ``fixed_*`` fields) or a gait of
-        ``FIXED_GAITS`` (``swept``: the best of the documented sweep, ``hexnewton.cpg_sweep``)."""
+        ``FIXED_GAITS`` (``swept``: the best of the documented sweep, ``hexnewton.apps.cpg_sweep``)."""
         omega, a1, a2, a3 = (self.fixed_omega, self.fixed_a1, self.fixed_a2, self.fixed_a3) if gait == "default" \
             else FIXED_GAITS[gait]
         return self.with_posture(gait_params(omega, a1, a2, a3)).tolist()
@@ -270,7 +270,7 @@ def gait_params(omega: float, a1: float, a2: float, a3: float) -> list[float]:
 
 
 #: Fixed CPG gaits (omega [rad/s], A1, A2, A3 [rad]) besides ``CPGConfig.fixed_*``: ``swept`` is the best gait of the
-#: sweep in results/cpg_sweep (``python -m hexnewton.cpg_sweep``; highest mean success at 3 m over rugged, stepped and
+#: sweep in results/cpg_sweep (``python -m hexnewton.apps.cpg_sweep``; highest mean success at 3 m over rugged, stepped and
 #: complex ground, then the lowest pitch + roll variance), the fair fixed baseline.
 FIXED_GAITS = {"swept": (2.0 * math.pi, 0.2, 0.9, 0.3)}
 
@@ -303,13 +303,19 @@ class TaskConfig:
     reset_joint_noise: float = 0.05  # [rad]
     seed: int = 0
     # ours: the pure-DRL action mode's joint targets, standing pose + joint_action_scale * action [rad], clipped
-    # to the limits (kernels/cpg.py); 0 spans each joint's whole limit range with the actions
+    # to the limits (physics/cpg.py); 0 spans each joint's whole limit range with the actions
     joint_action_scale: float = 0.5
+    # the episode ends this task checks, rows of mdp/terms.py's TERMINATIONS in their order (nonfinite always)
+    terminations: tuple[str, ...] = ("nonfinite", "fell", "off_course", "success", "timeout")
+
+
+#: Table 1's terms (Eq. 5), the reward of the paper's task
+PAPER_REWARD_TERMS = ("height", "direction", "distance", "stability", "forward")
 
 
 @dataclass
 class RewardConfig:
-    """Table 1 / Eq. 5 weights. The paper names w_h, w_d, w_theta but gives no values (kernels/mdp.py)."""
+    """Table 1 / Eq. 5 weights. The paper names w_h, w_d, w_theta but gives no values (mdp/terms.py)."""
 
     w_height: float = 1.0  # ours
     w_direction: float = 1.0  # ours
@@ -320,17 +326,17 @@ class RewardConfig:
     # ±0.2 rad start yaw, RESULTS.md).
     direction_deadband: float = 0.0
     # ours: Table 1's D is the start-to-goal vector; True takes it from the robot to the goal, so the direction
-    # term steers back toward a goal the robot has drifted away from (kernels/mdp.py). False: the paper's.
+    # term steers back toward a goal the robot has drifted away from (mdp/terms.py). False: the paper's.
     direction_to_goal: bool = True
     stability_penalty: float = 100.0  # Table 1: r_s = -100, weight 1
-    stability_tilt: float = math.pi / 6  # Table 1: r_s while |roll| or |pitch| > pi/6 [rad] (kernels/mdp.py)
+    stability_tilt: float = math.pi / 6  # Table 1: r_s while |roll| or |pitch| > pi/6 [rad] (mdp/terms.py)
     forward_penalty: float = 0.3  # Table 1: r_f = -0.3, weight 1
-    # ours: more than w_d / (1 - gamma) = 100, what lingering by the goal is worth (kernels/mdp.py)
+    # ours: more than w_d / (1 - gamma) = 100, what lingering by the goal is worth (mdp/terms.py)
     goal_bonus: float = 300.0
     # ours: paid once on leaving the course (§2.4.4 (2)); without it PPO walks off the course when stuck at a
-    # step (kernels/mdp.py). 0 restores the paper's reward.
+    # step (mdp/terms.py). 0 restores the paper's reward.
     off_course_penalty: float = 100.0
-    # ours: gait-quality terms (kernels/mdp.py, "Stability shaping"), each per 20 ms step and 0 = off (Table 1
+    # ours: gait-quality terms (mdp/terms.py, "Stability shaping"), each per 20 ms step and 0 = off (Table 1
     # has only the -100 fine beyond pi/6). Body tilt: -w_tilt (roll^2 + pitch^2) [rad^2]; body roll and pitch rate:
     # -w_ang_vel (w_x^2 + w_y^2) [(rad/s)^2, body frame]; action rate: -w_action_rate sum_k (a_k - a_k,prev)^2 over
     # the 15 actions in [-1, 1]. Off here; train.py's recipes for the paper's terrains switch them on
@@ -338,15 +344,19 @@ class RewardConfig:
     w_tilt: float = 0.0
     w_ang_vel: float = 0.0
     w_action_rate: float = 0.0
+    # the terms this task pays, rows of mdp/terms.py's REWARD_TERMS (logged as Reward/<name>, summed in table order)
+    terms: tuple[str, ...] = ("height", "direction", "distance", "stability", "forward", "goal", "off_course", "tilt",
+                              "ang_vel", "action_rate")
 
     def paper_reward(self) -> "RewardConfig":
-        """Table 1 as written: no goal bonus, no off-course penalty, no gait-quality terms, the π/6 dead band on the
-        start-to-goal direction (the weights w_h, w_d, w_theta, which the paper does not give, stay ours)."""
+        """Table 1 as written: its five terms alone (no goal bonus, no off-course penalty, no gait-quality terms, their
+        weights 0 as well), the π/6 dead band on the start-to-goal direction (the weights w_h, w_d, w_theta, which the
+        paper does not give, stay ours)."""
         from dataclasses import replace
 
         return replace(self, direction_deadband=math.pi / 6, direction_to_goal=False, goal_bonus=0.0,
                        off_course_penalty=0.0, stability_tilt=math.pi / 6, w_tilt=0.0, w_ang_vel=0.0,
-                       w_action_rate=0.0)  # fmt: skip
+                       w_action_rate=0.0, terms=PAPER_REWARD_TERMS)  # fmt: skip
 
 
 @dataclass

@@ -1,4 +1,4 @@
-"""The shipped complex policy in MuJoCo (hexnewton.sim2sim) and in Newton (hexnewton.rollout.run_rounds, CPU) on the
+"""The shipped complex policy in MuJoCo (hexnewton.apps.sim2sim) and in Newton (hexnewton.analysis.rollout.run_rounds, CPU) on the
 same terrain and lanes, step by step: where the two simulators part (results/sim2sim/report.md, "Why they differ").
 
     PYTHONPATH=. python scripts/sim2sim_side_by_side.py --out results/sim2sim/side_by_side.json
@@ -55,7 +55,7 @@ def wedged_feet(r, robots) -> int:
 
 
 def mujoco_case(terrain: str, robots: int, steps: int) -> dict:
-    from hexnewton.sim2sim import Rounds
+    from hexnewton.apps.sim2sim import Rounds
 
     t0 = time.perf_counter()
     r = Rounds(BUNDLE, terrain, robots)
@@ -77,7 +77,7 @@ def mujoco_case(terrain: str, robots: int, steps: int) -> dict:
 
 
 def newton_case(terrain: str, robots: int, steps: int, overrides: dict | None = None) -> dict:
-    from hexnewton.rollout import run_rounds
+    from hexnewton.analysis.rollout import run_rounds
 
     t0 = time.perf_counter()
     ep = run_rounds("cpg_rl", POLICY, terrain, robots, "cpu", steps, progress=False, overrides=overrides)

@@ -1,4 +1,4 @@
-"""The skrl baselines (hexnewton.baselines): each algorithm trains a few steps on CPU, saves a checkpoint that loads as
+"""The skrl baselines (hexnewton.learning.baselines): each algorithm trains a few steps on CPU, saves a checkpoint that loads as
 data only, and runs the evaluation's rounds; the adapter, the squashed actor, the presets and one-line errors."""
 
 import json
@@ -8,7 +8,7 @@ import os
 import pytest
 import torch
 
-from hexnewton.baselines import agent_config
+from hexnewton.learning.baselines import agent_config
 
 ROOT = os.path.join(os.path.dirname(__file__), "..")
 SMALL = {  # a few updates on 8 envs
@@ -19,21 +19,21 @@ SMALL = {  # a few updates on 8 envs
 
 
 def _main(argv):
-    from hexnewton.baselines.__main__ import main
-    from hexnewton.cli import run
+    from hexnewton.apps.baselines import main
+    from hexnewton.apps.cli import run
 
-    return run(main, "python -m hexnewton.baselines", argv)
+    return run(main, "python -m hexnewton.apps.baselines", argv)
 
 
 @pytest.mark.parametrize("algo", ["sac", "td3", "a2c"])
 def test_baseline_trains_saves_and_runs_the_rounds(algo, tmp_path, capsys):
     """12 vector steps of 8 envs (updates from the 3rd), a checkpoint of tensors and plain data with the task's
     config, TensorBoard points against env-steps, then two evaluation rounds with the deterministic action."""
-    from hexnewton.baselines import load_baseline_checkpoint
-    from hexnewton.checkpoint import checkpoint_meta, trained_config
-    from hexnewton.curves import read_curve
-    from hexnewton.policy import policy_checkpoint
-    from hexnewton.rollout import run_rounds
+    from hexnewton.analysis.curves import read_curve
+    from hexnewton.analysis.rollout import run_rounds
+    from hexnewton.learning.baselines import load_baseline_checkpoint
+    from hexnewton.learning.checkpoint import checkpoint_meta, trained_config
+    from hexnewton.learning.policy import policy_checkpoint
     from hexnewton.tasks import task
 
     logs = tmp_path / "logs"
@@ -60,9 +60,9 @@ def test_baseline_trains_saves_and_runs_the_rounds(algo, tmp_path, capsys):
 
 
 def test_adapter_passes_device_tensors_in_skrls_layout():
-    from hexnewton.baselines import wrap_env
     from hexnewton.config import HexConfig, SimConfig
-    from hexnewton.env import make_env
+    from hexnewton.learning.baselines import wrap_env
+    from hexnewton.mdp.env import make_env
 
     env = make_env(HexConfig(sim=SimConfig(num_envs=3, device="cpu")))
     skrl_env = wrap_env(env)
@@ -81,7 +81,7 @@ def test_squashed_actor_is_bounded_with_the_tanh_corrected_log_prob():
     from torch.distributions import Normal, TransformedDistribution
     from torch.distributions.transforms import TanhTransform
 
-    from hexnewton.baselines import make_models
+    from hexnewton.learning.baselines import make_models
 
     obs_space = gymnasium.spaces.Box(-np.inf, np.inf, (5,), np.float32)
     act_space = gymnasium.spaces.Box(-1.0, 1.0, (3,), np.float32)
@@ -106,7 +106,7 @@ def test_paper_preset_is_table_2():
 
 
 def test_stages_follow_the_ppo_schedule_in_steps_per_env():
-    from hexnewton.baselines import stage_changes
+    from hexnewton.learning.baselines import stage_changes
     from hexnewton.tasks import task
 
     stages = task("complex").agent.stages
@@ -126,18 +126,18 @@ def test_stages_follow_the_ppo_schedule_in_steps_per_env():
 def test_bad_values_give_one_line_and_exit_2(argv, message, capsys):
     try:
         rc = _main(argv + ["--device", "cpu"])
-    except SystemExit as exc:  # argparse's own errors (hexnewton.cli.ArgumentParser: one line, status 2)
+    except SystemExit as exc:  # argparse's own errors (hexnewton.apps.cli.ArgumentParser: one line, status 2)
         rc = exc.code
     err = capsys.readouterr().err
     assert rc == 2 and message in err and len(err.strip().splitlines()) == 1, err
 
 
 def test_evaluate_rejects_a_checkpoint_of_the_other_kind(tmp_path, capsys):
-    from hexnewton.cli import run
-    from hexnewton.evaluate import main
+    from hexnewton.apps.cli import run
+    from hexnewton.apps.evaluate import main
 
     policy = os.path.join(ROOT, "results", "policies", "cpg_rl_flat.pt")
-    rc = run(main, "python -m hexnewton.evaluate", ["--controllers", "sac_cpg", "--checkpoint", f"sac_cpg={policy}",
+    rc = run(main, "python -m hexnewton.apps.evaluate", ["--controllers", "sac_cpg", "--checkpoint", f"sac_cpg={policy}",
                                                    "--terrains", "flat", "--out", str(tmp_path / "e")])  # fmt: skip
     err = capsys.readouterr().err
     assert rc == 2 and "not a skrl baseline checkpoint" in err and len(err.strip().splitlines()) == 1
@@ -147,7 +147,7 @@ def test_deterministic_action_of_a2c_is_the_clipped_mean():
     import gymnasium
     import numpy as np
 
-    from hexnewton.baselines import deterministic_action, make_agent
+    from hexnewton.learning.baselines import deterministic_action, make_agent
 
     obs_space = gymnasium.spaces.Box(-np.inf, np.inf, (4,), np.float32)
     act_space = gymnasium.spaces.Box(-1.0, 1.0, (2,), np.float32)
@@ -173,9 +173,9 @@ def _events(run, points, config):
 
 
 def test_fig5a_and_table3_over_seeds(tmp_path, capsys):
-    """hexnewton.compare on synthetic runs: a PPO run (iterations) and two skrl runs (env-steps) become one band per
+    """hexnewton.apps.compare on synthetic runs: a PPO run (iterations) and two skrl runs (env-steps) become one band per
     method; two seeds' evaluations one Table 3 row with their mean and range."""
-    from hexnewton.compare import main
+    from hexnewton.apps.compare import main
 
     ppo = {"hexnewton": {"config": {"sim": {"num_envs": 8}}}, "train": {"num_steps_per_env": 24}}
     _events(tmp_path / "runs" / "cpg_rl_s1" / "r", [(0, 1.0, 0.0), (1, 2.0, 0.5), (2, 3.0, 1.0)], ppo)

@@ -9,11 +9,11 @@ import torch
 import warp as wp
 
 from hexnewton.config import HexConfig, SimConfig, TaskConfig, TerrainConfig
-from hexnewton.env import make_env
-from hexnewton.kernels.curriculum import curriculum_kernel, curriculum_reference, placement_kernel, start_levels
-from hexnewton.kernels.mdp import NONFINITE, SUCCESS
-from hexnewton.terrain import build_height_grid, height_field_from_grid, max_terrain_height_np, terrain_height_np
-from hexnewton.terrain.heightmap import lane_center_y
+from hexnewton.mdp.env import make_env
+from hexnewton.mdp.events import curriculum_kernel, curriculum_reference, placement_kernel, start_levels
+from hexnewton.mdp.terms import NONFINITE, SUCCESS, height_field_from_grid
+from hexnewton.physics.terrain import build_height_grid, max_terrain_height_np, terrain_height_np
+from hexnewton.physics.terrain.heightmap import lane_center_y
 
 DEV = "cpu"
 
@@ -103,7 +103,7 @@ def test_env_moves_robots_between_lanes():
     lv0 = env.level.numpy().copy()
     assert lv0.tolist() == [0, 0, 0, 1, 1, 1]
     centre = lane_center_y(cfg.terrain, lv0)
-    assert np.all(np.abs(env.world.start_wp.numpy()[:, 1] - centre) <= cfg.sim.spawn_y_spread + cfg.task.reset_lateral + 1e-5)
+    assert np.all(np.abs(env.start.numpy()[:, 1] - centre) <= cfg.sim.spawn_y_spread + cfg.task.reset_lateral + 1e-5)
     act = torch.zeros(6, 15)  # mid-range CPG parameters walk ~1 m in a few seconds
     promoted = np.zeros(6, bool)
     for _ in range(300):
@@ -113,7 +113,7 @@ def test_env_moves_robots_between_lanes():
             success = env.status.numpy() == SUCCESS
             assert np.all(env.level.numpy()[d & success] == np.minimum(lv0[d & success] + 1, 3))
             promoted |= d & success
-            ys = env.world.start_wp.numpy()[:, 1]
+            ys = env.start.numpy()[:, 1]
             lanes = lane_center_y(cfg.terrain, env.level.numpy())
             assert np.all(np.abs(ys - lanes)[d] <= cfg.sim.spawn_y_spread + cfg.task.reset_lateral + 1e-5)
             lv0 = env.level.numpy().copy()

@@ -1,4 +1,4 @@
-"""Learning curves from a run's TensorBoard events (hexnewton/curves.py)."""
+"""Learning curves from a run's TensorBoard events (hexnewton/analysis/curves.py)."""
 
 import glob
 import subprocess
@@ -9,11 +9,11 @@ def test_learning_curves_from_a_run(trained, tmp_path):
     logs, _ = trained
     run_dir = glob.glob(str(logs / "hexnewton_flat" / "*"))[0]
     out = tmp_path / "curve.png"
-    proc = subprocess.run([sys.executable, "-m", "hexnewton.curves", run_dir, "--out", str(out)], capture_output=True,
+    proc = subprocess.run([sys.executable, "-m", "hexnewton.apps.curves", run_dir, "--out", str(out)], capture_output=True,
                           text=True, timeout=300)  # fmt: skip
     assert proc.returncode == 0, proc.stderr[-2000:]
     assert out.stat().st_size > 5000 and "Episode/success_rate" in (tmp_path / "curve.csv").read_text()
-    bad = subprocess.run([sys.executable, "-m", "hexnewton.curves", str(tmp_path / "nope")], capture_output=True,
+    bad = subprocess.run([sys.executable, "-m", "hexnewton.apps.curves", str(tmp_path / "nope")], capture_output=True,
                          text=True, timeout=300)  # fmt: skip
     assert bad.returncode == 2 and "not a run directory" in bad.stderr
 
@@ -21,7 +21,7 @@ def test_learning_curves_from_a_run(trained, tmp_path):
 def test_curve_axes_and_resumed_pieces(trained):
     """env-steps come from config.json (iterations x envs x steps per env); a piece that repeats iterations
     already plotted adds nothing; wall time starts at 0."""
-    from hexnewton.curves import read_curve, steps_per_iteration
+    from hexnewton.analysis.curves import read_curve, steps_per_iteration
 
     logs, _ = trained
     run_dir = glob.glob(str(logs / "hexnewton_flat" / "*"))[0]

@@ -21,7 +21,7 @@ def _run(args, **kw):
 @pytest.fixture(scope="module")
 def bundle(tmp_path_factory):
     out = tmp_path_factory.mktemp("deploy") / "bundle"
-    proc = _run(["-m", "hexnewton.export", "--checkpoint", POLICY, "--out", str(out), "--steps", "60", "--robots", "3"])
+    proc = _run(["-m", "hexnewton.apps.export", "--checkpoint", POLICY, "--out", str(out), "--steps", "60", "--robots", "3"])
     assert proc.returncode == 0, proc.stderr[-3000:]
     assert "reproduces the simulator's joint targets" in proc.stdout
     return out
@@ -45,7 +45,7 @@ def test_runtime_reproduces_the_simulator_without_warp_newton_or_torch(bundle):
     code = (
         "import sys, json\n"
         f"for m in {BLOCKED!r}: sys.modules[m] = None  # importing any of them now fails\n"
-        "from hexnewton.deploy import replay\n"
+        "from hexnewton.deploy.runtime import replay\n"
         f"print(json.dumps(replay({str(bundle)!r})))\n"
     )
     proc = _run(["-c", code])
@@ -53,13 +53,13 @@ def test_runtime_reproduces_the_simulator_without_warp_newton_or_torch(bundle):
     r = json.loads(proc.stdout.strip().splitlines()[-1])
     assert r["steps"] == 60 and r["robots"] == 3
     assert r["max_target_diff_rad"] < 1e-4 and r["max_obs_diff"] < 1e-4
-    proc = _run(["-m", "hexnewton.deploy", str(bundle)])
+    proc = _run(["-m", "hexnewton.apps.deploy", str(bundle)])
     assert proc.returncode == 0 and "(ok," in proc.stdout
 
 
 def test_runtime_step_by_step(bundle):
     """The public per-step API: readings in, joint targets out, within the joint limits; the heading-frame helper."""
-    from hexnewton.deploy import Controller, target_in_heading_frame
+    from hexnewton.deploy.runtime import Controller, target_in_heading_frame
 
     ctrl = Controller(str(bundle), num_robots=2)
     yaw = 0.3
@@ -78,7 +78,7 @@ def test_runtime_step_by_step(bundle):
 
 def test_sampled_actions_follow_the_trained_gaussian(bundle):
     """``stochastic=True``: actions scatter around the mean with the exported std, reproducibly for one seed."""
-    from hexnewton.deploy import Controller
+    from hexnewton.deploy.runtime import Controller
 
     obs = np.load(bundle / "check.npz")["obs"][0]
     std = np.asarray(json.loads((bundle / "controller.json").read_text())["action_std"])
@@ -93,11 +93,11 @@ def test_sampled_actions_follow_the_trained_gaussian(bundle):
 
 def test_expected_clipped_action_matches_its_reference_and_monte_carlo():
     """E[clip(a, -1, 1)], a ~ N(mean, std^2): the torch twin (play.py, used in evaluation) against the float64 NumPy
-    reference (deploy.py, the robot runtime) on random inputs, the reference against sampling, and its limits."""
+    reference (deploy/runtime.py, the robot runtime) on random inputs, the reference against sampling, and its limits."""
     import torch
 
-    from hexnewton.deploy import expected_clipped_action
-    from hexnewton.policy import expected_clipped_action as expected_torch
+    from hexnewton.deploy.runtime import expected_clipped_action
+    from hexnewton.learning.policy import expected_clipped_action as expected_torch
 
     rng = np.random.default_rng(0)
     mean, std = rng.uniform(-4, 4, (64, 15)), rng.uniform(0.01, 6.0, 15)
@@ -119,10 +119,10 @@ def test_expected_actions_in_the_runtime_and_the_simulator(bundle):
 
     import torch
 
-    from hexnewton.deploy import Controller, expected_clipped_action
-    from hexnewton.env import make_env
-    from hexnewton.checkpoint import load_checkpoint, trained_config
-    from hexnewton.policy import load_policy
+    from hexnewton.deploy.runtime import Controller, expected_clipped_action
+    from hexnewton.learning.checkpoint import load_checkpoint, trained_config
+    from hexnewton.learning.policy import load_policy
+    from hexnewton.mdp.env import make_env
 
     obs = np.load(bundle / "check.npz")["obs"][0]
     std = np.asarray(json.loads((bundle / "controller.json").read_text())["action_std"])
@@ -142,17 +142,17 @@ def test_expected_actions_in_the_runtime_and_the_simulator(bundle):
 
 
 def test_bad_bundles_and_exports(bundle, tmp_path):
-    not_bundle = _run(["-m", "hexnewton.deploy", str(tmp_path)])
+    not_bundle = _run(["-m", "hexnewton.apps.deploy", str(tmp_path)])
     assert not_bundle.returncode == 2 and "not a controller bundle" in not_bundle.stderr
     bad = tmp_path / "bad"
     bad.mkdir()
     (bad / "controller.json").write_text(json.dumps({"format": "something-else"}))
-    wrong = _run(["-m", "hexnewton.deploy", str(bad)])
+    wrong = _run(["-m", "hexnewton.apps.deploy", str(bad)])
     assert wrong.returncode == 2 and "expected 'hexnewton-controller/1'" in wrong.stderr
-    exists = _run(["-m", "hexnewton.export", "--checkpoint", POLICY, "--out", str(bundle)])
+    exists = _run(["-m", "hexnewton.apps.export", "--checkpoint", POLICY, "--out", str(bundle)])
     err = [line for line in exists.stderr.splitlines() if line.strip() and "Warp CUDA" not in line]
     assert exists.returncode == 2 and len(err) == 1 and "exists: nothing is overwritten" in err[0]
-    missing = _run(["-m", "hexnewton.export", "--checkpoint", str(tmp_path / "nope.pt"), "--out", str(tmp_path / "b")])
+    missing = _run(["-m", "hexnewton.apps.export", "--checkpoint", str(tmp_path / "nope.pt"), "--out", str(tmp_path / "b")])
     assert missing.returncode == 2 and "checkpoint not found" in missing.stderr
     assert not (tmp_path / "b").exists()
 
@@ -161,7 +161,7 @@ def test_policies_keep_their_trained_parameter_ranges():
     """A checkpoint's actions mean what they meant in training: play, evaluate, export and --resume take the CPG
     ranges from the checkpoint, not from today's defaults."""
     from hexnewton.config import CPGConfig
-    from hexnewton.checkpoint import load_checkpoint, trained_config
+    from hexnewton.learning.checkpoint import load_checkpoint, trained_config
 
     assert trained_config(load_checkpoint(POLICY)).cpg.a2_range == (0.0, 0.8)  # trained before the range was widened
     assert CPGConfig().a2_range == (0.0, 1.3)
@@ -176,10 +176,10 @@ BETA_POLICY = os.path.join(ROOT, "results", "policies", "cpg_rl_complex_beta.pt"
 def test_beta_policy_bundle_runs_its_deterministic_action(tmp_path):
     """A Beta policy: the ONNX file computes the distribution's mean (the controller), the runtime reproduces the
     simulator with it, and sampling in the runtime is refused with one clear error (no Gaussian std to sample)."""
-    from hexnewton.deploy import Controller, replay
+    from hexnewton.deploy.runtime import Controller, replay
 
     out = tmp_path / "beta"
-    proc = _run(["-m", "hexnewton.export", "--checkpoint", BETA_POLICY, "--out", str(out), "--steps", "30",
+    proc = _run(["-m", "hexnewton.apps.export", "--checkpoint", BETA_POLICY, "--out", str(out), "--steps", "30",
                  "--robots", "2"])  # fmt: skip
     assert proc.returncode == 0, proc.stderr[-3000:]
     spec = json.loads((out / "controller.json").read_text())
@@ -199,10 +199,10 @@ def test_reflex_bundle_reads_the_attitude_at_every_substep(tmp_path):
     """The shipped complex policy has the body posture and the levelling reflex: its bundle records the body's
     quaternion at every substep, the runtime reproduces the simulator with them (and not with the control step's
     quaternion held over the step), and a substep without the attitude is refused with one clear error."""
-    from hexnewton.deploy import Controller, replay
+    from hexnewton.deploy.runtime import Controller, replay
 
     out = tmp_path / "reflex"
-    proc = _run(["-m", "hexnewton.export", "--checkpoint", REFLEX_POLICY, "--out", str(out), "--steps", "25",
+    proc = _run(["-m", "hexnewton.apps.export", "--checkpoint", REFLEX_POLICY, "--out", str(out), "--steps", "25",
                  "--robots", "2"])  # fmt: skip
     assert proc.returncode == 0, proc.stderr[-3000:]
     spec = json.loads((out / "controller.json").read_text())
@@ -239,17 +239,17 @@ def test_checkpoints_load_as_data_only(tmp_path):
     marker = tmp_path / "ran"
     evil = tmp_path / "evil.pt"
     torch.save({"actor_state_dict": {}, "iter": 0, "infos": {"x": _Payload(str(marker))}}, evil)
-    proc = _run(["-m", "hexnewton.export", "--checkpoint", str(evil), "--out", str(tmp_path / "b")])
+    proc = _run(["-m", "hexnewton.apps.export", "--checkpoint", str(evil), "--out", str(tmp_path / "b")])
     assert proc.returncode == 2 and "could run code" in proc.stderr and len(proc.stderr.strip().splitlines()) == 1
     assert not marker.exists()
     onnx_file = os.path.join(ROOT, "results", "controllers", "cpg_rl_flat", "policy.onnx")
-    onnx = _run(["-m", "hexnewton.export", "--checkpoint", onnx_file, "--out", str(tmp_path / "c")])
+    onnx = _run(["-m", "hexnewton.apps.export", "--checkpoint", onnx_file, "--out", str(tmp_path / "c")])
     assert onnx.returncode == 2 and "is an ONNX policy" in onnx.stderr
 
 
 @pytest.mark.parametrize("name", sorted(os.listdir(os.path.join(ROOT, "results", "controllers"))))
 def test_every_shipped_bundle_deploys(name):
-    """``python -m hexnewton.deploy results/controllers/<name>`` replays the bundle's recorded rollout (check.npz is
+    """``python -m hexnewton.apps.deploy results/controllers/<name>`` replays the bundle's recorded rollout (check.npz is
     committed with it) within the default tolerance."""
-    proc = _run(["-m", "hexnewton.deploy", os.path.join(ROOT, "results", "controllers", name)])
+    proc = _run(["-m", "hexnewton.apps.deploy", os.path.join(ROOT, "results", "controllers", name)])
     assert proc.returncode == 0 and "(ok," in proc.stdout, proc.stdout + proc.stderr

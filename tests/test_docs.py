@@ -6,9 +6,9 @@ blocks and the inline ``code`` spans that start with ``python``, ``python3``, ``
 (a pipe between spaces: ``{a|b}`` is one word), its ``# comment`` dropped; an inline span may wrap over lines). Each is
 checked without running it:
 
-- ``python train.py ARGS`` and ``torchrun [torchrun flags] train.py ARGS`` -> ``hexnewton.train.main``;
-  ``python play.py ARGS`` -> ``hexnewton.play.main``; ``python -m hexnewton.X ARGS`` -> ``hexnewton.X.main``
-  (``hexnewton.baselines`` -> ``hexnewton.baselines.__main__.main``): the entry point's own argument parser parses
+- ``python train.py ARGS`` and ``torchrun [torchrun flags] train.py ARGS`` -> ``hexnewton.apps.train.main``;
+  ``python play.py ARGS`` -> ``hexnewton.apps.play.main``; ``python -m hexnewton.apps.X ARGS`` ->
+  ``hexnewton.apps.X.main``: the entry point's own argument parser parses
   ARGS in-process (``argparse.ArgumentParser.parse_args`` is patched to stop right after a successful parse), so a
   flag that does not exist, a wrong value or a missing argument fails with the parser's one-line message;
 - ``python scripts/....py``: the file exists; ``bash scripts/....sh SUB``: the file exists and SUB is one of its
@@ -193,11 +193,9 @@ def _entry(words: list[str]) -> tuple[str, list[str]] | None:
         module = words[2]
         if not module.startswith("hexnewton"):
             return None
-        if module == "hexnewton.baselines":
-            module = "hexnewton.baselines.__main__"
         return module, words[3:]
     if words[1] in ("train.py", "play.py"):
-        return "hexnewton." + words[1][:-3], words[2:]
+        return "hexnewton.apps." + words[1][:-3], words[2:]
     return None
 
 

@@ -1,4 +1,4 @@
-"""The rsl-rl VecEnv (hexnewton/env.py): API conformance, the PPO storage contract, blow-ups, time-outs, the
+"""The rsl-rl VecEnv (hexnewton/mdp/env.py): API conformance, the PPO storage contract, blow-ups, time-outs, the
 joint action mode, posture and shaping in the step, the heading-frame target; the Gymnasium wrapper (the reward, end
 and observation tables: tests/test_terms.py)."""
 
@@ -12,10 +12,11 @@ import warp as wp
 from tensordict import TensorDict
 
 from hexnewton.config import HexConfig, SimConfig, TaskConfig, TerrainConfig
-from hexnewton.env import make_env
-from hexnewton.kernels.cpg import joint_actions_kernel
-from hexnewton.kernels.mdp import NONFINITE, OBS_LAYOUT, REWARD_NAMES, TIMEOUT, reset_bounds_reference
-from hexnewton.kernels.reference import joint_actions_reference
+from hexnewton.mdp.env import make_env
+from hexnewton.mdp.events import reset_bounds_reference
+from hexnewton.mdp.terms import NONFINITE, OBS_LAYOUT, REWARD_NAMES, TIMEOUT
+from hexnewton.physics.cpg import joint_actions_kernel
+from hexnewton.physics.reference import joint_actions_reference
 
 DEV = "cpu"
 TASK = TaskConfig()
@@ -67,7 +68,7 @@ def test_ppo_stores_the_observation_each_action_was_taken_from():
 
     from rsl_rl.runners import OnPolicyRunner
 
-    from hexnewton.agent import AgentConfig
+    from hexnewton.learning.agent import AgentConfig
 
     env = make_env(_cfg("flat", 8))
     tcfg = AgentConfig(num_steps_per_env=8).to_rsl_rl(8)
@@ -86,7 +87,7 @@ def test_ppo_update_options_reach_rsl_rl():
 
     from rsl_rl.runners import OnPolicyRunner
 
-    from hexnewton.agent import AgentConfig, AlgorithmConfig, DistributionConfig
+    from hexnewton.learning.agent import AgentConfig, AlgorithmConfig, DistributionConfig
 
     env = make_env(_cfg("flat", 8))
     agent = AgentConfig(num_steps_per_env=8, torch_compile="default", distribution=DistributionConfig(name="gaussian"),
@@ -113,8 +114,8 @@ def test_std_max_caps_the_sampling_std():
 
     from rsl_rl.runners import OnPolicyRunner
 
-    from hexnewton.agent import AgentConfig, DistributionConfig
-    from hexnewton.policy import action_std
+    from hexnewton.learning.agent import AgentConfig, DistributionConfig
+    from hexnewton.learning.policy import action_std
 
     env = make_env(_cfg("flat", 8))
     agent = AgentConfig(distribution=DistributionConfig(name="gaussian", std_max=0.3))
@@ -171,7 +172,7 @@ def test_time_outs_and_auto_reset():
     assert reset_bounds_reference(env.world.spawn_xy, env.world.spawn_z, HexConfig().robot.stand_pose,
                                   (-math.pi / 6, 0, -math.pi / 3), (math.pi / 6, math.pi / 2, 0), TASK.reset_lateral,
                                   TASK.reset_yaw, TASK.reset_joint_noise, q)  # fmt: skip
-    np.testing.assert_allclose(env.world.start_wp.numpy(), q[:, :2], atol=1e-6)
+    np.testing.assert_allclose(env.start.numpy(), q[:, :2], atol=1e-6)
 
 
 def test_joint_action_mode():
@@ -251,7 +252,7 @@ def test_target_is_in_the_heading_frame():
     env._observe()
     obs = env.get_observations()["policy"][0]
     sl = {name: slice(a, b) for name, a, b in OBS_LAYOUT["cpg"]}
-    start_y = env.world.start_wp.numpy()[0, 1]
+    start_y = env.start.numpy()[0, 1]
     np.testing.assert_allclose(obs[sl["target"]][:2].numpy(), [start_y - q[0, 1].item(), -3.5], atol=1e-4)
     np.testing.assert_allclose(obs[sl["amplitudes"]].numpy(), HexConfig().cpg.fixed_params()[1:], rtol=1e-6)
 

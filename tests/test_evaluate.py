@@ -1,4 +1,4 @@
-"""The evaluation protocol (hexnewton.evaluate): metrics on synthetic trajectories, the report on a tiny run."""
+"""The evaluation protocol (hexnewton.apps.evaluate): metrics on synthetic trajectories, the report on a tiny run."""
 
 import json
 import os
@@ -8,8 +8,8 @@ import sys
 import numpy as np
 import pytest
 
-from hexnewton.kernels.mdp import FELL, OFF_COURSE, SUCCESS
-from hexnewton.metrics import DISTANCES, round_metrics, summarize
+from hexnewton.analysis.metrics import DISTANCES, round_metrics, summarize
+from hexnewton.mdp.terms import FELL, OFF_COURSE, SUCCESS
 
 DT = 0.02
 ROOT = os.path.join(os.path.dirname(__file__), "..")
@@ -83,7 +83,7 @@ def test_report_on_a_tiny_run(tmp_path):
     _fake_run(str(tmp_path / "b"), [0.0, 0.5])
     out = tmp_path / "report"
     policy = os.path.join(ROOT, "results", "policies", "cpg_rl_flat.pt")
-    cmd = [sys.executable, "-m", "hexnewton.evaluate", "--controllers", "cpg", "cpg_rl", "--checkpoint",
+    cmd = [sys.executable, "-m", "hexnewton.apps.evaluate", "--controllers", "cpg", "cpg_rl", "--checkpoint",
            f"cpg_rl={policy}", "--terrains", "stepped", "--rounds", "2", "--max_steps", "25", "--device", "cpu",
            "--runs", f"cpg_rl={tmp_path / 'a'}", f"joint={tmp_path / 'b'}", "--out", str(out)]  # fmt: skip
     proc = subprocess.run(cmd, capture_output=True, text=True, timeout=900, cwd=ROOT)
@@ -108,7 +108,7 @@ def test_report_on_a_tiny_run(tmp_path):
         (["--stochastic", "--expected", "--out", str(tmp_path / "x")], "not allowed with argument --stochastic"),
     ]
     for args, message in cases:
-        p = subprocess.run([sys.executable, "-m", "hexnewton.evaluate", *args, "--device", "cpu"], capture_output=True,
+        p = subprocess.run([sys.executable, "-m", "hexnewton.apps.evaluate", *args, "--device", "cpu"], capture_output=True,
                            text=True, timeout=300, cwd=ROOT)  # fmt: skip
         err = [line for line in p.stderr.splitlines() if line.strip() and "Warp CUDA" not in line]
         assert p.returncode == 2 and len(err) == 1 and message in err[0], (args, p.stderr[-1500:])
@@ -118,7 +118,7 @@ def test_report_on_a_tiny_run(tmp_path):
 def test_stochastic_rounds_are_seeded_and_sample_around_the_mean():
     """``--stochastic``: the policy samples its actions (trajectories differ from the mean action's), and the
     same evaluation seed gives the same rounds; another seed (``--seed``, a validation set) other rounds."""
-    from hexnewton.rollout import run_rounds
+    from hexnewton.analysis.rollout import run_rounds
 
     policy = os.path.join(ROOT, "results", "policies", "cpg_rl_flat.pt")
     mean, a, b = (run_rounds("cpg_rl", policy, "flat", 2, "cpu", 30, False, stochastic=stochastic)
@@ -135,18 +135,18 @@ def test_rounds_run_under_the_policys_own_physics(tmp_path, monkeypatch):
     set it; the fixed CPG runs under the defaults."""
     import torch
 
-    import hexnewton.env
-    from hexnewton.checkpoint import load_checkpoint, trained_config
+    import hexnewton.mdp.env
+    from hexnewton.analysis.rollout import run_rounds
     from hexnewton.config import SimConfig
-    from hexnewton.rollout import run_rounds
+    from hexnewton.learning.checkpoint import load_checkpoint, trained_config
 
     ckpt = load_checkpoint(os.path.join(ROOT, "results", "policies", "cpg_rl_flat.pt"))
     ckpt["infos"]["hexnewton"]["config"]["sim"].update(frame_dt=0.02, substeps=3)
     path = str(tmp_path / "fast.pt")
     torch.save(ckpt, path)
     assert (trained_config(ckpt).sim.frame_dt, trained_config(ckpt).sim.substeps) == (0.02, 3)
-    seen, make_env = [], hexnewton.env.make_env
-    monkeypatch.setattr(hexnewton.env, "make_env", lambda cfg, mode="cpg": seen.append(cfg.sim) or make_env(cfg, mode))
+    seen, make_env = [], hexnewton.mdp.env.make_env
+    monkeypatch.setattr(hexnewton.mdp.env, "make_env", lambda cfg, mode="cpg": seen.append(cfg.sim) or make_env(cfg, mode))
     run_rounds("cpg_rl", path, "flat", 2, "cpu", 3, False)
     run_rounds("cpg_rl", path, "flat", 2, "cpu", 3, False, overrides={"sim.frame_dt": 0.01, "sim.substeps": 4})
     run_rounds("cpg", None, "flat", 2, "cpu", 3, False)
@@ -157,8 +157,8 @@ def test_rounds_run_under_the_policys_own_physics(tmp_path, monkeypatch):
 def test_posture_reflex_for_posture_policies_and_fixed_gaits():
     """``--env.cpg.posture_reflex``: a posture policy runs with the given gain, a fixed gait (15 parameters) gets the neutral
     posture and the reflex, a policy without the posture is refused with one error."""
+    from hexnewton.analysis.rollout import run_rounds
     from hexnewton.config import gait_params
-    from hexnewton.rollout import run_rounds
 
     posture = os.path.join(ROOT, "results", "policies", "cpg_rl_complex_posture.pt")
     ep = run_rounds("cpg_rl", posture, "rugged", 2, "cpu", 5, False, overrides={"cpg.posture_reflex": 2.0})
@@ -175,9 +175,9 @@ def test_shipped_complex_policy_climbs_steps_under_its_20ms_physics():
     """The shipped complex policy (trained under a 20 ms frame = 4 x 5 ms) climbs the 6 cm risers on the CPU as
     on the GPU: 8 unseen rounds, sampled actions, 20 s. Steps climbable is one of the stability checks
     for that physics; the fixed CPG stands at the first riser (x = 0.5 m)."""
-    from hexnewton.checkpoint import load_checkpoint, trained_config
-    from hexnewton.kernels.mdp import FELL
-    from hexnewton.rollout import run_rounds
+    from hexnewton.analysis.rollout import run_rounds
+    from hexnewton.learning.checkpoint import load_checkpoint, trained_config
+    from hexnewton.mdp.terms import FELL
 
     policy = os.path.join(ROOT, "results", "policies", "cpg_rl_complex_gaussian.pt")
     sim = trained_config(load_checkpoint(policy)).sim
@@ -191,7 +191,7 @@ def test_shipped_policy_is_more_level_than_the_fixed_cpg_on_rugged_ground():
     """The shipped complex policy (body posture, levelling reflex, deterministic action) against the fixed CPG with
     its default gait under the same physics: 4 unseen rugged rounds of 8 s, the same seeds, no falls, lower pitch
     and roll variance (on the GPU's 1000 test rounds: 0.60x / 0.77x, RESULTS.md)."""
-    from hexnewton.rollout import run_rounds
+    from hexnewton.analysis.rollout import run_rounds
 
     policy = os.path.join(ROOT, "results", "policies", "cpg_rl_complex.pt")
     stats = {}
@@ -206,7 +206,7 @@ def test_shipped_policy_is_more_level_than_the_fixed_cpg_on_rugged_ground():
 def test_gait_quality_and_fall_metrics():
     """Falls anywhere in a round, the 99.9th percentile of |angle|, body rate RMS and the parameters' change per step
     (from each first episode's second step on)."""
-    from hexnewton.metrics import gait_quality
+    from hexnewton.analysis.metrics import gait_quality
 
     pos, rpy, done, status = _synthetic()
     m = round_metrics(pos, rpy, done, status, DT)
@@ -224,8 +224,8 @@ def test_gait_quality_and_fall_metrics():
 
 
 def test_named_perturbations_change_one_thing():
+    from hexnewton.analysis.rollout import PERTURBATIONS, perturbation
     from hexnewton.config import RandomizationConfig
-    from hexnewton.rollout import PERTURBATIONS, perturbation
 
     assert perturbation("nominal") == {}
     friction = perturbation("friction_0.3")
@@ -242,10 +242,10 @@ def test_named_perturbations_change_one_thing():
 
 
 def test_fixed_gait_sweep_and_robustness_on_a_tiny_run(tmp_path):
-    """``hexnewton.cpg_sweep``: every gait of a 2-gait grid walks its rounds in one batch and the best is reported;
+    """``hexnewton.apps.cpg_sweep``: every gait of a 2-gait grid walks its rounds in one batch and the best is reported;
     ``evaluate --perturbations`` adds a robustness table per controller, with the swept fixed gait beside."""
     out = tmp_path / "sweep"
-    cmd = [sys.executable, "-m", "hexnewton.cpg_sweep", "--terrains", "flat", "--rounds", "2", "--omega",
+    cmd = [sys.executable, "-m", "hexnewton.apps.cpg_sweep", "--terrains", "flat", "--rounds", "2", "--omega",
            "9.42477796076938", "--a1", "0.3", "--a2", "0.5", "1.1", "--a3", "0.5", "--max_steps", "30", "--device",
            "cpu", "--out", str(out)]  # fmt: skip
     proc = subprocess.run(cmd, capture_output=True, text=True, timeout=900, cwd=ROOT)
@@ -255,7 +255,7 @@ def test_fixed_gait_sweep_and_robustness_on_a_tiny_run(tmp_path):
     assert res["default"] is not None and "best gait" in proc.stdout
     assert "| default " in (out / "report.md").read_text()
     ev = tmp_path / "ev"
-    cmd = [sys.executable, "-m", "hexnewton.evaluate", "--controllers", "cpg", "cpg_swept", "--terrains", "flat",
+    cmd = [sys.executable, "-m", "hexnewton.apps.evaluate", "--controllers", "cpg", "cpg_swept", "--terrains", "flat",
            "--rounds", "2", "--max_steps", "20", "--device", "cpu", "--perturbations", "payload_0.8kg", "--out",
            str(ev)]  # fmt: skip
     proc = subprocess.run(cmd, capture_output=True, text=True, timeout=900, cwd=ROOT)
@@ -272,12 +272,12 @@ def test_fixed_gait_sweep_and_robustness_on_a_tiny_run(tmp_path):
     res["meta"]["rounds"] = 3
     (other / "results.json").write_text(json.dumps(res))
     for dirs, code in (([ev, ev], 0), ([ev, other], 2)):
-        p = subprocess.run([sys.executable, "-m", "hexnewton.evaluate", "--merge", *map(str, dirs), "--out",
+        p = subprocess.run([sys.executable, "-m", "hexnewton.apps.evaluate", "--merge", *map(str, dirs), "--out",
                             str(tmp_path / f"merged{code}")], capture_output=True, text=True, timeout=300, cwd=ROOT)
         assert p.returncode == code, p.stderr[-2000:]
     assert "## Robustness: CPG (swept)" in (tmp_path / "merged0" / "report.md").read_text()
     assert not (tmp_path / "merged2").exists()
-    bad = subprocess.run([sys.executable, "-m", "hexnewton.cpg_sweep", "--a2", "2.0", "--out", str(tmp_path / "b")],
+    bad = subprocess.run([sys.executable, "-m", "hexnewton.apps.cpg_sweep", "--a2", "2.0", "--out", str(tmp_path / "b")],
                          capture_output=True, text=True, timeout=300, cwd=ROOT)  # fmt: skip
     assert bad.returncode == 2 and "leaves the parameter ranges" in bad.stderr and not (tmp_path / "b").exists()
 
@@ -285,8 +285,8 @@ def test_fixed_gait_sweep_and_robustness_on_a_tiny_run(tmp_path):
 def test_sweep_points_change_one_thing():
     """A sweep point is the course with one field at one value: terrain fields as given, randomisation fields on every
     robot with the nominal robot otherwise, motor strength on gains and effort together; ``default`` is the set."""
-    from hexnewton.evaluate import sweep_specs
-    from hexnewton.rollout import DEFAULT_SWEEPS, perturbation, sweep_overrides
+    from hexnewton.analysis.rollout import DEFAULT_SWEEPS, perturbation, sweep_overrides
+    from hexnewton.apps.evaluate import sweep_specs
 
     assert sweep_overrides("terrain.step_rise", 0.08) == {"terrain.step_rise": 0.08}
     friction = sweep_overrides("randomization.friction", 0.3)
@@ -318,7 +318,7 @@ def test_capability_sweep_on_a_tiny_run(tmp_path):
     in results.json, the report and one figure per sweep; bad sweeps end with one line and exit 2."""
     out = tmp_path / "sweep"
     policy = os.path.join(ROOT, "results", "policies", "cpg_rl_complex.pt")
-    cmd = [sys.executable, "-m", "hexnewton.evaluate", "--controllers", "cpg", "cpg_rl", "--checkpoint",
+    cmd = [sys.executable, "-m", "hexnewton.apps.evaluate", "--controllers", "cpg", "cpg_rl", "--checkpoint",
            f"cpg_rl={policy}", "--terrains", "stepped", "--rounds", "2", "--max_steps", "20", "--device", "cpu",
            "--sweep", "terrain.step_rise", "0.06", "0.1", "--sweep", "motor_strength", "0.5", "--out", str(out)]  # fmt: skip
     proc = subprocess.run(cmd, capture_output=True, text=True, timeout=900, cwd=ROOT)
@@ -332,7 +332,7 @@ def test_capability_sweep_on_a_tiny_run(tmp_path):
     assert len(res["sweeps"]["motor_strength"]["curves"]["cpg"]) == 1
     assert (out / "fig_sweep_terrain.step_rise.png").stat().st_size > 2000
     assert "## Capability curve: terrain.step_rise" in (out / "report.md").read_text()
-    p = subprocess.run([sys.executable, "-m", "hexnewton.evaluate", "--controllers", "cpg", "--sweep", "terrain.nope",
+    p = subprocess.run([sys.executable, "-m", "hexnewton.apps.evaluate", "--controllers", "cpg", "--sweep", "terrain.nope",
                         "1", "--device", "cpu", "--out", str(tmp_path / "x")], capture_output=True, text=True,
                        timeout=300, cwd=ROOT)  # fmt: skip
     err = [line for line in p.stderr.splitlines() if line.strip() and "Warp CUDA" not in line]

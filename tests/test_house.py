@@ -1,6 +1,7 @@
-"""The package's house rules, read from its source (AST) and checked in a few fresh interpreters: one-way imports, no
-private names across modules, library modules free of the command lines, light command-line start-up (``--help`` and
-argument errors without Warp or Newton), a deployment runtime without Warp, Newton or torch, short functions."""
+"""The package's house rules, read from its source (AST) and checked in a few fresh interpreters: layers as folders
+whose imports only go down, no circles, no private names across modules, every command line in ``apps/`` and nothing
+else there, light command-line start-up (``--help`` and argument errors without Warp or Newton), a deployment runtime
+without Warp, Newton or torch, short functions."""
 
 import ast
 import json
@@ -14,10 +15,11 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 PACKAGE = os.path.join(ROOT, "hexnewton")
 #: the longest function or method allowed in the package (def line to last line, decorators excluded)
 MAX_FUNCTION_LINES = 80
-#: modules with a ``main`` that are libraries first: the deployment runtime (its ``main`` replays a bundle)
-LIBRARIES_WITH_MAIN = {"hexnewton.deploy"}
 #: command-line modules without a ``main`` of their own: the argument parsing shared by the command lines
-COMMAND_LINE_HELPERS = {"hexnewton.cli"}
+COMMAND_LINE_HELPERS = {"hexnewton.apps.cli"}
+#: the layers, bottom up: a module imports modules of its own layer or of layers below it ("" is the package's root:
+#: configuration, errors, start-up timing)
+LAYERS = ("", "physics", "deploy", "mdp", "learning", "tasks", "analysis", "apps")
 HEAVY = ("warp", "newton")
 
 
@@ -64,8 +66,13 @@ def _imports(name: str) -> list[tuple[str, str | None, int]]:
 
 
 GRAPH = {name: {target for target, _, _ in _imports(name) if target in MODULES and target != name} for name in MODULES}
-COMMAND_LINES = {name for name, tree in TREES.items() if name not in LIBRARIES_WITH_MAIN and any(
+COMMAND_LINES = {name for name, tree in TREES.items() if any(
     isinstance(n, ast.FunctionDef) and n.name == "main" for n in tree.body)} | COMMAND_LINE_HELPERS  # fmt: skip
+
+
+def _layer(name: str) -> str:
+    parts = name.split(".")
+    return parts[1] if len(parts) > 2 or name in ("hexnewton." + layer for layer in LAYERS) else ""
 
 
 def test_every_import_resolves():
@@ -104,9 +111,27 @@ def test_no_private_name_imported_from_another_module():
     assert not private, private
 
 
+def test_every_module_sits_in_a_layer_and_imports_only_go_down():
+    """Each module is in one of the layer folders (or is the root's configuration, errors, start-up timing); it
+    imports modules of its own layer or of a lower one, never of a higher one."""
+    assert {_layer(name) for name in MODULES} == set(LAYERS)
+    assert {name for name in MODULES if _layer(name) == ""} == {"hexnewton", "hexnewton.config", "hexnewton.errors",
+                                                                 "hexnewton.startup"}  # fmt: skip
+    rank = {layer: k for k, layer in enumerate(LAYERS)}
+    up = [f"{name}:{line} ({_layer(name) or 'root'}) imports {target} ({_layer(target)})" for name in sorted(MODULES)
+          for target, _, line in _imports(name) if target in MODULES and rank[_layer(target)] > rank[_layer(name)]]
+    assert not up, up
+
+
+def test_command_lines_live_in_apps():
+    """Every module with a ``main`` is a command line in ``hexnewton/apps/``, and ``apps/`` holds nothing else."""
+    apps = {name for name in MODULES if _layer(name) == "apps"} - {"hexnewton.apps"}
+    assert COMMAND_LINES == apps
+
+
 def test_library_modules_import_no_command_line_module():
     """Only command lines import command lines (and ``cli``, their argument parsing)."""
-    assert {"hexnewton.train", "hexnewton.evaluate", "hexnewton.baselines.__main__", "hexnewton.cli"} <= COMMAND_LINES
+    assert {"hexnewton.apps.train", "hexnewton.apps.evaluate", "hexnewton.apps.baselines", "hexnewton.apps.cli"} <= COMMAND_LINES
     wrong = [f"{name}:{line} imports {target}" for name in sorted(set(MODULES) - COMMAND_LINES)
              for target, _, line in _imports(name) if target in COMMAND_LINES]  # fmt: skip
     assert not wrong, wrong
@@ -138,8 +163,7 @@ def test_import_hexnewton_loads_neither_warp_nor_newton():
 
 #: each command line: (how to run it, a bad argument)
 CLIS = {"train.py": ("path", ["--num_envs", "-1"]), "play.py": ("path", ["--num_envs", "-1"])}
-CLIS.update({name.removesuffix(".__main__"): ("module", ["--not_a_flag", "1"])  # python -m hexnewton.baselines
-             for name in sorted(COMMAND_LINES - COMMAND_LINE_HELPERS)})  # fmt: skip
+CLIS.update({name: ("module", ["--not_a_flag", "1"]) for name in sorted(COMMAND_LINES - COMMAND_LINE_HELPERS)})
 CLI_PROBE = """
 import contextlib, io, json, runpy, sys
 
@@ -182,16 +206,17 @@ def test_command_line_help_and_argument_errors_load_neither_warp_nor_newton(cli)
 
 
 def test_deploy_runtime_loads_neither_warp_newton_nor_torch():
-    """``import hexnewton.deploy`` and its controllers (a bundle with its ONNX policy, a fixed gait's spec) run on
+    """``import hexnewton.deploy.runtime`` and its controllers (a bundle with its ONNX policy, a fixed gait's spec) run on
     NumPy and onnxruntime alone; its replay command's ``--help`` too."""
-    from hexnewton.sim2sim import fixed_cpg_spec
+    from hexnewton.apps.sim2sim import fixed_cpg_spec
 
     bundle = os.path.join(ROOT, "results", "controllers", "cpg_rl_flat")
     code = (
         "import json, sys\n"
-        "from hexnewton import deploy\n"
-        f"deploy.Controller(json.loads({json.dumps(json.dumps(fixed_cpg_spec()))}), num_robots=2)\n"
-        f"if {os.path.isdir(bundle)!r}: deploy.Controller({bundle!r}, num_robots=2)\n"
+        "from hexnewton.apps import deploy\n"
+        "from hexnewton.deploy import runtime\n"
+        f"runtime.Controller(json.loads({json.dumps(json.dumps(fixed_cpg_spec()))}), num_robots=2)\n"
+        f"if {os.path.isdir(bundle)!r}: runtime.Controller({bundle!r}, num_robots=2)\n"
         "try:\n"
         "    deploy.main(['--help'])\n"
         "except SystemExit:\n"
@@ -199,3 +224,82 @@ def test_deploy_runtime_loads_neither_warp_newton_nor_torch():
         f"print(json.dumps([m for m in {(*HEAVY, 'torch')!r} if m in sys.modules]))\n"
     )
     assert _python(code) == []
+
+
+def _kernel_files(obj, seen: set) -> set[str]:
+    """The source files of a Warp kernel or function and of every Warp function it calls, directly or through a term
+    table's rows (``wp.static(TABLE[k].func)``), read from the names its code uses."""
+    import inspect
+    import types
+
+    import warp as wp
+
+    if id(obj) in seen:
+        return set()
+    seen.add(id(obj))
+    func = obj.func
+    files = {inspect.getsourcefile(func)}
+    cells = dict(zip(func.__code__.co_freevars, (c.cell_contents for c in func.__closure__ or ())))
+    codes, names = [func.__code__], set()
+    while codes:
+        code = codes.pop()
+        names |= set(code.co_names) | set(code.co_freevars)
+        codes += [c for c in code.co_consts if isinstance(c, types.CodeType)]
+    for name in names:
+        value = cells.get(name, func.__globals__.get(name))
+        rows = value if isinstance(value, (tuple, list)) else (value,)
+        for row in rows:
+            target = row if isinstance(row, (wp.Function, wp.Kernel)) else getattr(row, "func", None)
+            if isinstance(target, wp.Kernel) or (isinstance(target, wp.Function) and not target.is_builtin()):
+                files |= _kernel_files(target, seen)
+    return files
+
+
+def test_one_control_step_passes_the_files_the_readme_names():
+    """The README's "How one control step flows" names exactly the package files whose code one ``env.step`` runs
+    (Python called, Warp kernels launched and the Warp functions they call), at most five, with every part of the step
+    switched on: the body posture and reflex, domain randomisation, the terrain curriculum."""
+    import re
+
+    import numpy as np
+    import torch
+    import warp as wp
+
+    from hexnewton.config import CPGConfig, HexConfig, RandomizationConfig, SimConfig, TerrainConfig
+    from hexnewton.mdp.env import make_env
+
+    cfg = HexConfig(sim=SimConfig(num_envs=4, device="cpu", use_graph=False, frame_dt=0.02, substeps=2),
+                    terrain=TerrainConfig(name="complex", levels=2, start_levels=1),
+                    cpg=CPGConfig(posture=True, posture_reflex=2.0),
+                    randomization=RandomizationConfig(enabled=True, push_interval=0.02))  # fmt: skip
+    env = make_env(cfg)
+    actions = torch.zeros(env.num_envs, env.num_actions)
+    env.step(actions)
+    package = os.path.join(ROOT, "hexnewton") + os.sep
+    called, launched = set(), []
+
+    def profile(frame, event, arg):
+        if event == "call" and frame.f_code.co_filename.startswith(package):
+            called.add(frame.f_code.co_filename)
+
+    real_launch = wp.launch
+
+    def launch(kernel, *args, **kwargs):
+        launched.append(kernel)
+        return real_launch(kernel, *args, **kwargs)
+
+    wp.launch = launch
+    sys.setprofile(profile)
+    try:
+        env.step(actions)
+    finally:
+        sys.setprofile(None)
+        wp.launch = real_launch
+    seen: set = set()
+    files = called | {f for k in launched for f in _kernel_files(k, seen)}
+    files = {os.path.relpath(f, ROOT) for f in files if f.startswith(package)}
+    readme = open(os.path.join(ROOT, "README.md")).read()
+    section = readme.split("## How one control step flows", 1)[1].split("\n## ", 1)[0]
+    named = set(re.findall(r"hexnewton/[\w/]+\.py", section))
+    assert files == named and len(files) <= 5, (sorted(files), sorted(named))
+    assert np.isfinite(env.obs.numpy()).all()

@@ -1,4 +1,4 @@
-"""play.py and reading checkpoints (hexnewton/play.py, checkpoint.py, policy.py): the trained checkpoint plays, the
+"""play.py and reading checkpoints (hexnewton/apps/play.py, checkpoint.py, policy.py): the trained checkpoint plays, the
 newest run's result is the default, bad checkpoints and arguments are one-line errors, the shipped policies fit."""
 
 import glob
@@ -93,8 +93,8 @@ def test_bad_checkpoints_are_one_line_errors(trained, tmp_path, capsys):
     before = sorted(glob.glob(str(logs / "**"), recursive=True))
     # the first case of each entry point as its own process (the file users run), the others through the same
     # cli.run wrapper in this process: one line on stderr, exit status 2, no traceback
-    from hexnewton import play, train
-    from hexnewton.cli import run
+    from hexnewton.apps import play, train
+    from hexnewton.apps.cli import run
 
     entry = {"train.py": (train.main, "python train.py"), "play.py": (play.main, "python play.py")}
     seen = set()
@@ -124,8 +124,8 @@ def test_shipped_policies_fit_the_environment(name):
 
     import onnxruntime as ort
 
-    from hexnewton.checkpoint import check_compatible, load_checkpoint
-    from hexnewton.kernels.mdp import OBS_DIM
+    from hexnewton.learning.checkpoint import check_compatible, load_checkpoint
+    from hexnewton.mdp.terms import OBS_DIM
 
     results = os.path.join(os.path.dirname(__file__), "..", "results")
     pt = os.path.join(results, "policies", name + ".pt")
@@ -139,7 +139,7 @@ def test_shipped_policies_fit_the_environment(name):
 def test_newest_checkpoint_is_the_runs_result(tmp_path):
     """play.py's default: the newest run's model_best.pt where it kept one (train.py's result then), else its last
     numbered checkpoint."""
-    from hexnewton.checkpoint import newest_checkpoint
+    from hexnewton.learning.checkpoint import newest_checkpoint
 
     old, new = tmp_path / "hexnewton_flat" / "2026-01-01_00-00-00", tmp_path / "hexnewton_rugged" / "2026-01-02_00-00-00"
     for run, names in ((old, ("model_0.pt", "model_best.pt")), (new, ("model_2.pt", "model_10.pt"))):

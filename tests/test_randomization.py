@@ -9,16 +9,16 @@ import torch
 import warp as wp
 
 from hexnewton.config import HexConfig, RandomizationConfig, SimConfig, TaskConfig
-from hexnewton.env import make_env
-from hexnewton.kernels.mdp import OBS_LAYOUT
-from hexnewton.kernels.randomization import (
+from hexnewton.mdp.env import make_env
+from hexnewton.mdp.events import (
     delay_actions_kernel,
     delay_actions_reference,
     observation_noise_kernel,
     push_kernel,
     pushed_envs_reference,
 )
-from hexnewton.kernels.reference import scale_actions_reference
+from hexnewton.mdp.terms import OBS_LAYOUT
+from hexnewton.physics.reference import scale_actions_reference
 
 DEV = "cpu"
 RZ = RandomizationConfig(enabled=True)
@@ -110,7 +110,7 @@ def test_randomised_env_steps(pair):
 
 
 def test_evaluation_under_perturbed_conditions():
-    from hexnewton.rollout import run_rounds
+    from hexnewton.analysis.rollout import run_rounds
 
     ep = run_rounds("cpg", None, "flat", 3, DEV, 20, progress=False,
                     overrides={"task.reset_yaw": 0.0, "randomization.enabled": True, "task.goal_distance": 5.5})
@@ -120,8 +120,8 @@ def test_evaluation_under_perturbed_conditions():
 def test_foot_radius_and_contact_timeconst_reach_both_simulators():
     """The drawn foot radius sizes each env's foot spheres for Newton's collision and MuJoCo, and the drawn time
     constant is the solref of that env's robot-ground contacts after MuJoCo's averaging with the ground's."""
-    from hexnewton.randomization import randomize_physics
-    from hexnewton.sim import World
+    from hexnewton.mdp.events import randomize_physics
+    from hexnewton.physics.world import World
 
     rz = RandomizationConfig(enabled=True, foot_radius=(0.010, 0.014), contact_timeconst=(0.015, 0.03))
     cfg = HexConfig(sim=replace(SimConfig(), num_envs=4, device=DEV), randomization=rz)
@@ -149,8 +149,8 @@ def test_foot_radius_and_contact_timeconst_reach_both_simulators():
 
 def test_larger_feet_stand_higher():
     """Newton's collision uses the drawn radius: 4 mm more foot radius lifts the standing torso by about 4 mm."""
-    from hexnewton.randomization import randomize_physics
-    from hexnewton.sim import World
+    from hexnewton.mdp.events import randomize_physics
+    from hexnewton.physics.world import World
 
     heights = []
     for r in (0.010, 0.014):

@@ -2,13 +2,13 @@
 
 import math
 
+import newton
 import numpy as np
 import pytest
 import warp as wp
 
-import newton
 from hexnewton.config import JOINT_NAMES, RobotConfig
-from hexnewton.robot import BASE_Q, build_hexapod, stand_height
+from hexnewton.physics.robot import BASE_Q, build_hexapod, stand_height
 
 
 @pytest.fixture(scope="module")

@@ -12,22 +12,22 @@ import warp as wp
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from hexnewton.analysis.rollout import rollout
 from hexnewton.config import JOINT_NAMES, HexConfig, SimConfig, TaskConfig, TerrainConfig
-from hexnewton.env import make_env
-from hexnewton.kernels.mdp import (
+from hexnewton.learning.policy import fixed_cpg_actions
+from hexnewton.mdp.env import make_env
+from hexnewton.mdp.terms import (
     FELL,
     NONFINITE,
     SUCCESS,
     EndInputs,
     episode_status_kernel,
     episode_status_np,
+    height_field_from_grid,
     make_struct,
 )
-from hexnewton.kernels.reference import quat_to_rpy_np
-from hexnewton.policy import fixed_cpg_actions
-from hexnewton.rollout import rollout
-from hexnewton.terrain import make_terrain, terrain_height_np
-from hexnewton.terrain.query import height_field_from_grid
+from hexnewton.physics.reference import quat_to_rpy_np
+from hexnewton.physics.terrain import make_terrain, terrain_height_np
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 TASK = TaskConfig()

@@ -1,4 +1,4 @@
-"""Sim2sim in C MuJoCo (hexnewton.mjcf, hexnewton.sim2sim): the MJCF is the Newton robot, the terrain and the height
+"""Sim2sim in C MuJoCo (hexnewton.deploy.mjcf, hexnewton.apps.sim2sim): the MJCF is the Newton robot, the terrain and the height
 scanner are the training's grid, a shipped bundle walks closed loop, and the command line's outputs and errors."""
 
 from __future__ import annotations
@@ -11,11 +11,11 @@ import pytest
 
 mujoco = pytest.importorskip("mujoco")
 
+from hexnewton.apps.sim2sim import HEADLINE, PROG, HeightScanner, Rounds, fixed_cpg_spec, main  # noqa: E402
 from hexnewton.config import JOINT_NAMES, RobotConfig, TerrainConfig  # noqa: E402
-from hexnewton.kernels.reference import RUNNING  # noqa: E402
-from hexnewton.mjcf import build_model, robot_xml  # noqa: E402
-from hexnewton.sim2sim import HEADLINE, PROG, HeightScanner, Rounds, fixed_cpg_spec, main  # noqa: E402
-from hexnewton.terrain.heightmap import build_height_grid  # noqa: E402
+from hexnewton.deploy.mjcf import build_model, robot_xml  # noqa: E402
+from hexnewton.physics.reference import RUNNING  # noqa: E402
+from hexnewton.physics.terrain.heightmap import build_height_grid  # noqa: E402
 
 BUNDLE = os.path.join(os.path.dirname(__file__), "..", "results", "controllers", "cpg_rl_complex")
 
@@ -25,7 +25,7 @@ def _newton_robot(cfg: RobotConfig, q: np.ndarray):
     import newton
     import warp as wp
 
-    from hexnewton.robot import build_hexapod
+    from hexnewton.physics.robot import build_hexapod
 
     model = build_hexapod(cfg).finalize(device="cpu")
     state = model.state()
@@ -81,7 +81,7 @@ def test_servos_and_sensors_follow_the_robot_config():
 
 
 def test_terrain_boxes_and_scanner_are_the_height_grid():
-    from hexnewton.terrain import max_terrain_height_np, terrain_height_np
+    from hexnewton.physics.terrain import max_terrain_height_np, terrain_height_np
 
     grid = build_height_grid(TerrainConfig(name="complex", seed=3))
     m = build_model(RobotConfig(), grid, [], 0.005)
@@ -123,7 +123,7 @@ def test_fixed_cpg_runs_through_the_runtime():
 
 
 def test_cli_writes_results_and_rejects_bad_input(tmp_path, capsys):
-    from hexnewton.cli import run
+    from hexnewton.apps.cli import run
 
     out = str(tmp_path / "s2s")
     args = [BUNDLE, "--terrains", "flat", "--rounds", "2", "--max_steps", "20", "--fixed_terrains", "--out", out]
@@ -148,7 +148,7 @@ def test_newton_reference_reads_both_results_layouts(tmp_path):
     """``--newton`` takes evaluate's own results.json (``meta`` + ``results``) and a study's (``test``)."""
     import json
 
-    from hexnewton.sim2sim import newton_reference
+    from hexnewton.apps.sim2sim import newton_reference
 
     summary = {"rounds": 10, "success_3m": 0.9}
     own = tmp_path / "own.json"

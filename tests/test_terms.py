@@ -1,4 +1,4 @@
-"""The term tables (kernels/mdp.py): each fused kernel against the rows' float64
+"""The term tables (mdp/terms.py): each fused kernel against the rows' float64
 NumPy functions on random states, the paper's terms on hand-made states, and what the tables drive (kernel columns,
 log names, layouts, noise)."""
 
@@ -12,8 +12,8 @@ import torch
 import warp as wp
 
 from hexnewton.config import HexConfig, RandomizationConfig, RewardConfig, SimConfig, TaskConfig, TerrainConfig
-from hexnewton.env import make_env
-from hexnewton.kernels.mdp import (
+from hexnewton.mdp.env import make_env
+from hexnewton.mdp.terms import (
     FELL,
     LAYOUTS,
     OBS_DIM,
@@ -31,6 +31,7 @@ from hexnewton.kernels.mdp import (
     RewardTerm,
     TaskParams,
     config_params,
+    height_field_from_grid,
     make_rewards_kernel,
     make_struct,
     observation_noise,
@@ -40,9 +41,8 @@ from hexnewton.kernels.mdp import (
     rewards_kernel,
     rewards_reference,
 )
-from hexnewton.kernels.reference import STATUS_NAMES
-from hexnewton.terrain import make_terrain, max_terrain_height_np, terrain_height_np
-from hexnewton.terrain.query import height_field_from_grid
+from hexnewton.physics.reference import STATUS_NAMES
+from hexnewton.physics.terrain import make_terrain, max_terrain_height_np, terrain_height_np
 
 DEV = "cpu"
 TASK, REW = TaskConfig(), RewardConfig()
@@ -237,6 +237,31 @@ def test_reward_table_drives_kernel_reference_and_log():
     assert env.terms.shape == (2, len(REWARD_TERMS))
 
 
+def test_a_task_chooses_its_terms():
+    """``RewardConfig.terms`` and ``TaskConfig.terminations`` choose table rows: the env pays and logs only the
+    chosen reward terms (their sum is the reward), checks only the chosen ends (without ``timeout`` an episode runs past
+    its step limit), and a name that is no row, or ends without ``nonfinite``, are one-line errors; the default is every
+    row."""
+    assert REW.terms == REWARD_NAMES and TaskConfig().terminations == tuple(t.name for t in TERMINATIONS)
+    chosen = ("distance", "forward", "height")
+    cfg = HexConfig(sim=SimConfig(num_envs=2, device=DEV), terrain=TerrainConfig(name="flat"),
+                    task=dataclasses.replace(TaskConfig(), max_episode_steps=3, terminations=("nonfinite", "fell")),
+                    reward=dataclasses.replace(REW, terms=chosen))  # fmt: skip
+    env = make_env(cfg)
+    for _ in range(4):
+        _, rew, done, extras = env.step(torch.zeros(2, 15))
+    assert [k for k in extras["log"] if k.startswith("Reward/")] == ["Reward/height", "Reward/distance", "Reward/forward"]
+    assert env.terms.shape == (2, 3)
+    np.testing.assert_allclose(rew.numpy(), env.terms.numpy().sum(axis=1), rtol=1e-6)
+    assert not done.any() and (env.episode_steps.numpy() == 4).all()  # no timeout row: past max_episode_steps
+    with pytest.raises(ValueError, match="reward.terms: no term speed; choose from height, direction"):
+        make_env(dataclasses.replace(cfg, reward=dataclasses.replace(REW, terms=("height", "speed"))))
+    with pytest.raises(ValueError, match="task.terminations must include nonfinite"):
+        make_env(dataclasses.replace(cfg, task=dataclasses.replace(TaskConfig(), terminations=("fell",))))
+    paper = RewardConfig().paper_reward()
+    assert paper.terms == ("height", "direction", "distance", "stability", "forward")
+
+
 def test_config_structs_follow_the_config():
     """The terms read the configuration through structs generated from TaskConfig and RewardConfig: every scalar
     field, same name and value."""
@@ -254,7 +279,7 @@ def test_config_structs_follow_the_config():
 
 
 def test_termination_table_covers_every_status_once():
-    """One row per status code 1..5, named as in kernels/reference.py; the blow-up check comes first (its rpy is 0)."""
+    """One row per status code 1..5, named as in physics/reference.py; the blow-up check comes first (its rpy is 0)."""
     assert sorted(t.code for t in TERMINATIONS) == list(range(1, len(STATUS_NAMES)))
     assert [t.name for t in sorted(TERMINATIONS, key=lambda t: t.code)] == list(STATUS_NAMES[1:])
     assert TERMINATIONS[0].name == "nonfinite" and [t.name for t in TERMINATIONS[1:]] == ["fell", "off_course",
@@ -272,7 +297,7 @@ def test_observation_layout_covers_59_62_and_44():
         assert all(a[2] == b[1] for a, b in zip(spans, spans[1:]))
         assert [name for name, _, _ in spans] == [t.name for t in OBS_TERMS if mode in t.layouts]
     # the layout documented in the module docstring is the table's
-    import hexnewton.kernels.mdp as obs_module
+    import hexnewton.mdp.terms as obs_module
 
     assert "    [54:57]   body posture P_h, P_p, P_r [rad] (filtered)" in obs_module.__doc__
 

@@ -1,4 +1,4 @@
-"""Tests for hexnewton.terrain: the paper's terrains (Huang et al. 2025, §3.1), their collision mesh
+"""Tests for hexnewton.physics.terrain: the paper's terrains (Huang et al. 2025, §3.1), their collision mesh
 and the in-kernel height query. CPU only."""
 
 from __future__ import annotations
@@ -15,20 +15,17 @@ from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
 from hexnewton.config import TERRAINS, TerrainConfig
-from hexnewton.terrain import (
-    HeightField,
+from hexnewton.mdp.terms import HeightField, height_field_from_grid, sample_heights, terrain_height
+from hexnewton.physics.terrain import (
     HeightGrid,
     Part,
     Terrain,
     build_height_grid,
     generate,
     grid_to_mesh,
-    height_field_from_grid,
     make_terrain,
     max_terrain_height_np,
-    sample_heights,
     split_strips,
-    terrain_height,
     terrain_height_np,
 )
 
@@ -280,7 +277,7 @@ def test_mesh_ray_cast_hits_terrain_height(terrains: dict[str, Terrain], name: s
                     indices=wp.array(terrain.mesh.indices, dtype=wp.int32, device=DEVICE))
     out = [wp.zeros(len(xy), dtype=wp.float32, device=DEVICE) for _ in range(3)]
     wp.launch(_ray_down_kernel, dim=len(xy),
-              inputs=[wmesh.id, terrain.height_field(DEVICE), wp.array(xy, dtype=wp.vec2, device=DEVICE)],
+              inputs=[wmesh.id, height_field_from_grid(terrain.grid, DEVICE), wp.array(xy, dtype=wp.vec2, device=DEVICE)],
               outputs=out, device=DEVICE)
     hit_z, normal_z, expected = (a.numpy() for a in out)
     np.testing.assert_allclose(hit_z, expected, atol=1e-5)

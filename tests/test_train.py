@@ -1,4 +1,4 @@
-"""train.py and the runner (hexnewton/train.py, runner.py, stopping.py): checkpoints, ONNX and TensorBoard, seeding,
+"""train.py and the runner (hexnewton/apps/train.py, runner.py, stopping.py): checkpoints, ONNX and TensorBoard, seeding,
 resume, interruption, torchrun ranks, stop rules, the stable-gait stages, start-up timing, the progress line, the
 best checkpoint."""
 
@@ -119,7 +119,7 @@ def test_interrupt_saves_and_exports(tmp_path):
 def test_torchrun_ranks_devices_and_seeds():
     """torchrun's variables pick cuda:LOCAL_RANK (or the CPU when asked) and rank-offset seeds; a plain run is
     unchanged (no GPU needed)."""
-    from hexnewton.runner import distributed_rank
+    from hexnewton.learning.runner import distributed_rank
 
     assert distributed_rank({}, None).device is None and distributed_rank({}, "cpu").world_size == 1
     r = distributed_rank({"WORLD_SIZE": "2", "RANK": "1", "LOCAL_RANK": "1"}, None)
@@ -156,7 +156,7 @@ def test_torchrun_two_cpu_processes_train_as_one(tmp_path):
     assert agree and float(agree.group(1)) <= 1e-6, proc.stdout[-2000:]
     runs = glob.glob(str(tmp_path / "hexnewton_flat" / "*"))
     assert len(runs) == 1 and os.path.isfile(os.path.join(runs[0], "model_1.pt"))
-    from hexnewton.checkpoint import checkpoint_meta, load_checkpoint
+    from hexnewton.learning.checkpoint import checkpoint_meta, load_checkpoint
 
     assert checkpoint_meta(load_checkpoint(os.path.join(runs[0], "model_1.pt")))["world_size"] == 2
 
@@ -164,16 +164,16 @@ def test_torchrun_two_cpu_processes_train_as_one(tmp_path):
 def test_stop_reason_is_one_decision_for_all_ranks():
     """--max_minutes / --target_success under torchrun: every rank reaches the same decision from the sums over
     the ranks (here a fake two-rank sum), so no rank leaves the others waiting in a collective."""
-    from hexnewton.env import RING
-    from hexnewton.runner import stop_reason
+    from hexnewton.learning.runner import stop_reason
+    from hexnewton.mdp.env import RING
 
-    full = {"episodes": RING, "success_rate": 0.96, "top_level_episodes": RING // 4, "top_level_success_rate": 0.5}
+    full = {"window": RING, "episodes": RING, "success_rate": 0.96, "top_level_episodes": RING // 4, "top_level_success_rate": 0.5}
     assert stop_reason(False, full, 0.95, 0) == "target success 0.960 >= 0.95"
     assert stop_reason(False, full, 0.95, 10) is None  # a curriculum counts the last level only
     assert stop_reason(False, dict(full, episodes=RING - 1), 0.95, 0) is None  # ring not full yet
     assert stop_reason(True, full, None, 0) == "the --max_minutes limit"
     assert stop_reason(False, full, None, 0) is None
-    other = {"episodes": RING, "success_rate": 0.90, "top_level_episodes": RING // 4, "top_level_success_rate": 1.0}
+    other = {"window": RING, "episodes": RING, "success_rate": 0.90, "top_level_episodes": RING // 4, "top_level_success_rate": 1.0}
     sent = []
     stop_reason(False, other, 0.9, 0, reduce=lambda v: sent.append(v) or v)  # what the other rank contributes
     plus_other = lambda v: [a + b for a, b in zip(v, sent[0], strict=True)]  # noqa: E731
@@ -211,7 +211,7 @@ def test_curriculum_stages_change_reflex_and_weights_in_one_run(tmp_path, capsys
     stage, on its own task."""
     import torch
 
-    from hexnewton import train
+    from hexnewton.apps import train
 
     stages = "((1, {'posture_reflex': 2.0, 'w_tilt': 15.0}), (2, {'w_tilt': 40.0, 'w_ang_vel': 0.3}))"
     assert train.main(["--task", "complex", "--num_envs", "8", "--agent.num_steps_per_env", "4", "--max_iterations",
@@ -248,7 +248,7 @@ def test_training_reports_its_start_up_and_writes_timing(trained):
 
 
 def test_progress_line_says_when_no_episode_has_ended():
-    from hexnewton.runner import progress_line
+    from hexnewton.learning.runner import progress_line
 
     stats = {"success_rate": float("nan"), "fell_rate": float("nan"), "off_course_rate": float("nan"),
              "distance_m": float("nan"), "episodes": 0}  # fmt: skip
@@ -261,16 +261,17 @@ def test_progress_line_says_when_no_episode_has_ended():
 def test_best_checkpoint_keeps_the_best_iteration(tmp_path):
     """model_best.pt follows the training success once enough episodes are in (a quarter of the ring; with a
     curriculum, played on the last level), and only a real improvement saves again."""
-    from hexnewton.env import RING
-    from hexnewton.runner import BestCheckpoint, training_success
+    from hexnewton.learning.runner import BestCheckpoint, training_success
+    from hexnewton.mdp.env import RING
 
     saved = []
     best = BestCheckpoint(str(tmp_path), levels=0)
     save = lambda path, infos: saved.append((path, infos["best_success"]))  # noqa: E731
     for it, (rate, n) in enumerate([(0.9, RING // 8), (0.5, RING // 4), (0.8, RING), (0.802, RING), (0.7, RING)]):
-        best.update({"success_rate": rate, "episodes": n}, it, save)
+        best.update({"window": RING, "success_rate": rate, "episodes": n}, it, save)
     assert [r for _, r in saved] == [0.5, 0.8] and best.iteration == 2 and best.rate == 0.8
     assert saved[0][0] == str(tmp_path / "model_best.pt")
-    stats = {"top_level_success_rate": 0.9, "top_level_episodes": RING // 4, "success_rate": 0.1, "episodes": RING}
+    stats = {"window": RING, "top_level_success_rate": 0.9, "top_level_episodes": RING // 4, "success_rate": 0.1,
+             "episodes": RING}
     assert training_success(stats, levels=10) == 0.9 and training_success(stats, levels=0) == 0.1
     assert training_success({**stats, "top_level_episodes": 3}, levels=10) is None

@@ -10,7 +10,7 @@ import sys
 import numpy as np
 import pytest
 
-from hexnewton.viewer import TORSO_COLOR, check_viewer_args, default_viewer, draw_caption
+from hexnewton.physics.viewer import TORSO_COLOR, check_viewer_args, default_viewer, draw_caption
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 # a short fixed-CPG rollout on flat ground: 2 robots, 24 control steps, a frame every 2nd step -> 12 frames
@@ -130,10 +130,10 @@ def test_training_clips_at_an_interval(tmp_path):
     named by iteration; everything else reads and writes the wrapped env."""
     import torch
 
-    from hexnewton.env import make_env
-    from hexnewton.policy import fixed_cpg_actions
+    from hexnewton.learning.policy import fixed_cpg_actions
+    from hexnewton.mdp.env import make_env
+    from hexnewton.physics.viewer import VideoEnv
     from hexnewton.tasks import course
-    from hexnewton.viewer import VideoEnv
 
     env = make_env(course("flat", None, {}, 2, "cpu", 0, seed=0), "cpg")
     videos = VideoEnv(env, str(tmp_path / "videos"), interval=2, length=3, steps_per_iteration=2, width=320,

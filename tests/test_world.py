@@ -9,10 +9,10 @@ import torch
 import warp as wp
 
 from hexnewton.config import TERRAINS, HexConfig, SimConfig, TerrainConfig
-from hexnewton.controller import CPGController
-from hexnewton.robot import stand_height
-from hexnewton.sim import ContactOverflowError, HexnewtonError, World, resolve_device
-from hexnewton.terrain import max_terrain_height_np
+from hexnewton.physics.cpg import CPGController
+from hexnewton.physics.robot import stand_height
+from hexnewton.physics.terrain import max_terrain_height_np
+from hexnewton.physics.world import ContactOverflowError, HexnewtonError, World, resolve_device
 
 N = 4
 
@@ -191,7 +191,7 @@ def test_bad_num_envs_raises():
     + ([(["--device", "cuda"], "no CUDA device")] if not wp.is_cuda_available() else []),
 )
 def test_cli_bad_input_is_one_line(args, message):
-    proc = subprocess.run([sys.executable, "-m", "hexnewton.bench", *args], capture_output=True, text=True,
+    proc = subprocess.run([sys.executable, "-m", "hexnewton.apps.bench", *args], capture_output=True, text=True,
                           timeout=300)  # fmt: skip
     assert proc.returncode == 2
     err = [line for line in proc.stderr.splitlines() if line.strip() and "Warp" not in line and not line.startswith(" ")]
@@ -201,7 +201,7 @@ def test_cli_bad_input_is_one_line(args, message):
 
 def test_precompile_finds_every_step_module():
     """The CUDA cold-start list names modules that exist once a World is built (guards against renames)."""
-    from hexnewton.sim import STEP_MODULES, precompile
+    from hexnewton.physics.world import STEP_MODULES, precompile
 
     world = _world("flat")
     world.step(1)
@@ -216,7 +216,7 @@ def test_bench_reports_sim_env_and_training(tmp_path):
     import json
 
     out, md = tmp_path / "b.json", tmp_path / "B.md"
-    proc = subprocess.run([sys.executable, "-m", "hexnewton.bench", "--device", "cpu", "--terrain", "flat", "--num_envs",
+    proc = subprocess.run([sys.executable, "-m", "hexnewton.apps.bench", "--device", "cpu", "--terrain", "flat", "--num_envs",
                            "4", "--frames", "5", "--env_steps", "3", "--train_iterations", "1", "--json", str(out),
                            "--append", str(md), "--profile", "--env.sim.frame_dt", "0.02", "--env.sim.substeps", "3",
                            "--agent.algorithm.num_mini_batches", "2"],
@@ -235,7 +235,7 @@ def test_bench_reports_sim_env_and_training(tmp_path):
 
 def test_bench_largest_that_fits(monkeypatch):
     """--largest doubles the env count until an allocation fails; other errors are not swallowed."""
-    from hexnewton import bench
+    from hexnewton.apps import bench
 
     def fake(terrain, n, device, frames, sim, ground=None):
         assert ground is None or ground.collision == "mesh_boxes"  # the terrain settings are passed on

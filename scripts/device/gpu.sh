@@ -8,9 +8,9 @@
 #   bash scripts/device/gpu.sh wait SECONDS NAME...          # until those runs end (at most SECONDS), their progress
 #   bash scripts/device/gpu.sh pack NAME...                  # config, events, log, best and last checkpoint ->
 #                                                            # $OUT/run_NAME.tgz; the shipped checkpoint -> $KEEP/NAME.pt
-#   bash scripts/device/gpu.sh eval SECONDS NAME[@GPU]:ARGS...   # `python -m hexnewton.evaluate ARGS` jobs at once,
+#   bash scripts/device/gpu.sh eval SECONDS NAME[@GPU]:ARGS...   # `python -m hexnewton.apps.evaluate ARGS` jobs at once,
 #                                                                # each cut off after SECONDS -> $OUT/evals.tgz
-#   bash scripts/device/gpu.sh baseline NAME [GPU] -- ARGS...   # `python -m hexnewton.baselines ARGS` as train does
+#   bash scripts/device/gpu.sh baseline NAME [GPU] -- ARGS...   # `python -m hexnewton.apps.baselines ARGS` as train does
 #   bash scripts/device/gpu.sh methods TASK MINUTES ENV_STEPS NUM_ENVS "SEEDS" "GPUS"
 #        # in the background: every method ($METHODS: cpg_rl sac_cpg td3_cpg a2c_cpg joint) x seed on TASK (joint:
 #        # $JOINT_TASK, default complex-joint), each run ending at ENV_STEPS env-steps or MINUTES of wall time,
@@ -18,7 +18,7 @@
 #   bash scripts/device/gpu.sh evals ROUNDS "GPUS" TERRAIN...    # in the background: each run's last checkpoint,
 #        # ROUNDS unseen rounds per terrain, one job per GPU at a time -> $RUNS/method_evals/<run>_<terrain>/
 #        # ($EVAL_ARGS: more evaluate flags, e.g. --max_steps 3000)
-#   bash scripts/device/gpu.sh report WHAT                      # Fig. 5a + Table 3 over seeds (hexnewton.compare)
+#   bash scripts/device/gpu.sh report WHAT                      # Fig. 5a + Table 3 over seeds (hexnewton.apps.compare)
 #                                                                # -> $OUT/WHAT/{report.md,results.json,fig5a.*}
 #   bash scripts/device/gpu.sh busy                             # exit 0 while `methods` or `evals` jobs run
 #
@@ -92,7 +92,7 @@ eval)
     name=${spec%%:*}; args=${spec#*:}
     case "$name" in *@*) gpu=${name#*@}; name=${name%@*};; *) gpu=${CUDA_VISIBLE_DEVICES:-0};; esac
     ( t=$SECONDS
-      CUDA_VISIBLE_DEVICES=$gpu timeout -k 10 "$limit" python -m hexnewton.evaluate $args --out "$evals/$name" \
+      CUDA_VISIBLE_DEVICES=$gpu timeout -k 10 "$limit" python -m hexnewton.apps.evaluate $args --out "$evals/$name" \
         --no-progress > "$evals/$name.log" 2>&1
       echo "exit $? after $((SECONDS - t)) s" >> "$evals/$name.log" ) &
   done
@@ -108,9 +108,9 @@ baseline)
   name=$1; shift; gpu=${CUDA_VISIBLE_DEVICES:-0}
   [ "${1:-}" != "--" ] && { gpu=$1; shift; }
   shift   # --
-  CUDA_VISIBLE_DEVICES=$gpu nohup python -m hexnewton.baselines "$@" --log_dir "$RUNS" --experiment "$name" \
+  CUDA_VISIBLE_DEVICES=$gpu nohup python -m hexnewton.apps.baselines "$@" --log_dir "$RUNS" --experiment "$name" \
     > "$RUNS/$name.log" 2>&1 &
-  echo "started $name on GPU $gpu: python -m hexnewton.baselines $*"
+  echo "started $name on GPU $gpu: python -m hexnewton.apps.baselines $*"
   ;;
 methods)
   [ $# -eq 6 ] || { echo "usage: gpu.sh methods TASK MINUTES ENV_STEPS NUM_ENVS \"SEEDS\" \"GPUS\""; exit 2; }
@@ -134,7 +134,7 @@ _methods)   # the queue behind `methods`
     case $m in
       cpg_rl) cmd=(python train.py --task "$task" --max_iterations "$its" --agent.max_minutes "$minutes") ;;
       joint)  cmd=(python train.py --task "${JOINT_TASK:-complex-joint}" --max_iterations "$its" --agent.max_minutes "$minutes") ;;
-      *_cpg)  cmd=(python -m hexnewton.baselines --task "$task" --algo "${m%_cpg}" --total_steps "$steps" --max_minutes "$minutes") ;;
+      *_cpg)  cmd=(python -m hexnewton.apps.baselines --task "$task" --algo "${m%_cpg}" --total_steps "$steps" --max_minutes "$minutes") ;;
       *) echo "unknown method $m"; continue ;;
     esac
     echo "$(date +%T) $name on GPU $free: ${cmd[*]}"
@@ -167,7 +167,7 @@ _evals)   # the queue behind `evals`
         [ -z "$free" ] && sleep 5
       done
       echo "$(date +%T) ${name}_$terrain on GPU $free: $ck"
-      CUDA_VISIBLE_DEVICES=$free python -m hexnewton.evaluate --controllers "$m" --checkpoint "$m=$ck" \
+      CUDA_VISIBLE_DEVICES=$free python -m hexnewton.apps.evaluate --controllers "$m" --checkpoint "$m=$ck" \
         --terrains "$terrain" --rounds "$rounds" --out "$dest/${name}_$terrain" --no-progress ${EVAL_ARGS:-} \
         > "$dest/${name}_$terrain.log" 2>&1 &
       pid[$free]=$!
@@ -178,7 +178,7 @@ _evals)   # the queue behind `evals`
   ;;
 report)
   what=$1
-  python -m hexnewton.compare --runs "$RUNS/methods" --evals "$RUNS/method_evals" --out "$OUT/$what" \
+  python -m hexnewton.apps.compare --runs "$RUNS/methods" --evals "$RUNS/method_evals" --out "$OUT/$what" \
     && tail -n +1 "$OUT/$what/report.md" | head -60
   ;;
 busy)

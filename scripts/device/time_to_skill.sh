@@ -44,7 +44,7 @@ contact)
   for setting in mesh mesh_boxes mesh_speculative mesh_boxes_speculative; do
     args="--env.terrain.collision ${setting%_speculative}"
     case $setting in *speculative) args="$args --env.sim.rigid_gap 0.002 --env.sim.terrain_gap 0 --env.sim.speculative_gap 0.01";; esac
-    python -m hexnewton.bench $base --terrain complex stepped $args --json "$OUT/contact/$setting.json" \
+    python -m hexnewton.apps.bench $base --terrain complex stepped $args --json "$OUT/contact/$setting.json" \
       > "$OUT/contact/$setting.log" 2>&1
     echo "== $setting ($args)"; grep -E "robot-s/s|overflow|Error" "$OUT/contact/$setting.log" | head -6
   done
@@ -82,12 +82,12 @@ eval)
   for name in "$@"; do
     ckpt=$(sed -n 's/^  python play.py --checkpoint //p' "$RUNS/$name.log" | tail -1)
     [ -z "$ckpt" ] && { echo "$name: no result"; continue; }
-    ( timeout -k 10 "$limit" python -m hexnewton.evaluate --controllers cpg_rl --checkpoint "cpg_rl=$ckpt" \
+    ( timeout -k 10 "$limit" python -m hexnewton.apps.evaluate --controllers cpg_rl --checkpoint "cpg_rl=$ckpt" \
         --terrains rugged stepped complex --rounds "$rounds" --out "$RUNS/eval_$name" --no-progress \
         > "$RUNS/eval_$name.log" 2>&1; echo "exit $?" >> "$RUNS/eval_$name.log" ) &
   done
   if [ ! -d "$RUNS/eval_cpg" ]; then
-    ( timeout -k 10 "$limit" python -m hexnewton.evaluate --controllers cpg --terrains rugged --rounds "$rounds" \
+    ( timeout -k 10 "$limit" python -m hexnewton.apps.evaluate --controllers cpg --terrains rugged --rounds "$rounds" \
         --env.sim.frame_dt 0.02 --env.sim.substeps 4 --out "$RUNS/eval_cpg" --no-progress > "$RUNS/eval_cpg.log" 2>&1
       echo "exit $?" >> "$RUNS/eval_cpg.log" ) &
   fi

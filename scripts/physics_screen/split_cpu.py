@@ -4,8 +4,8 @@ from dataclasses import replace
 import numpy as np
 import warp as wp
 from hexnewton.config import HexConfig, SimConfig, TerrainConfig
-from hexnewton.controller import CPGController
-from hexnewton.sim import World
+from hexnewton.physics.cpg import CPGController
+from hexnewton.physics.world import World
 
 for terrain in ("flat", "complex"):
     for gap in (0.005, 0.01):

@@ -1,0 +1,179 @@
+"""Command-line plumbing shared by every entry point: one clear error line and a non-zero exit, no traceback."""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+from collections.abc import Callable
+
+from hexnewton.config import TERRAINS
+
+
+class ArgumentParser(argparse.ArgumentParser):
+    """argparse, but a usage error is one line (``prog: error: ...``) and exit status 2."""
+
+    def error(self, message: str):  # noqa: D102
+        sys.stderr.write(f"{self.prog}: error: {message}\n")
+        sys.exit(2)
+
+
+def positive_int(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a positive integer, got '{text}'")
+    if value <= 0:
+        raise argparse.ArgumentTypeError(f"must be a positive integer, got {value}")
+    return value
+
+
+def terrain_name(text: str) -> str:
+    if text not in TERRAINS:
+        raise argparse.ArgumentTypeError(f"unknown terrain '{text}': choose one of {', '.join(TERRAINS)}")
+    return text
+
+
+def check_writable(path: str, ext: str) -> None:
+    """Fail before any simulation if an output file could not be written (never lose a finished rollout)."""
+    if not path.endswith(ext):
+        raise ValueError(f"{path}: expected a {ext} file name")
+    parent = os.path.dirname(os.path.abspath(path))
+    if not os.path.isdir(parent) or not os.access(parent, os.W_OK):
+        raise ValueError(f"cannot write {path}: {parent} is not a writable directory")
+
+
+def check_new_dir(path: str) -> None:
+    """Fail before any simulation unless ``path`` is a folder that does not exist yet and can be made (nothing is
+    overwritten)."""
+    if os.path.exists(path):
+        raise ValueError(f"{path} exists: choose a new --out (nothing is overwritten)")
+    parent = os.path.dirname(os.path.abspath(path))
+    if not os.path.isdir(parent) or not os.access(parent, os.W_OK):
+        raise ValueError(f"cannot create {path}: {parent} is not a writable directory")
+
+
+def run(main: Callable[[list[str] | None], int | None], prog: str, argv: list[str] | None = None) -> int:
+    """Run ``main``; user errors (HexnewtonError, ValueError) become one stderr line and exit status 2, file
+    system errors one line and exit status 1."""
+    from hexnewton.errors import HexnewtonError
+
+    try:
+        return int(main(argv) or 0)
+    except (HexnewtonError, ValueError) as exc:
+        sys.stderr.write(f"{prog}: error: {exc}\n")
+        return 2
+    except OSError as exc:  # a log directory that cannot be written, a full disk, ...
+        sys.stderr.write(f"{prog}: error: {exc}\n")
+        return 1
+    except KeyboardInterrupt:
+        sys.stderr.write(f"{prog}: interrupted\n")
+        return 130
+
+
+# ----------------------------------------------------------------------------------------------------
+# config overrides generated from the dataclasses: --env.<section>.<field> VALUE, --agent.<...>.<field> VALUE
+# ----------------------------------------------------------------------------------------------------
+
+_NONE = ("none", "null")
+
+
+def _field_parser(hint, choices=None):
+    """(argparse type, nargs, metavar) for a field annotated ``hint``."""
+    import ast
+    import types
+    import typing
+
+    args = typing.get_args(hint)
+    optional = (typing.get_origin(hint) in (typing.Union, types.UnionType)) and type(None) in args
+    if optional:
+        hint = next(a for a in args if a is not type(None))
+        args = typing.get_args(hint)
+
+    def nullable(parse, what):
+        def convert(text: str):
+            if optional and text.lower() in _NONE:
+                return None
+            try:
+                value = parse(text)
+            except (ValueError, SyntaxError):
+                raise argparse.ArgumentTypeError(f"expected {what}{' or none' if optional else ''}, got '{text}'")
+            if choices is not None and value not in choices:
+                raise argparse.ArgumentTypeError(f"'{text}' is not one of {', '.join(map(str, choices))}")
+            return value
+
+        return convert
+
+    def boolean(text: str) -> bool:
+        low = text.lower()
+        if low not in ("true", "false", "1", "0", "yes", "no", "on", "off"):
+            raise ValueError(text)
+        return low in ("true", "1", "yes", "on")
+
+    scalars = {bool: (boolean, "true or false"), int: (int, "an integer"), float: (float, "a number"),
+               str: (str, "a string")}  # fmt: skip
+    if hint in scalars:
+        return nullable(*scalars[hint]), None, "NONE|" * optional + {bool: "true|false", int: "INT", float: "FLOAT",
+                                                                      str: "|".join(choices or ()) or "TEXT"}[hint]
+    origin = typing.get_origin(hint)
+    if origin is tuple and args and all(a in (int, float) for a in args if a is not Ellipsis):
+        parse, what = scalars[args[0]]
+        # an optional fixed-length tuple takes its numbers or the single word none (checked by _NumbersOrNone)
+        nargs = "+" if Ellipsis in args or optional else len(args)
+        return nullable(parse, what), nargs, ("INT" if args[0] is int else "X")
+    if origin is tuple and args == (str, Ellipsis):  # names (a task's terms): one or more words
+        return nullable(str, "a name"), "+", "NAME"
+    # anything else (tuples of tuples, the curriculum's stages): a Python literal
+    return nullable(ast.literal_eval, "a Python literal such as ((1, 2), (3, 4))"), None, "LITERAL"
+
+
+def add_config_args(parser, prefix: str, obj, skip: tuple[str, ...] = (), title: str | None = None) -> None:
+    """Add ``--<prefix>.<path> VALUE`` for every field of dataclass instance ``obj`` (recursively), its current value
+    shown as the default; ``skip`` lists paths (``sim.num_envs``) that have a conventional flag of their own. The
+    parsed values land in ``args.overrides`` as {path: value} (only those given)."""
+    import dataclasses
+    import typing
+
+    group = parser.add_argument_group(title or f"--{prefix}.*: any field of the {type(obj).__name__} tree")
+
+    def walk(o, path: str) -> None:
+        hints = typing.get_type_hints(type(o))
+        for f in dataclasses.fields(o):
+            value, sub = getattr(o, f.name), f"{path}{f.name}"
+            if dataclasses.is_dataclass(value):
+                walk(value, sub + ".")
+                continue
+            if sub in skip:
+                continue
+            convert, nargs, metavar = _field_parser(hints[f.name], f.metadata.get("choices"))
+            shown = "none" if value is None else " ".join(map(str, value)) if nargs and value else value
+            inner = next((a for a in typing.get_args(hints[f.name]) if typing.get_origin(a) is tuple), None)
+            fixed = nargs == "+" and inner is not None and Ellipsis not in typing.get_args(inner)
+            extra = dict(action=_NumbersOrNone, length=len(typing.get_args(inner))) if fixed else {}
+            group.add_argument(f"--{prefix}.{sub}", dest=f"override:{prefix}:{sub}", type=convert, nargs=nargs,
+                               metavar=metavar, default=argparse.SUPPRESS, help=f"(default: {shown})",
+                               **extra)  # fmt: skip
+
+    walk(obj, "")
+
+
+class _NumbersOrNone(argparse.Action):
+    """An optional fixed-length tuple field (``foot_radius: tuple[float, float] | None``): its ``length`` numbers
+    or the single word none; ValueError (one error line through :func:`run`) otherwise."""
+
+    def __init__(self, *args, length: int, **kwargs):
+        super().__init__(*args, **kwargs)
+        self.length = length
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        if values == [None]:
+            values = None
+        elif None in values or len(values) != self.length:
+            raise ValueError(f"{option_string}: give {self.length} numbers or none")
+        setattr(namespace, self.dest, values)
+
+
+def config_overrides(args, prefix: str) -> dict:
+    """{path: value} of the ``--<prefix>.*`` options that were given (see :func:`add_config_args`)."""
+    tag = f"override:{prefix}:"
+    return {k[len(tag):]: (tuple(v) if isinstance(v, list) else v) for k, v in vars(args).items() if k.startswith(tag)}

@@ -1,0 +1,295 @@
+"""Train a task's controller with rsl-rl's PPO: ``python train.py --task NAME``.
+
+    python train.py --list_tasks                                           # the tasks, one line each
+    python train.py                                                        # task flat
+    python train.py --task complex                                         # the shipped complex policy's recipe
+    python train.py --task rugged --env.reward.w_tilt 10 --agent.algorithm.learning_rate 5e-4
+    python train.py --resume logs/hexnewton_rugged/2026-11-21_15-00-00/model_299.pt --max_iterations 100
+    torchrun --nproc_per_node=2 train.py --task complex --num_envs 4096    # 4096 envs on each of 2 GPUs
+    python train.py --task rugged --video --video_interval 100             # a 4 s clip every 100 iterations
+
+Every field of the task's configs can be set from the command line: ``--env.<section>.<field>`` (HexConfig: robot,
+terrain, sim, cpg, task, reward, randomization) and ``--agent.<field>`` (AgentConfig: PPO, networks, distribution,
+curriculum, stop rules); ``python train.py --task T --help`` lists them with the task's values. A resumed run goes on
+with the configs its checkpoint recorded, overrides on top.
+
+Each run writes ``logs/hexnewton_<task>/<date_time>/``: TensorBoard event files; ``model_<it>.pt`` checkpoints with
+the task, the configs and the action mode (``play.py``, ``evaluate`` and ``export`` need nothing else);
+``model_best.pt``; ``config.json``; ``git/`` (hexnewton's commit and diff); at the end ``policy.onnx``, the
+deterministic policy with a dynamic batch dimension, checked against torch with onnxruntime. With ``--video``,
+``videos/iteration_<k>.mp4``: ``--video_length`` control steps of the first robots as training plays them, from
+iteration 0 and every ``--video_interval`` iterations (Newton's ViewerGL, headless; ``hexnewton.physics.viewer.VideoEnv``).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import datetime
+import json
+import os
+import sys
+import time
+
+from hexnewton.apps.cli import ArgumentParser, add_config_args, config_overrides, positive_int, run
+from hexnewton.config import apply_overrides
+
+
+def _base_task(argv: list[str] | None):
+    """The task the command line starts from: ``--task``'s (default flat), or a resumed checkpoint's own configs,
+    with the checkpoint itself (None when not resuming)."""
+    from hexnewton.tasks import task
+
+    pre = ArgumentParser(add_help=False)
+    pre.add_argument("--task", default=None)
+    pre.add_argument("--resume", default=None)
+    known, _ = pre.parse_known_args(argv)
+    if known.resume is None:
+        return task(known.task or "flat"), None
+    if known.task is not None:
+        raise ValueError("--resume continues the checkpoint's own task: leave --task out (override fields with "
+                         "--env.* / --agent.*)")  # fmt: skip
+    from hexnewton.learning.checkpoint import (
+        checkpoint_agent,
+        checkpoint_meta,
+        checkpoint_task,
+        load_checkpoint,
+        trained_config,
+    )
+    from hexnewton.tasks import TASKS, Task
+
+    ckpt = load_checkpoint(known.resume)  # fails before building anything
+    if "critic_state_dict" not in ckpt or "optimizer_state_dict" not in ckpt:
+        raise ValueError(f"{known.resume} holds the policy only (no critic or optimiser): resume from a run's "
+                         "model_<iteration>.pt")  # fmt: skip
+    meta = checkpoint_meta(ckpt)
+    cfg = trained_config(ckpt)
+    name = checkpoint_task(ckpt) or cfg.terrain.name
+    base = Task(name, TASKS[name].description if name in TASKS else "", cfg, checkpoint_agent(ckpt),
+                meta.get("action_mode", "cpg"))  # fmt: skip
+    return base, ckpt
+
+
+def parser(base, resumed: bool) -> ArgumentParser:
+    """The command line of ``python train.py``, its defaults those of ``base`` (the task, or a ``resumed``
+    checkpoint's configs)."""
+    from hexnewton.tasks import TASKS
+
+    p = ArgumentParser(prog="python train.py", description="Train a task's controller with rsl-rl PPO.",
+                       usage="python train.py [--task NAME] [options] [--env.SECTION.FIELD VALUE ...] "
+                             "[--agent.FIELD VALUE ...]")  # fmt: skip
+    p.add_argument("--task", choices=list(TASKS), default=base.name if not resumed else None,
+                   help="what to train (python train.py --list_tasks; default flat)")
+    p.add_argument("--list_tasks", action="store_true", help="list the tasks, one line each, and exit")
+    p.add_argument("--num_envs", type=positive_int, default=None, help="envs per GPU (default 4096 on CUDA, 64 on CPU)")
+    p.add_argument("--device", default=None, help="cpu, cuda or cuda:N (default: cuda if present, else cpu)")
+    p.add_argument("--seed", type=int, default=base.env.task.seed,
+                   help=f"seed of actions, resets and initialisation (default {base.env.task.seed}; the terrain's is "
+                        "--env.terrain.seed)")  # fmt: skip
+    p.add_argument("--max_iterations", type=positive_int, default=None,
+                   help=f"PPO iterations of this run (default: the task's, {base.agent.max_iterations})")
+    p.add_argument("--resume", metavar="PATH", help="checkpoint to continue from (a new run directory is made)")
+    p.add_argument("--log_dir", default="logs")
+    p.add_argument("--experiment", default=None, help="default: hexnewton_<task>")
+    p.add_argument("--headless", action="store_true",
+                   help="Isaac Lab's flag, accepted: training never opens a window (--video renders off-screen)")
+    p.add_argument("--video", action="store_true",
+                   help="record clips of the training robots into the run's videos/ (headless ViewerGL, .mp4)")
+    p.add_argument("--video_length", type=positive_int, default=200, help="control steps per clip (default 200: 4 s)")
+    p.add_argument("--video_interval", type=positive_int, default=100, help="iterations between clips (default 100)")
+    add_config_args(p, "env", base.env, skip=("sim.num_envs", "sim.device", "task.seed"),
+                    title="--env.*: the environment (HexConfig, hexnewton/config.py)")
+    add_config_args(p, "agent", base.agent, skip=("max_iterations",),
+                    title="--agent.*: the learner (AgentConfig, hexnewton/learning/agent.py)")
+    return p
+
+
+def configs(args, base, ckpt: dict | None):
+    """The run's environment and learner configs: the task's (or the resumed checkpoint's) with the command line's
+    overrides, checked before anything is built."""
+    env_cfg = apply_overrides(base.env, config_overrides(args, "env"))
+    agent = apply_overrides(base.agent, config_overrides(args, "agent"))
+    if args.max_iterations is not None:
+        agent = dataclasses.replace(agent, max_iterations=args.max_iterations)
+    agent.check()
+    if ckpt is not None:
+        from hexnewton.learning.checkpoint import checkpoint_agent
+
+        if agent.distribution.name != checkpoint_agent(ckpt).distribution.name:
+            raise ValueError("--agent.distribution.name: a resumed run keeps the distribution it was trained with")
+    if agent.stages and not (env_cfg.cpg.posture and base.action_mode == "cpg"):
+        raise ValueError("agent.stages change the levelling reflex of the body posture: set --env.cpg.posture true "
+                         "or --agent.stages '()'")  # fmt: skip
+    return env_cfg, agent
+
+
+def check_outputs(args) -> None:
+    """Fail before any simulation if the run's logs or its videos could not be written."""
+    from hexnewton.learning.runner import check_log_dir
+
+    check_log_dir(args.log_dir)
+    if args.video:
+        from hexnewton.physics.viewer import check_viewer_args
+
+        check_viewer_args("gl", True, "clip.mp4", None)
+
+
+def rank_config(args, env_cfg):
+    """This process's torchrun rank and its config: the device resolved, ``--num_envs`` (default 4096 on CUDA, 64 on
+    the CPU), the rank's own seeds (seeded here)."""
+    from hexnewton.learning.runner import distributed_rank, seed_everything
+    from hexnewton.physics.world import resolve_device
+
+    rank = distributed_rank(dict(os.environ), args.device)
+    device = resolve_device(rank.device or args.device)
+    num_envs = args.num_envs or (4096 if device.startswith("cuda") else 64)
+    seed, terrain_seed = rank.seeds(args.seed, env_cfg.terrain.seed)
+    seed_everything(seed)
+    cfg = dataclasses.replace(env_cfg, sim=dataclasses.replace(env_cfg.sim, num_envs=num_envs, device=device),
+                              terrain=dataclasses.replace(env_cfg.terrain, seed=terrain_seed),
+                              task=dataclasses.replace(env_cfg.task, seed=seed))  # fmt: skip
+    return rank, cfg
+
+
+def make_run_dir(args, meta: dict, train_cfg: dict, rank) -> str:
+    """``log_dir/experiment/<date_time>``; rank 0 makes it (nothing is overwritten) and writes its config.json: the
+    run's metadata and rsl-rl's ``train_cfg``."""
+    experiment = args.experiment or f"hexnewton_{meta['task']}"
+    run_dir = os.path.join(args.log_dir, experiment, datetime.datetime.now().strftime("%Y-%m-%d_%H-%M-%S"))
+    if rank.is_main:  # only rank 0 writes logs, checkpoints and the export
+        if os.path.exists(run_dir):
+            raise ValueError(f"{run_dir} exists: nothing is overwritten (start again in a second, or change "
+                             "--experiment)")  # fmt: skip
+        os.makedirs(run_dir)
+        with open(os.path.join(run_dir, "config.json"), "w") as f:
+            json.dump({"hexnewton": meta, "train": train_cfg}, f, indent=1, default=str)
+    return run_dir
+
+
+def make_runner(args, env, agent, meta: dict, run_dir: str, rank, ckpt: dict | None):
+    """The run's :class:`~hexnewton.learning.runner.HexRunner` (resumed from ``ckpt`` if given) and, with ``--video`` on rank 0,
+    the :class:`~hexnewton.physics.viewer.VideoEnv` it trains through (else None)."""
+    from hexnewton.learning.runner import HexRunner
+
+    cfg = env.cfg
+    videos = None
+    if args.video and rank.is_main:
+        from hexnewton.physics.viewer import VideoEnv
+
+        steps_per_iteration = agent.to_rsl_rl(cfg.sim.num_envs)["num_steps_per_env"]
+        env = videos = VideoEnv(env, os.path.join(run_dir, "videos"), args.video_interval, args.video_length,
+                                steps_per_iteration, title=f"task {meta['task']}: ")  # fmt: skip
+    runner = HexRunner(env, agent, meta, run_dir if rank.is_main else None, cfg.sim.device, rank)
+    if ckpt is not None:
+        resume(runner, ckpt, args, agent)
+    return runner, videos
+
+
+def resume(runner, ckpt: dict, args, agent) -> None:
+    """Load the checkpoint's models, optimiser and iteration into ``runner`` and continue after its iteration; a
+    Gaussian's ``--agent.distribution.init_std`` replaces the std the checkpoint brought."""
+    from hexnewton.learning.checkpoint import load_into_runner
+    from hexnewton.learning.policy import fix_action_std
+
+    load_into_runner(runner, ckpt)
+    # rsl-rl stores the last finished iteration and would start again from it: continue after it instead
+    runner.current_learning_iteration += 1
+    if "distribution.init_std" in config_overrides(args, "agent") and agent.distribution.name == "gaussian":
+        fix_action_std(runner.alg.get_policy(), agent.distribution.init_std)  # the checkpoint brought its own
+    print(f"resumed from {args.resume}: continuing at iteration {runner.current_learning_iteration}, "
+          f"learning rate {runner.alg.learning_rate:.2e}")
+
+
+def check_ranks_agree(runner, rank) -> None:
+    """RuntimeError unless every torchrun rank ended with the same parameters (the gradients were shared)."""
+    spread = runner.rank_spread()
+    if rank.is_main:
+        print(f"parameters of the {rank.world_size} ranks agree to {spread:.1e}")
+    if spread > 1e-5:
+        raise RuntimeError(f"the ranks' parameters differ by {spread:.2e}: the gradients were not shared")
+
+
+def finish(args, runner, cfg, agent, rank, run_dir: str, videos, train_s: float, first_it: int) -> None:
+    """Rank 0 after training: the last episodes, the policy to ship (the best iteration's or the last) exported as
+    ONNX, ``timing.json``, and the commands that use the result."""
+    from hexnewton import startup
+    from hexnewton.learning.runner import training_success
+
+    num_envs = cfg.sim.num_envs
+    iterations = runner.current_learning_iteration + 1 - first_it  # this run's (a resumed one starts later)
+    timing = {"startup_phases_s": startup.phases(), "first_iteration_s": runner.first_iteration_s,
+              "train_s": train_s, "iterations": iterations,
+              "env_steps": iterations * num_envs * agent.num_steps_per_env * rank.world_size,
+              "wall_s_to_result": None}  # fmt: skip
+    stats = runner.env.episode_stats()
+    print("last episodes: " + ", ".join(f"{k} {v:.3f}" for k, v in stats.items()))
+    final = runner.final_policy()
+    if final == runner.best.path:
+        print(f"best training success {runner.best.rate:.3f} at iteration {runner.best.iteration} ({final}); the last "
+              f"iteration ended at {training_success(stats, cfg.terrain.levels) or float('nan'):.3f}: exporting the "
+              "best")  # fmt: skip
+    onnx_path = os.path.join(run_dir, "policy.onnx")
+    err = runner.export(onnx_path)
+    print(f"exported {onnx_path} (dynamic batch; onnxruntime vs torch max |diff| {err:.2e})")
+    timing["wall_s_to_result"] = startup.since_start()
+    timing["result"] = final
+    with open(os.path.join(run_dir, "timing.json"), "w") as f:
+        json.dump(timing, f, indent=1)
+    print(f"{timing['wall_s_to_result']:.0f} s from process start to the exported result")
+    if videos is not None:
+        print(f"{len(videos.clips)} training video(s) in {os.path.join(run_dir, 'videos')}")
+    print(f"\nresults in {run_dir} (checkpoints, TensorBoard events, policy.onnx). Next:\n"
+          f"  python play.py --checkpoint {final}\n"
+          f"  python -m hexnewton.apps.evaluate --controllers cpg cpg_rl --checkpoint cpg_rl={final} --terrains "
+          f"{cfg.terrain.name}\n"
+          f"  python -m hexnewton.apps.export --checkpoint {final} --out bundle/\n"
+          f"  tensorboard --logdir {args.log_dir}")  # fmt: skip
+
+
+def main(argv: list[str] | None = None) -> int:
+    base, ckpt = _base_task(argv)
+    args = parser(base, ckpt is not None).parse_args(argv)
+    if args.list_tasks:
+        from hexnewton.tasks import task_table
+
+        print(task_table())
+        return 0
+    env_cfg, agent = configs(args, base, ckpt)
+    check_outputs(args)
+
+    from hexnewton.mdp.env import make_env
+
+    rank, cfg = rank_config(args, env_cfg)
+    env = make_env(cfg, base.action_mode)
+    if ckpt is not None:
+        from hexnewton.learning.checkpoint import check_compatible
+
+        check_compatible(ckpt, args.resume, env.num_obs, env.num_actions, base.action_mode)
+    meta = {"task": base.name, "action_mode": base.action_mode, "num_obs": env.num_obs,
+            "num_actions": env.num_actions, "config": dataclasses.asdict(cfg), "agent": dataclasses.asdict(agent),
+            "world_size": rank.world_size}  # fmt: skip
+    run_dir = make_run_dir(args, meta, agent.to_rsl_rl(cfg.sim.num_envs), rank)
+    runner, videos = make_runner(args, env, agent, meta, run_dir, rank, ckpt)
+    where = f"rank {rank.rank} of {rank.world_size}, " if rank.world_size > 1 else ""
+    print(f"training task {base.name}: {where}{cfg.sim.num_envs} envs on {cfg.sim.device}, {agent.max_iterations} "
+          f"iterations, logs in {run_dir}")  # fmt: skip
+    if videos is not None:
+        videos.first_iteration = runner.current_learning_iteration
+    t0, first_it = time.time(), runner.current_learning_iteration
+    try:
+        reason = runner.train(agent.max_iterations)
+    finally:
+        if videos is not None:
+            videos.close()
+    train_s = time.time() - t0
+    print(f"finished at iteration {runner.current_learning_iteration} after {train_s:.0f} s ({reason})")
+    if rank.world_size > 1:
+        check_ranks_agree(runner, rank)
+        runner.leave_group()
+    if not rank.is_main:
+        return 0
+    finish(args, runner, cfg, agent, rank, run_dir, videos, train_s, first_it)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(run(main, "python train.py"))

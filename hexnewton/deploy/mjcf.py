@@ -1,0 +1,216 @@
+"""The hexapod and the paper's terrains as a C MuJoCo model (MJCF), written from the project's own descriptions.
+
+The robot comes from :class:`~hexnewton.config.RobotConfig` through :mod:`hexnewton.physics.robot.geometry`, the same functions
+the Newton articulation is built from (:func:`hexnewton.physics.robot.hexapod.build_hexapod`), not converted from Newton's
+model: a free torso box and per leg (R1, R2, R3, L1, L2, L3) the bodies coxa -> femur -> tibia on hinge joints hip ->
+knee -> ankle with the Newton robot's frames, axes, masses, inertias, limits and armature; collision capsules on femur
+and tibia, a foot sphere, the torso box (no self-collision). Each joint has a MuJoCo position actuator with Newton's
+PD drive: kp = ``joint_ke``, kv = ``joint_kd``, force clamped to ``effort_limit``. Sensors per robot: the torso's
+orientation (``framequat`` at an IMU site on the torso origin) and 18 ``jointpos`` / 18 ``jointvel`` encoders.
+
+The terrain comes from the height grid (:func:`hexnewton.physics.terrain.heightmap.build_height_grid`): every strip of constant
+height across the patch (run-ups, stair treads, landings) is one box (:func:`hexnewton.physics.terrain.parts.split_strips`),
+every rugged block is one box, all down to a common bottom; flat ground is a plane. Boxes keep the risers vertical,
+where a MuJoCo heightfield would interpolate them into ramps. A heightfield copy of the grid (its vertices at the cell
+centres, so a vertical ray through a cell centre hits that cell's height) takes the height scanner's ray casts
+(``hexnewton.apps.sim2sim``); it does not collide.
+
+Several robots can share one model (one terrain, as the evaluation's robots share one): robots touch the terrain
+only (``contype`` 1 / ``conaffinity`` 0 on the robot, 0 / 1 on the terrain), never each other. Plain Python and NumPy
+until :func:`build_model` compiles the text with ``mujoco``.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from hexnewton.config import LEG_NAMES, RobotConfig
+from hexnewton.physics.robot.geometry import (
+    PITCH_AXIS,
+    box_inertia,
+    hip_axis,
+    hip_mount,
+    leg_bounds,
+    leg_links,
+    leg_yaw,
+    rod_inertia,
+    torso_mass,
+    validate,
+)
+from hexnewton.physics.terrain.heightmap import HeightGrid
+from hexnewton.physics.terrain.parts import split_strips
+
+#: geom group of the scanner's heightfield (hidden in the viewer's default groups 0-2)
+SCANNER_GROUP = 5
+_BASE_DEPTH = 0.1  # the terrain boxes reach this far below the lowest cell [m]
+_ROBOT = 'contype="1" conaffinity="0"'
+_TERRAIN = 'contype="0" conaffinity="1"'
+
+
+def _v(values) -> str:
+    return " ".join(f"{float(x):.9g}" for x in values)
+
+
+def _yaw_quat(yaw: float) -> tuple[float, float, float, float]:
+    """MuJoCo's (w, x, y, z) of a rotation by ``yaw`` about z."""
+    return (math.cos(yaw / 2), 0.0, 0.0, math.sin(yaw / 2))
+
+
+def leg_xml(cfg: RobotConfig, leg: int, prefix: str) -> str:
+    """One leg's three bodies, hinge joints and collision geoms (MJCF text, body frames at the joints as in Newton)."""
+    name = f"{prefix}{LEG_NAMES[leg]}"
+    lower, upper = leg_bounds(cfg)
+    r, fr = cfg.leg_radius, cfg.foot_radius
+    joint_at = (hip_mount(cfg, leg), (cfg.hip_length, 0.0, 0.0), (cfg.femur_length, 0.0, 0.0))
+    axes = (hip_axis(leg), PITCH_AXIS, PITCH_AXIS)
+    tibia_mid, tibia_half = -(cfg.tibia_length - fr) / 2, max((cfg.tibia_length - fr) / 2 - r, 1e-3)
+    geoms = (
+        "",
+        f'<geom name="{name}_femur" type="capsule" size="{r:.9g}" fromto="{r:.9g} 0 0 {cfg.femur_length - r:.9g} 0 0" '
+        f'{_ROBOT}/>',
+        f'<geom name="{name}_shin" type="capsule" size="{r:.9g}" fromto="0 0 {tibia_mid + tibia_half:.9g} 0 0 '
+        f'{tibia_mid - tibia_half:.9g}" {_ROBOT}/><geom name="{name}_foot" type="sphere" size="{fr:.9g}" '
+        f'pos="0 0 {-cfg.tibia_length:.9g}" {_ROBOT}/>',
+    )
+    kinds = ("hip", "knee", "ankle")
+    out, close = [], []
+    for k, (link, mass, length, com, axis_i) in enumerate(leg_links(cfg)):
+        quat = f' quat="{_v(_yaw_quat(leg_yaw(cfg, leg)))}"' if k == 0 else ""
+        out.append(
+            f'<body name="{name}_{link}" pos="{_v(joint_at[k])}"{quat}>'
+            f'<joint name="{name}_{kinds[k]}" type="hinge" axis="{_v(axes[k])}" '
+            f'range="{lower[k]:.12g} {upper[k]:.12g}" armature="{cfg.armature:.9g}"/>'
+            f'<inertial pos="{_v(com)}" mass="{mass:.9g}" diaginertia="{_v(rod_inertia(mass, length, r, axis_i))}"/>'
+            + geoms[k])  # fmt: skip
+        close.append("</body>")
+    return "".join(out) + "".join(close)
+
+
+def robot_xml(cfg: RobotConfig, prefix: str = "", pos=(0.0, 0.0, 0.15), yaw: float = 0.0) -> str:
+    """One hexapod (MJCF ``<body>`` text): torso with a free joint at ``pos`` turned by ``yaw``, then the six legs.
+    Names start with ``prefix`` (``r0_torso``, ``r0_R1_hip``, ...)."""
+    validate(cfg)
+    m = torso_mass(cfg)
+    sx, sy, sz = cfg.torso_size
+    legs = "".join(leg_xml(cfg, leg, prefix) for leg in range(len(LEG_NAMES)))
+    return (f'<body name="{prefix}torso" pos="{_v(pos)}" quat="{_v(_yaw_quat(yaw))}">'
+            f'<freejoint name="{prefix}base"/>'
+            f'<inertial pos="0 0 0" mass="{m:.9g}" diaginertia="{_v(box_inertia(m, sx, sy, sz))}"/>'
+            f'<geom name="{prefix}torso" type="box" size="{_v((sx / 2, sy / 2, sz / 2))}" {_ROBOT} '
+            f'rgba=".35 .45 .6 1"/>'
+            f'<site name="{prefix}imu"/>{legs}</body>')  # fmt: skip
+
+
+def robot_io_xml(cfg: RobotConfig, prefix: str = "") -> tuple[str, str]:
+    """(actuators, sensors) of one robot: 18 position servos (kp = joint_ke, kv = joint_kd, |force| <= effort_limit),
+    then the IMU quaternion, 18 joint encoders and 18 joint velocities, in that order."""
+    joints = [f"{prefix}{leg}_{kind}" for leg in LEG_NAMES for kind in ("hip", "knee", "ankle")]
+    e = cfg.effort_limit
+    act = "".join(f'<position name="{j}" joint="{j}" kp="{cfg.joint_ke:.9g}" kv="{cfg.joint_kd:.9g}" '
+                  f'forcerange="{-e:.9g} {e:.9g}"/>' for j in joints)  # fmt: skip
+    sens = (f'<framequat name="{prefix}imu" objtype="site" objname="{prefix}imu"/>'
+            + "".join(f'<jointpos name="{j}_pos" joint="{j}"/>' for j in joints)
+            + "".join(f'<jointvel name="{j}_vel" joint="{j}"/>' for j in joints))  # fmt: skip
+    return act, sens
+
+
+def _column_boxes(h: np.ndarray) -> list[tuple[int, int, int, int]]:
+    """Boxes (i0, i1, j0, j1) of constant height covering ``h`` (ni, nj): runs of equal cells along y, merged over
+    consecutive identical columns (a 2 cm block of 1 cm cells is one box)."""
+    boxes, i, ni = [], 0, h.shape[0]
+    while i < ni:
+        k = i + 1
+        while k < ni and np.array_equal(h[k], h[i]):
+            k += 1
+        cuts = np.flatnonzero(np.diff(h[i]) != 0) + 1
+        edges = [0, *cuts.tolist(), h.shape[1]]
+        boxes += [(i, k, a, b) for a, b in zip(edges[:-1], edges[1:])]
+        i = k
+    return boxes
+
+
+def terrain_boxes(grid: HeightGrid, base_depth: float = _BASE_DEPTH) -> np.ndarray:
+    """The terrain as boxes (M, 6): centre x, y, z and half sizes, each of one height, all down to the common
+    bottom ``min(height) - base_depth``; their union has the grid's surface."""
+    h = np.asarray(grid.heights, np.float64)
+    zb = float(h.min()) - base_depth
+    out = []
+    for p in split_strips(grid):
+        cells = [(p.i0, p.i1, p.j0, p.j1)] if p.box else \
+            [(p.i0 + a, p.i0 + b, p.j0 + c, p.j0 + d) for a, b, c, d in _column_boxes(h[p.i0:p.i1, p.j0:p.j1])]
+        for i0, i1, j0, j1 in cells:
+            top = h[i0, j0]
+            xa, xb = grid.x0 + i0 * grid.res, grid.x0 + i1 * grid.res
+            ya, yb = grid.y0 + j0 * grid.res, grid.y0 + j1 * grid.res
+            out.append((0.5 * (xa + xb), 0.5 * (ya + yb), 0.5 * (top + zb), 0.5 * (xb - xa), 0.5 * (yb - ya),
+                        0.5 * (top - zb)))  # fmt: skip
+    return np.asarray(out, np.float64).reshape(-1, 6)
+
+
+def terrain_xml(grid: HeightGrid | None) -> tuple[str, str]:
+    """(asset, worldbody) MJCF text of the terrain: a plane for flat ground (``grid`` None or all zero), else the
+    boxes of :func:`terrain_boxes`, plus the scanner's heightfield (geom ``scanner``, group ``SCANNER_GROUP``)."""
+    h = None if grid is None else np.asarray(grid.heights, np.float64)
+    if h is None or not h.any():
+        asset, scanner = ("", "") if grid is None else _scanner_xml(grid, h)
+        return asset, f'<geom name="ground" type="plane" size="0 0 1" {_TERRAIN} rgba=".55 .55 .5 1"/>' + scanner
+    boxes = terrain_boxes(grid)
+    top = boxes[:, 2] + boxes[:, 5]
+    shade = 0.45 + 0.35 * (top - top.min()) / max(float(np.ptp(top)), 1e-9)
+    geoms = [f'<geom type="box" pos="{_v(b[:3])}" size="{_v(b[3:])}" {_TERRAIN} rgba="{s:.3f} {s:.3f} .45 1"/>'
+             for b, s in zip(boxes, shade)]  # fmt: skip
+    body = "".join(geoms)
+    asset, scanner = _scanner_xml(grid, h)
+    return asset, body + scanner
+
+
+def _scanner_xml(grid: HeightGrid, h: np.ndarray) -> tuple[str, str]:
+    """The non-colliding heightfield of the grid, one vertex at each cell centre (elevations set after compiling:
+    :func:`set_scanner_heights`)."""
+    rx, ry = 0.5 * (grid.nx - 1) * grid.res, 0.5 * (grid.ny - 1) * grid.res
+    lo, span = float(h.min()), float(np.ptp(h)) or 1.0
+    cx, cy = grid.x0 + 0.5 * grid.nx * grid.res, grid.y0 + 0.5 * grid.ny * grid.res
+    asset = f'<hfield name="scanner" nrow="{grid.ny}" ncol="{grid.nx}" size="{_v((rx, ry, span, _BASE_DEPTH))}"/>'
+    geom = (f'<geom name="scanner" type="hfield" hfield="scanner" pos="{_v((cx, cy, lo))}" contype="0" '
+            f'conaffinity="0" group="{SCANNER_GROUP}" rgba="0 0 0 0"/>')  # fmt: skip
+    return asset, geom
+
+
+def set_scanner_heights(model, grid: HeightGrid) -> None:
+    """Write the grid's heights into the compiled model's scanner heightfield (rows along y, columns along x)."""
+    h = np.asarray(grid.heights, np.float64)
+    span = float(np.ptp(h)) or 1.0
+    model.hfield_data[:] = ((h - h.min()) / span).T.ravel()
+
+
+def scene_xml(cfg: RobotConfig, grid: HeightGrid | None, starts, timestep: float) -> str:
+    """The whole scene: MuJoCo's default solver and contact settings (Newton solver, pyramidal cones) at ``timestep``
+    with the implicit-in-velocity integrator (``implicitfast``: the servos' kv term is integrated implicitly, as in
+    training), the terrain, and one robot per start ``(x, y, z, yaw)`` named ``r0_``, ``r1_``, ..."""
+    asset, ground = terrain_xml(grid)
+    robots, acts, sens = [], [], []
+    for k, (x, y, z, yaw) in enumerate(starts):
+        robots.append(robot_xml(cfg, f"r{k}_", (x, y, z), yaw))
+        a, s = robot_io_xml(cfg, f"r{k}_")
+        acts.append(a)
+        sens.append(s)
+    return (f'<mujoco model="hexnewton"><compiler angle="radian" autolimits="true"/>'
+            f'<option timestep="{timestep:.9g}" integrator="implicitfast"/>'
+            f'<size memory="{64 + 8 * len(robots)}M"/>'
+            f'<visual><global offwidth="1280" offheight="720"/><quality shadowsize="4096"/></visual>'
+            f'<default><geom friction="{cfg.friction:.9g} 0.005 0.0001"/></default>'
+            f'<asset>{asset}</asset><worldbody><light pos="0 0 4" dir="0 0 -1" directional="true"/>{ground}'
+            f'{"".join(robots)}</worldbody><actuator>{"".join(acts)}</actuator>'
+            f'<sensor>{"".join(sens)}</sensor></mujoco>')  # fmt: skip
+
+
+def build_model(cfg: RobotConfig, grid: HeightGrid | None, starts, timestep: float):
+    """Compile :func:`scene_xml` (``mujoco.MjModel``), the scanner's heightfield filled in."""
+    import mujoco
+
+    model = mujoco.MjModel.from_xml_string(scene_xml(cfg, grid, starts, timestep))
+    if grid is not None:
+        set_scanner_heights(model, grid)
+    return model

@@ -1,0 +1,220 @@
+"""The trained hierarchy on a robot's computer: NumPy + onnxruntime, no Warp, Newton or torch.
+
+A controller bundle (written by ``python -m hexnewton.apps.export``) is a folder with:
+- ``policy.onnx``: the high level (observation normaliser included), one file, dynamic batch dimension;
+- ``controller.json``: the observation layout, the parameter ranges, the CPG and mapping constants, the
+  control and integration periods, the standing pose and joint limits;
+- ``check.npz``: a short simulator rollout (observations, the simulator's joint targets and, for a controller with
+  the levelling reflex, the body attitude at every substep) that ``python -m hexnewton.apps.deploy BUNDLE`` replays to
+  show this runtime reproduces the simulator here.
+
+Per control step (``control_dt``, 20 ms by default) :meth:`Controller.step` takes the robot's readings:
+- joint positions and velocities (18 each, order R1..L3 x hip, knee, ankle);
+- the base orientation quaternion (x, y, z, w);
+- the goal relative to the robot in its heading frame (:func:`target_in_heading_frame`);
+- the highest terrain within ±30 cm minus the ground under the robot (0 without a terrain sensor).
+
+It runs the policy's deterministic action (the mean of its Beta distribution, computed inside ``policy.onnx``;
+older Gaussian bundles can also sample, ``stochastic=True``, or take the expected clipped action,
+``expected=True``), scales its 15 actions to (omega, A1, A2, A3) (18 with the body posture P_h, P_p, P_r),
+then integrates the two Hopf oscillators (Eq. 3, RK4) and applies the mapping function
+(Eq. 4) every ``substep_dt`` (2.5 ms by default), exactly as the simulator does. It returns the 18 joint
+position targets at the end of the step (all substeps' targets are in ``last_substep_targets``, for a servo
+loop faster than the control rate).
+
+A controller trained with the levelling reflex (``posture_reflex`` in controller.json) bends its knees against the
+body's measured pitch and roll at every substep. On the robot, run the two rates apart: :meth:`Controller.set_actions`
+once per control step (``act(observe(...))``), then :meth:`Controller.substep` with the IMU's latest quaternion every
+``substep_dt``; :meth:`Controller.step` holds the control step's quaternion for all its substeps.
+The maths is the float64 reference of the simulator's kernels (``hexnewton.physics.reference``).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+
+import numpy as np
+
+from hexnewton.physics.reference import (
+    hopf_cpg_reference,
+    initial_cpg_state,
+    mapping_reference,
+    quat_to_rpy_np,
+    scale_actions_reference,
+)
+
+FORMAT = "hexnewton-controller/1"
+
+
+def target_in_heading_frame(base_pos, base_quat, goal, goal_ground_z=None) -> np.ndarray:
+    """The goal relative to the robot, rotated by -yaw (x forward, y left); z is the goal's ground height minus
+    the base height (the robot's own base height if ``goal_ground_z`` is None, i.e. level ground). (N, 3)."""
+    pos, goal = np.atleast_2d(np.asarray(base_pos, np.float64)), np.atleast_2d(np.asarray(goal, np.float64))
+    yaw = quat_to_rpy_np(np.atleast_2d(base_quat))[:, 2]
+    dx, dy = goal[:, 0] - pos[:, 0], goal[:, 1] - pos[:, 1]
+    c, s = np.cos(yaw), np.sin(yaw)
+    gz = pos[:, 2] if goal_ground_z is None else np.broadcast_to(np.asarray(goal_ground_z, np.float64), dx.shape)
+    return np.stack([c * dx + s * dy, -s * dx + c * dy, gz - pos[:, 2]], axis=1)
+
+
+def load_spec(bundle: str) -> dict:
+    """The bundle's controller.json, checked for its format."""
+    path = os.path.join(bundle, "controller.json")
+    if not os.path.isfile(path):
+        raise ValueError(f"{bundle} is not a controller bundle (no controller.json)")
+    with open(path) as f:
+        spec = json.load(f)
+    if spec.get("format") != FORMAT:
+        raise ValueError(f"{path}: format {spec.get('format')!r}, expected {FORMAT!r}")
+    return spec
+
+
+def expected_clipped_action(mean, std) -> np.ndarray:
+    """E[clip(a, -1, 1)] for a ~ N(mean, std^2), per action, in float64: the action a sampled policy asks of the CPG
+    on average (the clipped actions are low-pass filtered into its parameters). A deterministic action for policies
+    whose learnt std is wide, where the mean action is not what the policy does on average (RESULTS.md)."""
+    mean = np.asarray(mean, np.float64)
+    std = np.maximum(np.asarray(std, np.float64), 1e-12)
+    erf = np.vectorize(math.erf, otypes=[np.float64])
+    a, b = (-1.0 - mean) / std, (1.0 - mean) / std
+    cdf_a, cdf_b = 0.5 * (1.0 + erf(a / math.sqrt(2.0))), 0.5 * (1.0 + erf(b / math.sqrt(2.0)))
+    pdf_a, pdf_b = np.exp(-0.5 * a * a) / math.sqrt(2 * math.pi), np.exp(-0.5 * b * b) / math.sqrt(2 * math.pi)
+    return -cdf_a + (1.0 - cdf_b) + mean * (cdf_b - cdf_a) - std * (pdf_b - pdf_a)
+
+
+class Controller:
+    """The exported CPG_RL hierarchy for ``num_robots`` robots (batched like the simulator). ``bundle``: a bundle's
+    folder, or a ``controller.json``-shaped dict without a policy (a fixed gait: the CPG runs ``initial_params``;
+    :func:`hexnewton.apps.sim2sim.fixed_cpg_spec`)."""
+
+    def __init__(self, bundle: str | dict, num_robots: int = 1, providers: list[str] | None = None,
+                 stochastic: bool = False, seed: int | None = None, expected: bool = False):
+        if isinstance(bundle, dict):  # a controller.json's contents without a policy: the CPG at its initial_params
+            self.spec = spec = bundle
+            self.session = None
+        else:
+            import onnxruntime as ort
+
+            self.spec = spec = load_spec(bundle)
+            self.session = ort.InferenceSession(os.path.join(bundle, "policy.onnx"),
+                                                providers=providers or ["CPUExecutionProvider"])  # fmt: skip
+            self._input = self.session.get_inputs()[0].name
+        self.n = int(num_robots)
+        self.layout = {name: (a, b) for name, a, b in spec["obs_layout"]}
+        self.num_obs = int(spec["num_obs"])
+        self.lower, self.upper = np.asarray(spec["param_lower"]), np.asarray(spec["param_upper"])
+        c = spec["cpg"]
+        self.cpg = (c["alpha"], c["mu"], c["delta"], c["theta"], c["duty"], c["steepness"])
+        self.dt = float(spec["substep_dt"])
+        self.substeps = int(spec["substeps_per_control"])
+        self.gain = 1.0 if c["param_tau"] == 0 else 1.0 - math.exp(-self.dt / c["param_tau"])
+        if stochastic and expected:
+            raise ValueError("choose sampled (stochastic) or expected actions, not both")
+        if (stochastic or expected) and "action_std" not in spec:
+            raise ValueError(f"{bundle}: sampled and expected actions need a Gaussian policy's action_std; this "
+                             f"bundle's policy ({spec.get('distribution', 'gaussian')}) runs its deterministic action")
+        self.stochastic, self.expected = stochastic, expected
+        self.action_std = np.asarray(spec.get("action_std", np.zeros(spec["num_actions"])), np.float64)
+        self.rng = np.random.default_rng(seed)
+        self.stand, self.joint_lower, self.joint_upper = (np.asarray(spec[k]) for k in ("stand_pose", "joint_lower",
+                                                                                         "joint_upper"))  # fmt: skip
+        self.reflex = float(spec.get("posture_reflex", 0.0))  # levelling reflex gain (0: none; older bundles)
+        self.tilt_max = float(spec.get("posture_tilt_max", 0.0))
+        self.reset()
+
+    def reset(self, mask=None) -> None:
+        """Selected robots (all if None): oscillators at their locked start, parameters at the initial gait."""
+        m = np.ones(self.n, bool) if mask is None else np.asarray(mask, bool)
+        if not hasattr(self, "params"):
+            self.params = np.zeros((self.n, len(self.spec["initial_params"])))
+            self.target = np.zeros_like(self.params)
+            self.state = np.zeros((self.n, 4))
+            self.dy = np.zeros((self.n, 2))
+            self.last_substep_targets = np.zeros((self.substeps, self.n, 18))
+        self.params[m] = self.target[m] = self.spec["initial_params"]
+        self.state[m] = initial_cpg_state(self.cpg[1], self.cpg[3])
+        self.dy[m] = 0.0
+
+    def observe(self, joint_pos, joint_vel, base_quat, target, max_height=0.0) -> np.ndarray:
+        """The policy's observation (N, num_obs), laid out as in training (``controller.json``)."""
+        obs = np.zeros((self.n, self.num_obs))
+        quat = np.asarray(base_quat, np.float64).reshape(self.n, 4)
+        h = np.asarray(max_height, np.float64)
+        h = h.reshape(self.n, 1) if h.size == self.n else np.full((self.n, 1), float(h))
+        parts = {
+            "joint_pos": np.asarray(joint_pos, np.float64).reshape(self.n, 18),
+            "joint_vel": np.asarray(joint_vel, np.float64).reshape(self.n, 18),
+            "target": np.asarray(target, np.float64).reshape(self.n, 3),
+            "omega": self.params[:, :1],
+            "amplitudes": self.params[:, 1:15],
+            "posture": self.params[:, 15:],
+            "quat": quat * np.where(quat[:, 3:4] < 0, -1.0, 1.0),
+            "max_height": h,
+        }
+        for name, (a, b) in self.layout.items():
+            obs[:, a:b] = parts[name]
+        return obs
+
+    def act(self, obs: np.ndarray) -> np.ndarray:
+        """The policy's actions (N, num_actions) for observations (N, num_obs): the mean, sampled around it, or the
+        expected clipped action (:func:`expected_clipped_action`)."""
+        if self.session is None:
+            raise ValueError("this controller has no policy (built from a spec): it runs its initial_params")
+        mean = self.session.run(None, {self._input: np.asarray(obs, np.float32)})[0]
+        if self.expected:
+            return expected_clipped_action(mean, self.action_std)
+        if not self.stochastic:
+            return mean
+        return mean + self.action_std * self.rng.standard_normal(mean.shape)
+
+    def set_actions(self, actions: np.ndarray) -> None:
+        """The policy's actions (N, num_actions) in [-1, 1] as the parameters the CPG follows from now on."""
+        self.target = scale_actions_reference(actions, self.lower, self.upper)
+
+    def substep(self, base_quat=None) -> np.ndarray:
+        """One CPG + mapping substep (``substep_dt``); returns the joint targets (N, 18). ``base_quat`` (N, 4) or
+        (4,), x y z w: the body's attitude now, required by a controller with the levelling reflex."""
+        rpy = None
+        if self.reflex:
+            if base_quat is None:
+                raise ValueError("this controller has the levelling reflex: pass the body's quaternion to substep()")
+            rpy = quat_to_rpy_np(np.broadcast_to(np.asarray(base_quat, np.float64), (self.n, 4)))
+        self.params, self.state, self.dy = hopf_cpg_reference(self.target, self.params, self.state, self.gain,
+                                                              *self.cpg, self.dt)  # fmt: skip
+        return mapping_reference(self.state, self.dy, self.params, self.cpg[1], self.stand, self.joint_lower,
+                                 self.joint_upper, rpy, self.reflex, self.tilt_max)  # fmt: skip
+
+    def advance(self, actions: np.ndarray, base_quat=None) -> np.ndarray:
+        """Scale actions to the CPG parameters, then run ``substeps_per_control`` substeps; returns the last
+        substep's joint targets (N, 18). ``base_quat``: the attitude for the reflex, (N, 4) held over the step or
+        (substeps, N, 4), one per substep."""
+        self.set_actions(actions)
+        q = None if base_quat is None else np.asarray(base_quat, np.float64)
+        for k in range(self.substeps):
+            self.last_substep_targets[k] = self.substep(q[k] if q is not None and q.ndim == 3 else q)
+        return self.last_substep_targets[-1].copy()
+
+    def step(self, joint_pos, joint_vel, base_quat, target, max_height=0.0) -> np.ndarray:
+        """One control step: readings in, 18 joint position targets out (N, 18)."""
+        return self.advance(self.act(self.observe(joint_pos, joint_vel, base_quat, target, max_height)), base_quat)
+
+
+def replay(bundle: str) -> dict:
+    """Replay the bundle's recorded simulator rollout; returns the largest differences from the simulator."""
+    load_spec(bundle)
+    rec = np.load(os.path.join(bundle, "check.npz"))
+    obs, sim_targets = rec["obs"], rec["targets"]  # (K, N, num_obs), (K, N, 18)
+    quats = rec["substep_quat"] if "substep_quat" in rec else None  # (K, substeps, N, 4): the reflex's attitude
+    ctrl = Controller(bundle, num_robots=obs.shape[1])
+    lay = ctrl.layout
+    sl = lambda o, name: o[:, lay[name][0]:lay[name][1]]  # noqa: E731
+    err_obs = err_q = 0.0
+    for k in range(len(obs)):
+        o = obs[k]
+        mine = ctrl.observe(sl(o, "joint_pos"), sl(o, "joint_vel"), sl(o, "quat"), sl(o, "target"), sl(o, "max_height"))
+        err_obs = max(err_obs, float(np.abs(mine - o).max()))  # the CPG parameters were integrated here
+        q = ctrl.advance(ctrl.act(mine), None if quats is None else quats[k])
+        err_q = max(err_q, float(np.abs(q - sim_targets[k]).max()))
+    return {"steps": len(obs), "robots": obs.shape[1], "max_obs_diff": err_obs, "max_target_diff_rad": err_q}

@@ -1,0 +1,173 @@
+"""The learner's configuration: rsl-rl's PPO runner as one dataclass tree (``AgentConfig``), from which the plain dict
+rsl-rl-lib 5.5.1 takes is generated (:meth:`AgentConfig.to_rsl_rl`).
+
+Two presets:
+- :func:`paper_agent`: Table 2. Learning rate 1e-4 (fixed schedule), gamma 0.99, lambda 0.95, clip 0.2, an actor and
+  critic of [256, 256, 256, 256] ReLU. The paper's batch size of 512 is rsl-rl's mini-batch: ``mini_batch_size =
+  512`` gives num_envs x num_steps_per_env / 512 mini-batches. Where Table 2 is silent, the paper's library
+  (Stable-Baselines3 PPO) decides: 10 epochs, no entropy bonus, value loss weight 0.5 (not clipped), gradient norm
+  0.5, a Gaussian of initial std 1 (log std 0), no observation normalisation.
+- :class:`AgentConfig` as it stands (ours, tuned for thousands of envs): learning rate 1e-3 with rsl-rl's adaptive KL
+  schedule (desired KL 0.01), 4 epochs x 2 mini-batches, [256, 256, 256, 256] ELU, a Beta distribution (actions
+  bounded to [-1, 1] by construction; its mean is the deterministic controller). The update is bound by
+  per-mini-batch overhead, not arithmetic: 2 x 4 costs 53 ms per iteration at 4096 envs against 119 ms for rsl-rl's
+  usual 4 x 5, and reached the same skill sooner (BENCHMARKS.md).
+
+Only this module and :mod:`hexnewton.tasks` hold learner settings; ``train.py --agent.<field> VALUE`` overrides any.
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, field, replace
+
+DISTRIBUTIONS = ("beta", "gaussian")
+#: torch.compile modes rsl-rl accepts (it rejects the CUDA-graph ones)
+COMPILE_MODES = ("default", "max-autotune-no-cudagraphs")
+
+
+@dataclass
+class DistributionConfig:
+    """The policy's action distribution."""
+
+    #: ``beta`` (rsl-rl's ``BetaDistribution``, bounded) or ``gaussian`` (clipped to [-1, 1] by the action kernel)
+    name: str = field(default="beta", metadata={"choices": DISTRIBUTIONS})
+    #: gaussian: initial std, learnt unless ``learn_std`` is false (then fixed)
+    init_std: float = 0.5
+    learn_std: bool = True
+    #: gaussian: cap on the learnt std (rsl-rl's ``std_range``; none: uncapped). Actions are clipped to [-1, 1] and
+    #: filtered into the CPG parameters, so a wider Gaussian only moves the filtered parameter's mean; the entropy
+    #: bonus grew the std to 1.7-5.8 in uncapped complex runs (RESULTS.md).
+    std_max: float | None = None
+
+
+@dataclass
+class ModelConfig:
+    """Actor and critic MLPs (rsl-rl's ``MLPModel``)."""
+
+    hidden_dims: tuple[int, ...] = (256, 256, 256, 256)
+    activation: str = field(default="elu", metadata={"choices": ("elu", "relu", "tanh", "selu", "lrelu")})
+    obs_normalization: bool = True
+
+
+@dataclass
+class AlgorithmConfig:
+    """rsl-rl's PPO."""
+
+    learning_rate: float = 1.0e-3
+    schedule: str = field(default="adaptive", metadata={"choices": ("adaptive", "fixed")})
+    desired_kl: float = 0.01
+    gamma: float = 0.99
+    lam: float = 0.95
+    clip_param: float = 0.2
+    num_learning_epochs: int = 4
+    num_mini_batches: int = 2
+    #: samples per mini-batch; set, it replaces ``num_mini_batches`` (num_envs x num_steps_per_env / mini_batch_size)
+    mini_batch_size: int | None = None
+    value_loss_coef: float = 1.0
+    use_clipped_value_loss: bool = True
+    entropy_coef: float = 0.005
+    max_grad_norm: float = 1.0
+    #: bfloat16 autocast in the update's forward pass and losses (rsl-rl's ``use_mixed_precision``)
+    use_mixed_precision: bool = False
+
+
+@dataclass
+class AgentConfig:
+    """Everything the learner does: PPO, the networks, the rollout length, how long and how it stops, the curriculum."""
+
+    num_steps_per_env: int = 24
+    max_iterations: int = 300
+    save_interval: int = 50
+    #: stop after this wall time [min] (then save and export as at the end); none: no limit
+    max_minutes: float | None = None
+    #: stop once this share of the last 1024 training episodes succeeded (with a terrain curriculum: of those, at
+    #: least 256, played on the last level); none: no target
+    target_success: float | None = None
+    #: torch.compile the actor and critic (rsl-rl's ``torch_compile_mode``); none: off
+    torch_compile: str | None = field(default=None, metadata={"choices": COMPILE_MODES})
+    #: curriculum of the reflex gain and the reward weights: ((first iteration, {field: value}), ...), applied from
+    #: that iteration on; fields are ``posture_reflex`` (CPGConfig) and RewardConfig's
+    stages: tuple = ()
+    distribution: DistributionConfig = field(default_factory=DistributionConfig)
+    model: ModelConfig = field(default_factory=ModelConfig)
+    algorithm: AlgorithmConfig = field(default_factory=AlgorithmConfig)
+
+    def check(self) -> None:
+        """ValueError (one line) for settings rsl-rl would reject late or misread."""
+        if self.max_minutes is not None and not self.max_minutes > 0:
+            raise ValueError("agent.max_minutes must be positive")
+        if self.target_success is not None and not 0 < self.target_success <= 1:
+            raise ValueError("agent.target_success must lie in (0, 1]")
+        for name in ("num_steps_per_env", "max_iterations", "save_interval"):
+            if getattr(self, name) <= 0:
+                raise ValueError(f"agent.{name} must be positive")
+        if self.distribution.name == "gaussian" and not self.distribution.init_std > 0:
+            raise ValueError("agent.distribution.init_std must be positive")
+        if self.distribution.std_max is not None and not self.distribution.std_max > 0:
+            raise ValueError("agent.distribution.std_max must be positive")
+        a = self.algorithm
+        if a.use_mixed_precision and self.distribution.name == "beta":
+            raise ValueError("agent.algorithm.use_mixed_precision: bfloat16 autocast cannot sample the Beta distribution "
+                             "(torch has no bfloat16 Dirichlet); use it with --agent.distribution.name gaussian")
+        if a.num_learning_epochs <= 0 or a.num_mini_batches <= 0 or (a.mini_batch_size or 1) <= 0:
+            raise ValueError("agent.algorithm epochs, mini-batches and mini-batch size must be positive")
+        for start, changes in self.stages:
+            if not isinstance(start, int) or not isinstance(changes, dict):
+                raise ValueError("agent.stages: expected ((first_iteration, {field: value}), ...)")
+
+    def to_rsl_rl(self, num_envs: int) -> dict:
+        """rsl-rl-lib 5.5.1's ``OnPolicyRunner`` configuration for ``num_envs`` envs per process."""
+        a = asdict(self.algorithm)
+        size = a.pop("mini_batch_size")
+        if size:
+            a["num_mini_batches"] = max(1, num_envs * self.num_steps_per_env // size)
+        if self.algorithm.schedule != "adaptive":
+            a.pop("desired_kl")
+        d = self.distribution
+        dist = {"class_name": "BetaDistribution"} if d.name == "beta" else {
+            "class_name": "GaussianDistribution", "init_std": d.init_std, "learn_std": d.learn_std,
+            "std_range": (1e-6, d.std_max or 1e6)}  # fmt: skip
+        model = dict(class_name="MLPModel", hidden_dims=list(self.model.hidden_dims), activation=self.model.activation,
+                     obs_normalization=self.model.obs_normalization)  # fmt: skip
+        return {
+            "num_steps_per_env": self.num_steps_per_env,
+            "save_interval": self.save_interval,
+            "obs_groups": {"actor": ["policy"], "critic": ["policy"]},
+            "logger": "tensorboard",
+            # rsl-rl's NaN check costs three device-to-host syncs per env step; the env already guarantees finite
+            # observations and rewards in-kernel (a blown-up env is reset and counted: mdp/terms.py,
+            # tested by injecting NaN/Inf), so the check only stalls the GPU
+            "check_for_nan": False,
+            "actor": dict(model, distribution_cfg=dist),
+            "critic": dict(model),
+            "algorithm": dict(a, class_name="PPO"),
+            "torch_compile_mode": self.torch_compile,
+        }
+
+
+def paper_agent() -> AgentConfig:
+    """Table 2's PPO (module docstring)."""
+    return AgentConfig(
+        distribution=DistributionConfig(name="gaussian", init_std=1.0),
+        model=ModelConfig(activation="relu", obs_normalization=False),
+        algorithm=AlgorithmConfig(learning_rate=1.0e-4, schedule="fixed", num_learning_epochs=10, mini_batch_size=512,
+                                  entropy_coef=0.0, value_loss_coef=0.5, use_clipped_value_loss=False,
+                                  max_grad_norm=0.5),  # fmt: skip
+    )
+
+
+def agent_from_dict(d: dict | None) -> AgentConfig:
+    """Rebuild an :class:`AgentConfig` from ``dataclasses.asdict`` output (a checkpoint's ``agent``); unknown keys are
+    ignored, missing ones keep their defaults."""
+    from hexnewton.config import dataclass_from_dict
+
+    return dataclass_from_dict(AgentConfig, d or {})
+
+
+def legacy_agent(meta: dict) -> AgentConfig:
+    """The learner of a checkpoint that records only ``preset``, ``distribution`` and ``std_max``."""
+    base = AgentConfig()
+    if meta.get("preset") == "paper":  # those normalised their observations
+        base = replace(paper_agent(), model=ModelConfig(activation="relu"))
+    dist = replace(base.distribution, name=meta.get("distribution", "gaussian"), std_max=meta.get("std_max"))
+    return replace(base, distribution=dist)

@@ -1,0 +1,27 @@
+"""Ending a training run cleanly: Ctrl-C and SIGTERM raise :class:`TrainingStopped`, which both trainers (rsl-rl's
+:class:`~hexnewton.learning.runner.HexRunner` and the skrl baselines' :class:`~hexnewton.learning.baselines.BaselineTrainer`) catch
+to save what was learnt. Plain Python: no torch, no Warp.
+"""
+
+from __future__ import annotations
+
+import signal
+
+#: the signals that end a training run cleanly
+STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM)
+
+
+class TrainingStopped(Exception):
+    """Raised by the signal handler (Ctrl-C, SIGTERM) or at the end of an iteration (--max_minutes,
+    --target_success) to end training cleanly."""
+
+
+def raise_stopped(signum, frame) -> None:
+    """Signal handler: raise :class:`TrainingStopped` named after the signal (``SIGINT``, ``SIGTERM``)."""
+    raise TrainingStopped(signal.Signals(signum).name)
+
+
+def catch_stop_signals() -> dict:
+    """Make Ctrl-C and SIGTERM raise :class:`TrainingStopped`; returns the handlers they had ({signal: handler}),
+    for the caller to restore."""
+    return {sig: signal.signal(sig, raise_stopped) for sig in STOP_SIGNALS}

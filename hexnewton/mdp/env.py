@@ -1,0 +1,457 @@
+"""The paper's MDP (§2.4) as an rsl-rl-lib 5.5.1 ``VecEnv`` over the batched Newton world.
+
+One ``step(actions)`` is one control step (``TaskConfig.control_dt``). Apart from the action copy, it is a
+single captured graph (a CUDA graph on GPU, Warp's capture on CPU) of Warp kernels on preallocated arrays:
+
+    actions -> parameters (physics/cpg.py) -> [CPG + mapping (physics/cpg.py, through controller.py) + physics
+            (sim.py)] x substeps -> episode ends, rewards with the stability shaping (mdp/terms.py)
+            -> episode bookkeeping (here) -> [curriculum lane change (mdp/events.py)]
+            -> randomised resets of finished envs and observations (mdp/terms.py)
+
+With ``RandomizationConfig.enabled`` the step also delays the actions of "late" envs, pushes bases and adds
+observation noise (mdp/events.py); the per-env physical draws are
+``randomization.randomize_physics``.
+
+torch sees every buffer zero-copy (``wp.to_torch``), and nothing goes back to the host inside a step. What
+``step`` and ``get_observations`` return are device copies of those buffers, made after the graph: rsl-rl keeps
+the observation an action was computed from until after the next ``step`` (its storage copies it only in
+``process_env_step``), so a view would hand it the next observation instead (the stored observations would be
+one step late, and the adaptive learning rate would sit at its 1e-5 floor).
+Finished envs auto-reset. ``extras["time_outs"]`` marks time-limit ends. ``extras["log"]`` carries:
+- the mean of each reward term;
+- success, fall, off-course, timeout and non-finite rates, with distance and length, over the last 1024
+  finished episodes;
+- ``Episode/nonfinite_resets_total``: how many blown-up envs (NaN/Inf or runaway state, ``mdp/terms.py``)
+  were reset since the env was built. Their reward stays finite (0 if the position itself is not) and their
+  observation comes from the fresh start, so training never sees a NaN;
+- ``Episode/contact_overflow_frames``: frames with dropped contacts so far (checked every 250 steps);
+- with a curriculum, ``Curriculum/mean_level`` and ``Curriculum/top_level_share``.
+
+Action modes:
+- ``cpg`` (15 actions): omega, A1[2], A2[6], A3[6], each scaled to its range (the paper's CPG_RL);
+  with ``CPGConfig.posture`` (ours, physics/cpg.py) 18: the 15 and the body posture P_h, P_p, P_r, knee
+  offsets that level the body over uneven footholds; the observation adds their 3 filtered values (62,
+  layout ``cpg_posture``);
+- ``joint`` (18 actions): joint targets about the standing pose, ``TaskConfig.joint_action_scale`` rad per unit
+  action, clipped to the limits (the pure-DRL comparison). Its observation
+  lacks the CPG parameters (44 values instead of 59); the reward is the same.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import torch
+import warp as wp
+from rsl_rl.env import VecEnv
+from tensordict import TensorDict
+
+from hexnewton import startup
+from hexnewton.config import ACTION_MODES, HexConfig, control_decimation
+from hexnewton.errors import HexnewtonError
+from hexnewton.mdp.events import (
+    advance_counter_kernel,
+    curriculum_kernel,
+    delay_actions_kernel,
+    observation_noise_kernel,
+    placement_kernel,
+    push_kernel,
+    randomize_physics,
+    reset_envs_kernel,
+    start_levels,
+)
+from hexnewton.mdp.terms import (
+    LAYOUTS,
+    NONFINITE,
+    OBS_DIM,
+    SUCCESS,
+    TERMINATIONS,
+    TIMEOUT,
+    EndInputs,
+    ObsInputs,
+    RewardInputs,
+    height_field_from_grid,
+    make_status_kernel,
+    make_struct,
+    observation_noise,
+    observations_kernel,
+    reward_table,
+    reward_weights,
+    rewards_kernel_of,
+)
+from hexnewton.physics.cpg import CPGController, joint_actions_kernel
+from hexnewton.physics.robot import BASE_Q
+from hexnewton.physics.world import World, capture_graph
+
+RING = 1024  # finished episodes the logged rates average over
+# the ring's columns: one per episode end (its status code - 1), then distance, length and curriculum level
+ENDS = sorted(TERMINATIONS, key=lambda end: end.code)
+DISTANCE, LENGTH, LEVEL = len(ENDS), len(ENDS) + 1, len(ENDS) + 2
+
+
+@wp.kernel
+def _bookkeeping(
+    status: wp.array[wp.int32],
+    joint_q: wp.array2d[wp.float32],
+    start: wp.array[wp.vec2],
+    level: wp.array[wp.int32],
+    steps: wp.array[wp.int32],
+    done: wp.array[wp.bool],
+    done_u8: wp.array[wp.uint8],
+    time_out: wp.array[wp.uint8],
+    cursor: wp.array[wp.int32],
+    ring: wp.array2d[wp.float32],
+    nonfinite_total: wp.array[wp.int32],
+):
+    """Done flags and step counters; each finished episode writes (status one-hot, distance, length, curriculum
+    level) to the ring; blown-up envs are counted in ``nonfinite_total``."""
+    e = wp.tid()
+    st = status[e]
+    d = st != 0
+    done[e] = d
+    done_u8[e] = wp.uint8(0)
+    time_out[e] = wp.uint8(0)
+    if st == TIMEOUT:
+        time_out[e] = wp.uint8(1)
+    if st == NONFINITE:
+        wp.atomic_add(nonfinite_total, 0, 1)
+    if d:
+        done_u8[e] = wp.uint8(1)
+        slot = wp.atomic_add(cursor, 0, 1) % ring.shape[0]
+        for k in range(wp.static(len(ENDS))):
+            ring[slot, k] = 0.0
+        ring[slot, st - 1] = 1.0  # status 1..5 -> columns fell, off_course, success, timeout, nonfinite
+        dist = float(0.0)
+        if wp.isfinite(joint_q[e, 0]):
+            dist = joint_q[e, 0] - start[e][0]
+        ring[slot, DISTANCE] = dist
+        ring[slot, LENGTH] = float(steps[e] + 1)
+        ring[slot, LEVEL] = float(level[e])
+        steps[e] = 0
+    else:
+        steps[e] = steps[e] + 1
+
+
+class HexapodEnv(VecEnv):
+    """N hexapods, one terrain, the paper's observation, action, reward and terminations."""
+
+    def __init__(self, cfg: HexConfig, action_mode: str = "cpg"):
+        if action_mode not in ACTION_MODES:
+            raise HexnewtonError(f"unknown action mode '{action_mode}': choose one of {', '.join(ACTION_MODES)}")
+        self.cfg = cfg
+        self.action_mode = action_mode
+        self.world = world = World(cfg)
+        # each env's physical draws (friction, masses, gains, contacts), once, before anything is stepped
+        self.physical_draws = randomize_physics(world, cfg.task.seed) if cfg.randomization.enabled else {}
+        task = cfg.task
+        self.decimation = control_decimation(task.control_dt, world.frame_dt)
+        self.num_envs = world.num_envs
+        posture = action_mode == "cpg" and cfg.cpg.posture
+        self.obs_layout = "cpg_posture" if posture else action_mode
+        self.num_actions = cfg.cpg.num_params if action_mode == "cpg" else 18
+        self.num_obs = OBS_DIM[self.obs_layout]
+        self.max_episode_length = task.max_episode_steps
+        self.device = world.device
+
+        self.controller = CPGController(world) if action_mode == "cpg" else None
+        world.set_controller(self.controller)
+
+        self._buffers()
+        self._curriculum_buffers()
+        self._randomization_buffers()
+        self._reset(None)
+        self._observe()
+        wp.synchronize_device(self.device)
+        self.graph = None
+        self.common_step_counter = 0
+        startup.mark("env buffers")
+
+    def _buffers(self) -> None:
+        """The step's buffers, the task's term kernels and the torch views of what rsl-rl reads."""
+        cfg, world, n, dev = self.cfg, self.world, self.num_envs, self.device
+        task = cfg.task
+        # each env's start lane (x, y) and spawn height (the curriculum moves them), its episode's actual start
+        # (written by every reset) and the control-step counter the random draws are keyed on
+        self.height_field = height_field_from_grid(world.terrain.grid, dev)  # the terms' view of the ground
+        self.lane = wp.array(world.spawn_xy.astype(np.float32), dtype=wp.vec2, device=dev)
+        self.lane_z = wp.array(np.asarray(world.spawn_z, np.float32), device=dev)
+        self.start = wp.clone(self.lane)
+        self.counter = wp.zeros(1, dtype=wp.int32, device=dev)
+        self._all = wp.ones(n, dtype=wp.bool, device=dev)
+
+        z = lambda *shape, dtype=wp.float32: wp.zeros(shape, dtype=dtype, device=dev)  # noqa: E731
+        self.actions = z(n, self.num_actions)
+        self.status, self.rpy = z(n, dtype=wp.int32), z(n, 3)
+        self.episode_steps = z(n, dtype=wp.int32)
+        self.done, self.done_u8, self.time_out = z(n, dtype=wp.bool), z(n, dtype=wp.uint8), z(n, dtype=wp.uint8)
+        # the task's terms (TaskConfig.terminations, RewardConfig.terms): their fused kernels
+        self.status_kernel = make_status_kernel(task.terminations)
+        self.reward_terms = reward_table(cfg.reward)
+        self.rewards_kernel = rewards_kernel_of(cfg.reward.terms)
+        self.reward, self.terms, self.prev_x = z(n), z(n, len(self.reward_terms)), z(n)
+        self.obs = z(n, self.num_obs)
+        # the state at the end of the last step, before finished envs were reset (play.py records these)
+        self.last_q, self.last_start = z(n, 7 + 18), wp.zeros(n, dtype=wp.vec2, device=dev)
+        self.last_qd = z(n, 6 + 18)
+        self.last_cpg_state, self.last_params = z(n, 4), z(n, cfg.cpg.num_params)
+        self.prev_actions = z(n, self.num_actions)  # the policy's last actions (action-rate term)
+        self._cursor = z(1, dtype=wp.int32)
+        self._nonfinite_total = z(1, dtype=wp.int32)  # blown-up envs reset since the env was built
+        # finished episodes: status one-hot (5), distance, length, curriculum level
+        self._ring = wp.full((RING, LEVEL + 1), float("nan"), dtype=wp.float32, device=dev)
+        self._no_level = z(n, dtype=wp.int32)
+
+        # torch views (zero-copy)
+        self._obs_t = wp.to_torch(self.obs)
+        self._rew_t = wp.to_torch(self.reward)
+        self._done_t = wp.to_torch(self.done_u8)
+        self._time_out_t = wp.to_torch(self.time_out)
+        self._actions_t = wp.to_torch(self.actions)
+        self._terms_t = wp.to_torch(self.terms)
+        self._ring_t = wp.to_torch(self._ring)
+        self._steps_t = wp.to_torch(self.episode_steps)
+        self._nonfinite_t = wp.to_torch(self._nonfinite_total)
+        self._overflow_frames_t = torch.zeros((), device=self._obs_t.device)  # frames with dropped contacts
+
+    def _curriculum_buffers(self) -> None:
+        """Each env's curriculum level (``TerrainConfig.levels`` > 0; None without a curriculum), placed on its lane."""
+        cfg, world, n, dev = self.cfg, self.world, self.num_envs, self.device
+        self.level = None
+        if cfg.terrain.levels:
+            self.level = wp.array(start_levels(n, cfg.terrain.start_levels), dtype=wp.int32, device=dev)
+            self._level_t = wp.to_torch(self.level)
+            self._lane_offset = wp.array(world.spawn_xy[:, 1].astype(np.float32), device=dev)
+            wp.launch(placement_kernel, dim=n,
+                      inputs=[self.level, cfg.terrain.levels, cfg.terrain.lane_width, self._lane_offset,
+                              self.height_field, world.footprint, world.spawn_clearance],
+                      outputs=[self.lane, self.lane_z], device=dev)  # fmt: skip
+
+    # ------------------------------------------------------------------ rsl-rl VecEnv API
+    @property
+    def episode_length_buf(self) -> torch.Tensor:
+        return self._steps_t
+
+    @episode_length_buf.setter
+    def episode_length_buf(self, value: torch.Tensor) -> None:
+        # rsl-rl's learn(init_at_random_ep_len=True) assigns a new tensor: copy it into the Warp buffer
+        self._steps_t.copy_(value.to(self._steps_t.dtype))
+
+    def reset(self) -> TensorDict:
+        """Every robot back to a (randomised) start with its episode counter at 0; returns :meth:`get_observations`.
+        Training never needs it (finished robots restart inside ``step``); the Gymnasium adapter's ``reset`` does."""
+        self._reset(None)
+        self.episode_steps.zero_()
+        self._observe()
+        return self.get_observations()
+
+    def get_observations(self) -> TensorDict:
+        """A copy of the current observations (device to device), which the next ``step`` leaves untouched."""
+        return TensorDict({"policy": self._obs_t.clone()}, batch_size=[self.num_envs], device=self._obs_t.device)
+
+    def step(self, actions: torch.Tensor) -> tuple[TensorDict, torch.Tensor, torch.Tensor, dict]:
+        # torch writes the actions on its (legacy default) stream; Warp's own streams are blocking streams, so
+        # the graph below starts after that copy and torch's later reads wait for the graph. (Wrapping torch's
+        # stream with wp.stream_from_torch failed on an H100 with "Warp error: unknown stream".)
+        self._actions_t.copy_(actions)
+        self._launch()
+        self.common_step_counter += 1
+        if self.common_step_counter % 250 == 0:  # one host read every 250 steps: contact overflow never silent
+            self.world.check_contacts()
+            self._overflow_frames_t.fill_(float(self.world.overflow_frames))
+        extras = {"time_outs": self._time_out_t.clone(), "log": self._log()}
+        return self.get_observations(), self._rew_t.clone(), self._done_t.clone(), extras
+
+    # ------------------------------------------------------------------ the control step
+    def _launch(self) -> None:
+        if not self.cfg.sim.use_graph:
+            self._control_step()
+            return
+        if self.graph is None:
+            first = self.common_step_counter == 0
+            self._capture()
+            if first:
+                startup.mark("first step and graph capture")
+        wp.capture_launch(self.graph)
+
+    def _capture(self) -> None:
+        # the same capture as World's (proven on the H100), on Warp's own stream of the device: CUDA graphs
+        # cannot be captured on torch's legacy default stream
+        self.graph = capture_graph(self.device, self._control_step, self._state_arrays())
+
+    def _randomization_buffers(self) -> None:
+        """Per-step domain randomisation (``RandomizationConfig.enabled``): which envs act late, the previous
+        actions, the observation noise per column and the push period in control steps."""
+        rz, n, dev = self.cfg.randomization, self.num_envs, self.device
+        self.randomized = rz.enabled
+        if not rz.enabled:
+            return
+        rng = np.random.default_rng([self.cfg.task.seed, 0x1A7E])
+        self._late = wp.array(rng.random(n) < rz.latency_share, dtype=wp.bool, device=dev)
+        self._prev_actions = wp.zeros((n, self.num_actions), dtype=wp.float32, device=dev)
+        self._effective_actions = wp.zeros((n, self.num_actions), dtype=wp.float32, device=dev)
+        self._obs_noise = wp.array(observation_noise(self.obs_layout, rz), device=dev)
+        self._push_steps = max(1, int(round(rz.push_interval / self.cfg.task.control_dt)))
+
+    def _state_arrays(self) -> list[wp.array]:
+        s = self.world.state_0
+        arrays = [s.joint_q, s.joint_qd, s.body_q, s.body_qd, self.episode_steps, self.prev_x, self.start,
+                  self._ring, self._cursor, self.obs, self.reward, self.done_u8, self.time_out]  # fmt: skip
+        arrays += [self.prev_actions, self.counter]
+        if self.controller is not None:
+            arrays += [self.controller.params, self.controller.params_target, self.controller.state]
+        if self.level is not None:
+            arrays += [self.level, self.lane, self.lane_z]
+        if self.randomized:
+            arrays += [self._prev_actions]
+        return arrays
+
+    def _control_step(self) -> None:
+        w, t, r, dev, n = self.world, self.cfg.task, self.cfg.reward, self.device, self.num_envs
+        actions = self.actions
+        if self.randomized:  # actuation latency and pushes
+            actions = self._effective_actions
+            wp.launch(delay_actions_kernel, dim=(n, self.num_actions), inputs=[self.actions, self._late],
+                      outputs=[self._prev_actions, actions], device=dev)  # fmt: skip
+            rz = self.cfg.randomization
+            wp.launch(push_kernel, dim=n, inputs=[self.episode_steps, self._push_steps, rz.push_velocity,
+                                                  t.seed + 104729, self.counter],
+                      outputs=[w.joint_qd_wp], device=dev)  # fmt: skip
+        if self.controller is not None:
+            self.controller.set_actions(actions)
+        else:
+            wp.launch(joint_actions_kernel, dim=(n, self.num_actions),
+                      inputs=[actions, w.stand_pose, w.joint_lower, w.joint_upper, t.joint_action_scale, BASE_Q],
+                      outputs=[w.joint_target_wp],
+                      device=dev)  # fmt: skip
+        for _ in range(self.decimation):
+            w.simulate_frame()
+        ends = make_struct(EndInputs, joint_q=w.joint_q_wp, joint_qd=w.joint_qd_wp, episode_steps=self.episode_steps,
+                           start=self.start, hf=self.height_field, task=t)  # fmt: skip
+        wp.launch(self.status_kernel, dim=n, inputs=[ends], outputs=[self.status, self.rpy], device=dev)
+        rewards = make_struct(RewardInputs, joint_q=w.joint_q_wp, joint_qd=w.joint_qd_wp, rpy=self.rpy,
+                              status=self.status, episode_steps=self.episode_steps, actions=self.actions,
+                              start=self.start, hf=self.height_field, prev_x=self.prev_x,
+                              prev_actions=self.prev_actions, task=t, reward=r)  # fmt: skip
+        wp.launch(self.rewards_kernel, dim=n, inputs=[rewards, reward_weights(r, self.reward_terms)], outputs=[self.reward, self.terms],
+                  device=dev)  # fmt: skip
+        wp.launch(
+            _bookkeeping, dim=n,
+            inputs=[self.status, w.joint_q_wp, self.start, self.level if self.level is not None else self._no_level],
+            outputs=[self.episode_steps, self.done, self.done_u8, self.time_out, self._cursor, self._ring,
+                     self._nonfinite_total], device=dev,
+        )  # fmt: skip
+        wp.copy(self.last_q, w.joint_q_wp)
+        wp.copy(self.last_qd, w.joint_qd_wp)
+        wp.copy(self.last_start, self.start)
+        if self.controller is not None:
+            wp.copy(self.last_cpg_state, self.controller.state)
+            wp.copy(self.last_params, self.controller.params)
+        if self.level is not None:  # finished envs change lanes before they are reset onto them
+            tc = self.cfg.terrain
+            wp.launch(
+                curriculum_kernel, dim=n,
+                inputs=[self.status, w.joint_q_wp, self.start, t.goal_distance, tc.levels, tc.lane_width,
+                        self._lane_offset, self.height_field, w.footprint, w.spawn_clearance, t.seed + 7919,
+                        self.counter],
+                outputs=[self.level, self.lane, self.lane_z], device=dev,
+            )  # fmt: skip
+        self._reset(self.done)
+        self._observe()
+
+    def _reset(self, mask: wp.array | None) -> None:
+        t, w, m = self.cfg.task, self.world, mask if mask is not None else self._all
+        wp.launch(reset_envs_kernel, dim=self.num_envs,
+                  inputs=[m, self.lane, self.lane_z, w.stand_pose, w.joint_lower, w.joint_upper, t.reset_lateral,
+                          t.reset_yaw, t.reset_joint_noise, t.seed, self.counter],
+                  outputs=[w.joint_q_wp, w.joint_qd_wp, w.joint_target_wp, self.start, self.prev_x],
+                  device=self.device)  # fmt: skip
+        wp.launch(advance_counter_kernel, dim=1, inputs=[self.counter], device=self.device)
+        w.restart(m)
+        if self.controller is not None:
+            self.controller.reset(mask)
+
+    def _observe(self) -> None:
+        w, ctrl = self.world, self.controller
+        params = ctrl.params if ctrl is not None else self.terms  # unread placeholder in joint mode
+        inputs = make_struct(ObsInputs, joint_q=w.joint_q_wp, joint_qd=w.joint_qd_wp, params=params,
+                             start=self.start, hf=self.height_field, task=self.cfg.task)  # fmt: skip
+        wp.launch(observations_kernel, dim=self.num_envs, inputs=[inputs, LAYOUTS.index(self.obs_layout)],
+                  outputs=[self.obs], device=self.device)  # fmt: skip
+        if self.randomized:
+            wp.launch(observation_noise_kernel, dim=self.num_envs,
+                      inputs=[self._obs_noise, self.cfg.task.seed + 15485863, self.counter], outputs=[self.obs],
+                      device=self.device)  # fmt: skip
+
+    # ------------------------------------------------------------------ logging
+    def _log(self) -> dict[str, torch.Tensor]:
+        means = self._terms_t.mean(dim=0)
+        log = {f"Reward/{term.name}": means[k] for k, term in enumerate(self.reward_terms)}
+        rates = torch.nanmean(self._ring_t, dim=0)
+        for end in ENDS:
+            log[f"Episode/{end.name}_rate"] = rates[end.code - 1]
+        log["Episode/distance_m"] = rates[DISTANCE]
+        log["Episode/length_steps"] = rates[LENGTH]
+        log["Episode/nonfinite_resets_total"] = self._nonfinite_t[0].float()
+        log["Episode/contact_overflow_frames"] = self._overflow_frames_t
+        if self.level is not None:
+            log["Curriculum/mean_level"] = self._level_t.float().mean()
+            log["Curriculum/top_level_share"] = (self._level_t == self.cfg.terrain.levels - 1).float().mean()
+            log["Curriculum/top_level_success_rate"] = self._top_level_success()[0]
+        return log
+
+    def _top_level_success(self) -> tuple[torch.Tensor, torch.Tensor]:
+        """(success rate, episode count) of the ring's episodes played on the last curriculum level (no host
+        sync: masks and sums, nan while there is none)."""
+        top = self._ring_t[:, LEVEL] == self.cfg.terrain.levels - 1
+        count = top.sum()
+        return (top & (self._ring_t[:, SUCCESS - 1] == 1.0)).sum() / count, count
+
+    def episode_stats(self) -> dict[str, float]:
+        """Host copy of the logged episode rates (syncs; for reports, not for the training loop)."""
+        rates = torch.nanmean(self._ring_t, dim=0).cpu().numpy()
+        out = {f"{end.name}_rate": float(rates[end.code - 1]) for end in ENDS}
+        out.update(distance_m=float(rates[DISTANCE]), length_steps=float(rates[LENGTH]),
+                   episodes=int(min(int(self._cursor.numpy()[0]), RING)), window=RING,
+                   nonfinite_resets_total=int(self._nonfinite_total.numpy()[0]),
+                   contact_overflow_frames=int(self.world.overflow_frames))  # fmt: skip
+        if self.level is not None:
+            rate, count = self._top_level_success()
+            out.update(mean_level=float(self.level.numpy().mean()), top_level_success_rate=float(rate),
+                       top_level_episodes=int(count))  # fmt: skip
+        return out
+
+    def set_shaping(self, reward, posture_reflex: float) -> None:
+        """New reward weights (``RewardConfig``) and levelling reflex gain between iterations (a training curriculum,
+        ``train.STABLE_STAGES``); the next step captures the graphs again with them."""
+        import dataclasses
+
+        if reward.terms != self.cfg.reward.terms:
+            raise ValueError("a training curriculum changes reward weights, not the task's reward terms")
+        self.cfg = dataclasses.replace(self.cfg, reward=reward,
+                                       cpg=dataclasses.replace(self.cfg.cpg, posture_reflex=posture_reflex))
+        if self.controller is not None:
+            self.controller.cfg = self.cfg.cpg
+        self.graph = self.world.graph = None
+
+    def close(self) -> None:
+        self.graph = None
+
+
+def make_env(cfg: HexConfig, action_mode: str = "cpg") -> HexapodEnv:
+    """Build the environment; configuration errors become ``HexnewtonError`` / ``ValueError`` with one line."""
+    if not math.isfinite(cfg.task.goal_distance) or cfg.task.goal_distance <= cfg.task.goal_radius:
+        raise HexnewtonError("task.goal_distance must exceed task.goal_radius")
+    knee = cfg.robot.knee_limit[1] - cfg.robot.stand_pose[1]  # the knee lift the standing pose leaves
+    lo, hi = cfg.cpg.a2_range
+    if not 0 <= lo < hi <= knee:
+        raise HexnewtonError(f"cpg.a2_range must satisfy 0 <= LO < HI <= {knee:.3g} (the knee's limit above the "
+                             f"standing pose), got {lo:g} {hi:g}")  # fmt: skip
+    if not 0 < cfg.reward.stability_tilt < math.pi / 2:
+        raise HexnewtonError("reward.stability_tilt must lie in (0, pi/2) rad")
+    if not cfg.cpg.param_tau >= 0:
+        raise HexnewtonError("cpg.param_tau must be >= 0")
+    return HexapodEnv(cfg, action_mode)
+
+
+__all__ = ["ACTION_MODES", "HexapodEnv", "make_env"]

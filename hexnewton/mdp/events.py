@@ -1,0 +1,341 @@
+"""The MDP's events: what happens to an env besides the policy's actions (mjlab's "events"), in the order of a control
+step, and the physical draws made once when the env is built.
+
+Physical draws (``RandomizationConfig``, at construction: :func:`randomize_physics`)
+-------------------------------------------------------------------------------------
+Each env's friction, payload, link masses, PD gains, effort limits and, where set, foot radius and contact time
+constant, drawn once and written into the :class:`~hexnewton.physics.world.World`'s Newton model, then handed to
+MuJoCo.
+
+Per-step randomisation (``RandomizationConfig.enabled``)
+--------------------------------------------------------
+- :func:`delay_actions_kernel`: actuation latency. Envs flagged ``late`` act on the previous control step's
+  actions (20 ms late); the others on this step's.
+- :func:`push_kernel`: every ``interval`` control steps of an episode, a random horizontal change of the base
+  velocity (components uniform in +-``velocity``).
+- :func:`observation_noise_kernel`: uniform noise of a per-column amplitude added to the observation.
+
+Terrain curriculum (legged_gym style, ``TerrainConfig.levels`` = L > 0): every finished episode moves its robot
+between lanes
+------------------------------------------------------------------------------------------------------------------
+The curriculum terrain is L lanes side by side along y; lane k is the chosen terrain with its block heights and step
+rise scaled by (k + 1) / L (``terrain.heightmap.lane_config``). When an env's episode ends (status != 0), before it
+is reset (:func:`curriculum_kernel`):
+- success (the goal reached, i.e. ``goal_distance - goal_radius`` walked): one level up; an env that solves
+  the last level goes to a random level, so every level keeps being visited (as legged_gym does);
+- fell, off course or timed out having walked less than half of ``goal_distance`` along x: one level down
+  (never below 0); otherwise the level stays;
+- nonfinite (blown-up physics): the level stays.
+The env's lane start moves to the new level's lane centre (plus the env's own fixed lateral offset), at
+``spawn_height`` above the highest terrain under the robot's footprint there; the reset then places the
+robot there. :func:`placement_kernel` does the placement alone (at construction).
+
+Resets (:func:`reset_envs_kernel`)
+----------------------------------
+For every env selected by ``mask``, back to the env's start lane with the randomisation the task asks for
+(``TaskConfig.reset_lateral``, ``reset_yaw``, ``reset_joint_noise``):
+- the base goes to (lane_x, lane_y + U(-lateral, lateral)) at height ``spawn_z``, with yaw U(-yaw, yaw);
+- the joints go to the standing pose + U(-joint, joint), clipped to the limits, at rest;
+- the joint targets are set to that pose;
+- ``start`` receives the new base (x, y), which the goal and the off-course check are measured from;
+- ``prev_x`` receives the new base x, for the forward reward.
+The world then makes its physics consistent with the new joint state (``World.restart``).
+
+Random numbers come from Warp's counter-based generator, ``wp.rand_init(seed, env + N * counter)``, with ``counter``
+the env's control-step counter, advanced once per step by :func:`advance_counter_kernel` (a launch of its own, so
+that every kernel runs inside the captured graph).
+"""
+
+from __future__ import annotations
+
+import newton
+import numpy as np
+import warp as wp
+
+from hexnewton.mdp.terms import HeightField, max_terrain_height
+from hexnewton.physics.reference import NONFINITE, SUCCESS
+from hexnewton.physics.robot import BASE_QD
+from hexnewton.physics.world import World
+
+
+def randomize_physics(world: World, seed: int = 0) -> dict[str, np.ndarray]:
+    """Draw each env's physical properties from ``world.cfg.randomization`` (``RandomizationConfig``), write them into
+    the world's Newton model and hand them to MuJoCo: contact friction, torso payload, leg link masses, PD gains and
+    effort limits, foot radius and contact time constant (where set). Returns the per-env draws."""
+    r, m, n = world.cfg.randomization, world.model, world.num_envs
+    rng = np.random.default_rng([seed, 0x5EED])
+    u = lambda lo_hi: rng.uniform(lo_hi[0], lo_hi[1], n)  # noqa: E731
+    draws = {"friction": u(r.friction), "payload": u(r.payload), "link_mass_scale": u(r.link_mass_scale),
+             "kp_scale": u(r.kp_scale), "kd_scale": u(r.kd_scale), "effort_scale": u(r.effort_scale)}  # fmt: skip
+    # friction: MuJoCo combines two geoms' friction by max, so the shared ground takes the range's minimum
+    # and every robot shape its env's draw
+    shape_world = m.shape_world.numpy()
+    mu = m.shape_material_mu.numpy()
+    robot = shape_world >= 0
+    mu[robot] = draws["friction"][shape_world[robot]]
+    mu[~robot] = min(r.friction)
+    m.shape_material_mu.assign(mu)
+    draws.update(_contact_draws(world, rng, robot, shape_world))
+    # masses: bodies are laid out env by env, torso first; inertia scales with the mass
+    per_env = m.body_count // n
+    mass = m.body_mass.numpy().reshape(n, per_env)
+    inertia = m.body_inertia.numpy().reshape(n, per_env, 3, 3)
+    scale = np.ones((n, per_env))
+    scale[:, 0] = (mass[:, 0] + draws["payload"]) / mass[:, 0]
+    scale[:, 1:] = draws["link_mass_scale"][:, None]
+    mass = mass * scale
+    inertia = inertia * scale[:, :, None, None]
+    m.body_mass.assign(mass.reshape(-1).astype(np.float32))
+    m.body_inv_mass.assign(np.where(mass > 0, 1.0 / mass, 0.0).reshape(-1).astype(np.float32))
+    m.body_inertia.assign(inertia.reshape(-1, 3, 3).astype(np.float32))
+    m.body_inv_inertia.assign(np.linalg.inv(inertia.reshape(-1, 3, 3)).astype(np.float32))
+    # the 18 actuated joints of each env (after the 6 base dofs)
+    nd = m.joint_dof_count // n
+    for name, key in (("joint_target_ke", "kp_scale"), ("joint_target_kd", "kd_scale"),
+                      ("joint_effort_limit", "effort_scale")):  # fmt: skip
+        a = getattr(m, name).numpy().reshape(n, nd)
+        a[:, BASE_QD:] *= draws[key][:, None]
+        getattr(m, name).assign(a.reshape(-1))
+    world.solver.notify_model_changed(newton.ModelFlags.SHAPE_PROPERTIES | newton.ModelFlags.BODY_INERTIAL_PROPERTIES
+                                      | newton.ModelFlags.JOINT_DOF_PROPERTIES | newton.ModelFlags.ACTUATOR_PROPERTIES)
+    return draws
+
+
+def _contact_draws(world: World, rng: np.random.Generator, robot: np.ndarray, shape_world: np.ndarray) -> dict:
+    """Each env's foot radius (``shape_scale`` of its ``*_foot`` spheres, their bounding radius with it) and its
+    robot-ground contact time constant, where ``cfg.randomization`` sets them. MuJoCo averages the two geoms'
+    solref, so the robot's shapes get ``2 t - t_ground`` (stiffness 1/t², damping 2/t: damping ratio 1)."""
+    r, m, n = world.cfg.randomization, world.model, world.num_envs
+    draws = {}
+    if r.foot_radius is not None:
+        draws["foot_radius"] = radius = rng.uniform(r.foot_radius[0], r.foot_radius[1], n)
+        feet = robot & np.array([str(label).endswith("_foot") for label in m.shape_label])
+        scale, bound = m.shape_scale.numpy(), m.shape_collision_radius.numpy()
+        scale[feet, 0] = bound[feet] = radius[shape_world[feet]]
+        m.shape_scale.assign(scale)
+        m.shape_collision_radius.assign(bound)
+    if r.contact_timeconst is not None:
+        draws["contact_timeconst"] = t = rng.uniform(r.contact_timeconst[0], r.contact_timeconst[1], n)
+        ke, kd = m.shape_material_ke.numpy(), m.shape_material_kd.numpy()
+        ground = ~robot
+        t_ground = 2.0 / float(kd[ground][0]) if ground.any() and kd[ground][0] > 0 else 0.02
+        t_robot = np.maximum(2.0 * t[shape_world[robot]] - t_ground, 1e-3)
+        ke[robot], kd[robot] = 1.0 / t_robot**2, 2.0 / t_robot
+        m.shape_material_ke.assign(ke)
+        m.shape_material_kd.assign(kd)
+    return draws
+
+
+__all__ = ["randomize_physics"]
+
+
+# ====================================================================================================
+# per-step randomisation
+# ====================================================================================================
+
+@wp.kernel
+def delay_actions_kernel(
+    actions: wp.array2d[wp.float32],
+    late: wp.array[wp.bool],
+    previous: wp.array2d[wp.float32],
+    effective: wp.array2d[wp.float32],
+):
+    e, k = wp.tid()
+    a = actions[e, k]
+    if late[e]:
+        effective[e, k] = previous[e, k]
+    else:
+        effective[e, k] = a
+    previous[e, k] = a
+
+
+@wp.kernel
+def observation_noise_kernel(
+    amplitude: wp.array[wp.float32],
+    seed: int,
+    counter: wp.array[wp.int32],
+    obs: wp.array2d[wp.float32],
+):
+    e = wp.tid()
+    rng = wp.rand_init(seed, e + obs.shape[0] * counter[0])
+    for j in range(obs.shape[1]):
+        obs[e, j] = obs[e, j] + amplitude[j] * (2.0 * wp.randf(rng) - 1.0)
+
+
+@wp.kernel
+def push_kernel(
+    episode_steps: wp.array[wp.int32],
+    interval: int,
+    velocity: float,
+    seed: int,
+    counter: wp.array[wp.int32],
+    joint_qd: wp.array2d[wp.float32],
+):
+    e = wp.tid()
+    k = episode_steps[e]
+    if k == 0 or k % interval != 0:
+        return
+    rng = wp.rand_init(seed, e + joint_qd.shape[0] * counter[0])
+    joint_qd[e, 0] = joint_qd[e, 0] + velocity * (2.0 * wp.randf(rng) - 1.0)
+    joint_qd[e, 1] = joint_qd[e, 1] + velocity * (2.0 * wp.randf(rng) - 1.0)
+
+
+def delay_actions_reference(actions, late, previous):
+    """Float64 reference of :func:`delay_actions_kernel`: returns (effective, new previous)."""
+    a = np.asarray(actions, np.float64)
+    return np.where(np.asarray(late, bool)[:, None], np.asarray(previous, np.float64), a), a
+
+
+def pushed_envs_reference(episode_steps, interval):
+    """Which envs :func:`push_kernel` pushes this step (the draws themselves are Warp's)."""
+    k = np.asarray(episode_steps)
+    return (k != 0) & (k % interval == 0)
+
+
+# ====================================================================================================
+# terrain curriculum
+# ====================================================================================================
+
+@wp.func
+def _place(hf: HeightField, level: int, levels: int, lane_width: float, offset_y: float, footprint: float,
+           spawn_height: float) -> wp.vec3:  # fmt: skip
+    y = (float(level) + 0.5 - 0.5 * float(levels)) * lane_width + offset_y
+    return wp.vec3(0.0, y, max_terrain_height(hf, 0.0, y, footprint) + spawn_height)
+
+
+@wp.kernel
+def curriculum_kernel(
+    status: wp.array[wp.int32],
+    joint_q: wp.array2d[wp.float32],
+    start: wp.array[wp.vec2],
+    goal_distance: float,
+    levels: int,
+    lane_width: float,
+    offset_y: wp.array[wp.float32],
+    hf: HeightField,
+    footprint: float,
+    spawn_height: float,
+    seed: int,
+    counter: wp.array[wp.int32],
+    level: wp.array[wp.int32],
+    lane: wp.array[wp.vec2],
+    spawn_z: wp.array[wp.float32],
+):
+    e = wp.tid()
+    st = status[e]
+    if st == 0 or st == NONFINITE:
+        return
+    lv = level[e]
+    if st == SUCCESS:
+        lv = lv + 1
+        if lv >= levels:
+            rng = wp.rand_init(seed, e + joint_q.shape[0] * counter[0])
+            lv = wp.min(int(wp.randf(rng) * float(levels)), levels - 1)
+    elif joint_q[e, 0] - start[e][0] < 0.5 * goal_distance:
+        lv = wp.max(lv - 1, 0)
+    level[e] = lv
+    p = _place(hf, lv, levels, lane_width, offset_y[e], footprint, spawn_height)
+    lane[e] = wp.vec2(p[0], p[1])
+    spawn_z[e] = p[2]
+
+
+@wp.kernel
+def placement_kernel(
+    level: wp.array[wp.int32],
+    levels: int,
+    lane_width: float,
+    offset_y: wp.array[wp.float32],
+    hf: HeightField,
+    footprint: float,
+    spawn_height: float,
+    lane: wp.array[wp.vec2],
+    spawn_z: wp.array[wp.float32],
+):
+    e = wp.tid()
+    p = _place(hf, level[e], levels, lane_width, offset_y[e], footprint, spawn_height)
+    lane[e] = wp.vec2(p[0], p[1])
+    spawn_z[e] = p[2]
+
+
+def start_levels(num_envs: int, start_levels: int) -> np.ndarray:
+    """Initial levels: envs spread evenly over 0 .. start_levels - 1."""
+    return (np.arange(num_envs) * start_levels // max(num_envs, 1)).astype(np.int32)
+
+
+def curriculum_reference(status, walked, level, goal_distance, levels, random_level):
+    """Float64 reference of :func:`curriculum_kernel`'s level update (``walked`` = x - start x; ``random_level``
+    (N,) stands in for the kernel's draw where an env solves the last level). Returns the new levels."""
+    status, walked, level = np.asarray(status), np.asarray(walked, np.float64), np.asarray(level, np.int64)
+    up = level + 1
+    up = np.where(up >= levels, random_level, up)
+    down = np.where(walked < 0.5 * goal_distance, np.maximum(level - 1, 0), level)
+    new = np.where(status == SUCCESS, up, down)
+    return np.where((status == 0) | (status == NONFINITE), level, new)
+
+
+# ====================================================================================================
+# resets
+# ====================================================================================================
+
+@wp.kernel
+def reset_envs_kernel(
+    mask: wp.array[wp.bool],
+    lane: wp.array[wp.vec2],
+    spawn_z: wp.array[wp.float32],
+    stand: wp.vec3,
+    lower: wp.vec3,
+    upper: wp.vec3,
+    lateral: float,
+    yaw: float,
+    joint_noise: float,
+    seed: int,
+    counter: wp.array[wp.int32],
+    joint_q: wp.array2d[wp.float32],
+    joint_qd: wp.array2d[wp.float32],
+    joint_target: wp.array2d[wp.float32],
+    start: wp.array[wp.vec2],
+    prev_x: wp.array[wp.float32],
+):
+    e = wp.tid()
+    if not mask[e]:
+        return
+    n = joint_q.shape[0]
+    rng = wp.rand_init(seed, e + n * counter[0])
+    x = lane[e][0]
+    y = lane[e][1] + lateral * (2.0 * wp.randf(rng) - 1.0)
+    a = yaw * (2.0 * wp.randf(rng) - 1.0)
+    joint_q[e, 0] = x
+    joint_q[e, 1] = y
+    joint_q[e, 2] = spawn_z[e]
+    joint_q[e, 3] = 0.0
+    joint_q[e, 4] = 0.0
+    joint_q[e, 5] = wp.sin(0.5 * a)
+    joint_q[e, 6] = wp.cos(0.5 * a)
+    for leg in range(6):
+        for k in range(3):
+            q = wp.clamp(stand[k] + joint_noise * (2.0 * wp.randf(rng) - 1.0), lower[k], upper[k])
+            joint_q[e, 7 + 3 * leg + k] = q
+            joint_target[e, 7 + 3 * leg + k] = q
+    for i in range(joint_qd.shape[1]):
+        joint_qd[e, i] = 0.0
+    start[e] = wp.vec2(x, y)
+    prev_x[e] = x
+
+
+@wp.kernel
+def advance_counter_kernel(counter: wp.array[wp.int32]):
+    counter[0] = counter[0] + 1
+
+
+def reset_bounds_reference(lane, spawn_z, stand, lower, upper, lateral, yaw, joint_noise, joint_q):
+    """Checks a reset state against its bounds (the generator itself is Warp's); returns True if all hold."""
+    q = np.asarray(joint_q, np.float64)
+    ok = np.allclose(q[:, 0], np.asarray(lane)[:, 0], atol=1e-6)
+    ok &= np.all(np.abs(q[:, 1] - np.asarray(lane)[:, 1]) <= lateral + 1e-6)
+    ok &= np.allclose(q[:, 2], spawn_z, atol=1e-6)
+    ok &= np.allclose(np.linalg.norm(q[:, 3:7], axis=1), 1.0, atol=1e-5)
+    ok &= np.all(np.abs(2 * np.arctan2(q[:, 5], q[:, 6])) <= yaw + 1e-5)
+    joints = q[:, 7:25].reshape(-1, 6, 3)
+    ok &= np.all(joints >= np.asarray(lower) - 1e-6) & np.all(joints <= np.asarray(upper) + 1e-6)
+    ok &= np.all(np.abs(joints - np.asarray(stand)) <= joint_noise + 1e-6)
+    return bool(ok)

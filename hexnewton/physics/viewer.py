@@ -1,0 +1,322 @@
+"""Rendering through Newton's viewers: an interactive window, headless ``.mp4`` videos and recordings.
+
+One :class:`RolloutViewer` binds a batched :class:`~hexnewton.physics.world.World` (every robot in one Newton model, each in
+its own lane) to one of Newton's viewers (``newton.viewer``):
+
+- ``gl``: ``ViewerGL``, an OpenGL window; with ``headless=True`` it renders off-screen through EGL, which on a
+  machine without a GPU is Mesa's software rasteriser (llvmpipe). ``video=PATH.mp4`` grabs every rendered frame
+  (``ViewerGL.get_frame``), draws the time and the task into it (Pillow) and encodes it with ffmpeg from
+  ``imageio-ffmpeg``;
+- ``usd``, ``rerun``, ``file``: ``ViewerUSD`` (``.usd``/``.usda``/``.usdc``, opens in usdview or Omniverse),
+  ``ViewerRerun`` (``.rrd``, opens in the Rerun viewer) and ``ViewerFile`` (``.json``/``.bin``, Newton's own
+  recording, replayed by ``ViewerFile.load_recording``): the model and the body poses of every frame, for offline
+  inspection and replay;
+- ``null``: ``ViewerNull``, nothing drawn (timing, tests).
+
+Only the first ``robots`` lanes are shown (``ViewerBase.set_visible_worlds``), where the simulation put them: the
+viewer's automatic world offsets are switched off. A follow camera looks at the mean base position of the shown
+robots from behind and to the side. ``RolloutViewer.add`` has the signature of the rollout recorders
+(:func:`hexnewton.analysis.rollout.rollout`), so a viewer rides along any rollout.
+
+Headless OpenGL needs ``PYGLET_HEADLESS=1`` before pyglet is first imported (:func:`make_viewer` sets it) and, on a
+machine without a GPU driver, Mesa's EGL and software rasteriser (Debian: ``libegl1 libegl-mesa0 libgl1-mesa-dri
+libgl1 libgbm1``).
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import math
+import os
+import sys
+
+import numpy as np
+
+VIEWERS = ("gl", "usd", "rerun", "file", "null")
+#: recording viewers -> the file endings their ``--out`` takes
+RECORDINGS = {"usd": (".usd", ".usda", ".usdc"), "rerun": (".rrd",), "file": (".json", ".bin")}
+#: viewer -> (module it needs, pip package)
+_NEEDS = {"gl": ("pyglet", "pyglet"), "usd": ("pxr", "usd-core"), "rerun": ("rerun", "rerun-sdk")}
+VIDEO_EXTENSIONS = (".mp4",)
+
+
+def has_display() -> bool:
+    """Whether a window can open: a desktop session (X11 or Wayland on Linux; always on macOS and Windows)."""
+    if sys.platform in ("darwin", "win32"):
+        return True
+    return bool(os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY"))
+
+
+def default_viewer(video: str | None, out: str | None) -> str:
+    """The viewer a command line without ``--viewer`` gets: the recording ``out``'s file ending names, else ``gl``
+    for a video or with a display, else ``null``."""
+    for viewer, ends in RECORDINGS.items():
+        if out is not None and out.endswith(ends):
+            return viewer
+    if video or has_display():
+        return "gl"
+    return "null"
+
+
+def _require(viewer: str) -> None:
+    module, package = _NEEDS.get(viewer, (None, None))
+    if module is None:
+        return
+    if importlib.util.find_spec(module) is None:
+        raise ValueError(f"--viewer {viewer} needs {package}: pip install -e \".[viewer]\" (or pip install {package})")
+
+
+def check_viewer_args(viewer: str, headless: bool, video: str | None, out: str | None) -> None:
+    """Fail before any simulation, with one line, on a combination of viewer flags that cannot work."""
+    if viewer not in VIEWERS:
+        raise ValueError(f"unknown viewer '{viewer}': choose from {', '.join(VIEWERS)}")
+    if video is not None:
+        if not video.endswith(VIDEO_EXTENSIONS):
+            raise ValueError(f"{video}: a video must be a {' or '.join(VIDEO_EXTENSIONS)} file")
+        if viewer != "gl":
+            raise ValueError(f"--video renders through ViewerGL: use --viewer gl (not {viewer}), or --out for a "
+                             "recording")  # fmt: skip
+        if importlib.util.find_spec("imageio_ffmpeg") is None:
+            raise ValueError("writing .mp4 needs ffmpeg from imageio-ffmpeg: pip install -e \".[viewer]\"")
+    if viewer in RECORDINGS:
+        ends = RECORDINGS[viewer]
+        if out is None:
+            raise ValueError(f"--viewer {viewer} records to a file: give --out PATH{ends[0]}")
+        if not out.endswith(ends):
+            raise ValueError(f"{out}: a {viewer} recording must be a {' or '.join(ends)} file")
+        if out.endswith(".bin"):
+            if importlib.util.find_spec("cbor2") is None:
+                raise ValueError(f"{out}: a .bin recording needs cbor2 (pip install cbor2), or write .json")
+    elif out is not None:
+        raise ValueError(f"--out is the file of a recording: use it with --viewer {', '.join(RECORDINGS)}")
+    if viewer == "gl" and not headless and video is None and not has_display():
+        raise ValueError("--viewer gl opens a window but there is no display (DISPLAY is unset): add --headless "
+                         "--video PATH.mp4, or record with --viewer usd --out PATH.usd")  # fmt: skip
+    _require(viewer)
+
+
+def make_viewer(viewer: str, out: str | None = None, headless: bool = False, width: int = 960, height: int = 540,
+                fps: float = 50.0, num_frames: int | None = None):  # fmt: skip
+    """One of Newton's viewers (``VIEWERS``), as Newton's examples make them (``newton.examples.init``)."""
+    if viewer == "gl" and headless:
+        os.environ["PYGLET_HEADLESS"] = "1"  # read once, when pyglet is first imported
+        if "pyglet" in sys.modules:  # imported already: its options count until its GL module loads
+            sys.modules["pyglet"].options["headless"] = True
+    import newton.viewer
+
+    if viewer == "gl":
+        return newton.viewer.ViewerGL(width=width, height=height, headless=headless, vsync=False)
+    if viewer == "usd":
+        return newton.viewer.ViewerUSD(output_path=out, fps=max(1, round(fps)), num_frames=num_frames)
+    if viewer == "rerun":
+        return newton.viewer.ViewerRerun(record_to_rrd=out, serve_web_viewer=False)
+    if viewer == "file":
+        return newton.viewer.ViewerFile(out, auto_save=False)
+    return newton.viewer.ViewerNull(num_frames=num_frames or 1 << 30)
+
+
+# ----------------------------------------------------------------------------------------------- frame overlay
+def _font(size: int):
+    from PIL import ImageFont
+
+    try:
+        return ImageFont.load_default(size=size)
+    except TypeError:  # Pillow < 10.1: one bitmap size
+        return ImageFont.load_default()
+
+
+def draw_caption(frame: np.ndarray, lines: list[str]) -> np.ndarray:
+    """``frame`` (H, W, 3) uint8 with ``lines`` written at its top left on a dark band."""
+    from PIL import Image, ImageDraw
+
+    img = Image.fromarray(frame)
+    draw = ImageDraw.Draw(img)
+    size = max(12, frame.shape[0] // 30)
+    font = _font(size)
+    pad, step = size // 2, int(size * 1.3)
+    width = max(draw.textlength(line, font=font) for line in lines) if lines else 0
+    draw.rectangle((0, 0, int(width) + 2 * pad, pad + step * len(lines)), fill=(20, 20, 20))
+    for i, line in enumerate(lines):
+        draw.text((pad, pad // 2 + i * step), line, fill=(255, 255, 255), font=font)
+    return np.asarray(img)
+
+
+class VideoWriter:
+    """Frames (H, W, 3) uint8 into an H.264 ``.mp4`` through imageio-ffmpeg's ffmpeg."""
+
+    def __init__(self, path: str, fps: float):
+        import imageio_ffmpeg
+
+        self.path, self.fps, self.frames = path, fps, 0
+        self._gen = None
+        self._ffmpeg = imageio_ffmpeg
+
+    def add(self, frame: np.ndarray) -> None:
+        if self._gen is None:
+            h, w = frame.shape[:2]
+            self._gen = self._ffmpeg.write_frames(self.path, (w, h), fps=self.fps, codec="libx264", quality=7,
+                                                  macro_block_size=2, ffmpeg_log_level="error")  # fmt: skip
+            self._gen.send(None)
+        self._gen.send(np.ascontiguousarray(frame))
+        self.frames += 1
+
+    def close(self) -> None:
+        if self._gen is not None:
+            self._gen.close()
+            self._gen = None
+
+
+# ----------------------------------------------------------------------------------------------- the viewer
+GROUND_COLOR, TORSO_COLOR, LEG_COLOR = (0.62, 0.58, 0.50), (0.93, 0.55, 0.15), (0.22, 0.24, 0.28)
+
+
+def paint(model) -> None:
+    """Colour the model's shapes for the viewers (``Model.shape_color``, display only): the terrain sand, each
+    robot's torso orange, its legs dark grey."""
+    if getattr(model, "shape_color", None) is None:
+        return
+    body = model.shape_body.numpy()
+    bodies_per_robot = max(1, model.body_count // max(1, model.world_count))
+    colors = np.empty((len(body), 3), np.float32)
+    colors[:] = LEG_COLOR
+    colors[body < 0] = GROUND_COLOR
+    colors[(body >= 0) & (body % bodies_per_robot == 0)] = TORSO_COLOR
+    model.shape_color.assign(colors)
+
+
+class RolloutViewer:
+    """Shows a batched world's first ``robots`` robots through a Newton viewer, every ``stride`` control steps.
+
+    ``viewer``: one of ``VIEWERS``; ``out``: the recording's file (usd, rerun, file); ``video``: an ``.mp4`` written
+    from ViewerGL's frames (headless or in a window), each captioned with ``title`` and the time. :meth:`add` is a
+    rollout recorder's hook; :meth:`close` finishes the video or recording."""
+
+    def __init__(self, viewer: str = "gl", *, headless: bool = False, video: str | None = None, out: str | None = None,
+                 robots: int = 3, stride: int = 1, title: str = "", width: int = 960, height: int = 540,
+                 control_dt: float = 0.02):  # fmt: skip
+        check_viewer_args(viewer, headless, video, out)
+        self.kind, self.robots, self.stride, self.title = viewer, robots, max(1, stride), title
+        self.video_path, self.out = video, out
+        self.fps = 1.0 / (self.stride * control_dt)
+        self.viewer = make_viewer(viewer, out, headless, width, height, self.fps)
+        self.video = VideoWriter(video, self.fps) if video else None
+        self.world = None
+        self.frames = 0
+        self._k = 0
+        self._cam: np.ndarray | None = None
+        self.closed_by_user = False
+
+    # -- set-up
+    def attach(self, world) -> None:
+        """Give the viewer ``world``'s model, its first ``robots`` lanes shown where they are."""
+        self.world = world
+        v = self.viewer
+        paint(world.model)
+        v.set_model(world.model)
+        v.set_world_offsets((0.0, 0.0, 0.0))  # the lanes already keep the robots apart
+        self.shown = min(self.robots, world.num_envs)
+        if self.shown < world.num_envs:
+            v.set_visible_worlds(list(range(self.shown)))
+
+    def follow(self, base: np.ndarray) -> None:
+        """Put the camera behind and beside ``base`` (the shown robots' base positions, (R, 3)), looking at their
+        mean; the target is smoothed so that the picture does not shake with the gait."""
+        target = base.mean(axis=0)
+        self._cam = target if self._cam is None else self._cam + 0.15 * (target - self._cam)
+        spread = float(np.ptp(base[:, 1])) if len(base) > 1 else 0.0
+        dist = max(1.1, 0.9 * spread + 0.7)
+        direction = np.array([0.75, 0.55, -0.38])  # the view direction: forward (+x), across the lanes, down
+        direction /= np.linalg.norm(direction)
+        pos = self._cam - dist * direction
+        pitch = math.degrees(math.asin(direction[2]))
+        yaw = math.degrees(math.atan2(direction[1], direction[0]))
+        if hasattr(self.viewer, "camera"):
+            self.viewer.set_camera(pos.tolist(), pitch, yaw)
+
+    # -- per frame
+    def render(self, world, t: float) -> None:
+        """Draw ``world``'s current state at simulated time ``t``."""
+        if self.world is not world:
+            self.attach(world)
+        v = self.viewer
+        if self.kind == "gl" and not v.is_running():  # the window was closed: the rollout goes on unseen
+            self.closed_by_user = True
+            return
+        base = world.state_0.body_q.numpy().reshape(world.num_envs, -1, 7)[: self.shown, 0, :3]
+        self.follow(base)
+        v.begin_frame(t)
+        v.log_state(world.state_0)
+        v.end_frame()
+        self.frames += 1
+        if self.video is not None:
+            frame = v.get_frame().numpy()
+            self.video.add(draw_caption(frame, [line for line in (self.title, f"t = {t:6.2f} s") if line]))
+
+    def add(self, env, t: float, q=None, rpy=None, done=None) -> None:
+        """The rollout hook: every ``stride``-th control step, draw ``env``'s world."""
+        if self._k % self.stride == 0:
+            self.render(env.world, t)
+        self._k += 1
+
+    def close(self) -> None:
+        """Finish the video or recording (and close the window)."""
+        if self.video is not None:
+            self.video.close()
+        if self.kind in ("usd", "file"):
+            self.viewer.close()  # writes the file
+        elif self.kind == "gl":
+            self.viewer.close()
+        elif self.kind == "rerun":
+            self.viewer.close()
+
+
+# ----------------------------------------------------------------------------------------------- during training
+class VideoEnv:
+    """A training env (rsl-rl VecEnv) that records a clip every ``interval`` iterations (Isaac Lab's and mjlab's
+    ``--video``): from the first control step of iterations 0, ``interval``, 2 ``interval``, ... the next ``length``
+    control steps go through a headless :class:`RolloutViewer` into ``folder/iteration_<k>.mp4``. Everything else is
+    the wrapped env's (attributes are read from and written to it)."""
+
+    def __init__(self, env, folder: str, interval: int, length: int, steps_per_iteration: int, robots: int = 3,
+                 title: str = "", width: int = 960, height: int = 540):  # fmt: skip
+        check_viewer_args("gl", True, "clip.mp4", None)
+        os.makedirs(folder, exist_ok=True)
+        attrs = dict(env=env, folder=folder, interval=interval, length=length, steps_per_iteration=steps_per_iteration,
+                     robots=robots, title=title, size=(width, height), first_iteration=0, clips=[], _step=0,
+                     _recorder=None, _left=0)  # fmt: skip
+        for name, value in attrs.items():
+            object.__setattr__(self, name, value)
+
+    def __getattr__(self, name: str):
+        return getattr(self.env, name)
+
+    def __setattr__(self, name: str, value) -> None:
+        if name in self.__dict__:
+            object.__setattr__(self, name, value)
+        else:
+            setattr(self.env, name, value)
+
+    def step(self, actions):
+        out = self.env.step(actions)
+        period = self.interval * self.steps_per_iteration
+        if self._recorder is None and self._step % period == 0:
+            iteration = self.first_iteration + self._step // self.steps_per_iteration
+            path = os.path.join(self.folder, f"iteration_{iteration}.mp4")
+            self._recorder = RolloutViewer("gl", headless=True, video=path, robots=self.robots, width=self.size[0],
+                                           height=self.size[1], control_dt=self.env.cfg.task.control_dt,
+                                           title=f"{self.title}iteration {iteration}")  # fmt: skip
+            self._left = self.length
+        if self._recorder is not None:
+            self._recorder.render(self.env.world, (self.length - self._left) * self.env.cfg.task.control_dt)
+            self._left -= 1
+            if self._left <= 0:
+                self.close()
+        self._step += 1
+        return out
+
+    def close(self) -> None:
+        """Finish the clip being recorded, if any."""
+        if self._recorder is not None:
+            self._recorder.close()
+            self.clips.append(self._recorder.video_path)
+            object.__setattr__(self, "_recorder", None)

@@ -1,0 +1,531 @@
+"""A batched Newton world: N hexapods, each in its own world, sharing one terrain.
+
+Model/State/Control as in Newton: ``World.model`` is static, ``World.state`` the current physics state,
+``World.control`` the joint targets. One ``World.step()`` advances one physics frame (``frame_dt``): the
+collision pipeline runs once, then ``substeps`` MuJoCo (mujoco_warp) steps reuse its contacts. The whole
+frame is recorded once into a graph (a CUDA graph on GPU, Warp's own capture on CPU) and replayed.
+
+Tensors (torch, zero-copy over the Warp arrays; writes go straight into the simulation):
+  ``joint_q``      (N, 25)  base position xyz, base quaternion xyzw, 18 joint angles
+  ``joint_qd``     (N, 24)  base linear, base angular velocity, 18 joint velocities
+  ``joint_target`` (N, 18)  PD position targets of the 18 joints (a view into ``control.joint_target_q``)
+
+Contact capacity: every frame, a kernel folds MuJoCo's per-world overflow bitmask and the collision
+pipeline's triangle-pair / contact-reduction counters into sticky flags that ``check_contacts()`` reads and
+reports (warning or ``ContactOverflowError``); overflow never passes silently.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import os
+import warnings
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import newton
+import numpy as np
+import warp as wp
+from newton.solvers import SolverMuJoCo
+
+from hexnewton import startup
+from hexnewton.config import HexConfig, SimConfig
+from hexnewton.errors import HexnewtonError
+from hexnewton.physics.robot import BASE_Q, BASE_QD, NUM_JOINTS, build_hexapod, leg_bounds, stand_height
+from hexnewton.physics.terrain import Terrain, make_terrain, max_terrain_height_np
+
+log = logging.getLogger("hexnewton")
+
+# overflow bits beyond MuJoCo's own (bits 0-15) and Newton's (16 pipeline contacts, 17 nconmax)
+OVERFLOW_TRIANGLE_PAIRS = 1 << 20
+OVERFLOW_CONTACT_REDUCTION = 1 << 21
+# mujoco_warp's ITERATIONS (1 << 9) and LS_ITERATIONS (1 << 10) flags mean "solver hit its iteration cap",
+# not a dropped contact or constraint: counted apart from capacity overflow.
+NOT_CONVERGED_BITS = (1 << 9) | (1 << 10)
+
+
+
+class ContactOverflowError(HexnewtonError):
+    pass
+
+
+def init_warp() -> None:
+    """``wp.init()`` without the notice Warp's native library prints on every start of a machine without a CUDA driver
+    ("Warp CUDA warning: Could not find or load the NVIDIA CUDA driver ...": the CPU machines this runs on by design);
+    anything else it writes to stderr passes through. Warp logs warnings and errors only: no init banner, no
+    per-module compile lines."""
+    import sys
+    import tempfile
+
+    wp.config.log_level = wp.LOG_WARNING
+    if wp._src.context.runtime is not None:
+        return
+    sys.stderr.flush()
+    saved = os.dup(2)
+    with tempfile.TemporaryFile() as captured:
+        os.dup2(captured.fileno(), 2)
+        try:
+            wp.init()
+        finally:
+            os.dup2(saved, 2)
+            os.close(saved)
+        captured.seek(0)
+        text = captured.read().decode(errors="replace")
+    rest = [line for line in text.splitlines(keepends=True) if "Could not find or load the NVIDIA CUDA driver" not in line]
+    sys.stderr.write("".join(rest))
+
+
+init_warp()
+
+
+def resolve_device(name: str | None) -> str:
+    """``None``/``"auto"`` -> ``cuda:0`` if CUDA is available else ``cpu``; explicit CUDA must exist."""
+    wp.init()
+    if name in (None, "", "auto"):
+        return "cuda:0" if wp.is_cuda_available() else "cpu"
+    if name.startswith("cuda"):
+        if not wp.is_cuda_available():
+            raise HexnewtonError(f"device '{name}' was requested but this machine has no CUDA device")
+        if name == "cuda":
+            return "cuda:0"
+        try:
+            wp.get_device(name)
+        except Exception:
+            raise HexnewtonError(f"device '{name}' does not exist (CUDA devices: {wp.get_cuda_device_count()})")
+        return name
+    if name != "cpu":
+        raise HexnewtonError(f"unknown device '{name}': use cpu, cuda or cuda:N")
+    return name
+
+
+MAX_ENVS = 1 << 20  # per device; an H100 holds 16384 envs in a few GB (BENCHMARKS.md)
+
+
+def validate_sim(cfg: SimConfig) -> None:
+    if not isinstance(cfg.num_envs, (int, np.integer)) or cfg.num_envs <= 0:
+        raise HexnewtonError(f"num_envs must be a positive integer, got {cfg.num_envs}")
+    if cfg.num_envs > MAX_ENVS:
+        raise HexnewtonError(f"num_envs {cfg.num_envs:,} exceeds the {MAX_ENVS:,} robots one device can hold")
+    if cfg.substeps < 1:
+        raise HexnewtonError(f"substeps must be >= 1, got {cfg.substeps}")
+    if not cfg.frame_dt > 0:
+        raise HexnewtonError(f"frame_dt must be > 0, got {cfg.frame_dt}")
+    for name in ("rigid_gap", "terrain_gap", "speculative_gap"):
+        value = getattr(cfg, name)
+        if value is not None and not (math.isfinite(value) and value >= 0):
+            raise HexnewtonError(f"sim.{name} must be a non-negative number of metres, got {value}")
+
+
+@wp.kernel
+def _accumulate_overflow(
+    solver_overflow: wp.array[wp.int32],
+    triangle_pairs: wp.array[wp.int32],
+    max_triangle_pairs: int,
+    reduction_overflow: wp.array[wp.int32],
+    sticky: wp.array[wp.int32],
+    global_sticky: wp.array[wp.int32],
+):
+    w = wp.tid()
+    bits = solver_overflow[w]
+    if bits != 0:
+        wp.atomic_or(sticky, w, bits)
+    if w == 0:
+        g = wp.int32(0)
+        if triangle_pairs[0] > max_triangle_pairs:
+            g = g | OVERFLOW_TRIANGLE_PAIRS
+        if reduction_overflow[0] != 0:
+            g = g | OVERFLOW_CONTACT_REDUCTION
+        if g != 0:
+            wp.atomic_or(global_sticky, 0, g)
+
+
+@wp.kernel
+def _nonfinite_envs(
+    joint_q: wp.array2d[wp.float32],
+    joint_qd: wp.array2d[wp.float32],
+    out: wp.array[wp.bool],
+):
+    e = wp.tid()
+    bad = int(0)
+    for i in range(joint_q.shape[1]):
+        if not wp.isfinite(joint_q[e, i]):
+            bad = 1
+    for i in range(joint_qd.shape[1]):
+        if not wp.isfinite(joint_qd[e, i]):
+            bad = 1
+    out[e] = bad != 0
+
+
+@wp.kernel
+def _spawn_pose(
+    mask: wp.array[wp.bool],
+    spawn_q: wp.array2d[wp.float32],
+    joint_q: wp.array2d[wp.float32],
+    joint_qd: wp.array2d[wp.float32],
+    joint_target: wp.array2d[wp.float32],
+):
+    e = wp.tid()
+    if not mask[e]:
+        return
+    for k in range(joint_q.shape[1]):
+        joint_q[e, k] = spawn_q[e, k]
+        joint_target[e, k] = spawn_q[e, k]
+    for k in range(joint_qd.shape[1]):
+        joint_qd[e, k] = 0.0
+
+
+@wp.kernel
+def _zero_world_rows(mask: wp.array[wp.bool], values: wp.array2d[wp.float32]):
+    """values[w, :] = 0 for the worlds w selected by mask (one thread per world: most steps reset few)."""
+    w = wp.tid()
+    if mask[w]:
+        for i in range(values.shape[1]):
+            values[w, i] = 0.0
+
+
+def as_mask(mask: np.ndarray | wp.array | None, buffer: wp.array) -> wp.array:
+    """A per-env bool mask as a Warp array: ``None`` selects all (filled into ``buffer``), a Warp array is used as
+    is (capturable), anything else is copied into ``buffer``."""
+    if mask is None:
+        buffer.fill_(True)
+        return buffer
+    if isinstance(mask, wp.array):
+        return mask
+    buffer.assign(np.asarray(mask, dtype=bool))
+    return buffer
+
+
+def capture_graph(device: str, step: Callable[[], None], restore: list[wp.array]) -> wp.Graph:
+    """Run ``step`` once uncaptured (kernel compilation, lazy solver allocations), put the ``restore`` arrays
+    back as they were, then record ``step`` into a graph (a CUDA graph on GPU, Warp's capture on CPU)."""
+    saved = [wp.clone(a) for a in restore]
+    step()
+    for dst, src in zip(restore, saved):
+        wp.copy(dst, src)
+    wp.synchronize_device(device)
+    with wp.ScopedDevice(device), wp.ScopedCapture() as cap:
+        step()
+    return cap.graph
+
+
+# Warp modules (defined at import time) that a World's step launches, as listed by a CPU run. They are compiled
+# in parallel before the first step (``precompile``), on CUDA (NVRTC) and on the CPU (LLVM) alike: on the 2-core
+# machine a cold start to the first iteration took 74 s against 82 s compiling them one by one. Kernels that
+# mujoco_warp builds on the fly still compile lazily (161 s of a 265 s cold start on an H100,
+# results/time_to_skill); a module missing from this list only costs time, never correctness.
+STEP_MODULES = (
+    "newton._src.geometry.broad_phase_nxn", "newton._src.geometry.bvh", "newton._src.geometry.narrow_phase",
+    "newton._src.sim.articulation", "newton._src.sim.collide", "newton._src.solvers.mujoco.kernels",
+    "mujoco_warp._src.constraint", "mujoco_warp._src.derivative", "mujoco_warp._src.forward",
+    "mujoco_warp._src.passive", "mujoco_warp._src.set_const", "mujoco_warp._src.smooth",
+    "mujoco_warp._src.solver", "mujoco_warp._src.support",
+)  # fmt: skip
+
+
+def precompile(device: str, max_workers: int | None = None) -> list[str]:
+    """Compile ``STEP_MODULES`` and every ``hexnewton`` Warp module for ``device`` on parallel threads
+    (default: one per CPU core); returns the module names loaded."""
+    from warp._src.context import user_modules
+
+    modules = [m for m in list(user_modules.values())
+               if m.kernels and (m.name in STEP_MODULES or m.name.startswith("hexnewton."))]  # fmt: skip
+    wp.force_load(device=device, modules=modules, max_workers=max_workers or os.cpu_count() or 1)
+    return [m.name for m in modules]
+
+
+@dataclass
+class OverflowReport:
+    worlds: int  # worlds whose solver reported a capacity-overflow bit
+    bits: int  # union of all capacity-overflow bits seen
+    frames_checked: int
+    not_converged_worlds: int = 0  # worlds where the MuJoCo solver hit its iteration cap (not an overflow)
+
+    @property
+    def ok(self) -> bool:
+        return self.bits == 0
+
+    def describe(self) -> str:
+        names = []
+        b = self.bits
+        if b & int(SolverMuJoCo.OverflowBits.CONTACT_PIPELINE):
+            names.append("collision pipeline contacts > rigid_contact_max (raise sim.contacts_per_env)")
+        if b & int(SolverMuJoCo.OverflowBits.SOLVER_NCONMAX):
+            names.append("contacts > MuJoCo nconmax (raise sim.contacts_per_env)")
+        if b & 0xFFFF:
+            names.append(f"mujoco_warp overflow flags 0x{b & 0xFFFF:x} (raise sim.constraints_per_env)")
+        if b & OVERFLOW_TRIANGLE_PAIRS:
+            names.append("triangle-pair buffer (raise sim.triangle_pairs_per_env)")
+        if b & OVERFLOW_CONTACT_REDUCTION:
+            names.append("contact-reduction buffer (raise sim.contacts_per_env)")
+        return (f"contact buffers overflowed in {self.worlds} world(s), contacts were dropped: " + "; ".join(names)
+                + "; or lower sim.rigid_gap (fewer contact candidates)")
+
+
+class World:
+    """N hexapods on one terrain, stepped by SolverMuJoCo with Newton's collision pipeline."""
+
+    def __init__(self, cfg: HexConfig | None = None, terrain: Terrain | None = None):
+        self.cfg = cfg = cfg or HexConfig()
+        sim = cfg.sim
+        validate_sim(sim)
+        self.device = resolve_device(sim.device)
+        self.num_envs = int(sim.num_envs)
+        self.frame_dt = sim.frame_dt
+        self.sim_dt = sim.frame_dt / sim.substeps
+        self.substeps = sim.substeps
+        startup.mark("python and imports")
+
+        self.terrain = terrain if terrain is not None else make_terrain(cfg.terrain)
+        startup.mark("terrain")
+        scene = self._build_scene()
+        startup.mark("scene")
+        with wp.ScopedDevice(self.device):
+            self.model = scene.finalize(device=self.device)
+        startup.mark("finalize")
+        self._init_model_arrays()
+        startup.mark("model arrays")
+        self._init_physics()
+        precompile(self.device)
+        startup.mark("kernels")
+        self._init_buffers()
+        self._bind_views()
+        self.sim_time = 0.0
+        self.graph = None
+        self.controller: Callable[[World], None] | None = None
+        wp.synchronize_device(self.device)
+        startup.mark("world buffers")
+
+    def _build_scene(self) -> newton.ModelBuilder:
+        """The scene: ``num_envs`` hexapods, each in its own world, and the shared terrain. Env i stands at x = 0 in
+        its own lane y_i, the lanes evenly spread over +-spawn_y_spread so that the robots meet different blocks, its
+        torso ``spawn_clearance`` above the highest terrain under its footprint."""
+        cfg, sim, n = self.cfg, self.cfg.sim, self.num_envs
+        robot = build_hexapod(cfg.robot, gap=sim.rigid_gap)
+
+        scene = newton.ModelBuilder()
+        SolverMuJoCo.register_custom_attributes(scene)
+        scene.rigid_gap = sim.rigid_gap
+        scene.replicate(robot, n)
+        terrain_gap = sim.rigid_gap if sim.terrain_gap is None else sim.terrain_gap
+        ground_cfg = newton.ModelBuilder.ShapeConfig(mu=cfg.robot.friction, gap=terrain_gap)
+        self.terrain.add_to_builder(scene, ground_cfg)
+
+        self.spawn_xy = np.zeros((n, 2))
+        if n > 1:
+            self.spawn_xy[:, 1] = np.linspace(-sim.spawn_y_spread, sim.spawn_y_spread, n)
+        self.footprint = 0.5 * math.hypot(*cfg.robot.torso_size[:2]) + cfg.robot.hip_length + cfg.robot.femur_length
+        self.spawn_clearance = max(cfg.robot.spawn_height, stand_height(cfg.robot))
+        ground = max_terrain_height_np(self.terrain.grid, self.spawn_xy[:, 0], self.spawn_xy[:, 1], self.footprint)
+        self.spawn_z = ground + self.spawn_clearance
+        nq = BASE_Q + NUM_JOINTS
+        q = np.asarray(scene.joint_q, dtype=np.float32).reshape(n, nq)
+        q[:, 0:2] = self.spawn_xy
+        q[:, 2] = self.spawn_z
+        scene.joint_q[:] = q.reshape(-1).tolist()
+        return scene
+
+    def _init_model_arrays(self) -> None:
+        """The finalized model's states (forward kinematics of the spawn poses) and control."""
+        self.model.rigid_gap = self.cfg.sim.rigid_gap
+
+        self.state_0 = self.model.state()
+        self.state_1 = self.model.state()
+        self.control = self.model.control()
+        newton.eval_fk(self.model, self.model.joint_q, self.model.joint_qd, self.state_0)
+
+    def _init_physics(self) -> None:
+        """The MuJoCo solver and Newton's collision pipeline with the contact capacity the solver takes."""
+        sim = self.cfg.sim
+        self.solver = SolverMuJoCo(
+            self.model,
+            use_mujoco_contacts=False,
+            solver=sim.solver,
+            integrator=sim.integrator,
+            iterations=sim.iterations,
+            ls_iterations=sim.ls_iterations,
+            nconmax=sim.contacts_per_env,
+            njmax=sim.constraints_per_env,
+        )
+        # iteration-cap hits are reported by check_contacts(), not printed per world by mujoco_warp
+        self.solver.mjw_model.opt.warn_overflow &= ~NOT_CONVERGED_BITS
+        max_contacts = self.solver.get_max_contact_count()
+        startup.mark("solver")
+        self.pipeline = newton.CollisionPipeline(
+            self.model,
+            rigid_contact_max=max_contacts,
+            max_triangle_pairs=max(1_000_000, sim.triangle_pairs_per_env * self.num_envs),
+            speculative_contact_gap_max=sim.speculative_gap,
+        )
+        # speculative contacts need the time until the next detection: one frame
+        self._collide_dt = sim.frame_dt if sim.speculative_gap is not None else None
+        self.contacts = self.pipeline.contacts()
+        startup.mark("collision pipeline")
+
+    def _init_buffers(self) -> None:
+        """The step's and the resets' buffers: overflow flags, reset masks, the solver's constraint rows per world,
+        the spawn poses, the standing pose and joint limits as kernels take them, the non-finite flags."""
+        n = self.num_envs
+        self.observables = self.solver.observables({SolverMuJoCo.ObservableKind.OVERFLOW})
+        self._overflow_world = wp.zeros(n, dtype=wp.int32, device=self.device)
+        self._overflow_global = wp.zeros(1, dtype=wp.int32, device=self.device)
+        self._frames_since_check = 0
+        self.overflow_frames = 0  # frames in which some overflow was reported (upper bound per check)
+
+        self._reset_mask = wp.zeros(n, dtype=wp.bool, device=self.device)
+        # SolverMuJoCo.reset's world mask: one entry per world plus the global world -1 (never reset)
+        self._solver_mask = wp.zeros(n + 1, dtype=wp.bool, device=self.device)
+        efc = self.solver.mjw_data.efc
+        self._efc_rows = [a.reshape((n, -1)) for a in (efc.J, efc.D, efc.Jqvel, efc.aref, efc.force, efc.frictionloss,
+                                                        efc.margin, efc.pos, efc.vel)]  # fmt: skip
+        self._spawn_q = wp.clone(self.model.joint_q.reshape((n, BASE_Q + NUM_JOINTS)))  # each env's spawn pose
+        # one leg's standing pose and (hip, knee, ankle) limits, as kernels take them
+        robot = self.cfg.robot
+        lower, upper = leg_bounds(robot)
+        self.stand_pose, self.joint_lower, self.joint_upper = (wp.vec3(*robot.stand_pose), wp.vec3(*lower),
+                                                               wp.vec3(*upper))  # fmt: skip
+        self._bad = wp.zeros(n, dtype=wp.bool, device=self.device)
+        self.nonfinite_resets = 0
+
+    def set_controller(self, controller: Callable[[World], None] | None) -> None:
+        """Launch ``controller(world)`` before every physics substep (inside the captured graph)."""
+        self.controller = controller
+        self.graph = None
+
+    # ------------------------------------------------------------------ tensors
+    def _bind_views(self) -> None:
+        n, nq, nqd = self.num_envs, BASE_Q + NUM_JOINTS, BASE_QD + NUM_JOINTS
+        self.joint_q_wp = self.state_0.joint_q.reshape((n, nq))
+        self.joint_qd_wp = self.state_0.joint_qd.reshape((n, nqd))
+        self.joint_target_wp = self.control.joint_target_q.reshape((n, nq))
+
+    @property
+    def joint_q(self):
+        return wp.to_torch(self.joint_q_wp)
+
+    @property
+    def joint_qd(self):
+        return wp.to_torch(self.joint_qd_wp)
+
+    @property
+    def joint_target(self):
+        """(N, 18) joint position targets (torch view; the base columns of the control array are unused)."""
+        return wp.to_torch(self.joint_target_wp)[:, BASE_Q:]
+
+    def numpy_q(self) -> np.ndarray:
+        return self.joint_q_wp.numpy()
+
+    # ------------------------------------------------------------------ stepping
+    def simulate_frame(self) -> None:
+        """One physics frame (collision + substeps), uncaptured: callers may record it into their own graph."""
+        self.pipeline.collide(self.state_0, self.contacts, dt=self._collide_dt)
+        for i in range(self.substeps):
+            if self.controller is not None:
+                self.controller(self)
+            self.state_0.clear_forces()
+            self.solver.step(
+                self.state_0, self.state_1, self.control, self.contacts, self.sim_dt, observables=self.observables
+            )
+            wp.launch(
+                _accumulate_overflow,
+                dim=self.num_envs,
+                inputs=[
+                    self.observables.overflow,
+                    self._triangle_pair_count(),
+                    self.pipeline.narrow_phase.max_triangle_pairs,
+                    self.contacts._reduction_overflow,
+                    self._overflow_world,
+                    self._overflow_global,
+                ],
+                device=self.device,
+            )
+            if self.substeps % 2 == 1 and i == self.substeps - 1:
+                self.state_0.assign(self.state_1)
+            else:
+                self.state_0, self.state_1 = self.state_1, self.state_0
+
+    def _triangle_pair_count(self) -> wp.array:
+        c = getattr(self.pipeline.narrow_phase, "triangle_pairs_count", None)
+        if c is None:  # no mesh in the scene (flat terrain)
+            if not hasattr(self, "_zero_count"):
+                self._zero_count = wp.zeros(1, dtype=wp.int32, device=self.device)
+            c = self._zero_count
+        return c
+
+    def _capture(self) -> None:
+        s = self.state_0
+        restore = [s.joint_q, s.joint_qd, s.body_q, s.body_qd, self._overflow_world, self._overflow_global]
+        self.graph = capture_graph(self.device, self.simulate_frame, restore)
+
+    def step(self, frames: int = 1) -> None:
+        """Advance ``frames`` physics frames of ``frame_dt`` each."""
+        if self.graph is None and self.cfg.sim.use_graph:
+            self._capture()
+        for _ in range(frames):
+            if self.graph is not None:
+                wp.capture_launch(self.graph)
+            else:
+                self.simulate_frame()
+        self.sim_time += frames * self.frame_dt
+        self._frames_since_check += frames
+
+    # ------------------------------------------------------------------ resets & health
+    def reset(self, mask: np.ndarray | wp.array | None = None) -> None:
+        """Put the selected envs (all if ``mask`` is None) back at their spawn pose, at rest, with their joint targets
+        on it (:meth:`restart`). The MDP places its robots itself (``hexnewton.mdp.events``) and calls
+        :meth:`restart`. Capturable when ``mask`` is a Warp array."""
+        m = as_mask(mask, self._reset_mask)
+        wp.launch(_spawn_pose, dim=self.num_envs, inputs=[m, self._spawn_q],
+                  outputs=[self.joint_q_wp, self.joint_qd_wp, self.joint_target_wp], device=self.device)  # fmt: skip
+        self.restart(m)
+
+    def restart(self, mask: wp.array) -> None:
+        """Make the physics of the envs in ``mask`` follow the joint state just written into ``joint_q`` /
+        ``joint_qd``: their bodies by forward kinematics, MuJoCo's warm start, applied forces and constraint rows
+        cleared. Capturable."""
+        newton.eval_fk(self.model, self.state_0.joint_q, self.state_0.joint_qd, self.state_0, mask=mask)
+        # MuJoCo's per-world warm start and applied forces survive a state reset: after a blow-up they would
+        # poison the next step, so clear them for the reset worlds (the joint state was set above: flags 0)
+        wp.copy(self._solver_mask, mask, count=self.num_envs)
+        self.solver.reset(self.state_0, self._solver_mask, flags=0)
+        # ... and so do the constraint rows (mujoco_warp fills only the non-zero Jacobian entries of a new row):
+        # zero them, or a NaN left by a blow-up returns a few steps later
+        for rows in self._efc_rows:
+            wp.launch(_zero_world_rows, dim=self.num_envs, inputs=[mask, rows], device=self.device)
+
+    def reset_nonfinite(self) -> int:
+        """Reset every env whose state holds NaN/Inf; returns how many (also counted in nonfinite_resets)."""
+        wp.launch(_nonfinite_envs, dim=self.num_envs, inputs=[self.joint_q_wp, self.joint_qd_wp, self._bad],
+                  device=self.device)  # fmt: skip
+        bad = int(self._bad.numpy().sum())
+        if bad:
+            self.reset(self._bad)
+            self.nonfinite_resets += bad
+            log.warning("reset %d env(s) with non-finite physics state", bad)
+        return bad
+
+    def check_contacts(self, on_overflow: str = "warn") -> OverflowReport:
+        """Read the sticky overflow flags since the last check; warn (or raise) if any buffer overflowed."""
+        flags = self._overflow_world.numpy()
+        capacity = flags & ~NOT_CONVERGED_BITS
+        bits = int(np.bitwise_or.reduce(capacity)) | int(self._overflow_global.numpy()[0])
+        report = OverflowReport(
+            worlds=int((capacity != 0).sum()),
+            bits=bits,
+            frames_checked=self._frames_since_check,
+            not_converged_worlds=int(((flags & NOT_CONVERGED_BITS) != 0).sum()),
+        )
+        self._overflow_world.zero_()
+        self._overflow_global.zero_()
+        self._frames_since_check = 0
+        if not report.ok:
+            self.overflow_frames += report.frames_checked
+            if on_overflow == "raise":
+                raise ContactOverflowError(report.describe())
+            warnings.warn(report.describe(), RuntimeWarning, stacklevel=2)
+        return report
+
+    # ------------------------------------------------------------------ convenience
+    def base_pos(self) -> np.ndarray:
+        return self.numpy_q()[:, 0:3]
+

@@ -1,0 +1,178 @@
+"""Named tasks: each one environment config (:class:`~hexnewton.config.HexConfig`) and one learner config
+(:class:`~hexnewton.learning.agent.AgentConfig`), registered by name and with Gymnasium.
+
+    python train.py --list_tasks
+    python train.py --task complex                       # the shipped complex policy's recipe
+    python train.py --task complex --env.reward.w_tilt 20 --agent.algorithm.learning_rate 5e-4
+
+    import gymnasium as gym
+    import hexnewton.tasks                                 # registers the tasks, as isaaclab_tasks and mjlab.tasks do
+    env = gym.make("Hexnewton-Complex-v0", num_envs=1024, device="cuda")
+
+A task is data: :func:`task` returns a fresh copy, ``train.py`` applies the command line's overrides to it, and every
+checkpoint records the task's name and the full configs it trained with, so ``play.py``, ``evaluate`` and ``export``
+need nothing but the checkpoint. Adding a task is one :func:`register` call below.
+
+The recipe of the paper's terrains (ours; RESULTS.md says what each part does): a terrain curriculum (10 lanes of
+rising difficulty, robots start on the first 3), a knee-lift floor (A2 in 0.9-1.3 rad: a high-stepping gait from the
+start), domain randomisation, the 20 ms physics frame, a 0.1 s filter on the CPG parameters and the stability shaping
+(:data:`STABLE_SHAPING`). The complex course adds the body posture and the stable-gait curriculum
+(:data:`STABLE_STAGES`, 300 iterations: 172 s from process start to the exported policy on one H100,
+results/time_to_skill). ``paper`` is Table 1's reward and Table 2's PPO on the complex course, with
+none of that.
+"""
+
+from __future__ import annotations
+
+import copy
+from dataclasses import dataclass, field, replace
+
+from hexnewton.config import (
+    ACTION_MODES,
+    CPGConfig,
+    HexConfig,
+    RandomizationConfig,
+    RewardConfig,
+    SimConfig,
+    TaskConfig,
+    TerrainConfig,
+    apply_overrides,
+    terrain_for_goal,
+)
+from hexnewton.learning.agent import AgentConfig, paper_agent
+
+#: The stability shaping of the variant chosen on validation rounds among six (RESULTS.md, "Stable gaits"): fewest
+#: falls, lowest rugged pitch and roll variance; 2 / 0.02 / 0.05 (with a 0.03 s filter) fell 18x as often on rugged
+#: ground, 20 / 0.2 / 0.1 20x.
+STABLE_SHAPING = dict(w_tilt=5.0, w_ang_vel=0.05, w_action_rate=0.1)
+#: contact randomisation, off in the recipe: feet of 10-14 mm radius (nominal 12) and contact time constants of 10-30
+#: ms (nominal 20), so that training meets feet that fit between the 2 cm blocks and sink deeper into them
+#: (``--env.randomization.foot_radius 0.010 0.014 --env.randomization.contact_timeconst 0.010 0.030``; what it does
+#: in Newton and in C MuJoCo: results/sim2sim/contact_randomisation)
+FOOT_CONTACT_RANGES = dict(foot_radius=(0.010, 0.014), contact_timeconst=(0.010, 0.030))
+
+#: The stable-gait curriculum of the complex recipe (RESULTS.md, "Stable gaits"; results/time_to_skill): (first
+#: iteration, changes) of the reflex gain (``posture_reflex``) and the reward weights, applied from that iteration on;
+#: the run ends after 300 iterations (29.5 M env-steps at 4096 envs).
+STABLE_STAGES = ((100, dict(posture_reflex=2.0, w_tilt=15.0, w_ang_vel=0.1)), (200, dict(w_tilt=40.0, w_ang_vel=0.3)))
+STABLE_ITERATIONS = 300
+#: The same curriculum over 1062 iterations, for the 5 m courses (``complex-5m``, ``stairs-8cm``): their episodes are
+#: longer, so the terrain curriculum needs more iterations per level (not measured with the 300-iteration schedule).
+LONG_STABLE_STAGES = ((382, dict(posture_reflex=2.0, w_tilt=15.0, w_ang_vel=0.1)), (744, dict(w_tilt=40.0, w_ang_vel=0.3)))
+LONG_STABLE_ITERATIONS = 1062
+
+
+@dataclass
+class Task:
+    """One named task: what the robot faces (``env``), how it learns (``agent``) and what it commands."""
+
+    name: str
+    description: str
+    env: HexConfig = field(default_factory=HexConfig)
+    agent: AgentConfig = field(default_factory=AgentConfig)
+    #: ``cpg``: the policy sets the CPG's parameters (CPG_RL); ``joint``: the 18 joint targets (pure DRL)
+    action_mode: str = "cpg"
+
+    @property
+    def gym_id(self) -> str:
+        """The Gymnasium id: ``Hexnewton-Complex-5m-v0`` for ``complex-5m``."""
+        return "Hexnewton-" + "-".join(w[:1].upper() + w[1:] for w in self.name.split("-")) + "-v0"
+
+
+TASKS: dict[str, Task] = {}
+
+
+def register(t: Task) -> Task:
+    if t.name in TASKS:
+        raise ValueError(f"task '{t.name}' is registered already")
+    if t.action_mode not in ACTION_MODES:
+        raise ValueError(f"task '{t.name}': action mode must be one of {', '.join(ACTION_MODES)}")
+    TASKS[t.name] = t
+    _register_gymnasium(t)
+    return t
+
+
+def task(name: str) -> Task:
+    """A fresh copy of the registered task ``name``; ValueError naming the tasks for an unknown one."""
+    if name not in TASKS:
+        raise ValueError(f"unknown task '{name}': choose one of {', '.join(TASKS)} (python train.py --list_tasks)")
+    return copy.deepcopy(TASKS[name])
+
+
+def task_table() -> str:
+    """One line per task: name, Gymnasium id, description."""
+    width = max(map(len, TASKS))
+    gid = max(len(t.gym_id) for t in TASKS.values())
+    return "\n".join(f"{t.name:<{width}}  {t.gym_id:<{gid}}  {t.description}" for t in TASKS.values())
+
+
+def course(terrain: str | TerrainConfig, trained: HexConfig | None = None, overrides: dict | None = None,
+           num_envs: int | None = None, device: str | None = None, terrain_seed: int = 0, **task_fields) -> HexConfig:
+    """The course a trained controller is played or evaluated on: ``terrain`` (a name: as §3.1 defines it; a
+    ``TerrainConfig``: that one) without curriculum lanes, no randomisation, with the controller's own physics and CPG
+    (``trained``: a checkpoint's config; the defaults for the fixed CPG) and ``TaskConfig`` with ``task_fields``;
+    then ``overrides`` ({"terrain.step_rise": 0.07, ...}), ``num_envs`` robots on ``device``, terrain seed
+    ``terrain_seed`` and the patch long enough for the goal."""
+    trained = trained or HexConfig()
+    ground = TerrainConfig(name=terrain) if isinstance(terrain, str) else replace(terrain, levels=0, start_levels=1)
+    cfg = HexConfig(sim=trained.sim, cpg=trained.cpg, task=replace(TaskConfig(), **task_fields), terrain=ground)
+    cfg = apply_overrides(cfg, overrides or {})
+    sim = cfg.sim if num_envs is None else replace(cfg.sim, num_envs=num_envs, device=device)
+    return replace(cfg, sim=sim, terrain=terrain_for_goal(replace(cfg.terrain, seed=terrain_seed),
+                                                          cfg.task.goal_distance))
+
+
+def _register_gymnasium(t: Task) -> None:
+    """Register ``t`` with Gymnasium (when it is installed): ``gym.make(t.gym_id, num_envs=N, device=D)``."""
+    try:
+        import gymnasium
+    except ImportError:  # pragma: no cover - gymnasium is a dependency
+        return
+    if t.gym_id not in gymnasium.registry:
+        gymnasium.register(id=t.gym_id, entry_point="hexnewton.tasks.gymnasium_env:HexnewtonGymEnv",
+                           kwargs={"task": t.name}, disable_env_checker=True)  # fmt: skip
+
+
+def _recipe(terrain: str, goal_distance: float = TaskConfig.goal_distance, posture: bool = False,
+            **terrain_fields) -> HexConfig:
+    """The paper's terrains as hexnewton trains on them (module docstring)."""
+    return HexConfig(
+        terrain=terrain_for_goal(TerrainConfig(name=terrain, levels=10, start_levels=3, **terrain_fields),
+                                 goal_distance),
+        sim=SimConfig(frame_dt=0.02, substeps=4),
+        cpg=CPGConfig(a2_range=(0.9, 1.3), param_tau=0.1, posture=posture),
+        task=TaskConfig(goal_distance=goal_distance, seed=1),
+        reward=RewardConfig(**STABLE_SHAPING),
+        randomization=RandomizationConfig(enabled=True),
+    )
+
+
+def _stable_agent(long: bool = False) -> AgentConfig:
+    if long:
+        return AgentConfig(max_iterations=LONG_STABLE_ITERATIONS, stages=LONG_STABLE_STAGES)
+    return AgentConfig(max_iterations=STABLE_ITERATIONS, stages=STABLE_STAGES)
+
+
+register(Task("flat", "flat ground, the plain MDP (Table 1 with our goal and off-course terms), 300 iterations",
+              HexConfig(task=TaskConfig(seed=1))))
+register(Task("rugged", "2 cm blocks of 0-6 cm (§3.1), the terrain recipe, 300 iterations", _recipe("rugged")))
+register(Task("stepped", "15 stairs of 6 cm rise, 25 cm deep (§3.1), the terrain recipe, 300 iterations",
+              _recipe("stepped")))
+register(Task("complex", "1.5 m of blocks then 1.5 m of stairs (§3.1) with the body posture and the stable-gait "
+              "curriculum, 300 iterations (about 3 minutes on one H100)", _recipe("complex", posture=True), _stable_agent()))
+register(Task("complex-5m", "the complex course walked 5 m (goal 5.5 m ahead) with the complex recipe",
+              _recipe("complex", goal_distance=5.5, posture=True), _stable_agent(long=True)))
+register(Task("stairs-8cm", "15 stairs of 8 cm rise walked 5 m with the complex recipe; the stability fine starts "
+              "at 0.8 rad, climbing pitches the torso 19-25 deg",
+              replace(_recipe("stepped", goal_distance=5.5, posture=True, step_rise=0.08),
+                      reward=RewardConfig(stability_tilt=0.8, **STABLE_SHAPING)), _stable_agent(long=True)))
+register(Task("paper", "the complex course with Table 1's reward and Table 2's PPO exactly (no curriculum, posture, "
+              "shaping or randomisation; the paper's 15 parameters)",
+              HexConfig(terrain=TerrainConfig(name="complex"), task=TaskConfig(seed=1),
+                        reward=RewardConfig().paper_reward()), paper_agent()))
+register(Task("complex-joint", "pure DRL on the complex course: the 18 joint targets, the complex recipe's "
+              "terrain, physics and reward without the CPG", _recipe("complex"), action_mode="joint"))
+
+
+__all__ = ["ACTION_MODES", "FOOT_CONTACT_RANGES", "LONG_STABLE_STAGES", "STABLE_SHAPING", "STABLE_STAGES", "TASKS", "Task", "course", "register", "task",
+           "task_table"]
