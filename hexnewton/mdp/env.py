@@ -1,16 +1,17 @@
 """The paper's MDP (§2.4) as an rsl-rl-lib 5.5.1 ``VecEnv`` over the batched Newton world.
 
 One ``step(actions)`` is one control step (``TaskConfig.control_dt``). Apart from the action copy, it is a
-single captured graph (a CUDA graph on GPU, Warp's capture on CPU) of Warp kernels on preallocated arrays:
+single captured graph (a CUDA graph on GPU, Warp's capture on CPU) of Warp kernels on preallocated arrays, through
+five files:
 
-    actions -> parameters (physics/cpg.py) -> [CPG + mapping (physics/cpg.py, through controller.py) + physics
-            (sim.py)] x substeps -> episode ends, rewards with the stability shaping (mdp/terms.py)
-            -> episode bookkeeping (here) -> [curriculum lane change (mdp/events.py)]
-            -> randomised resets of finished envs and observations (mdp/terms.py)
+    [latency, pushes (mdp/events.py)] -> actions to CPG parameters (physics/cpg.py)
+    -> [CPG + mapping (physics/cpg.py) + physics (physics/world.py)] x frames x substeps
+    -> episode ends, rewards (mdp/terms.py) -> done flags and the episode ring (here)
+    -> [curriculum lane change (mdp/events.py)] -> resets of finished envs (mdp/events.py, physics/world.py)
+    -> observations (mdp/terms.py) [+ noise (mdp/events.py)]
 
-With ``RandomizationConfig.enabled`` the step also delays the actions of "late" envs, pushes bases and adds
-observation noise (mdp/events.py); the per-env physical draws are
-``randomization.randomize_physics``.
+The bracketed parts run with ``RandomizationConfig.enabled`` and ``TerrainConfig.levels``; the per-env physical draws
+are ``events.randomize_physics``, once, when the env is built.
 
 torch sees every buffer zero-copy (``wp.to_torch``), and nothing goes back to the host inside a step. What
 ``step`` and ``get_observations`` return are device copies of those buffers, made after the graph: rsl-rl keeps

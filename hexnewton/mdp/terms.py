@@ -116,7 +116,7 @@ by the caller), and any term whose value is not finite is 0: training never sees
 Adding a term touches two places: its row in ``REWARD_TERMS`` with its ``@wp.func`` and NumPy function (both read
 ``i.task.<field>`` / ``i.reward.<field>`` for any ``TaskConfig`` / ``RewardConfig`` field: the term tables' structs
 makes the structs from the dataclasses), and, for a new weight or parameter, its field in ``RewardConfig``. The env
-sizes ``terms``, launches the kernel and logs ``Reward/<name>`` from the table; ``tests/test_terms.py`` checks every
+sizes ``terms``, launches the kernel and logs ``Reward/<name>`` from the table; ``tests/mdp/test_terms.py`` checks every
 row's Warp function against its NumPy function.
 
 Observations (§2.4.1)

@@ -1,9 +1,18 @@
-"""The CPG's kernels, top down: the policy's action to the CPG parameters, the mid level (Huang et al. 2025,
-Eq. 3) and the low level (Eq. 4).
+"""The CPG: the policy's action to the CPG parameters, the mid level (Huang et al. 2025, Eq. 3) and the low level
+(Eq. 4), as Warp kernels and :class:`CPGController`, which drives a ``World``'s joints every substep.
 
-One control step launches :func:`scale_actions_kernel` once; before every physics substep ``hexnewton.physics.cpg``
-launches :func:`hopf_cpg_kernel` and then :func:`mapping_kernel`, which writes the 18 joint targets. Float64
-references of every kernel: ``physics/reference.py`` (the deployment runtime runs them too).
+``CPGController(world, cfg)`` owns, per env:
+- ``params_target`` (N, P): the parameters the high level asks for, in physical units (P = 15, or 18 with the
+  body posture, ``CPGConfig.posture``);
+- ``params`` (N, P): their filtered values, which the oscillators and the mapping actually use;
+- ``state`` (N, 4): the oscillators' (x0, y0, x1, y1);
+- ``dy`` (N, 2): the oscillators' dy/dt.
+
+The high level writes actions with ``set_actions`` (policy actions in [-1, 1]: one launch of
+:func:`scale_actions_kernel` per control step) or ``set_params`` (physical values). Call
+``world.set_controller(controller)``: before every physics substep (inside the captured graph) the controller
+launches :func:`hopf_cpg_kernel` and then :func:`mapping_kernel`, which writes the 18 joint targets into Newton's
+control array. Float64 references of every kernel: ``physics/reference.py`` (the deployment runtime runs them too).
 
 Actions -> parameters
 ---------------------

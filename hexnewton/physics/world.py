@@ -54,7 +54,8 @@ def init_warp() -> None:
     """``wp.init()`` without the notice Warp's native library prints on every start of a machine without a CUDA driver
     ("Warp CUDA warning: Could not find or load the NVIDIA CUDA driver ...": the CPU machines this runs on by design);
     anything else it writes to stderr passes through. Warp logs warnings and errors only: no init banner, no
-    per-module compile lines."""
+    per-module compile lines. Called where a command first needs Warp (:func:`resolve_device`, which every
+    :class:`World` calls), not on import."""
     import sys
     import tempfile
 
@@ -76,12 +77,10 @@ def init_warp() -> None:
     sys.stderr.write("".join(rest))
 
 
-init_warp()
-
 
 def resolve_device(name: str | None) -> str:
     """``None``/``"auto"`` -> ``cuda:0`` if CUDA is available else ``cpu``; explicit CUDA must exist."""
-    wp.init()
+    init_warp()
     if name in (None, "", "auto"):
         return "cuda:0" if wp.is_cuda_available() else "cpu"
     if name.startswith("cuda"):

@@ -17,7 +17,7 @@ from hexnewton.deploy.mjcf import build_model, robot_xml  # noqa: E402
 from hexnewton.physics.reference import RUNNING  # noqa: E402
 from hexnewton.physics.terrain.heightmap import build_height_grid  # noqa: E402
 
-BUNDLE = os.path.join(os.path.dirname(__file__), "..", "results", "controllers", "cpg_rl_complex")
+BUNDLE = os.path.join(os.path.dirname(__file__), "..", "..", "results", "controllers", "cpg_rl_complex")
 
 
 def _newton_robot(cfg: RobotConfig, q: np.ndarray):

@@ -9,7 +9,7 @@ import sys
 import numpy as np
 import pytest
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
 POLICY = os.path.join(ROOT, "results", "policies", "cpg_rl_flat.pt")
 BLOCKED = ("warp", "torch", "newton", "mujoco", "mujoco_warp", "rsl_rl", "tensordict")
 

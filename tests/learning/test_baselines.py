@@ -10,7 +10,7 @@ import torch
 
 from hexnewton.learning.baselines import agent_config
 
-ROOT = os.path.join(os.path.dirname(__file__), "..")
+ROOT = os.path.join(os.path.dirname(__file__), "..", "..")
 SMALL = {  # a few updates on 8 envs
     "sac": ["--agent.batch_size", "64", "--agent.learning_starts", "2", "--agent.buffer_size", "512"],
     "td3": ["--agent.batch_size", "64", "--agent.learning_starts", "2", "--agent.buffer_size", "512"],

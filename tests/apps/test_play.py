@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 import torch
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
 
 
 def test_play_loads_the_trained_checkpoint(trained):
@@ -127,7 +127,7 @@ def test_shipped_policies_fit_the_environment(name):
     from hexnewton.learning.checkpoint import check_compatible, load_checkpoint
     from hexnewton.mdp.terms import OBS_DIM
 
-    results = os.path.join(os.path.dirname(__file__), "..", "results")
+    results = os.path.join(os.path.dirname(__file__), "..", "..", "results")
     pt = os.path.join(results, "policies", name + ".pt")
     check_compatible(load_checkpoint(pt), pt, OBS_DIM["cpg"], 15, "cpg")
     sess = ort.InferenceSession(os.path.join(results, "controllers", name, "policy.onnx"),

@@ -12,7 +12,7 @@ from hexnewton.analysis.metrics import DISTANCES, round_metrics, summarize
 from hexnewton.mdp.terms import FELL, OFF_COURSE, SUCCESS
 
 DT = 0.02
-ROOT = os.path.join(os.path.dirname(__file__), "..")
+ROOT = os.path.join(os.path.dirname(__file__), "..", "..")
 
 
 def _synthetic():

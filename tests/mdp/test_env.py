@@ -1,6 +1,6 @@
 """The rsl-rl VecEnv (hexnewton/mdp/env.py): API conformance, the PPO storage contract, blow-ups, time-outs, the
 joint action mode, posture and shaping in the step, the heading-frame target; the Gymnasium wrapper (the reward, end
-and observation tables: tests/test_terms.py)."""
+and observation tables: tests/mdp/test_terms.py)."""
 
 import dataclasses
 import math

@@ -12,7 +12,7 @@ import pytest
 
 from hexnewton.physics.viewer import TORSO_COLOR, check_viewer_args, default_viewer, draw_caption
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
 # a short fixed-CPG rollout on flat ground: 2 robots, 24 control steps, a frame every 2nd step -> 12 frames
 ROLLOUT = ["--controller", "cpg", "--terrain", "flat", "--num_envs", "2", "--steps", "24", "--video_speed", "2",
            "--device", "cpu", "--no-progress"]  # fmt: skip

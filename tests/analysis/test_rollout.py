@@ -29,7 +29,7 @@ from hexnewton.mdp.terms import (
 from hexnewton.physics.reference import quat_to_rpy_np
 from hexnewton.physics.terrain import make_terrain, terrain_height_np
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
 TASK = TaskConfig()
 
 
