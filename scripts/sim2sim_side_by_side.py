@@ -55,7 +55,7 @@ def wedged_feet(r, robots) -> int:
 
 
 def mujoco_case(terrain: str, robots: int, steps: int) -> dict:
-    from hexnewton.apps.sim2sim import Rounds
+    from hexnewton.analysis.sim2sim import Rounds
 
     t0 = time.perf_counter()
     r = Rounds(BUNDLE, terrain, robots)

@@ -208,7 +208,7 @@ def test_command_line_help_and_argument_errors_load_neither_warp_nor_newton(cli)
 def test_deploy_runtime_loads_neither_warp_newton_nor_torch():
     """``import hexnewton.deploy.runtime`` and its controllers (a bundle with its ONNX policy, a fixed gait's spec) run on
     NumPy and onnxruntime alone; its replay command's ``--help`` too."""
-    from hexnewton.apps.sim2sim import fixed_cpg_spec
+    from hexnewton.analysis.sim2sim import fixed_cpg_spec
 
     bundle = os.path.join(ROOT, "results", "controllers", "cpg_rl_flat")
     code = (

@@ -87,7 +87,7 @@ def expected_clipped_action(mean, std) -> np.ndarray:
 class Controller:
     """The exported CPG_RL hierarchy for ``num_robots`` robots (batched like the simulator). ``bundle``: a bundle's
     folder, or a ``controller.json``-shaped dict without a policy (a fixed gait: the CPG runs ``initial_params``;
-    :func:`hexnewton.apps.sim2sim.fixed_cpg_spec`)."""
+    :func:`hexnewton.analysis.sim2sim.fixed_cpg_spec`)."""
 
     def __init__(self, bundle: str | dict, num_robots: int = 1, providers: list[str] | None = None,
                  stochastic: bool = False, seed: int | None = None, expected: bool = False):

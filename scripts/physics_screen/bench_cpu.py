@@ -1,4 +1,4 @@
-"""CPU sim-only throughput per candidate: hexnewton.apps.bench.bench_one with the candidate's SimConfig
+"""CPU sim-only throughput per candidate: hexnewton.analysis.bench.bench_one with the candidate's SimConfig
 (so rigid_gap works too). 16 envs, flat + complex, best of `reps` runs.
 
     python scripts/physics_screen/bench_cpu.py A B C ... [--json out]
@@ -8,7 +8,7 @@ import sys
 import warnings
 from dataclasses import asdict, replace
 
-from hexnewton.apps.bench import bench_one
+from hexnewton.analysis.bench import bench_one
 from hexnewton.config import SimConfig
 
 sys.path.insert(0, "scripts/physics_screen")

@@ -7,7 +7,8 @@ import numpy as np
 import pytest
 
 from hexnewton.apps.cli import run
-from hexnewton.apps.cpg_figure import NETWORKS, convergence, limit_cycle, main, param_counts, random_starts
+from hexnewton.analysis.cpg_figure import NETWORKS, convergence, limit_cycle, param_counts, random_starts
+from hexnewton.apps.cpg_figure import main
 from hexnewton.config import LEG_OSCILLATOR, CPGConfig
 from hexnewton.physics.reference import (
     hopf_cpg_reference,

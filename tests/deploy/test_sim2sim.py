@@ -11,7 +11,8 @@ import pytest
 
 mujoco = pytest.importorskip("mujoco")
 
-from hexnewton.apps.sim2sim import HEADLINE, PROG, HeightScanner, Rounds, fixed_cpg_spec, main  # noqa: E402
+from hexnewton.analysis.sim2sim import HeightScanner, Rounds, fixed_cpg_spec  # noqa: E402
+from hexnewton.apps.sim2sim import HEADLINE, PROG, main  # noqa: E402
 from hexnewton.config import JOINT_NAMES, RobotConfig, TerrainConfig  # noqa: E402
 from hexnewton.deploy.mjcf import build_model, robot_xml  # noqa: E402
 from hexnewton.physics.reference import RUNNING  # noqa: E402

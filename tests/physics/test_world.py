@@ -235,7 +235,7 @@ def test_bench_reports_sim_env_and_training(tmp_path):
 
 def test_bench_largest_that_fits(monkeypatch):
     """--largest doubles the env count until an allocation fails; other errors are not swallowed."""
-    from hexnewton.apps import bench
+    from hexnewton.analysis import bench
 
     def fake(terrain, n, device, frames, sim, ground=None):
         assert ground is None or ground.collision == "mesh_boxes"  # the terrain settings are passed on

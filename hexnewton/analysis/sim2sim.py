@@ -1,0 +1,308 @@
+"""A controller bundle in a closed loop in C MuJoCo, through the robot runtime, on the paper's terrains: the robots'
+sensors (:class:`HeightScanner`), the episode ends, the rounds of the evaluation's protocol (:class:`Rounds`,
+:func:`measure`), a film and MuJoCo's viewer. The command line and its report: ``python -m hexnewton.apps.sim2sim``."""
+
+from __future__ import annotations
+
+import time
+from dataclasses import replace
+
+import numpy as np
+
+from hexnewton.analysis.metrics import round_metrics, summarize
+from hexnewton.analysis.rollout import EVAL_TERRAIN_SEED, START_SEED_OFFSET
+from hexnewton.config import CPGConfig, RobotConfig, SimConfig, TaskConfig, TerrainConfig, terrain_for_goal
+from hexnewton.deploy.mjcf import build_model
+from hexnewton.deploy.runtime import FORMAT, Controller, target_in_heading_frame
+from hexnewton.physics.reference import FELL, NONFINITE, OFF_COURSE, RUNNING, SUCCESS, TIMEOUT, quat_to_rpy_np
+from hexnewton.physics.robot.geometry import footprint, leg_bounds, spawn_clearance
+
+#: the terrain reading's window, as the training observation's (``mdp.terms.H_HALF_EXTENT``) [m]
+H_HALF_EXTENT = 0.3
+
+
+_PARK_Z = -50.0  # where a finished robot waits, far below every terrain [m]
+
+
+class HeightScanner:
+    """The robot's terrain sensor: vertical ray casts (MuJoCo ``mj_rayHfield`` on the model's scanner heightfield)
+    through the centres of a 1 cm lattice of the odometry frame, kept in an elevation map as cells enter the window.
+    The terrain is static, so a cell is cast once; the readings are those of the training's height grid query
+    (``terrain.query``: the cell under a point, the highest cell overlapping a square), edge cells clamped alike."""
+
+    def __init__(self, model, data, grid):
+        import mujoco
+
+        self._ray, self.m, self.d = mujoco.mj_rayHfield, model, data
+        self.geom = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, "scanner")
+        self.x0, self.y0, self.res, self.nx, self.ny = grid.x0, grid.y0, grid.res, grid.nx, grid.ny
+        self.top = float(np.max(grid.heights)) + 1.0  # rays start 1 m above the highest terrain
+        self.map = np.full((grid.nx, grid.ny), np.nan)
+        self.rays = 0
+
+    def _index(self, coord, origin: float, n: int) -> np.ndarray:
+        return np.clip(np.floor((np.asarray(coord, np.float64) - origin) / self.res), 0, n - 1).astype(np.int64)
+
+    def _cast(self, i0: int, i1: int, j0: int, j1: int) -> np.ndarray:
+        """The map over cells [i0, i1] x [j0, j1], casting the rays of the cells not seen yet."""
+        block = self.map[i0:i1 + 1, j0:j1 + 1]
+        down = np.array([0.0, 0.0, -1.0])
+        for a, b in zip(*np.nonzero(np.isnan(block))):
+            i, j = i0 + a, j0 + b
+            pnt = np.array([self.x0 + (i + 0.5) * self.res, self.y0 + (j + 0.5) * self.res, self.top])
+            dist = self._ray(self.m, self.d, self.geom, pnt, down)
+            if dist < 0:
+                raise RuntimeError(f"height scanner: the ray at ({pnt[0]:.3f}, {pnt[1]:.3f}) hit no terrain")
+            block[a, b] = self.top - dist
+            self.rays += 1
+        return block
+
+    def height(self, x: float, y: float) -> float:
+        """The ground under (x, y)."""
+        i, j = int(self._index(x, self.x0, self.nx)), int(self._index(y, self.y0, self.ny))
+        return float(self._cast(i, i, j, j)[0, 0])
+
+    def window_max(self, x: float, y: float, half: float = H_HALF_EXTENT) -> float:
+        """The highest terrain over the square of half side ``half`` around (x, y)."""
+        i0, i1 = self._index([x - half, x + half], self.x0, self.nx)
+        j0, j1 = self._index([y - half, y + half], self.y0, self.ny)
+        return float(self._cast(int(i0), int(i1), int(j0), int(j1)).max())
+
+    def reading(self, x: float, y: float) -> float:
+        """The observation's terrain term: highest terrain within +-30 cm minus the ground under the base."""
+        return self.window_max(x, y) - self.height(x, y)
+
+
+def fixed_cpg_spec(cpg: CPGConfig | None = None, robot: RobotConfig | None = None, control_dt: float = 0.02,
+                   substep_dt: float = 0.005) -> dict:
+    """A controller.json-shaped spec of the fixed CPG (§3.3): no policy, the CPG at ``cpg.fixed_params()``, for
+    :class:`deploy.Controller`. The default 5 ms substep is the shipped policy's physics, with which the committed
+    Newton numbers of the fixed CPG were measured (results/stable_gait)."""
+    cpg, robot = cpg or CPGConfig(), robot or RobotConfig()
+    lo, hi = cpg.param_ranges()
+    lower, upper = leg_bounds(robot)
+    return {
+        "format": FORMAT, "action_mode": "cpg", "num_obs": 0, "num_actions": cpg.num_params, "obs_layout": [],
+        "param_names": list(cpg.param_names), "posture_reflex": cpg.posture_reflex if cpg.posture else 0.0,
+        "posture_tilt_max": cpg.posture_tilt_range[1], "param_lower": list(lo), "param_upper": list(hi),
+        "initial_params": list(cpg.fixed_params()),
+        "cpg": {k: getattr(cpg, k) for k in ("alpha", "mu", "delta", "theta", "duty", "steepness", "param_tau")},
+        "control_dt": control_dt, "substep_dt": substep_dt, "substeps_per_control": int(round(control_dt / substep_dt)),
+        "stand_pose": list(robot.stand_pose), "joint_lower": list(lower), "joint_upper": list(upper),
+        "goal_distance": TaskConfig.goal_distance,
+    }  # fmt: skip
+
+
+def start_poses(rounds: int, seed: int, task: TaskConfig | None = None, spread: float = SimConfig.spawn_y_spread,
+                stand=RobotConfig.stand_pose, robot: RobotConfig | None = None) -> dict:
+    """The rounds' starts as the evaluation draws them: lanes ``linspace(-spread, spread, rounds)`` at x = 0, then
+    from seed ``seed`` (the start seed) a lateral offset, a yaw and joint noise per robot (``TaskConfig.reset_*``)."""
+    task, robot = task or TaskConfig(), robot or RobotConfig()
+    lane = np.linspace(-spread, spread, rounds) if rounds > 1 else np.zeros(1)
+    rng = np.random.default_rng(seed)
+    lower, upper = leg_bounds(robot)
+    joints = np.clip(np.tile(stand, 6) + rng.uniform(-task.reset_joint_noise, task.reset_joint_noise, (rounds, 18)),
+                     np.tile(lower, 6), np.tile(upper, 6))  # fmt: skip
+    return {"lane": lane, "y": lane + rng.uniform(-task.reset_lateral, task.reset_lateral, rounds),
+            "yaw": rng.uniform(-task.reset_yaw, task.reset_yaw, rounds), "joints": joints}
+
+
+def episode_status(qpos: np.ndarray, qvel: np.ndarray, ground: np.ndarray, start_xy: np.ndarray, steps: int,
+                   task: TaskConfig) -> tuple[np.ndarray, np.ndarray]:
+    """The episode ends of ``mdp/terms.py`` (TERMINATIONS, first match wins) for robots (N, 25) / (N, 24) after
+    ``steps`` control steps: (status codes (N,), roll / pitch / yaw (N, 3)). Quaternions are MuJoCo's (w, x, y, z)."""
+    finite = np.isfinite(qpos).all(axis=1) & np.isfinite(qvel).all(axis=1)
+    quat = np.where(finite[:, None], qpos[:, [4, 5, 6, 3]], [0.0, 0.0, 0.0, 1.0])
+    rpy = quat_to_rpy_np(quat)
+    with np.errstate(invalid="ignore"):
+        blown = ~finite | (np.linalg.norm(qvel[:, :3], axis=1) > task.max_base_speed) | \
+            (np.abs(qvel[:, 6:]) > task.max_joint_speed).any(axis=1)
+        fell = (qpos[:, 2] - ground < task.min_height) | (np.abs(rpy[:, :2]) > task.max_tilt).any(axis=1)
+        off = np.abs(qpos[:, 1] - start_xy[:, 1]) > task.max_abs_y
+        won = np.hypot(qpos[:, 0] - start_xy[:, 0] - task.goal_distance, qpos[:, 1] - start_xy[:, 1]) < task.goal_radius
+    late = np.full(len(qpos), steps >= task.max_episode_steps)
+    status = np.select([blown, fell, off, won, late], [NONFINITE, FELL, OFF_COURSE, SUCCESS, TIMEOUT], RUNNING)
+    return status, np.where((status == NONFINITE)[:, None], 0.0, rpy)
+
+
+class Rounds:
+    """``rounds`` robots of one controller on one terrain, each its first episode, closed loop in MuJoCo.
+
+    ``controller``: a bundle folder (its policy acts) or a spec dict without a policy (:func:`fixed_cpg_spec`).
+    ``terrain``: a terrain name (its config from ``TerrainConfig``, patch long enough for the goal), seed ``seed``;
+    starts from ``seed + START_SEED_OFFSET`` (:func:`start_poses`). MuJoCo's timestep is the bundle's substep."""
+
+    def __init__(self, controller: str | dict, terrain: str, rounds: int, seed: int = EVAL_TERRAIN_SEED,
+                 robot: RobotConfig | None = None, task: TaskConfig | None = None):
+        import mujoco
+
+        from hexnewton.physics.terrain.heightmap import build_height_grid
+
+        self.mj, self.robot, self.task = mujoco, robot or RobotConfig(), task or TaskConfig()
+        self.ctrl = Controller(controller, num_robots=rounds)
+        self.spec, self.n = self.ctrl.spec, rounds
+        self.policy = self.ctrl.session is not None
+        self.control_dt, self.substeps = float(self.spec["control_dt"]), int(self.spec["substeps_per_control"])
+        self.task = replace(self.task, goal_distance=float(self.spec.get("goal_distance", self.task.goal_distance)))
+        self.grid = build_height_grid(terrain_for_goal(TerrainConfig(name=terrain, seed=seed), self.task.goal_distance))
+        s = start_poses(rounds, seed + START_SEED_OFFSET, self.task, stand=self.spec["stand_pose"], robot=self.robot)
+        places = [(0.0, y, 1.0, a) for y, a in zip(s["y"], s["yaw"])]
+        self.m = build_model(self.robot, self.grid, places, float(self.spec["substep_dt"]))
+        self.d = mujoco.MjData(self.m)
+        if self.m.nq != 25 * rounds or self.m.nsensordata != 40 * rounds:
+            raise RuntimeError("unexpected MuJoCo model layout")
+        mujoco.mj_forward(self.m, self.d)  # the terrain's poses, for the scanner's rays
+        self.scan = HeightScanner(self.m, self.d, self.grid)
+        z = [self.scan.window_max(0.0, y, footprint(self.robot)) + spawn_clearance(self.robot) for y in s["lane"]]
+        q = self.d.qpos.reshape(rounds, 25)
+        q[:, 0], q[:, 1], q[:, 2] = 0.0, s["y"], z
+        q[:, 3:7] = np.stack([np.cos(s["yaw"] / 2), 0 * s["yaw"], 0 * s["yaw"], np.sin(s["yaw"] / 2)], axis=1)
+        q[:, 7:] = s["joints"]
+        self.d.ctrl[:] = s["joints"].ravel()
+        mujoco.mj_forward(self.m, self.d)
+        self.start = np.stack([np.zeros(rounds), s["y"]], axis=1)
+        self.goal = self.start + [self.task.goal_distance, 0.0]
+        self.goal_z = np.array([self.scan.height(gx, gy) for gx, gy in self.goal])
+        self.alive = np.ones(rounds, bool)
+        self.steps = 0
+        self._show_only(0)
+
+    def _show_only(self, k: int) -> None:
+        """Robot ``k``'s geoms in group 0, the others' in group 3 (hidden by the viewer's and renderer's defaults)."""
+        for g in range(self.m.ngeom):
+            name = self.mj.mj_id2name(self.m, self.mj.mjtObj.mjOBJ_GEOM, g) or ""
+            if name.startswith("r") and "_" in name and name.split("_")[0][1:].isdigit():
+                self.m.geom_group[g] = 0 if name.startswith(f"r{k}_") else 3
+
+    def sensors(self) -> dict:
+        """The robots' current readings: joint encoders and velocities (N, 18), IMU quaternion (N, 4), x y z w."""
+        s = self.d.sensordata.reshape(self.n, 40)
+        return {"quat": s[:, [1, 2, 3, 0]].copy(), "joint_pos": s[:, 4:22].copy(), "joint_vel": s[:, 22:40].copy()}
+
+    def observation_inputs(self, r: dict) -> dict:
+        """The rest of the observation: the goal in the heading frame (odometry: the free joint's position) and the
+        terrain reading, for the robots still walking (0 for the others)."""
+        pos = self.d.qpos.reshape(self.n, 25)[:, :3]
+        target = target_in_heading_frame(pos, r["quat"], np.c_[self.goal, np.zeros(self.n)], self.goal_z)
+        height = np.zeros(self.n)
+        for k in np.flatnonzero(self.alive):
+            height[k] = self.scan.reading(pos[k, 0], pos[k, 1])
+        return {"target": target, "max_height": height}
+
+    def control_step(self) -> None:
+        """One control step: policy (if any) on the first substep's readings, then the CPG substeps, each followed
+        by one MuJoCo step (``mj_step1``: sensors of the current state; the targets; ``mj_step2``: integrate)."""
+        for k in range(self.substeps):
+            self.mj.mj_step1(self.m, self.d)
+            r = self.sensors()
+            if k == 0 and self.policy:
+                o = self.observation_inputs(r)
+                obs = self.ctrl.observe(r["joint_pos"], r["joint_vel"], r["quat"], o["target"], o["max_height"])
+                self.ctrl.set_actions(self.ctrl.act(obs))
+            self.d.ctrl[:] = self.ctrl.substep(r["quat"]).ravel()
+            self.mj.mj_step2(self.m, self.d)
+        self.steps += 1
+
+    def status(self) -> tuple[np.ndarray, np.ndarray]:
+        """Episode status codes (N,) and roll / pitch / yaw (N, 3) after the last control step."""
+        q, v = self.d.qpos.reshape(self.n, 25), self.d.qvel.reshape(self.n, 24)
+        ground = np.array([self.scan.height(x, y) if a else 0.0 for (x, y), a in zip(q[:, :2], self.alive)])
+        return episode_status(q, v, ground, self.start, self.steps, self.task)
+
+    def park(self, mask: np.ndarray) -> None:
+        """Finished robots wait far below the terrain, 1 m apart and at rest (re-parked every step: they fall
+        freely), where MuJoCo's collision detection skips them."""
+        q, v = self.d.qpos.reshape(self.n, 25), self.d.qvel.reshape(self.n, 24)
+        k = np.flatnonzero(mask)
+        q[k, 0], q[k, 1], q[k, 2] = 1.0 * k, 0.0, _PARK_Z
+        v[k] = 0.0
+
+    def run(self, max_steps: int | None = None, on_step=None) -> dict:
+        """Run until every robot's first episode ended (or ``max_steps``); returns the per-step arrays the metrics
+        take: ``pos`` (T, N, 2) relative to the start, ``rpy`` (T, N, 3), ``done`` (T, N), ``status`` (T, N).
+        ``on_step(self)`` after every control step (a video frame, the viewer)."""
+        max_steps = max_steps or self.task.max_episode_steps
+        pos, rpy, done, status = [], [], [], []
+        while self.alive.any() and self.steps < max_steps:
+            self.control_step()
+            st, a = self.status()
+            st = np.where(self.alive, st, RUNNING)
+            p = self.d.qpos.reshape(self.n, 25)[:, :2] - self.start
+            pos.append(np.where(self.alive[:, None], p, np.nan))
+            rpy.append(np.where(self.alive[:, None], a, np.nan))
+            done.append(st != RUNNING)
+            status.append(st)
+            self.alive &= st == RUNNING
+            self.park(~self.alive)
+            if on_step is not None:
+                on_step(self)
+        return {"pos": np.stack(pos), "rpy": np.stack(rpy), "done": np.stack(done), "status": np.stack(status)}
+
+
+def measure(controller: str | dict, terrain: str, rounds: int, seed: int = EVAL_TERRAIN_SEED,
+            max_steps: int | None = None, on_step=None) -> dict:
+    """:class:`Rounds` run to the end and summarised with :mod:`hexnewton.analysis.metrics` (``summarize``'s dict plus the
+    wall time and the scanner's ray count)."""
+    t0 = time.perf_counter()
+    r = Rounds(controller, terrain, rounds, seed)
+    ep = r.run(max_steps, on_step)
+    out = summarize(round_metrics(ep["pos"], ep["rpy"], ep["done"], ep["status"], r.control_dt), ep["rpy"])
+    out.update(control_steps=r.steps, wall_s=round(time.perf_counter() - t0, 1), rays=r.scan.rays)
+    return out
+
+
+class Film:
+    """``on_step`` callback writing robot 0's round to an mp4 (MuJoCo's offscreen renderer, a camera tracking the
+    torso, every other control step; imageio-ffmpeg encodes). ``close()`` finishes the file."""
+
+    def __init__(self, path: str, width: int = 640, height: int = 480, every: int = 2):
+        import imageio_ffmpeg
+
+        self.path, self.size, self.every, self.frames = path, (width, height), every, 0
+        self.renderer = self.camera = None
+        self.writer = imageio_ffmpeg.write_frames(path, self.size, fps=1.0 / (0.02 * every), macro_block_size=1)
+        self.writer.send(None)
+
+    def __call__(self, r: Rounds) -> None:
+        mj = r.mj
+        if self.renderer is None:
+            try:
+                self.renderer = mj.Renderer(r.m, self.size[1], self.size[0])
+            except Exception as exc:  # no OpenGL context (MUJOCO_GL=egl or osmesa needs Mesa's libraries)
+                raise ValueError(f"--video: MuJoCo cannot render here ({exc}); try MUJOCO_GL=egl or osmesa") from exc
+            self.camera = mj.MjvCamera()
+            self.camera.type = mj.mjtCamera.mjCAMERA_TRACKING
+            self.camera.trackbodyid = mj.mj_name2id(r.m, mj.mjtObj.mjOBJ_BODY, "r0_torso")
+            self.camera.distance, self.camera.elevation, self.camera.azimuth = 1.0, -25.0, 135.0
+        if (r.alive[0] or self.frames == 0) and r.steps % self.every == 0:
+            self.renderer.update_scene(r.d, self.camera)
+            self.writer.send(np.ascontiguousarray(self.renderer.render()))
+            self.frames += 1
+
+    def close(self) -> None:
+        self.writer.close()
+        if self.renderer is not None:
+            self.renderer.close()
+
+
+class Viewer:
+    """``on_step`` callback showing the rounds in MuJoCo's interactive viewer (robot 0; the others are in the hidden
+    geom group 3) at real time."""
+
+    def __init__(self):
+        self.handle, self.t0 = None, None
+
+    def __call__(self, r: Rounds) -> None:
+        if self.handle is None:
+            import mujoco.viewer
+
+            self.handle = mujoco.viewer.launch_passive(r.m, r.d)
+            self.t0 = time.perf_counter()
+        if not self.handle.is_running():
+            raise KeyboardInterrupt
+        self.handle.sync()
+        time.sleep(max(0.0, self.t0 + r.steps * r.control_dt - time.perf_counter()))
+
+    def close(self) -> None:
+        if self.handle is not None:
+            self.handle.close()
