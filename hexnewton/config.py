@@ -340,7 +340,7 @@ class RewardConfig:
     # has only the -100 fine beyond pi/6). Body tilt: -w_tilt (roll^2 + pitch^2) [rad^2]; body roll and pitch rate:
     # -w_ang_vel (w_x^2 + w_y^2) [(rad/s)^2, body frame]; action rate: -w_action_rate sum_k (a_k - a_k,prev)^2 over
     # the 15 actions in [-1, 1]. Off here; train.py's recipes for the paper's terrains switch them on
-    # (train.STABLE_SHAPING: 5 / 0.05 / 0.1), ``paper_reward()`` switches them off with the other additions.
+    # (tasks.STABLE_SHAPING: 5 / 0.05 / 0.1), ``paper_reward()`` switches them off with the other additions.
     w_tilt: float = 0.0
     w_ang_vel: float = 0.0
     w_action_rate: float = 0.0

@@ -9,7 +9,7 @@ import math
 
 import numpy as np
 
-from hexnewton.physics.reference import FELL, NONFINITE, OFF_COURSE, STATUS_NAMES
+from hexnewton.mdp.status import FELL, NONFINITE, OFF_COURSE, STATUS_NAMES
 
 DISTANCES = (0.5, 1.0, 2.0, 3.0)  # Table 3's columns [m]
 _BAD_END = (FELL, OFF_COURSE, NONFINITE)

@@ -14,7 +14,8 @@ from hexnewton.analysis.rollout import EVAL_TERRAIN_SEED, START_SEED_OFFSET
 from hexnewton.config import CPGConfig, RobotConfig, SimConfig, TaskConfig, TerrainConfig, terrain_for_goal
 from hexnewton.deploy.mjcf import build_model
 from hexnewton.deploy.runtime import FORMAT, Controller, target_in_heading_frame
-from hexnewton.physics.reference import FELL, NONFINITE, OFF_COURSE, RUNNING, SUCCESS, TIMEOUT, quat_to_rpy_np
+from hexnewton.mdp.status import FELL, NONFINITE, OFF_COURSE, RUNNING, SUCCESS, TIMEOUT
+from hexnewton.physics.reference import quat_to_rpy_np
 from hexnewton.physics.robot.geometry import footprint, leg_bounds, spawn_clearance
 
 #: the terrain reading's window, as the training observation's (``mdp.terms.H_HALF_EXTENT``) [m]

@@ -298,7 +298,8 @@ class HexapodEnv(VecEnv):
         s = self.world.state_0
         arrays = [s.joint_q, s.joint_qd, s.body_q, s.body_qd, self.episode_steps, self.prev_x, self.start,
                   self._ring, self._cursor, self.obs, self.reward, self.done_u8, self.time_out]  # fmt: skip
-        arrays += [self.prev_actions, self.counter]
+        # (the draw counter stays where the trial run leaves it: the draws need only differ from step to step)
+        arrays.append(self.prev_actions)
         if self.controller is not None:
             arrays += [self.controller.params, self.controller.params_target, self.controller.state]
         if self.level is not None:
@@ -424,7 +425,7 @@ class HexapodEnv(VecEnv):
 
     def set_shaping(self, reward, posture_reflex: float) -> None:
         """New reward weights (``RewardConfig``) and levelling reflex gain between iterations (a training curriculum,
-        ``train.STABLE_STAGES``); the next step captures the graphs again with them."""
+        ``tasks.STABLE_STAGES``); the next step captures the graphs again with them."""
         import dataclasses
 
         if reward.terms != self.cfg.reward.terms:

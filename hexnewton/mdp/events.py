@@ -52,8 +52,8 @@ import newton
 import numpy as np
 import warp as wp
 
+from hexnewton.mdp.status import NONFINITE, SUCCESS
 from hexnewton.mdp.terms import HeightField, max_terrain_height
-from hexnewton.physics.reference import NONFINITE, SUCCESS
 from hexnewton.physics.robot import BASE_QD
 from hexnewton.physics.world import World
 

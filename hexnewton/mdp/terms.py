@@ -37,7 +37,7 @@ checks them (the first that holds is the env's status; 0, running, if none does)
   3 success    within ``goal_radius`` of the goal, ``goal_distance`` ahead of the env's start (§2.4.4 (3));
   4 timeout    this step is the episode's ``max_episode_steps``-th (``episode_steps`` counts the steps before it)
                (§2.4.4 (2)).
-The codes and names live in ``physics/reference.py`` (plain Python, for tools that do not load Warp); each row adds the
+The codes and names live in ``mdp/status.py`` (plain Python, for tools that do not load Warp); each row adds the
 condition as a ``@wp.func`` of (:class:`EndInputs`, :class:`EndFrame`) and as a float64 NumPy function of the same
 inputs (:func:`end_frame_np`). The kernel (:func:`episode_status_kernel`, the rows unrolled with ``wp.static``), the
 float64 reference (:func:`episode_status_np`) and the episode statistics' names (``Episode/<name>_rate``, env.py)
@@ -154,18 +154,9 @@ import warp as wp
 from warp._src.codegen import Struct
 
 from hexnewton.config import RewardConfig, TaskConfig
+from hexnewton.mdp.status import FELL, NONFINITE, OFF_COURSE, RUNNING, STATUS_NAMES, SUCCESS, TIMEOUT
 from hexnewton.physics.cpg import quat_to_rpy
-from hexnewton.physics.reference import (  # noqa: F401
-    FELL,
-    NONFINITE,
-    OFF_COURSE,
-    RUNNING,
-    STATUS_NAMES,
-    SUCCESS,
-    TIMEOUT,
-    quat_rotate_inv_np,
-    quat_to_rpy_np,
-)
+from hexnewton.physics.reference import quat_rotate_inv_np, quat_to_rpy_np
 from hexnewton.physics.terrain.heightmap import HeightGrid
 
 # ====================================================================================================

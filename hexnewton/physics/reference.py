@@ -1,4 +1,4 @@
-"""The kernels' Warp-free side: float64 NumPy references of the control kernels and the episode status codes.
+"""The kernels' Warp-free side: float64 NumPy references of the control kernels.
 
 The kernel tests compare each Warp kernel with its reference here, and the deployment runtime
 (``hexnewton.deploy.runtime``) runs the same functions on the robot's computer: the Hopf oscillators (Eq. 3, RK4),
@@ -11,11 +11,6 @@ shares the kernel's single-oscillator right-hand side, :func:`hopf_unit_rhs_np`.
 import math
 
 import numpy as np
-
-#: Episode status codes (``mdp/terms.py`` writes them, §2.4.4), here so that command lines, reports and the robot
-#: runtime use them without loading Warp. ``mdp.TERMINATIONS`` gives each code after 0 its condition.
-RUNNING, FELL, OFF_COURSE, SUCCESS, TIMEOUT, NONFINITE = 0, 1, 2, 3, 4, 5
-STATUS_NAMES = ("running", "fell", "off_course", "success", "timeout", "nonfinite")
 
 
 def initial_cpg_state(mu: float, theta: float) -> tuple[float, float, float, float]:

@@ -6,7 +6,7 @@
 import json
 import sys
 import warnings
-from dataclasses import asdict, replace
+from dataclasses import replace
 
 from hexnewton.analysis.bench import bench_one
 from hexnewton.config import SimConfig

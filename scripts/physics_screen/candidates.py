@@ -26,14 +26,14 @@ import numpy as np
 import torch
 
 from hexnewton.config import TERRAINS, CPGConfig, HexConfig, SimConfig, TaskConfig, TerrainConfig
-from hexnewton.physics.cpg import CPGController
-from hexnewton.mdp.env import make_env
-from hexnewton.mdp.terms import STATUS_NAMES
 from hexnewton.learning.policy import fixed_cpg_actions
+from hexnewton.mdp.env import make_env
+from hexnewton.mdp.status import STATUS_NAMES
+from hexnewton.physics.cpg import CPGController
 from hexnewton.physics.robot import stand_height
-from hexnewton.physics.world import World
 from hexnewton.physics.terrain import max_terrain_height_np
 from hexnewton.physics.terrain.query import terrain_height_np
+from hexnewton.physics.world import World
 
 CANDIDATES = {
     "A": dict(),  # defaults: 10 ms frame = 4 x 2.5 ms, 10/10 it, gap 5 mm

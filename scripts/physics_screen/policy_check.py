@@ -10,11 +10,11 @@ from dataclasses import replace
 
 import numpy as np
 
+from hexnewton.analysis.rollout import rollout
 from hexnewton.config import HexConfig, SimConfig, TaskConfig, TerrainConfig
-from hexnewton.mdp.env import make_env
 from hexnewton.learning.checkpoint import load_checkpoint, trained_config
 from hexnewton.learning.policy import load_policy
-from hexnewton.analysis.rollout import rollout
+from hexnewton.mdp.env import make_env
 
 sys.path.insert(0, "scripts/physics_screen")
 from candidates import CANDIDATES  # noqa: E402

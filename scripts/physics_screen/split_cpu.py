@@ -1,8 +1,10 @@
 """CPU time per call of the collision pipeline vs one MuJoCo substep (16 walking envs), per terrain and gap."""
-import time, warnings
+import time
+import warnings
 from dataclasses import replace
+
 import numpy as np
-import warp as wp
+
 from hexnewton.config import HexConfig, SimConfig, TerrainConfig
 from hexnewton.physics.cpg import CPGController
 from hexnewton.physics.world import World

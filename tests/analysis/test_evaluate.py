@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from hexnewton.analysis.metrics import DISTANCES, round_metrics, summarize
-from hexnewton.mdp.terms import FELL, OFF_COURSE, SUCCESS
+from hexnewton.mdp.status import FELL, OFF_COURSE, SUCCESS
 
 DT = 0.02
 ROOT = os.path.join(os.path.dirname(__file__), "..", "..")
@@ -177,7 +177,7 @@ def test_shipped_complex_policy_climbs_steps_under_its_20ms_physics():
     for that physics; the fixed CPG stands at the first riser (x = 0.5 m)."""
     from hexnewton.analysis.rollout import run_rounds
     from hexnewton.learning.checkpoint import load_checkpoint, trained_config
-    from hexnewton.mdp.terms import FELL
+    from hexnewton.mdp.status import FELL
 
     policy = os.path.join(ROOT, "results", "policies", "cpg_rl_complex_gaussian.pt")
     sim = trained_config(load_checkpoint(policy)).sim

@@ -6,8 +6,8 @@ import math
 import numpy as np
 import pytest
 
-from hexnewton.apps.cli import run
 from hexnewton.analysis.cpg_figure import NETWORKS, convergence, limit_cycle, param_counts, random_starts
+from hexnewton.apps.cli import run
 from hexnewton.apps.cpg_figure import main
 from hexnewton.config import LEG_OSCILLATOR, CPGConfig
 from hexnewton.physics.reference import (

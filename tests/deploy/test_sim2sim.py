@@ -15,7 +15,7 @@ from hexnewton.analysis.sim2sim import HeightScanner, Rounds, fixed_cpg_spec  # 
 from hexnewton.apps.sim2sim import HEADLINE, PROG, main  # noqa: E402
 from hexnewton.config import JOINT_NAMES, RobotConfig, TerrainConfig  # noqa: E402
 from hexnewton.deploy.mjcf import build_model, robot_xml  # noqa: E402
-from hexnewton.physics.reference import RUNNING  # noqa: E402
+from hexnewton.mdp.status import RUNNING  # noqa: E402
 from hexnewton.physics.terrain.heightmap import build_height_grid  # noqa: E402
 
 BUNDLE = os.path.join(os.path.dirname(__file__), "..", "..", "results", "controllers", "cpg_rl_complex")

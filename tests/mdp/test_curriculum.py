@@ -11,7 +11,8 @@ import warp as wp
 from hexnewton.config import HexConfig, SimConfig, TaskConfig, TerrainConfig
 from hexnewton.mdp.env import make_env
 from hexnewton.mdp.events import curriculum_kernel, curriculum_reference, placement_kernel, start_levels
-from hexnewton.mdp.terms import NONFINITE, SUCCESS, height_field_from_grid
+from hexnewton.mdp.status import NONFINITE, SUCCESS
+from hexnewton.mdp.terms import height_field_from_grid
 from hexnewton.physics.terrain import build_height_grid, max_terrain_height_np, terrain_height_np
 from hexnewton.physics.terrain.heightmap import lane_center_y
 

@@ -14,7 +14,8 @@ from tensordict import TensorDict
 from hexnewton.config import HexConfig, SimConfig, TaskConfig, TerrainConfig
 from hexnewton.mdp.env import make_env
 from hexnewton.mdp.events import reset_bounds_reference
-from hexnewton.mdp.terms import NONFINITE, OBS_LAYOUT, REWARD_NAMES, TIMEOUT
+from hexnewton.mdp.status import NONFINITE, TIMEOUT
+from hexnewton.mdp.terms import OBS_LAYOUT, REWARD_NAMES
 from hexnewton.physics.cpg import joint_actions_kernel
 from hexnewton.physics.reference import joint_actions_reference
 

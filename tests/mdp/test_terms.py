@@ -13,6 +13,7 @@ import warp as wp
 
 from hexnewton.config import HexConfig, RandomizationConfig, RewardConfig, SimConfig, TaskConfig, TerrainConfig
 from hexnewton.mdp.env import make_env
+from hexnewton.mdp.status import STATUS_NAMES
 from hexnewton.mdp.terms import (
     FELL,
     LAYOUTS,
@@ -41,7 +42,6 @@ from hexnewton.mdp.terms import (
     rewards_kernel,
     rewards_reference,
 )
-from hexnewton.physics.reference import STATUS_NAMES
 from hexnewton.physics.terrain import make_terrain, max_terrain_height_np, terrain_height_np
 
 DEV = "cpu"
