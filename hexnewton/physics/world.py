@@ -45,7 +45,6 @@ OVERFLOW_CONTACT_REDUCTION = 1 << 21
 NOT_CONVERGED_BITS = (1 << 9) | (1 << 10)
 
 
-
 class ContactOverflowError(HexnewtonError):
     pass
 
