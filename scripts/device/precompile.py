@@ -25,7 +25,7 @@ import time
 
 def exercise(workdir: pathlib.Path) -> None:
     """Run, tiny and on the CPU, every code path the GPU scripts use, so that their modules load."""
-    from hexnewton import bench, play, train
+    from hexnewton.apps import bench, play, train
 
     log = workdir / "logs"
     for extra in (["--task", "complex", "--env.terrain.levels", "3"], ["--task", "complex-joint"]):
