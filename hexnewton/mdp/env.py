@@ -73,13 +73,13 @@ from hexnewton.mdp.terms import (
     ObsInputs,
     RewardInputs,
     height_field_from_grid,
+    make_rewards_kernel,
     make_status_kernel,
     make_struct,
     observation_noise,
     observations_kernel,
     reward_table,
     reward_weights,
-    rewards_kernel_of,
 )
 from hexnewton.physics.cpg import CPGController, joint_actions_kernel
 from hexnewton.physics.robot import BASE_Q
@@ -189,7 +189,7 @@ class HexapodEnv(VecEnv):
         # the task's terms (TaskConfig.terminations, RewardConfig.terms): their fused kernels
         self.status_kernel = make_status_kernel(task.terminations)
         self.reward_terms = reward_table(cfg.reward)
-        self.rewards_kernel = rewards_kernel_of(cfg.reward.terms)
+        self.rewards_kernel = make_rewards_kernel(self.reward_terms)
         self.reward, self.terms, self.prev_x = z(n), z(n, len(self.reward_terms)), z(n)
         self.obs = z(n, self.num_obs)
         # the state at the end of the last step, before finished envs were reset (play.py records these)

@@ -466,13 +466,11 @@ def make_status_kernel(names: tuple[str, ...] = TERMINATION_NAMES) -> wp.Kernel:
     table = choose(TERMINATIONS, names, "task.terminations")
     if not table or table[0].code != NONFINITE:
         raise ValueError("task.terminations must include nonfinite (a blown-up env has to be reset)")
-    return _status_kernel(tuple(t.name for t in table))
+    return _status_kernel(table)
 
 
 @functools.cache
-def _status_kernel(names: tuple[str, ...]) -> wp.Kernel:
-    table = choose(TERMINATIONS, names, "task.terminations")
-
+def _status_kernel(table: tuple) -> wp.Kernel:
     @wp.kernel(module="unique")
     def episode_status_kernel(i: EndInputs, status: wp.array[wp.int32], rpy: wp.array2d[wp.float32]):
         """Each env's status: the code of the first row whose condition holds, else ``RUNNING``; and its roll, pitch,
@@ -790,18 +788,10 @@ def reward_table(reward) -> tuple:
     return choose(REWARD_TERMS, reward.terms, "reward.terms")
 
 
-def rewards_kernel_of(names: tuple[str, ...]) -> wp.Kernel:
-    """The fused reward kernel of the ``REWARD_TERMS`` rows ``names`` (one per choice of terms in a process)."""
-    return _rewards_kernel(tuple(t.name for t in choose(REWARD_TERMS, names, "reward.terms")))
-
-
 @functools.cache
-def _rewards_kernel(names: tuple[str, ...]) -> wp.Kernel:
-    return make_rewards_kernel(choose(REWARD_TERMS, names, "reward.terms"))
-
-
-def make_rewards_kernel(table=REWARD_TERMS) -> wp.Kernel:
-    """The fused reward kernel of a term table (:data:`rewards_kernel` is ``REWARD_TERMS``')."""
+def make_rewards_kernel(table: tuple = REWARD_TERMS) -> wp.Kernel:
+    """The fused reward kernel of a term table, one per table in a process (:data:`rewards_kernel` is
+    ``REWARD_TERMS``'; the env's is :func:`reward_table`'s choice)."""
 
     @wp.kernel(module="unique")
     def rewards_kernel(
@@ -844,7 +834,7 @@ def make_rewards_kernel(table=REWARD_TERMS) -> wp.Kernel:
     return rewards_kernel
 
 
-rewards_kernel = rewards_kernel_of(REWARD_NAMES)
+rewards_kernel = make_rewards_kernel(REWARD_TERMS)
 
 
 def rewards_reference(i, table=REWARD_TERMS):
