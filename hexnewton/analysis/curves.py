@@ -7,8 +7,9 @@ piece's ``config.json``; a skrl baseline run from ``hexnewton.learning.baselines
 the wall time (each piece's own time from its first to its last logged
 iteration, so the pause between pieces does not count).
 
-Fig. 5a (:func:`plot_fig5a`): the mean episode return and the training success rate (``Train/mean_reward``,
-``Episode/success_rate``: the last 1024 finished episodes) of each method's runs (seeds) against env-steps and against
+Fig. 5a (:func:`plot_fig5a`): the mean episode return, the training success rate and the terrain curriculum's mean
+level (``Train/mean_reward``, ``Episode/success_rate``: the last 1024 finished episodes, ``Curriculum/mean_level``:
+training success is measured on the level each robot has reached) of each method's runs (seeds) against env-steps and against
 wall time, as the mean over seeds with their range (min to max) shaded, each method up to the shortest of its runs;
 a CSV beside the figure holds the bands and a JSON the final values.
 """
@@ -82,7 +83,8 @@ def read_curve(spec: str, x: str = "iteration") -> dict[str, list[tuple[float, f
     return out
 
 
-FIG5A_TAGS = {"Train/mean_reward": "mean episode return", "Episode/success_rate": "training success rate"}
+FIG5A_TAGS = {"Train/mean_reward": "mean episode return", "Episode/success_rate": "training success rate",
+              "Curriculum/mean_level": "terrain curriculum level (mean)"}
 
 
 def seed_band(specs: list[str], x: str, tag: str, points: int = 200) -> dict | None:
@@ -101,10 +103,11 @@ def seed_band(specs: list[str], x: str, tag: str, points: int = 200) -> dict | N
             "final": ys[:, -1].tolist()}  # finite: NaN points are dropped above
 
 
-def plot_fig5a(path: str, methods: dict[str, list[str]]) -> dict:
-    """Fig. 5a: reward and success (rows) against env-steps and wall time (columns), one band per method (its seeds'
-    mean, min to max shaded); writes ``path`` (PNG) and the bands as ``<path>.csv``; returns each method's final
-    values {method: {axis: {tag: [per seed]}}} and the axis end it was read at."""
+def plot_fig5a(path: str, methods: dict[str, list[str]], axes: tuple[str, ...] = ("env_steps", "wall_time"),
+               title: str = "Fig. 5a: mean over seeds, min to max shaded") -> dict:
+    """Fig. 5a: reward, success and curriculum level (rows) against each of ``axes`` (columns: env-steps, wall time), one band per
+    method (its seeds' mean, min to max shaded); writes ``path`` (PNG) and the bands as ``<path>.csv``; returns each
+    method's final values {method: {axis: {tag: [per seed]}}} and the axis end it was read at."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -112,11 +115,12 @@ def plot_fig5a(path: str, methods: dict[str, list[str]]) -> dict:
 
     from hexnewton.analysis.rollout import LABELS
 
-    fig, axes = plt.subplots(2, 2, figsize=(12, 7.5))
+    fig, grid = plt.subplots(len(FIG5A_TAGS), len(axes), figsize=(6 * len(axes), 3.6 * len(FIG5A_TAGS)),
+                             squeeze=False)
     rows, summary = [], {}
-    for col, x in enumerate(("env_steps", "wall_time")):
+    for col, x in enumerate(axes):
         for row, (tag, ylabel) in enumerate(FIG5A_TAGS.items()):
-            ax = axes[row, col]
+            ax = grid[row, col]
             for name, specs in methods.items():
                 band = seed_band(specs, x, tag)
                 if band is None:
@@ -129,9 +133,9 @@ def plot_fig5a(path: str, methods: dict[str, list[str]]) -> dict:
                          for a, m, lo, hi in zip(band["x"], band["mean"], band["min"], band["max"])]
             ax.set(xlabel=X_AXES[x], ylabel=ylabel)
             ax.grid(alpha=0.3)
-    if axes[0, 0].get_legend_handles_labels()[0]:
-        axes[0, 0].legend(fontsize=8)
-    fig.suptitle("Fig. 5a: mean over seeds, min to max shaded")
+    if grid[0, 0].get_legend_handles_labels()[0]:
+        grid[0, 0].legend(fontsize=8)
+    fig.suptitle(title)
     fig.tight_layout()
     fig.savefig(path, dpi=100)
     plt.close(fig)

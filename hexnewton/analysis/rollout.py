@@ -22,7 +22,7 @@ CONTROLLERS = {"cpg": "cpg", "cpg_swept": "cpg", "cpg_rl": "cpg", "joint": "join
                "a2c_cpg": "cpg"}  # fmt: skip
 FIXED = {"cpg": "default", "cpg_swept": "swept"}  # fixed-parameter controllers -> config.FIXED_GAITS
 LABELS = {"cpg": "CPG", "cpg_swept": "CPG (swept)", "cpg_rl": "CPG_RL", "joint": "pure DRL", "sac_cpg": "SAC-CPG",
-          "td3_cpg": "TD3-CPG", "a2c_cpg": "A2C-CPG"}  # fmt: skip
+          "td3_cpg": "TD3-CPG", "a2c_cpg": "A2C-CPG", "paper": "CPG_RL (task paper)"}  # fmt: skip
 #: Named perturbations beyond the training ranges (RandomizationConfig: friction 0.4-1.2, payload -0.2..0.6 kg,
 #: gains and effort x0.8-1.2, half the envs 20 ms late, pushes of 0.3 m/s every 6 s; 6 cm steps and blocks). Each
 #: changes one thing; everything else is the nominal robot. Values: (RandomizationConfig fields, TerrainConfig fields).

@@ -1,14 +1,23 @@
 """The methods compared at equal budgets: Fig. 5a over seeds and Table 3 over seeds, one report.
 
-    python -m hexnewton.apps.compare --runs RUNS --evals EVALS --out results/methods_complex
+    python -m hexnewton.apps.compare --study results/paper_comparison                   # report from a kept study
+    python -m hexnewton.apps.compare --study results/paper_comparison --add LEASE/methods LEASE/method_evals
+    python -m hexnewton.apps.compare --runs RUNS --evals EVALS --out report_dir          # report from loose folders
 
-``--runs`` holds one experiment folder per training run, named ``<method>_s<seed>`` (``cpg_rl``, ``joint`` from
-``train.py``; ``sac_cpg``, ``td3_cpg``, ``a2c_cpg`` from ``python -m hexnewton.apps.baselines``), each with its run folder
-(``train.py --experiment`` / ``--log_dir``). ``--evals`` holds one ``hexnewton.apps.evaluate`` output folder per run and
-terrain, named ``<method>_s<seed>_<terrain>``. ``scripts/device/gpu.sh methods`` and ``gpu.sh evals`` lay them out
-so. Writes to ``--out``: ``report.md`` (the budget each run used: env-steps and wall time; Table 3 as the mean and
-range over seeds of the success at each distance and the falls; Fig. 5a), ``results.json`` (every number),
-``fig5a.png`` with its ``.csv`` (:func:`hexnewton.analysis.curves.plot_fig5a`).
+``--runs`` holds one experiment folder per training run, named ``<method>_s<seed>`` (``cpg_rl``, ``paper``, ``joint``
+from ``train.py --task complex / paper / complex-joint``; ``sac_cpg``, ``td3_cpg``, ``a2c_cpg`` from
+``python -m hexnewton.apps.baselines``), each with its run folder, and beside it ``<method>_s<seed>.done`` (the command,
+GPU and process time ``scripts/device/gpu.sh`` records when the run ends). ``--evals`` holds one
+``hexnewton.apps.evaluate`` folder per run and terrain: ``<method>_s<seed>_<terrain>`` (the deterministic action),
+``<method>_s<seed>_<terrain>_sampled`` (``--stochastic``) and ``cpg_s0_<terrain>`` (the fixed CPG). ``gpu.sh methods``
+and ``gpu.sh evals`` lay them out so.
+
+``--study DIR`` is a study kept across GPU leases (:mod:`hexnewton.analysis.study`): ``--add`` first copies a lease's
+finished runs (policy-only checkpoints, Fig. 5a's scalars) and evaluations into it, skipping those it holds; the
+report is then written into DIR itself. Writes: ``report.md`` (what is still missing, when anything is; the GPU
+leases; the budget each run used; Table 3 for the deterministic and the sampled action; Fig. 5a), ``results.json``
+(every number), ``fig5a_env_steps.png`` and ``fig5a_wall_time.png`` with their ``.csv``
+(:func:`hexnewton.analysis.curves.plot_fig5a`).
 """
 
 from __future__ import annotations
@@ -19,11 +28,17 @@ import os
 import re
 import sys
 
-from hexnewton.apps.cli import ArgumentParser, run
+from hexnewton.apps.cli import ArgumentParser, positive_int, run
 
-METHODS = ("cpg_rl", "sac_cpg", "td3_cpg", "a2c_cpg", "joint")
+METHODS = ("cpg_rl", "paper", "sac_cpg", "td3_cpg", "a2c_cpg", "joint")
+#: the controller ``evaluate`` runs for a method's checkpoint (``paper`` is CPG_RL trained with task ``paper``)
+CONTROLLER = {"paper": "cpg_rl"}
+#: seeds each method should have (``paper``: one more row, one seed)
+SEEDS = {"paper": 1}
+ACTIONS = ("deterministic", "sampled")
+METRICS = ("fall_rate", "pitch_var_deg2", "roll_var_deg2", "pitch_p999_deg", "roll_p999_deg")
 _RUN = re.compile(r"^(?P<method>[a-z0-9_]+)_s(?P<seed>\d+)$")
-_EVAL = re.compile(r"^(?P<method>[a-z0-9_]+)_s(?P<seed>\d+)_(?P<terrain>[a-z]+)$")
+_EVAL = re.compile(r"^(?P<method>[a-z0-9_]+)_s(?P<seed>\d+)_(?P<terrain>[a-z]+)(?P<sampled>_sampled)?$")
 
 
 def find_runs(runs_dir: str) -> dict[str, dict[int, str]]:
@@ -31,12 +46,12 @@ def find_runs(runs_dir: str) -> dict[str, dict[int, str]]:
     out: dict[str, dict[int, str]] = {}
     for exp in sorted(glob.glob(os.path.join(runs_dir, "*"))):
         m = _RUN.match(os.path.basename(exp))
-        runs = sorted(d for d in glob.glob(os.path.join(exp, "*")) if os.path.isdir(d))
+        runs = sorted(d for d in glob.glob(os.path.join(exp, "*")) if os.path.isdir(d) and not d.endswith(".part"))
         if m and m["method"] in METHODS and runs:
             out.setdefault(m["method"], {})[int(m["seed"])] = runs[-1]
     if not out:
         raise ValueError(f"no <method>_s<seed> runs under {runs_dir} (methods: {', '.join(METHODS)})")
-    return {k: out[k] for k in METHODS if k in out}
+    return {k: dict(sorted(out[k].items())) for k in METHODS if k in out}
 
 
 def run_budget(run_dir: str) -> dict:
@@ -60,19 +75,21 @@ def run_budget(run_dir: str) -> dict:
     return {"env_steps": int(steps[-1][0]) if steps else 0, "wall_min": round(wall / 60.0, 3)}
 
 
-def find_evals(evals_dir: str) -> dict[str, dict[str, dict[int, dict]]]:
-    """{terrain: {method: {seed: that evaluation's summary}}} from ``<method>_s<seed>_<terrain>/results.json``."""
-    out: dict[str, dict[str, dict[int, dict]]] = {}
+def find_evals(evals_dir: str) -> dict[str, dict[str, dict[str, dict[int, dict]]]]:
+    """{actions: {terrain: {method: {seed: that evaluation's summary}}}} from the ``results.json`` of
+    ``<method>_s<seed>_<terrain>[_sampled]`` folders; ``cpg`` (seed 0) is the fixed CPG."""
+    out: dict = {}
     for path in sorted(glob.glob(os.path.join(evals_dir, "*", "results.json"))):
         m = _EVAL.match(os.path.basename(os.path.dirname(path)))
-        if not m or m["method"] not in METHODS:
+        if not m or m["method"] not in (*METHODS, "cpg"):
             continue
         with open(path) as f:
             res = json.load(f)
-        summary = res["results"].get(m["terrain"], {}).get(m["method"])
+        summary = res["results"].get(m["terrain"], {}).get(CONTROLLER.get(m["method"], m["method"]))
         if summary is not None:
-            out.setdefault(m["terrain"], {}).setdefault(m["method"], {})[int(m["seed"])] = dict(summary,
-                                                                                               meta=res["meta"])
+            actions = "sampled" if m["sampled"] else "deterministic"
+            out.setdefault(actions, {}).setdefault(m["terrain"], {}).setdefault(m["method"], {})[int(m["seed"])] = \
+                dict(summary, meta=res["meta"])  # fmt: skip
     return out
 
 
@@ -86,85 +103,203 @@ def _stat(values: list[float]) -> dict:
 
 
 def table3(evals: dict, distances: tuple[float, ...]) -> dict:
-    """{terrain: {method: {"success_<d>m": stat, "fall_rate": stat, "rounds": R, "seeds": [...]}}}: over seeds."""
+    """{terrain: {method: {"success_<d>m": stat, "fall_rate": stat, ..., "rounds": R, "seeds": [...]}}}: over seeds;
+    the fixed CPG first."""
     out = {}
     for terrain, by_method in evals.items():
-        for method in [m for m in METHODS if m in by_method]:
+        for method in [m for m in ("cpg", *METHODS) if m in by_method]:
             seeds = by_method[method]
             row = {f"success_{d:g}m": _stat([s.get(f"success_{d:g}m") for s in seeds.values()]) for d in distances}
-            row["fall_rate"] = _stat([s.get("fall_rate") for s in seeds.values()])
+            row.update({k: _stat([s.get(k) for s in seeds.values()]) for k in METRICS})
             row.update(rounds=sorted({s["rounds"] for s in seeds.values()}), seeds=sorted(seeds))
             out.setdefault(terrain, {})[method] = row
     return out
 
 
-def _cell(stat: dict) -> str:
+def missing(runs: dict, evals: dict, terrains: tuple[str, ...], seeds: int) -> list[str]:
+    """What a complete study still lacks: runs (every method, ``seeds`` seeds; ``paper`` one) and their deterministic
+    and sampled evaluations on ``terrains``, and the fixed CPG's."""
+    out = []
+    for method in METHODS:
+        want = range(1, SEEDS.get(method, seeds) + 1)
+        lacking = [s for s in want if s not in runs.get(method, {})]
+        if lacking:
+            out.append(f"runs {', '.join(f'{method}_s{s}' for s in lacking)}")
+    for actions in ACTIONS:
+        for terrain in terrains:
+            got = evals.get(actions, {}).get(terrain, {})
+            need = [f"{m}_s{s}" for m, ss in runs.items() for s in ss if s not in got.get(m, {})]
+            if actions == "deterministic" and 0 not in got.get("cpg", {}):
+                need.insert(0, "cpg_s0")
+            if need:
+                out.append(f"{actions} evaluations on {terrain}: {', '.join(need)}")
+    return out
+
+
+def _cell(stat: dict, scale: float = 100.0, unit: str = "%", digits: int = 1) -> str:
     if stat["mean"] is None:
         return "—"
     if stat["n"] == 1:
-        return f"{100 * stat['mean']:.1f}%"
-    return f"{100 * stat['mean']:.1f}% ({100 * stat['min']:.0f}-{100 * stat['max']:.0f})"
+        return f"{scale * stat['mean']:.{digits}f}{unit}"
+    return f"{scale * stat['mean']:.{digits}f}{unit} ({scale * stat['min']:.0f}-{scale * stat['max']:.0f})"
 
 
-def report_markdown(budgets: dict, table: dict, distances: tuple[float, ...], fig: str | None, meta: dict) -> str:
+def _table_lines(table: dict, distances: tuple[float, ...], beside: dict | None) -> list[str]:
+    head = ("| terrain | method | seeds | rounds | " + " | ".join(f"{d:g} m" for d in distances) + " | falls | pitch var "
+            "[deg²] | roll var [deg²] | \\|pitch\\| p99.9 [deg] | \\|roll\\| p99.9 [deg] |")  # fmt: skip
+    cols = len(distances) + 5
+    if beside is not None:
+        head += " 3 m sampled | falls sampled |"
+        cols += 2
+    lines = [head, "|---|---|---:|---:|" + "---:|" * cols]
     from hexnewton.analysis.rollout import LABELS
 
-    lines = ["# Methods at equal budgets", ""] + [f"- {k}: {v}" for k, v in meta.items()]
+    for terrain, by_method in table.items():
+        for method, row in by_method.items():
+            cells = [_cell(row[f"success_{d:g}m"]) for d in distances] + [_cell(row["fall_rate"])]
+            cells += [_cell(row[k], 1.0, "", 1) for k in METRICS[1:]]
+            if beside is not None:
+                other = beside.get(terrain, {}).get(method)
+                last = f"success_{distances[-1]:g}m" if distances else None
+                cells += [_cell(other[last]) if other and last else "—", _cell(other["fall_rate"]) if other else "—"]
+            lines.append(f"| {terrain} | {LABELS.get(method, method)} | {len(row['seeds'])} | "
+                         f"{'/'.join(map(str, row['rounds']))} | " + " | ".join(cells) + " |")  # fmt: skip
+    return lines
+
+
+def report_markdown(budgets: dict, tables: dict, distances: tuple[float, ...], figs: list[str], meta: dict,
+                    gaps: list[str], leases: list[dict]) -> str:
+    from hexnewton.analysis.rollout import LABELS
+
+    title = "# Methods at equal budgets" + (" (partial)" if gaps else "")
+    lines = [title, ""] + [f"- {k}: {v}" for k, v in meta.items()]
+    if gaps:
+        lines += ["", "## Partial: still missing", ""] + [f"- {g}" for g in gaps]
+    if leases:
+        total = sum(float(x.get("device_s", 0)) for x in leases)
+        lines += ["", f"## GPU leases ({total / 60:.1f} device-minutes in all)", "",
+                  "| date | GPU kind | device [s] | what ran |", "|---|---|---:|---|"]  # fmt: skip
+        lines += [f"| {x.get('date', '')} | {x.get('kind', '')} | {x.get('device_s', '')} | {x.get('ran', '')} |"
+                  for x in leases]  # fmt: skip
+        for i, x in enumerate(leases, 1):
+            if x.get("notes"):
+                lines += ["", f"Lease {i}: {x['notes']}"]
+            if x.get("commands"):
+                lines += ["", f"Lease {i} ({x.get('date', '')}), its device calls after the install:", "", "```bash",
+                          *x["commands"], "```"]  # fmt: skip
     lines += ["", "## Budget used by each run", "", "Each run ended at its env-step budget or its wall-time budget, "
-              "whichever came first. Wall time: the training loop's, without building the env.", "",
-              "| method | seed | env-steps | wall time [min] | run |", "|---|---:|---:|---:|---|"]  # fmt: skip
+              "whichever came first. Wall time: the training loop's, without building the env; process: the whole "
+              "command, start-up and kernel compilation included.", "",
+              "| method | seed | env-steps | wall time [min] | process [s] | GPU | run |",
+              "|---|---:|---:|---:|---:|---|---|"]  # fmt: skip
     for method, seeds in budgets.items():
         for seed, b in sorted(seeds.items()):
             lines.append(f"| {LABELS.get(method, method)} | {seed} | {b['env_steps']:,} | {b['wall_min']:.2f} | "
-                         f"{b['run']} |")  # fmt: skip
-    lines += ["", "## Table 3: success at each distance, mean over seeds (min-max)", "",
-              "| terrain | method | seeds | rounds | " + " | ".join(f"{d:g} m" for d in distances) + " | falls |",
-              "|---|---|---:|---:|" + "---:|" * (len(distances) + 1)]  # fmt: skip
-    for terrain, by_method in table.items():
-        for method, row in by_method.items():
-            cells = " | ".join(_cell(row[f"success_{d:g}m"]) for d in distances)
-            lines.append(f"| {terrain} | {LABELS.get(method, method)} | {len(row['seeds'])} | "
-                         f"{'/'.join(map(str, row['rounds']))} | {cells} | {_cell(row['fall_rate'])} |")  # fmt: skip
-    if fig:
-        lines += ["", "## Fig. 5a", "", f"![Fig. 5a]({fig}): mean return and training success against env-steps and "
-                  "against wall time; the line is the mean over seeds, the band their range."]  # fmt: skip
+                         f"{b.get('process_s', '—')} | {b.get('gpu', '—')} | {b['run']} |")  # fmt: skip
+    for actions in ACTIONS:
+        if not tables.get(actions):
+            continue
+        lines += ["", f"## Table 3, {actions} action: success at each distance, mean over seeds (min-max)", ""]
+        beside = tables.get("sampled") if actions == "deterministic" else None
+        lines += _table_lines(tables[actions], distances, beside)
+    if figs:
+        lines += ["", "## Fig. 5a", ""] + [f"![Fig. 5a]({f})" for f in figs]
+        lines += ["", "Mean episode return and training success (the last 1024 finished episodes, sampled actions) "
+                  "against env-steps and against wall time; the line is the mean over seeds, the band their range. "
+                  "Wall-time curves compare runs of one GPU kind (the budget table)."]  # fmt: skip
     return "\n".join(lines) + "\n"
+
+
+def _resolve_folders(args) -> list[dict]:
+    """``--study`` (after ``--add`` copied a lease into it) or ``--runs`` / ``--evals`` / ``--out`` into ``args.runs``,
+    ``args.evals``, ``args.out``; returns the study's leases."""
+    leases: list[dict] = []
+    if args.study is not None:
+        if args.runs or args.evals or args.out:
+            raise ValueError("--study replaces --runs, --evals and --out")
+        if args.add is not None and len(args.add) > 2:
+            raise ValueError("--add takes a runs folder and, optionally, an evaluations folder")
+        from hexnewton.analysis.study import read_leases, store
+
+        if args.add:
+            for d in args.add:
+                if not os.path.isdir(d):
+                    raise ValueError(f"not a folder: {d}")
+            added = store(args.add[0], args.add[1] if len(args.add) > 1 else None, args.study)
+            print(f"added to {args.study}: {len(added['runs'])} runs ({', '.join(added['runs']) or 'none'}), "
+                  f"{len(added['evals'])} evaluations")  # fmt: skip
+        args.runs, args.out = os.path.join(args.study, "runs"), args.study
+        args.evals = os.path.join(args.study, "evals") if os.path.isdir(os.path.join(args.study, "evals")) else None
+        leases = read_leases(args.study)
+    else:
+        if args.add:
+            raise ValueError("--add needs --study")
+        if not args.runs or not args.out:
+            raise ValueError("give --study DIR, or --runs and --out")
+        if os.path.exists(args.out):
+            raise ValueError(f"{args.out} exists: choose a new --out (nothing is overwritten)")
+    return leases
 
 
 def main(argv: list[str] | None = None) -> int:
     p = ArgumentParser(prog="python -m hexnewton.apps.compare", description=__doc__.split("\n")[0])
-    p.add_argument("--runs", required=True, help="folder of <method>_s<seed> experiments")
+    p.add_argument("--study", default=None, help="a study folder kept across leases (runs/, evals/, leases.json); the "
+                                                 "report is written into it")  # fmt: skip
+    p.add_argument("--add", nargs="+", metavar="DIR", default=None,
+                   help="with --study: a lease's runs folder (gpu.sh's $RUNS/methods) and, optionally, its evaluations "
+                        "folder ($RUNS/method_evals) to copy into the study first")  # fmt: skip
+    p.add_argument("--runs", default=None, help="folder of <method>_s<seed> experiments (without --study)")
     p.add_argument("--evals", default=None, help="folder of <method>_s<seed>_<terrain> evaluations (Table 3)")
-    p.add_argument("--out", required=True, help="report folder (must not exist)")
+    p.add_argument("--out", default=None, help="report folder (without --study; must not exist)")
+    p.add_argument("--seeds", type=positive_int, default=3, help="seeds a complete study has per method (default 3)")
+    p.add_argument("--terrains", nargs="+", default=["rugged", "stepped", "complex"],
+                   help="terrains a complete study evaluates (default rugged stepped complex)")
     args = p.parse_args(argv)
-    if os.path.exists(args.out):
-        raise ValueError(f"{args.out} exists: choose a new --out (nothing is overwritten)")
+    leases = _resolve_folders(args)
     if args.evals is not None and not os.path.isdir(args.evals):
         raise ValueError(f"not a folder: {args.evals}")
+    from hexnewton.analysis.study import read_done
+
     runs = find_runs(args.runs)
-    budgets = {m: {s: dict(run_budget(d), run=os.path.relpath(d, args.runs)) for s, d in seeds.items()}
-               for m, seeds in runs.items()}  # fmt: skip
+    budgets = {}
+    for m, seeds in runs.items():
+        for s, d in seeds.items():
+            done = read_done(args.runs, f"{m}_s{s}")
+            budgets.setdefault(m, {})[s] = dict(run_budget(d), run=os.path.relpath(d, args.runs),
+                                                process_s=done.get("process_s"), gpu=done.get("gpu"))  # fmt: skip
     evals = find_evals(args.evals) if args.evals else {}
-    distances = ()
-    for by_method in evals.values():
-        for seeds in by_method.values():
-            for s in seeds.values():
-                distances = tuple(s["meta"].get("distances", distances))
-    table = table3(evals, distances)
-    os.makedirs(args.out)
+    distances: tuple = ()
+    for by_terrain in evals.values():
+        for by_method in by_terrain.values():
+            for seeds in by_method.values():
+                for s in seeds.values():
+                    distances = tuple(s["meta"].get("distances", distances))
+    tables = {a: table3(evals[a], distances) for a in ACTIONS if a in evals}
+    os.makedirs(args.out, exist_ok=args.study is not None)
     from hexnewton.analysis.curves import plot_fig5a
 
-    final = plot_fig5a(os.path.join(args.out, "fig5a.png"), {m: list(seeds.values()) for m, seeds in runs.items()})
-    meta = {"runs": os.path.abspath(args.runs), "evals": os.path.abspath(args.evals) if args.evals else None,
+    gpus = sorted({b["gpu"] for seeds in budgets.values() for b in seeds.values() if b.get("gpu")})
+    specs = {m: list(seeds.values()) for m, seeds in runs.items()}
+    final, figs = {}, []
+    for x in ("env_steps", "wall_time"):
+        figs.append(f"fig5a_{x}.png")
+        title = "Fig. 5a: mean over seeds, min to max shaded" + (f" ({', '.join(gpus)})" if x == "wall_time" else "")
+        for m, v in plot_fig5a(os.path.join(args.out, figs[-1]), specs, (x,), title).items():
+            final.setdefault(m, {}).update(v)
+    gaps = missing(runs, evals, tuple(args.terrains), args.seeds)
+    meta = {"runs": os.path.relpath(args.runs), "evals": os.path.relpath(args.evals) if args.evals else None,
             "methods": list(runs), "seeds": sorted({s for seeds in runs.values() for s in seeds}),
-            "checkpoints": "each run's last (the same rule for every method)"}  # fmt: skip
+            "checkpoints": "each run's last (the same rule for every method)", "GPUs": ", ".join(gpus) or None,
+            "complete": not gaps}  # fmt: skip
     with open(os.path.join(args.out, "results.json"), "w") as f:
-        json.dump({"meta": meta, "budgets": budgets, "table3": table, "fig5a_final": final,
-                   "evaluations": {t: {m: {str(s): {k: v for k, v in r.items() if k != "meta"} for s, r in seeds.items()}
-                                       for m, seeds in bm.items()} for t, bm in evals.items()}}, f, indent=1)  # fmt: skip
+        json.dump({"meta": meta, "missing": gaps, "leases": leases, "budgets": budgets, "table3": tables,
+                   "fig5a_final": final,
+                   "evaluations": {a: {t: {m: {str(s): {k: v for k, v in r.items() if k != "meta"}
+                                               for s, r in seeds.items()} for m, seeds in bm.items()}
+                                       for t, bm in by_t.items()} for a, by_t in evals.items()}}, f, indent=1)  # fmt: skip
     with open(os.path.join(args.out, "report.md"), "w") as f:
-        f.write(report_markdown(budgets, table, distances, "fig5a.png", meta))
-    print(f"report in {args.out}/ (report.md, results.json, fig5a.png)")
+        f.write(report_markdown(budgets, tables, distances, figs, meta, gaps, leases))
+    print(f"report in {args.out}/ (report.md, results.json, {', '.join(figs)})" + (" — partial" if gaps else ""))
     return 0
 
 

@@ -12,12 +12,19 @@
 #                                                                # each cut off after SECONDS -> $OUT/evals.tgz
 #   bash scripts/device/gpu.sh baseline NAME [GPU] -- ARGS...   # `python -m hexnewton.apps.baselines ARGS` as train does
 #   bash scripts/device/gpu.sh methods TASK MINUTES ENV_STEPS NUM_ENVS "SEEDS" "GPUS"
-#        # in the background: every method ($METHODS: cpg_rl sac_cpg td3_cpg a2c_cpg joint) x seed on TASK (joint:
-#        # $JOINT_TASK, default complex-joint), each run ending at ENV_STEPS env-steps or MINUTES of wall time,
-#        # whichever comes first, one run per GPU at a time (equal GPUs: equal wall time); runs in $RUNS/methods/
-#   bash scripts/device/gpu.sh evals ROUNDS "GPUS" TERRAIN...    # in the background: each run's last checkpoint,
-#        # ROUNDS unseen rounds per terrain, one job per GPU at a time -> $RUNS/method_evals/<run>_<terrain>/
-#        # ($EVAL_ARGS: more evaluate flags, e.g. --max_steps 3000)
+#        # in the background: every method ($METHODS: cpg_rl sac_cpg td3_cpg a2c_cpg joint; also paper: CPG_RL with
+#        # task paper) x seed on TASK (joint: $JOINT_TASK, default complex-joint), or the runs $JOBS names
+#        # ("cpg_rl:1 paper:1 ..."), each run ending at ENV_STEPS env-steps or MINUTES of wall time, whichever comes
+#        # first, one run per GPU at a time (equal GPUs: equal wall time); runs in $RUNS/methods/, NAME.done when a run
+#        # ends well (finished runs are skipped); none starts after $DEADLINE (seconds since the epoch)
+#   bash scripts/device/gpu.sh evals ROUNDS "GPUS" TERRAIN...    # in the background: the fixed CPG, then each
+#        # finished run's last checkpoint with its deterministic action, then with its sampled one, ROUNDS unseen
+#        # rounds per terrain, $PER_GPU jobs per GPU at a time (default 3), each cut off after $EVAL_TIMEOUT s ->
+#        # $RUNS/method_evals/<run>_<terrain>[_sampled]/ (done ones are skipped; $EVAL_ARGS: more evaluate flags)
+#   bash scripts/device/gpu.sh study DIR                        # a kept study's finished runs and evaluations into
+#        # $RUNS (results/paper_comparison): the queues skip what is finished
+#   bash scripts/device/gpu.sh collect                          # every finished run (policy, config, events, log)
+#        # -> $OUT/methods_runs.tgz.NN (15 MB parts) and the evaluations -> $OUT/method_evals.tgz
 #   bash scripts/device/gpu.sh report WHAT                      # Fig. 5a + Table 3 over seeds (hexnewton.apps.compare)
 #                                                                # -> $OUT/WHAT/{report.md,results.json,fig5a.*}
 #   bash scripts/device/gpu.sh busy                             # exit 0 while `methods` or `evals` jobs run
@@ -27,11 +34,12 @@
 #   bash scripts/device/gpu.sh wait 570 complex;  bash scripts/device/gpu.sh pack complex
 #   bash scripts/device/gpu.sh eval 560 "rugged:--controllers cpg cpg_rl --checkpoint cpg_rl=/root/keep/complex.pt \
 #       --terrains rugged --rounds 1000" ...
-# Example (the methods of Fig. 5a and Table 3 on complex terrain, 3 seeds, 8 GPUs; 15 runs of at most 8 minutes):
-#   bash scripts/device/gpu.sh methods complex 8 300000000 4096 "1 2 3" "0 1 2 3 4 5 6 7"
+# Example (the paper's comparison, kept in results/paper_comparison across leases: scripts/device/README.md):
+#   bash scripts/device/gpu.sh study results/paper_comparison
+#   DEADLINE=$(( $(date +%s) + 840 )) JOBS="sac_cpg:1 td3_cpg:1" \
+#       bash scripts/device/gpu.sh methods complex 20 60000000 4096 "" "0 1"
 #   bash scripts/device/gpu.sh wait 590 _methods     # as often as needed, then
-#   bash scripts/device/gpu.sh evals 1000 "0 1 2 3 4 5 6 7" rugged stepped complex
-#   bash scripts/device/gpu.sh wait 590 _evals;  bash scripts/device/gpu.sh report methods_complex
+#   bash scripts/device/gpu.sh collect               # here: python -m hexnewton.apps.compare --study ... --add ...
 set -u
 export PYTHONPATH=/opt/site${PYTHONPATH:+:$PYTHONPATH} PYTHONUNBUFFERED=1
 export NCCL_NVLS_ENABLE=0 TORCH_SYMM_MEM_DISABLE_MULTICAST=1 NVSHMEM_DISABLE_NVLS=1   # device docs: no NVLink multicast
@@ -43,8 +51,8 @@ cmd=${1:-}; shift || true
 run_dir() { ls -d "$RUNS/$1"/*/ 2>/dev/null | tail -1; }
 case "$cmd" in
 install)
-  bash .dw3bb/install.sh
-  mkdir -p /root/.cache && tar xzf /root/wc.tgz -C /root/.cache
+  bash "$(ls .dw*/install.sh | tail -1)"
+  [ -f /root/wc.tgz ] && mkdir -p /root/.cache && tar xzf /root/wc.tgz -C /root/.cache
   nvidia-smi --query-gpu=name,memory.total,driver_version --format=csv,noheader | tee "$OUT/gpu.txt"
   ;;
 train)
@@ -115,7 +123,10 @@ baseline)
 methods)
   [ $# -eq 6 ] || { echo "usage: gpu.sh methods TASK MINUTES ENV_STEPS NUM_ENVS \"SEEDS\" \"GPUS\""; exit 2; }
   mkdir -p "$RUNS/methods"
-  nohup bash "$0" _methods "$@" > "$RUNS/methods.log" 2>&1 &
+  # the queue runs from its own copy of the tree: a later call's tree (edited meanwhile) does not change its runs
+  code=$RUNS/code_$(date +%s); mkdir -p "$code"
+  tar --exclude='./.dw*' --exclude=./runs --exclude=./.git -cf - . | tar -xf - -C "$code"
+  (cd "$code" && nohup setsid bash scripts/device/gpu.sh _methods "$@" >> "$RUNS/methods.log" 2>&1 < /dev/null &)
   echo "queued $(for s in $5; do for m in ${METHODS:-cpg_rl sac_cpg td3_cpg a2c_cpg joint}; do echo -n "${m}_s$s "; done; done)on GPUs $6"
   ;;
 _methods)   # the queue behind `methods`
@@ -123,55 +134,102 @@ _methods)   # the queue behind `methods`
   per_it=${STEPS_PER_ENV:-24}; its=$(( (steps + envs * per_it - 1) / (envs * per_it) ))
   dest="$RUNS/methods"
   jobs=(); for s in $seeds; do for m in ${METHODS:-cpg_rl sac_cpg td3_cpg a2c_cpg joint}; do jobs+=("$m $s"); done; done
+  [ -n "${JOBS:-}" ] && { jobs=(); for j in $JOBS; do jobs+=("${j%:*} ${j#*:}"); done; }   # JOBS="cpg_rl:1 joint:2 ..."
   declare -A pid
   for job in "${jobs[@]}"; do
     set -- $job; m=$1 s=$2 free=
+    name=${m}_s$s
+    # finished runs are skipped (NAME.done: this lease's, or an earlier lease's copied in by `gpu.sh study`); a run
+    # cut off starts again
+    [ -f "$dest/$name.done" ] && { echo "$(date +%T) $name finished: skipped"; continue; }
     while [ -z "$free" ]; do
       for g in $gpus; do p=${pid[$g]:-}; { [ -z "$p" ] || ! kill -0 "$p" 2>/dev/null; } && { free=$g; break; }; done
       [ -z "$free" ] && sleep 5
     done
-    name=${m}_s$s
+    # no run starts past the deadline ($DEADLINE: seconds since the epoch), so the lease ends with whole runs
+    [ -n "${DEADLINE:-}" ] && [ "$(date +%s)" -gt "$DEADLINE" ] && { echo "$(date +%T) deadline: $name not started"; continue; }
     case $m in
       cpg_rl) cmd=(python train.py --task "$task" --max_iterations "$its" --agent.max_minutes "$minutes") ;;
+      paper)  cmd=(python train.py --task paper --max_iterations "$its" --agent.max_minutes "$minutes") ;;
       joint)  cmd=(python train.py --task "${JOINT_TASK:-complex-joint}" --max_iterations "$its" --agent.max_minutes "$minutes") ;;
       *_cpg)  cmd=(python -m hexnewton.apps.baselines --task "$task" --algo "${m%_cpg}" --total_steps "$steps" --max_minutes "$minutes") ;;
       *) echo "unknown method $m"; continue ;;
     esac
+    rm -rf "$dest/$name"
     echo "$(date +%T) $name on GPU $free: ${cmd[*]}"
-    CUDA_VISIBLE_DEVICES=$free "${cmd[@]}" --seed "$s" --num_envs "$envs" --log_dir "$dest" --experiment "$name" \
-      > "$dest/$name.log" 2>&1 &
+    gpu_name=$(nvidia-smi -i "$free" --query-gpu=name --format=csv,noheader)
+    ( t=$SECONDS
+      CUDA_VISIBLE_DEVICES=$free "${cmd[@]}" --seed "$s" --num_envs "$envs" --log_dir "$dest" --experiment "$name" \
+        > "$dest/$name.log" 2>&1
+      rc=$?; [ $rc = 0 ] && printf '{"exit": 0, "process_s": %d, "gpu": "%s", "command": "%s"}\n' \
+        $((SECONDS - t)) "$gpu_name" "${cmd[*]} --seed $s --num_envs $envs" > "$dest/$name.done"
+      echo "$(date +%T) $name ended: exit $rc after $((SECONDS - t)) s" ) &
     pid[$free]=$!
   done
   wait
   echo "$(date +%T) all runs ended"
   ;;
+study)   # a study kept on main (results/paper_comparison): its finished runs and evaluations into $RUNS, so that the
+         # queues skip them and evaluate the runs' stored policies
+  dir=${1:?usage: gpu.sh study DIR}
+  mkdir -p "$RUNS/methods" "$RUNS/method_evals"
+  [ -d "$dir/runs" ] && cp -rn "$dir/runs/." "$RUNS/methods/" && (cd "$dir/runs" && ls *.done) >> "$RUNS/methods/.kept"
+  [ -d "$dir/evals" ] && cp -rn "$dir/evals/." "$RUNS/method_evals/"
+  echo "from $dir: $(ls "$RUNS"/methods/*.done 2>/dev/null | wc -l) finished runs, $(ls "$RUNS"/method_evals/*/results.json 2>/dev/null | wc -l) evaluations"
+  ;;
+collect)   # the finished runs (config, events, log, last checkpoint, .done) -> $OUT/methods_runs.tgz.NN (15 MB parts)
+  cd "$RUNS/methods" || exit 1
+  files=()
+  for done in *.done; do
+    grep -qx "$done" .kept 2>/dev/null && continue   # already in the kept study
+    name=${done%.done}; run=$(ls -d "$name"/*/ | tail -1); last=$(ls -v "$run"model_*[0-9].pt 2>/dev/null | tail -1)
+    [ -z "$last" ] && last=$(ls -v "$run"checkpoints/*.pt 2>/dev/null | tail -1)
+    files+=("$done" "$name.log" $(ls "$run"config.json "$run"events.* 2>/dev/null) $(find "$run" -name "events.*" | grep -v "^$run"events) "$last")
+  done
+  [ -d "$RUNS/method_evals" ] && tar czf "$OUT/method_evals.tgz" -C "$RUNS" method_evals
+  [ ${#files[@]} -gt 0 ] || { echo "no new finished runs"; exit 0; }
+  tar czf - "${files[@]}" | split -b 15M -d - "$OUT/methods_runs.tgz."
+  ls -la "$OUT"; echo "${#files[@]} files of the new finished runs"
+  ;;
 evals)
   [ $# -ge 3 ] || { echo "usage: gpu.sh evals ROUNDS \"GPUS\" TERRAIN..."; exit 2; }
   mkdir -p "$RUNS/method_evals"
-  nohup bash "$0" _evals "$@" > "$RUNS/method_evals.log" 2>&1 &
+  nohup setsid bash "$0" _evals "$@" >> "$RUNS/method_evals.log" 2>&1 < /dev/null &
   echo "queued the evaluations of $(ls -d "$RUNS"/methods/*_s*/ 2>/dev/null | wc -l) runs on $3..."
   ;;
 _evals)   # the queue behind `evals`
   rounds=$1 gpus=$2; shift 2
   dest="$RUNS/method_evals"
+  # evaluations are launch-bound: $PER_GPU jobs share a GPU (default 3)
+  slots=(); for g in $gpus; do for k in $(seq "${PER_GPU:-3}"); do slots+=("$g"); done; done
   declare -A pid
-  for exp in "$RUNS"/methods/*_s*/; do
-    name=$(basename "$exp"); m=${name%_s*}
-    run=$(ls -d "$exp"*/ | tail -1); ck=$(ls -v "$run"model_[0-9]*.pt 2>/dev/null | tail -1)
-    [ -z "$ck" ] && { echo "no checkpoint in $exp"; continue; }
+  sampled=(); specs=()   # "NAME CONTROLLER CHECKPOINT TERRAIN FLAGS": every finished run, deterministic and sampled, and the fixed CPG
+  for terrain in "$@"; do specs+=("cpg_s0_$terrain cpg - $terrain -"); done
+  for done in "$RUNS"/methods/*.done; do
+    [ -e "$done" ] || continue
+    name=$(basename "$done" .done); m=${name%_s*}; ctrl=$m; [ "$m" = paper ] && ctrl=cpg_rl
+    run=$(ls -d "$RUNS/methods/$name"/*/ | tail -1); ck=$(ls -v "$run"model_*[0-9].pt 2>/dev/null | tail -1)
+    [ -z "$ck" ] && { echo "no checkpoint in $run"; continue; }
     for terrain in "$@"; do
-      [ -e "$dest/${name}_$terrain" ] && continue
-      free=
-      while [ -z "$free" ]; do
-        for g in $gpus; do p=${pid[$g]:-}; { [ -z "$p" ] || ! kill -0 "$p" 2>/dev/null; } && { free=$g; break; }; done
-        [ -z "$free" ] && sleep 5
-      done
-      echo "$(date +%T) ${name}_$terrain on GPU $free: $ck"
-      CUDA_VISIBLE_DEVICES=$free python -m hexnewton.apps.evaluate --controllers "$m" --checkpoint "$m=$ck" \
-        --terrains "$terrain" --rounds "$rounds" --out "$dest/${name}_$terrain" --no-progress ${EVAL_ARGS:-} \
-        > "$dest/${name}_$terrain.log" 2>&1 &
-      pid[$free]=$!
+      specs+=("${name}_$terrain $ctrl $ck $terrain -"); sampled+=("${name}_${terrain}_sampled $ctrl $ck $terrain --stochastic")
     done
+  done
+  specs+=("${sampled[@]}")   # every deterministic evaluation first, then the sampled ones
+  for spec in "${specs[@]}"; do
+    set -- $spec; out=$1 ctrl=$2 ck=$3 terrain=$4 flags=$5
+    [ -f "$dest/$out/results.json" ] && continue
+    rm -rf "$dest/$out"; free=
+    while [ -z "$free" ]; do
+      for i in "${!slots[@]}"; do p=${pid[$i]:-}; { [ -z "$p" ] || ! kill -0 "$p" 2>/dev/null; } && { free=$i; break; }; done
+      [ -z "$free" ] && sleep 2
+    done
+    args=(--controllers "$ctrl" --terrains "$terrain" --rounds "$rounds" --out "$dest/$out" --no-progress)
+    [ "$ck" != - ] && args+=(--checkpoint "$ctrl=$ck")
+    [ "$flags" != - ] && args+=($flags)
+    echo "$(date +%T) $out on GPU ${slots[$free]}: ${args[*]}"
+    ( CUDA_VISIBLE_DEVICES=${slots[$free]} timeout -k 10 "${EVAL_TIMEOUT:-3000}" python -m hexnewton.apps.evaluate "${args[@]}" ${EVAL_ARGS:-} \
+        > "$dest/$out.log" 2>&1; echo "$(date +%T) $out ended: exit $?" ) &
+    pid[$free]=$!
   done
   wait
   echo "$(date +%T) all evaluations ended"
