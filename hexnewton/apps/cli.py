@@ -53,6 +53,27 @@ def check_new_dir(path: str) -> None:
         raise ValueError(f"cannot create {path}: {parent} is not a writable directory")
 
 
+def add_browser_args(parser) -> None:
+    """``--host`` and ``--port`` of the browser viewer (``--viewer viser``)."""
+    from hexnewton.physics.viewer import DEFAULT_HOST, DEFAULT_PORT
+
+    parser.add_argument("--host", default=DEFAULT_HOST,
+                        help=f"--viewer viser: the address to listen on (default {DEFAULT_HOST}: this machine only; "
+                             "0.0.0.0 exposes the page on every interface)")  # fmt: skip
+    parser.add_argument("--port", type=positive_int, default=DEFAULT_PORT,
+                        help=f"--viewer viser: the port (default {DEFAULT_PORT})")
+
+
+def announce_browser(url: str, host: str, until: str) -> None:
+    """Print where the browser viewer is, how to reach it from another machine, and how long it serves."""
+    print(f"viewer viser: open {url} in a browser ({until}; Ctrl-C stops)")
+    if host in ("0.0.0.0", "::"):
+        print(f"viewer viser: listening on every interface ({host}): anyone who can reach this machine can watch")
+    else:
+        print(f"viewer viser: from another machine, ssh -L {url.rsplit(':', 1)[1]}:localhost:{url.rsplit(':', 1)[1]} "
+              "this machine, then open the same address there")  # fmt: skip
+
+
 def run(main: Callable[[list[str] | None], int | None], prog: str, argv: list[str] | None = None) -> int:
     """Run ``main``; user errors (HexnewtonError, ValueError) become one stderr line and exit status 2, file
     system errors one line and exit status 1."""

@@ -4,6 +4,7 @@
     python play.py --controller cpg --terrain flat --num_envs 64 --steps 500
     python play.py --viewer gl                                           # in a window (the default with a display)
     python play.py --headless --video walk.mp4 --steps 1000              # a 20 s video, no display needed
+    python play.py --viewer viser --steps 3000                           # in a browser: http://127.0.0.1:8080
     python play.py --viewer usd --out walk.usd                           # a recording for usdview / Omniverse
     python play.py --controller cpg --terrain stepped --record rollout.npz --plot gait.png
     python play.py --checkpoint logs/.../model_299.pt                    # its controller and course from the file
@@ -27,7 +28,9 @@ control step, the arrays listed under ``Recorder``.
 
 Viewers (``hexnewton.physics.viewer``, Newton's ``--viewer`` convention): ``gl`` an OpenGL window (the default when there is a
 display; ``--headless`` renders off-screen, through Mesa's software OpenGL on a machine without a GPU); ``--video
-PATH.mp4`` writes what ViewerGL renders, captioned with the task and the time; ``usd``, ``rerun`` and ``file`` write
+PATH.mp4`` writes what ViewerGL renders, captioned with the task and the time; ``viser`` serves the rollout as a web
+page at ``--host``:``--port`` (127.0.0.1:8080: this machine only) in real time (x ``--video_speed``) until ``--steps``
+end, ``--out PATH.viser`` also records it for playback in the browser; ``usd``, ``rerun`` and ``file`` write
 ``--out PATH`` (``.usd``, ``.rrd``, ``.json``/``.bin``) for offline inspection and replay; ``null`` draws nothing (the
 default without a display). They show the first terrain's rollout, the first ``--robots_shown`` robots.
 """
@@ -42,7 +45,9 @@ from dataclasses import replace
 from hexnewton.analysis.rollout import BASELINES, CONTROLLERS, FIXED
 from hexnewton.apps.cli import (
     ArgumentParser,
+    add_browser_args,
     add_config_args,
+    announce_browser,
     check_writable,
     config_overrides,
     positive_int,
@@ -74,7 +79,9 @@ def parser() -> ArgumentParser:
                    help="Newton viewer (default: gl with a display or --video, else null)")
     p.add_argument("--headless", action="store_true", help="gl: render off-screen (implied by --video without a display)")
     p.add_argument("--video", metavar="PATH.mp4", help="write the rendered frames as an .mp4 (ViewerGL)")
-    p.add_argument("--out", metavar="PATH", help="the recording of --viewer usd (.usd), rerun (.rrd) or file (.json/.bin)")
+    p.add_argument("--out", metavar="PATH", help="the recording of --viewer usd (.usd), rerun (.rrd), file (.json/.bin) "
+                   "or viser (.viser, beside the live page)")  # fmt: skip
+    add_browser_args(p)
     p.add_argument("--robots_shown", type=positive_int, default=3, help="robots shown by the viewer (the first lanes)")
     p.add_argument("--video_speed", type=positive_int, default=1,
                    help="playback speed (x real time): one frame every video_speed control steps")  # fmt: skip
@@ -105,6 +112,10 @@ def check_outputs(args) -> None:
     args.viewer = args.viewer or default_viewer(args.video, args.out)
     args.headless = args.headless or (args.video is not None and not has_display())
     check_viewer_args(args.viewer, args.headless, args.video, args.out)
+    if args.viewer == "viser":
+        from hexnewton.physics.viewer import check_port
+
+        check_port(args.host, args.port)
     for path in (args.video, args.out):
         if path:
             check_writable(path, os.path.splitext(path)[1])
@@ -171,7 +182,10 @@ def play_course(args, ground, first: bool, trained: HexConfig, ckpt: dict | None
         viewer = RolloutViewer(args.viewer, headless=args.headless, video=args.video, out=args.out,
                                robots=args.robots_shown, stride=args.video_speed,
                                title=(f"task {task}: " if task else "") + f"{args.controller} on {terrain}",
-                               control_dt=cfg.task.control_dt)  # fmt: skip
+                               control_dt=cfg.task.control_dt, host=args.host, port=args.port,
+                               realtime=args.viewer == "viser")  # fmt: skip
+        if viewer.url:
+            announce_browser(viewer.url, args.host, f"serving until the {args.steps} control steps end")
     t0 = time.perf_counter()
     try:
         stats = rollout(env, policy, args.steps, tuple(r for r in (recorder, viewer) if r is not None),
@@ -187,8 +201,10 @@ def play_course(args, ground, first: bool, trained: HexConfig, ckpt: dict | None
         recorder.save(args.record)
         print(f"recorded {args.steps} steps x {args.num_envs} envs to {args.record}")
     if viewer is not None:
-        wrote = [f"{viewer.frames} frames in ViewerGL{' (headless)' if args.headless else ''}" if args.viewer == "gl"
-                 else f"{viewer.frames} frames to {args.out}"]  # fmt: skip
+        where = {"gl": f"in ViewerGL{' (headless)' if args.headless else ''}", "viser": "served to the browser"}
+        wrote = [f"{viewer.frames} frames {where.get(args.viewer, f'to {args.out}')}"]
+        if args.viewer == "viser" and args.out:
+            wrote.append(f"recording written to {args.out}")
         if args.video:
             wrote.append(f"video written to {args.video}")
         print(f"viewer {args.viewer}: " + ", ".join(wrote))

@@ -7,6 +7,7 @@
     python train.py --resume logs/hexnewton_rugged/2026-11-21_15-00-00/model_299.pt --max_iterations 100
     torchrun --nproc_per_node=2 train.py --task complex --num_envs 4096    # 4096 envs on each of 2 GPUs
     python train.py --task rugged --video --video_interval 100             # a 4 s clip every 100 iterations
+    python train.py --task complex --viewer viser                          # watch training at http://127.0.0.1:8080
 
 Every field of the task's configs can be set from the command line: ``--env.<section>.<field>`` (HexConfig: robot,
 terrain, sim, cpg, task, reward, randomization) and ``--agent.<field>`` (AgentConfig: PPO, networks, distribution,
@@ -19,6 +20,9 @@ the task, the configs and the action mode (``play.py``, ``evaluate`` and ``expor
 deterministic policy with a dynamic batch dimension, checked against torch with onnxruntime. With ``--video``,
 ``videos/iteration_<k>.mp4``: ``--video_length`` control steps of the first robots as training plays them, from
 iteration 0 and every ``--video_interval`` iterations (Newton's ViewerGL, headless; ``hexnewton.physics.viewer.VideoEnv``).
+With ``--viewer viser`` the first ``--robots_shown`` training robots are drawn in a web page every ``--viewer_stride``
+control steps while training runs (``hexnewton.physics.viewer.LiveEnv``; ``--host`` / ``--port``, 127.0.0.1:8080 by
+default: this machine only).
 """
 
 from __future__ import annotations
@@ -30,7 +34,15 @@ import os
 import sys
 import time
 
-from hexnewton.apps.cli import ArgumentParser, add_config_args, config_overrides, positive_int, run
+from hexnewton.apps.cli import (
+    ArgumentParser,
+    add_browser_args,
+    add_config_args,
+    announce_browser,
+    config_overrides,
+    positive_int,
+    run,
+)
 from hexnewton.config import apply_overrides
 
 
@@ -96,6 +108,12 @@ def parser(base, resumed: bool) -> ArgumentParser:
                    help="record clips of the training robots into the run's videos/ (headless ViewerGL, .mp4)")
     p.add_argument("--video_length", type=positive_int, default=200, help="control steps per clip (default 200: 4 s)")
     p.add_argument("--video_interval", type=positive_int, default=100, help="iterations between clips (default 100)")
+    p.add_argument("--viewer", choices=("viser",), default=None,
+                   help="viser: watch the first training robots live in a browser while training runs")
+    p.add_argument("--viewer_stride", type=positive_int, default=10,
+                   help="--viewer viser: control steps between drawn frames (default 10)")
+    p.add_argument("--robots_shown", type=positive_int, default=3, help="--viewer viser: robots drawn (default 3)")
+    add_browser_args(p)
     add_config_args(p, "env", base.env, skip=("sim.num_envs", "sim.device", "task.seed"),
                     title="--env.*: the environment (HexConfig, hexnewton/config.py)")
     add_config_args(p, "agent", base.agent, skip=("max_iterations",),
@@ -127,10 +145,13 @@ def check_outputs(args) -> None:
     from hexnewton.learning.runner import check_log_dir
 
     check_log_dir(args.log_dir)
-    if args.video:
-        from hexnewton.physics.viewer import check_viewer_args
+    from hexnewton.physics.viewer import check_port, check_viewer_args
 
+    if args.video:
         check_viewer_args("gl", True, "clip.mp4", None)
+    if args.viewer:
+        check_viewer_args(args.viewer, True, None, None)
+        check_port(args.host, args.port)
 
 
 def rank_config(args, env_cfg):
@@ -166,22 +187,31 @@ def make_run_dir(args, meta: dict, train_cfg: dict, rank) -> str:
 
 
 def make_runner(args, env, agent, meta: dict, run_dir: str, rank, ckpt: dict | None):
-    """The run's :class:`~hexnewton.learning.runner.HexRunner` (resumed from ``ckpt`` if given) and, with ``--video`` on rank 0,
-    the :class:`~hexnewton.physics.viewer.VideoEnv` it trains through (else None)."""
+    """The run's :class:`~hexnewton.learning.runner.HexRunner` (resumed from ``ckpt`` if given) and, on rank 0, the
+    viewers it trains through: ``--video``'s :class:`~hexnewton.physics.viewer.VideoEnv` and ``--viewer viser``'s
+    :class:`~hexnewton.physics.viewer.LiveEnv` (a list, empty without them)."""
     from hexnewton.learning.runner import HexRunner
 
     cfg = env.cfg
-    videos = None
+    views = []
+    steps_per_iteration = agent.to_rsl_rl(cfg.sim.num_envs)["num_steps_per_env"]
     if args.video and rank.is_main:
         from hexnewton.physics.viewer import VideoEnv
 
-        steps_per_iteration = agent.to_rsl_rl(cfg.sim.num_envs)["num_steps_per_env"]
-        env = videos = VideoEnv(env, os.path.join(run_dir, "videos"), args.video_interval, args.video_length,
-                                steps_per_iteration, title=f"task {meta['task']}: ")  # fmt: skip
+        env = VideoEnv(env, os.path.join(run_dir, "videos"), args.video_interval, args.video_length,
+                       steps_per_iteration, title=f"task {meta['task']}: ")  # fmt: skip
+        views.append(env)
+    if args.viewer == "viser" and rank.is_main:
+        from hexnewton.physics.viewer import LiveEnv
+
+        env = LiveEnv(env, args.viewer_stride, steps_per_iteration, args.robots_shown, f"task {meta['task']}: ",
+                      args.host, args.port)  # fmt: skip
+        views.append(env)
+        announce_browser(env.url, args.host, "while training runs")
     runner = HexRunner(env, agent, meta, run_dir if rank.is_main else None, cfg.sim.device, rank)
     if ckpt is not None:
         resume(runner, ckpt, args, agent)
-    return runner, videos
+    return runner, views
 
 
 def resume(runner, ckpt: dict, args, agent) -> None:
@@ -208,7 +238,7 @@ def check_ranks_agree(runner, rank) -> None:
         raise RuntimeError(f"the ranks' parameters differ by {spread:.2e}: the gradients were not shared")
 
 
-def finish(args, runner, cfg, agent, rank, run_dir: str, videos, train_s: float, first_it: int) -> None:
+def finish(args, runner, cfg, agent, rank, run_dir: str, views, train_s: float, first_it: int) -> None:
     """Rank 0 after training: the last episodes, the policy to ship (the best iteration's or the last) exported as
     ONNX, ``timing.json``, and the commands that use the result."""
     from hexnewton import startup
@@ -235,8 +265,11 @@ def finish(args, runner, cfg, agent, rank, run_dir: str, videos, train_s: float,
     with open(os.path.join(run_dir, "timing.json"), "w") as f:
         json.dump(timing, f, indent=1)
     print(f"{timing['wall_s_to_result']:.0f} s from process start to the exported result")
-    if videos is not None:
-        print(f"{len(videos.clips)} training video(s) in {os.path.join(run_dir, 'videos')}")
+    for view in views:
+        if hasattr(view, "clips"):
+            print(f"{len(view.clips)} training video(s) in {os.path.join(run_dir, 'videos')}")
+        else:
+            print(f"viewer viser: {view.viewer.frames} frames of the training robots drawn")
     print(f"\nresults in {run_dir} (checkpoints, TensorBoard events, policy.onnx). Next:\n"
           f"  python play.py --checkpoint {final}\n"
           f"  python -m hexnewton.apps.evaluate --controllers cpg cpg_rl --checkpoint cpg_rl={final} --terrains "
@@ -268,18 +301,18 @@ def main(argv: list[str] | None = None) -> int:
             "num_actions": env.num_actions, "config": dataclasses.asdict(cfg), "agent": dataclasses.asdict(agent),
             "world_size": rank.world_size}  # fmt: skip
     run_dir = make_run_dir(args, meta, agent.to_rsl_rl(cfg.sim.num_envs), rank)
-    runner, videos = make_runner(args, env, agent, meta, run_dir, rank, ckpt)
+    runner, views = make_runner(args, env, agent, meta, run_dir, rank, ckpt)
     where = f"rank {rank.rank} of {rank.world_size}, " if rank.world_size > 1 else ""
     print(f"training task {base.name}: {where}{cfg.sim.num_envs} envs on {cfg.sim.device}, {agent.max_iterations} "
           f"iterations, logs in {run_dir}")  # fmt: skip
-    if videos is not None:
-        videos.first_iteration = runner.current_learning_iteration
+    for view in views:
+        view.first_iteration = runner.current_learning_iteration
     t0, first_it = time.time(), runner.current_learning_iteration
     try:
         reason = runner.train(agent.max_iterations)
     finally:
-        if videos is not None:
-            videos.close()
+        for view in views:
+            view.close()
     train_s = time.time() - t0
     print(f"finished at iteration {runner.current_learning_iteration} after {train_s:.0f} s ({reason})")
     if rank.world_size > 1:
@@ -287,7 +320,7 @@ def main(argv: list[str] | None = None) -> int:
         runner.leave_group()
     if not rank.is_main:
         return 0
-    finish(args, runner, cfg, agent, rank, run_dir, videos, train_s, first_it)
+    finish(args, runner, cfg, agent, rank, run_dir, views, train_s, first_it)
     return 0
 
 

@@ -11,6 +11,10 @@ its own lane) to one of Newton's viewers (``newton.viewer``):
   ``ViewerRerun`` (``.rrd``, opens in the Rerun viewer) and ``ViewerFile`` (``.json``/``.bin``, Newton's own
   recording, replayed by ``ViewerFile.load_recording``): the model and the body poses of every frame, for offline
   inspection and replay;
+- ``viser``: ``ViewerViser``, a web page (viser) that any browser opens, for machines without a display: the server
+  binds to 127.0.0.1 unless told otherwise (reach it through ``ssh -L 8080:localhost:8080 host``); with ``out=PATH.viser``
+  it also writes a recording that plays back in the browser (:func:`check_port` fails at once on a port in use, which
+  viser itself would wait on);
 - ``null``: ``ViewerNull``, nothing drawn (timing, tests).
 
 Only the first ``robots`` lanes are shown (``ViewerBase.set_visible_worlds``), where the simulation put them: the
@@ -28,15 +32,22 @@ from __future__ import annotations
 import importlib.util
 import math
 import os
+import socket
 import sys
+import time
 
 import numpy as np
 
-VIEWERS = ("gl", "usd", "rerun", "file", "null")
+VIEWERS = ("gl", "viser", "usd", "rerun", "file", "null")
 #: recording viewers -> the file endings their ``--out`` takes
 RECORDINGS = {"usd": (".usd", ".usda", ".usdc"), "rerun": (".rrd",), "file": (".json", ".bin")}
+#: live viewers that can also record (``--out`` optional) -> the file endings
+LIVE_RECORDINGS = {"viser": (".viser",)}
 #: viewer -> (module it needs, pip package)
-_NEEDS = {"gl": ("pyglet", "pyglet"), "usd": ("pxr", "usd-core"), "rerun": ("rerun", "rerun-sdk")}
+_NEEDS = {"gl": ("pyglet", "pyglet"), "viser": ("viser", "viser"), "usd": ("pxr", "usd-core"),
+          "rerun": ("rerun", "rerun-sdk")}
+#: where the browser viewer listens unless told otherwise: this machine only
+DEFAULT_HOST, DEFAULT_PORT = "127.0.0.1", 8080
 VIDEO_EXTENSIONS = (".mp4",)
 
 
@@ -50,7 +61,7 @@ def has_display() -> bool:
 def default_viewer(video: str | None, out: str | None) -> str:
     """The viewer a command line without ``--viewer`` gets: the recording ``out``'s file ending names, else ``gl``
     for a video or with a display, else ``null``."""
-    for viewer, ends in RECORDINGS.items():
+    for viewer, ends in {**RECORDINGS, **LIVE_RECORDINGS}.items():
         if out is not None and out.endswith(ends):
             return viewer
     if video or has_display():
@@ -87,16 +98,35 @@ def check_viewer_args(viewer: str, headless: bool, video: str | None, out: str |
         if out.endswith(".bin"):
             if importlib.util.find_spec("cbor2") is None:
                 raise ValueError(f"{out}: a .bin recording needs cbor2 (pip install cbor2), or write .json")
+    elif viewer in LIVE_RECORDINGS and out is not None:
+        if not out.endswith(LIVE_RECORDINGS[viewer]):
+            raise ValueError(f"{out}: a {viewer} recording must be a {' or '.join(LIVE_RECORDINGS[viewer])} file")
     elif out is not None:
-        raise ValueError(f"--out is the file of a recording: use it with --viewer {', '.join(RECORDINGS)}")
+        raise ValueError(f"--out is the file of a recording: use it with --viewer "
+                         f"{', '.join([*RECORDINGS, *LIVE_RECORDINGS])}")  # fmt: skip
     if viewer == "gl" and not headless and video is None and not has_display():
         raise ValueError("--viewer gl opens a window but there is no display (DISPLAY is unset): add --headless "
                          "--video PATH.mp4, or record with --viewer usd --out PATH.usd")  # fmt: skip
     _require(viewer)
 
 
+def check_port(host: str, port: int) -> None:
+    """One line instead of a hang when the browser viewer's ``host:port`` cannot be listened on (in use, or not an
+    address of this machine)."""
+    if not 0 < port < 65536:
+        raise ValueError(f"--port {port}: choose a port in 1-65535")
+    with socket.socket(socket.AF_INET6 if ":" in host else socket.AF_INET, socket.SOCK_STREAM) as sock:
+        sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)  # as the server does: a closed one's port is free
+        try:
+            sock.bind((host, port))
+        except OSError as exc:
+            why = "is in use" if exc.errno in (98, 48, 10048) else f"cannot be listened on ({exc.strerror})"
+            raise ValueError(f"{host}:{port} {why}: choose another with --port (or --host)") from None
+
+
 def make_viewer(viewer: str, out: str | None = None, headless: bool = False, width: int = 960, height: int = 540,
-                fps: float = 50.0, num_frames: int | None = None):  # fmt: skip
+                fps: float = 50.0, num_frames: int | None = None, host: str = DEFAULT_HOST, port: int = DEFAULT_PORT,
+                title: str = ""):  # fmt: skip
     """One of Newton's viewers (``VIEWERS``), as Newton's examples make them (``newton.examples.init``)."""
     if viewer == "gl" and headless:
         os.environ["PYGLET_HEADLESS"] = "1"  # read once, when pyglet is first imported
@@ -106,6 +136,10 @@ def make_viewer(viewer: str, out: str | None = None, headless: bool = False, wid
 
     if viewer == "gl":
         return newton.viewer.ViewerGL(width=width, height=height, headless=headless, vsync=False)
+    if viewer == "viser":
+        check_port(host, port)
+        return newton.viewer.ViewerViser(host=host, port=port, label=title or "hexnewton", verbose=False,
+                                         record_to_viser=out)  # fmt: skip
     if viewer == "usd":
         return newton.viewer.ViewerUSD(output_path=out, fps=max(1, round(fps)), num_frames=num_frames)
     if viewer == "rerun":
@@ -187,24 +221,34 @@ def paint(model) -> None:
 class RolloutViewer:
     """Shows a batched world's first ``robots`` robots through a Newton viewer, every ``stride`` control steps.
 
-    ``viewer``: one of ``VIEWERS``; ``out``: the recording's file (usd, rerun, file); ``video``: an ``.mp4`` written
-    from ViewerGL's frames (headless or in a window), each captioned with ``title`` and the time. :meth:`add` is a
-    rollout recorder's hook; :meth:`close` finishes the video or recording."""
+    ``viewer``: one of ``VIEWERS``; ``out``: the recording's file (usd, rerun, file, viser); ``video``: an ``.mp4``
+    written from ViewerGL's frames (headless or in a window), each captioned with ``title`` and the time; ``host`` and
+    ``port``: where the browser viewer (viser) listens, its page captioned likewise; ``realtime``: one drawn frame per
+    control step of wall time at most, so ``stride`` times real time (a live view one can watch). :meth:`add` is a rollout
+    recorder's hook; :meth:`close` finishes the video or recording."""
 
     def __init__(self, viewer: str = "gl", *, headless: bool = False, video: str | None = None, out: str | None = None,
                  robots: int = 3, stride: int = 1, title: str = "", width: int = 960, height: int = 540,
-                 control_dt: float = 0.02):  # fmt: skip
+                 control_dt: float = 0.02, host: str = DEFAULT_HOST, port: int = DEFAULT_PORT,
+                 realtime: bool = False):  # fmt: skip
         check_viewer_args(viewer, headless, video, out)
         self.kind, self.robots, self.stride, self.title = viewer, robots, max(1, stride), title
         self.video_path, self.out = video, out
         self.fps = 1.0 / (self.stride * control_dt)
-        self.viewer = make_viewer(viewer, out, headless, width, height, self.fps)
+        self.viewer = make_viewer(viewer, out, headless, width, height, self.fps, host=host, port=port, title=title)
         self.video = VideoWriter(video, self.fps) if video else None
+        self.caption = self.viewer.server.gui.add_markdown(title) if viewer == "viser" else None
+        self.realtime, self.control_dt, self._next_frame = realtime, control_dt, None
         self.world = None
         self.frames = 0
         self._k = 0
         self._cam: np.ndarray | None = None
         self.closed_by_user = False
+
+    @property
+    def url(self) -> str | None:
+        """The browser viewer's address (viser), else None."""
+        return self.viewer.url if self.kind == "viser" else None
 
     # -- set-up
     def attach(self, world) -> None:
@@ -230,7 +274,7 @@ class RolloutViewer:
         pos = self._cam - dist * direction
         pitch = math.degrees(math.asin(direction[2]))
         yaw = math.degrees(math.atan2(direction[1], direction[0]))
-        if hasattr(self.viewer, "camera"):
+        if self.kind in ("gl", "viser"):
             self.viewer.set_camera(pos.tolist(), pitch, yaw)
 
     # -- per frame
@@ -244,8 +288,15 @@ class RolloutViewer:
             return
         base = world.state_0.body_q.numpy().reshape(world.num_envs, -1, 7)[: self.shown, 0, :3]
         self.follow(base)
+        if self.realtime:  # wait for the frame's wall time
+            now = time.perf_counter()
+            self._next_frame = now if self._next_frame is None else max(self._next_frame, now - 1.0)
+            time.sleep(max(0.0, self._next_frame - now))
+            self._next_frame += self.control_dt  # one control step of wall time per drawn frame: stride x real time
         v.begin_frame(t)
         v.log_state(world.state_0)
+        if self.caption is not None:
+            self.caption.content = "  \n".join(line for line in (self.title, f"t = {t:6.2f} s") if line)
         v.end_frame()
         self.frames += 1
         if self.video is not None:
@@ -262,29 +313,17 @@ class RolloutViewer:
         """Finish the video or recording (and close the window)."""
         if self.video is not None:
             self.video.close()
-        if self.kind in ("usd", "file"):
-            self.viewer.close()  # writes the file
-        elif self.kind == "gl":
-            self.viewer.close()
-        elif self.kind == "rerun":
-            self.viewer.close()
+        if self.kind != "null":
+            self.viewer.close()  # writes a recording's file; stops viser's server
 
 
 # ----------------------------------------------------------------------------------------------- during training
-class VideoEnv:
-    """A training env (rsl-rl VecEnv) that records a clip every ``interval`` iterations (Isaac Lab's and mjlab's
-    ``--video``): from the first control step of iterations 0, ``interval``, 2 ``interval``, ... the next ``length``
-    control steps go through a headless :class:`RolloutViewer` into ``folder/iteration_<k>.mp4``. Everything else is
-    the wrapped env's (attributes are read from and written to it)."""
+class _TrainingEnvView:
+    """A training env (rsl-rl VecEnv) seen through a viewer: everything but ``step`` and this class's own attributes
+    is the wrapped env's (read from and written to it)."""
 
-    def __init__(self, env, folder: str, interval: int, length: int, steps_per_iteration: int, robots: int = 3,
-                 title: str = "", width: int = 960, height: int = 540):  # fmt: skip
-        check_viewer_args("gl", True, "clip.mp4", None)
-        os.makedirs(folder, exist_ok=True)
-        attrs = dict(env=env, folder=folder, interval=interval, length=length, steps_per_iteration=steps_per_iteration,
-                     robots=robots, title=title, size=(width, height), first_iteration=0, clips=[], _step=0,
-                     _recorder=None, _left=0)  # fmt: skip
-        for name, value in attrs.items():
+    def __init__(self, env, **attrs):
+        for name, value in dict(attrs, env=env).items():
             object.__setattr__(self, name, value)
 
     def __getattr__(self, name: str):
@@ -295,6 +334,48 @@ class VideoEnv:
             object.__setattr__(self, name, value)
         else:
             setattr(self.env, name, value)
+
+
+class LiveEnv(_TrainingEnvView):
+    """A training env whose first ``robots`` robots are drawn live in the browser (:class:`RolloutViewer` with
+    ``viser``) every ``stride`` control steps while training runs; the page says the iteration."""
+
+    def __init__(self, env, stride: int, steps_per_iteration: int, robots: int = 3, title: str = "",
+                 host: str = DEFAULT_HOST, port: int = DEFAULT_PORT):  # fmt: skip
+        viewer = RolloutViewer("viser", robots=robots, title=title, control_dt=env.cfg.task.control_dt, host=host,
+                               port=port)  # fmt: skip
+        super().__init__(env, viewer=viewer, stride=max(1, stride), steps_per_iteration=steps_per_iteration,
+                         title=title, first_iteration=0, _step=0)  # fmt: skip
+
+    @property
+    def url(self) -> str:
+        return self.viewer.url
+
+    def step(self, actions):
+        out = self.env.step(actions)
+        if self._step % self.stride == 0:
+            iteration = self.first_iteration + self._step // self.steps_per_iteration
+            self.viewer.title = f"{self.title}iteration {iteration}"
+            self.viewer.render(self.env.world, self._step * self.env.cfg.task.control_dt)
+        self._step += 1
+        return out
+
+    def close(self) -> None:
+        self.viewer.close()
+
+
+class VideoEnv(_TrainingEnvView):
+    """A training env that records a clip every ``interval`` iterations (Isaac Lab's and mjlab's ``--video``): from
+    the first control step of iterations 0, ``interval``, 2 ``interval``, ... the next ``length`` control steps go
+    through a headless :class:`RolloutViewer` into ``folder/iteration_<k>.mp4``."""
+
+    def __init__(self, env, folder: str, interval: int, length: int, steps_per_iteration: int, robots: int = 3,
+                 title: str = "", width: int = 960, height: int = 540):  # fmt: skip
+        check_viewer_args("gl", True, "clip.mp4", None)
+        os.makedirs(folder, exist_ok=True)
+        super().__init__(env, folder=folder, interval=interval, length=length, steps_per_iteration=steps_per_iteration,
+                         robots=robots, title=title, size=(width, height), first_iteration=0, clips=[], _step=0,
+                         _recorder=None, _left=0)  # fmt: skip
 
     def step(self, actions):
         out = self.env.step(actions)

@@ -1,0 +1,142 @@
+"""The browser viewer in a real browser: ``play.py --viewer viser`` on the CPU, its page loaded in headless Chromium
+(Selenium driving the system's Chromium and ChromeDriver), two screenshots a few seconds apart: the robots are drawn
+(pixels change as they walk, the robots' orange torsos and the terrain's sand are on the page). Without Chromium,
+ChromeDriver, Selenium or viser the test skips, saying which is missing (CI installs them: .ci/run)."""
+
+import importlib.util
+import os
+import select
+import shutil
+import socket
+import subprocess
+import sys
+import time
+
+import numpy as np
+import pytest
+
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser") or shutil.which("google-chrome")
+CHROMEDRIVER = shutil.which("chromedriver")
+
+
+def _helper():
+    """scripts/browser_screenshot.py (headless Chromium through Selenium), loaded by path."""
+    spec = importlib.util.spec_from_file_location("browser_screenshot",
+                                                  os.path.join(ROOT, "scripts", "browser_screenshot.py"))
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def _missing() -> str | None:
+    for what, ok in (("chromium", CHROMIUM), ("chromedriver", CHROMEDRIVER),
+                     ("selenium", importlib.util.find_spec("selenium")), ("viser", importlib.util.find_spec("viser"))):
+        if not ok:
+            return f"{what} is not installed (.ci/run installs the browser test's packages)"
+    return None
+
+
+def _free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def _wait_for_line(proc, prefix: str, timeout: float) -> str:
+    """The first stdout line of ``proc`` that starts with ``prefix`` (what came before it on failure)."""
+    seen, end = [], time.time() + timeout
+    while time.time() < end:
+        ready, _, _ = select.select([proc.stdout], [], [], 1.0)
+        if ready:
+            line = proc.stdout.readline()
+            if not line and proc.poll() is not None:
+                break
+            seen.append(line)
+            if line.startswith(prefix):
+                return line
+    raise AssertionError(f"no '{prefix}' line within {timeout} s:\n" + "".join(seen[-30:]))
+
+
+def _share(img: np.ndarray, lo, hi) -> float:
+    """The share of pixels whose RGB lies in [lo, hi] per channel."""
+    return float(np.all((img >= lo) & (img <= hi), axis=-1).mean())
+
+
+@pytest.mark.skipif(_missing() is not None, reason=str(_missing()))
+def test_play_in_a_browser_draws_the_walking_robots():
+    port = _free_port()
+    cmd = [sys.executable, "play.py", "--controller", "cpg", "--terrain", "rugged", "--num_envs", "3", "--steps",
+           "6000", "--device", "cpu", "--viewer", "viser", "--port", str(port), "--no-progress"]
+    proc = subprocess.Popen(cmd, cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
+                            env=dict(os.environ, PYTHONUNBUFFERED="1"))  # fmt: skip
+    driver = None
+    try:
+        line = _wait_for_line(proc, "viewer viser: open ", 600)
+        url = line.split("open ", 1)[1].split()[0]
+        assert url == f"http://127.0.0.1:{port}"
+        helper = _helper()
+        driver = helper.browser()
+        driver.get(url)
+        time.sleep(20)  # the client loads, receives the scene and the first frames
+        first = helper.screenshot(driver).astype(int)
+        time.sleep(6)
+        second = helper.screenshot(driver).astype(int)
+        changed = float((np.abs(first - second).sum(axis=-1) > 30).mean())
+        assert changed > 0.002, f"the page did not change while the robots walked ({changed:.4f} of its pixels)"
+        sand = max(_share(img, (95, 85, 65), (235, 225, 205)) for img in (first, second))
+        orange = max(_share(img, (150, 70, 0), (255, 175, 90)) for img in (first, second))
+        assert sand > 0.05, f"no terrain on the page ({sand:.4f} sand-coloured)"
+        assert orange > 1e-4, f"no robot torso on the page ({orange:.5f} orange)"
+    finally:
+        if driver is not None:
+            driver.quit()
+        proc.terminate()
+        try:
+            proc.wait(timeout=30)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+
+
+def test_a_port_in_use_is_one_line(capsys):
+    """viser itself would block on a port it cannot bind: the command says so at once."""
+    from hexnewton.apps.cli import run
+    from hexnewton.apps.play import main
+
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        s.listen()
+        port = s.getsockname()[1]
+        assert run(main, "python play.py", ["--viewer", "viser", "--port", str(port), "--device", "cpu"]) == 2
+    err = capsys.readouterr().err
+    assert f"127.0.0.1:{port} is in use" in err and len(err.strip().splitlines()) == 1
+
+
+def test_training_draws_its_first_robots_for_the_browser(tmp_path, capsys):
+    """train.py --viewer viser: the page's address, the warning that every interface listens, frames drawn every
+    --viewer_stride control steps of the training robots."""
+    from hexnewton.apps.cli import run
+    from hexnewton.apps.train import main
+
+    pytest.importorskip("viser")
+    argv = ["--task", "flat", "--num_envs", "4", "--max_iterations", "1", "--device", "cpu", "--log_dir",
+            str(tmp_path), "--viewer", "viser", "--viewer_stride", "6", "--robots_shown", "2", "--host", "0.0.0.0",
+            "--port", str(_free_port())]  # fmt: skip
+    assert run(main, "python train.py", argv) == 0
+    out = capsys.readouterr().out
+    assert "viewer viser: open http://localhost:" in out and "listening on every interface (0.0.0.0)" in out
+    assert "viewer viser: 4 frames of the training robots drawn" in out  # 24 control steps, every 6th
+
+
+def test_viser_flags_are_checked_before_any_simulation():
+    from hexnewton.physics.viewer import check_viewer_args, default_viewer
+
+    pytest.importorskip("viser")
+    assert default_viewer(None, "walk.viser") == "viser"
+    check_viewer_args("viser", False, None, "walk.viser")
+    check_viewer_args("viser", False, None, None)
+    for args, msg in ((("viser", False, None, "walk.usd"), "a viser recording must be a .viser file"),
+                      (("viser", False, "walk.mp4", None), "--video renders through ViewerGL"),
+                      (("null", False, None, "walk.viser"), "--out is the file of a recording")):
+        with pytest.raises(ValueError, match=msg):
+            check_viewer_args(*args)
