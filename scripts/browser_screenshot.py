@@ -32,7 +32,7 @@ def browser(width: int = 960, height: int = 600):
     return chrome
 
 
-def screenshot(driver, tries: int = 3):
+def screenshot(driver, tries: int = 10):
     """The page as an (H, W, 3) uint8 array; a renderer that does not answer in time (a busy machine) is asked again."""
     import numpy as np
     from PIL import Image
@@ -45,7 +45,7 @@ def screenshot(driver, tries: int = 3):
         except TimeoutException:
             if k == tries - 1:
                 raise
-            time.sleep(5)
+            time.sleep(10)
     return np.asarray(Image.open(io.BytesIO(png)).convert("RGB"))
 
 
