@@ -67,11 +67,12 @@ def add_browser_args(parser) -> None:
 def announce_browser(url: str, host: str, until: str) -> None:
     """Print where the browser viewer is, how to reach it from another machine, and how long it serves."""
     print(f"viewer viser: open {url} in a browser ({until}; Ctrl-C stops)")
+    port = url.rsplit(":", 1)[1]
     if host in ("0.0.0.0", "::"):
         print(f"viewer viser: listening on every interface ({host}): anyone who can reach this machine can watch")
     else:
-        print(f"viewer viser: from another machine, ssh -L {url.rsplit(':', 1)[1]}:localhost:{url.rsplit(':', 1)[1]} "
-              "this machine, then open the same address there")  # fmt: skip
+        print(f"viewer viser: from another machine, ssh -L {port}:localhost:{port} this machine, then open the same "
+              "address there")  # fmt: skip
 
 
 def run(main: Callable[[list[str] | None], int | None], prog: str, argv: list[str] | None = None) -> int:

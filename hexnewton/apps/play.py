@@ -111,11 +111,7 @@ def check_outputs(args) -> None:
 
     args.viewer = args.viewer or default_viewer(args.video, args.out)
     args.headless = args.headless or (args.video is not None and not has_display())
-    check_viewer_args(args.viewer, args.headless, args.video, args.out)
-    if args.viewer == "viser":
-        from hexnewton.physics.viewer import check_port
-
-        check_port(args.host, args.port)
+    check_viewer_args(args.viewer, args.headless, args.video, args.out, args.host, args.port)
     for path in (args.video, args.out):
         if path:
             check_writable(path, os.path.splitext(path)[1])

@@ -145,13 +145,12 @@ def check_outputs(args) -> None:
     from hexnewton.learning.runner import check_log_dir
 
     check_log_dir(args.log_dir)
-    from hexnewton.physics.viewer import check_port, check_viewer_args
+    from hexnewton.physics.viewer import check_viewer_args
 
     if args.video:
         check_viewer_args("gl", True, "clip.mp4", None)
     if args.viewer:
-        check_viewer_args(args.viewer, True, None, None)
-        check_port(args.host, args.port)
+        check_viewer_args(args.viewer, True, None, None, args.host, args.port)
 
 
 def rank_config(args, env_cfg):

@@ -77,8 +77,10 @@ def _require(viewer: str) -> None:
         raise ValueError(f"--viewer {viewer} needs {package}: pip install -e \".[viewer]\" (or pip install {package})")
 
 
-def check_viewer_args(viewer: str, headless: bool, video: str | None, out: str | None) -> None:
-    """Fail before any simulation, with one line, on a combination of viewer flags that cannot work."""
+def check_viewer_args(viewer: str, headless: bool, video: str | None, out: str | None, host: str = DEFAULT_HOST,
+                      port: int = DEFAULT_PORT) -> None:
+    """Fail before any simulation, with one line, on a combination of viewer flags that cannot work (for ``viser``,
+    also on a ``host:port`` it cannot listen on: :func:`check_port`)."""
     if viewer not in VIEWERS:
         raise ValueError(f"unknown viewer '{viewer}': choose from {', '.join(VIEWERS)}")
     if video is not None:
@@ -108,6 +110,8 @@ def check_viewer_args(viewer: str, headless: bool, video: str | None, out: str |
         raise ValueError("--viewer gl opens a window but there is no display (DISPLAY is unset): add --headless "
                          "--video PATH.mp4, or record with --viewer usd --out PATH.usd")  # fmt: skip
     _require(viewer)
+    if viewer == "viser":
+        check_port(host, port)
 
 
 def check_port(host: str, port: int) -> None:
@@ -137,7 +141,6 @@ def make_viewer(viewer: str, out: str | None = None, headless: bool = False, wid
     if viewer == "gl":
         return newton.viewer.ViewerGL(width=width, height=height, headless=headless, vsync=False)
     if viewer == "viser":
-        check_port(host, port)
         return newton.viewer.ViewerViser(host=host, port=port, label=title or "hexnewton", verbose=False,
                                          record_to_viser=out)  # fmt: skip
     if viewer == "usd":
@@ -231,7 +234,7 @@ class RolloutViewer:
                  robots: int = 3, stride: int = 1, title: str = "", width: int = 960, height: int = 540,
                  control_dt: float = 0.02, host: str = DEFAULT_HOST, port: int = DEFAULT_PORT,
                  realtime: bool = False):  # fmt: skip
-        check_viewer_args(viewer, headless, video, out)
+        check_viewer_args(viewer, headless, video, out, host, port)
         self.kind, self.robots, self.stride, self.title = viewer, robots, max(1, stride), title
         self.video_path, self.out = video, out
         self.fps = 1.0 / (self.stride * control_dt)

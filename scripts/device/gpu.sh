@@ -182,9 +182,8 @@ collect)   # the finished runs (config, events, log, last checkpoint, .done) -> 
   files=()
   for done in *.done; do
     grep -qx "$done" .kept 2>/dev/null && continue   # already in the kept study
-    name=${done%.done}; run=$(ls -d "$name"/*/ | tail -1); last=$(ls -v "$run"model_*[0-9].pt 2>/dev/null | tail -1)
-    [ -z "$last" ] && last=$(ls -v "$run"checkpoints/*.pt 2>/dev/null | tail -1)
-    files+=("$done" "$name.log" $(ls "$run"config.json "$run"events.* 2>/dev/null) $(find "$run" -name "events.*" | grep -v "^$run"events) "$last")
+    name=${done%.done}; run=$(ls -d "$name"/*/ | tail -1); last=$(ls -v "$run"model_*[0-9].pt | tail -1)
+    files+=("$done" "$name.log" "$run"config.json "$run"events.* "$last")
   done
   [ -d "$RUNS/method_evals" ] && tar czf "$OUT/method_evals.tgz" -C "$RUNS" method_evals
   [ ${#files[@]} -gt 0 ] || { echo "no new finished runs"; exit 0; }

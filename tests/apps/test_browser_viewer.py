@@ -168,8 +168,8 @@ def test_viser_flags_are_checked_before_any_simulation():
 
     pytest.importorskip("viser")
     assert default_viewer(None, "walk.viser") == "viser"
-    check_viewer_args("viser", False, None, "walk.viser")
-    check_viewer_args("viser", False, None, None)
+    check_viewer_args("viser", False, None, "walk.viser", port=_free_port())
+    check_viewer_args("viser", False, None, None, port=_free_port())
     for args, msg in ((("viser", False, None, "walk.usd"), "a viser recording must be a .viser file"),
                       (("viser", False, "walk.mp4", None), "--video renders through ViewerGL"),
                       (("null", False, None, "walk.viser"), "--out is the file of a recording")):
