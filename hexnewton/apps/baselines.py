@@ -21,6 +21,7 @@ import sys
 
 from hexnewton.apps.cli import ArgumentParser, add_config_args, config_overrides, positive_int, run
 from hexnewton.config import apply_overrides
+from hexnewton.learning.stopping import exit_status
 
 
 def _chosen(argv: list[str] | None) -> tuple[str, str | None, str]:
@@ -131,7 +132,7 @@ def main(argv: list[str] | None = None) -> int:
           f"  python -m hexnewton.apps.evaluate --controllers cpg cpg_rl {args.algo}_cpg --checkpoint cpg_rl=POLICY.pt "
           f"{args.algo}_cpg={final} --terrains {cfg_env.terrain.name}\n"
           f"  tensorboard --logdir {args.log_dir}")  # fmt: skip
-    return 0
+    return exit_status(reason)
 
 
 if __name__ == "__main__":

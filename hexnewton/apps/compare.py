@@ -36,6 +36,9 @@ CONTROLLER = {"paper": "cpg_rl"}
 #: seeds each method should have (``paper``: one more row, one seed)
 SEEDS = {"paper": 1}
 ACTIONS = ("deterministic", "sampled")
+#: methods with no sampled action to evaluate: TD3's actor is deterministic (its exploration noise is no policy of its
+#: own; ``baselines.sampled_action`` gives its deterministic action)
+DETERMINISTIC_ONLY = ("td3_cpg",)
 METRICS = ("fall_rate", "pitch_var_deg2", "roll_var_deg2", "pitch_p999_deg", "roll_p999_deg")
 _RUN = re.compile(r"^(?P<method>[a-z0-9_]+)_s(?P<seed>\d+)$")
 _EVAL = re.compile(r"^(?P<method>[a-z0-9_]+)_s(?P<seed>\d+)_(?P<terrain>[a-z]+)(?P<sampled>_sampled)?$")
@@ -118,7 +121,7 @@ def table3(evals: dict, distances: tuple[float, ...]) -> dict:
 
 def missing(runs: dict, evals: dict, terrains: tuple[str, ...], seeds: int) -> list[str]:
     """What a complete study still lacks: runs (every method, ``seeds`` seeds; ``paper`` one) and their deterministic
-    and sampled evaluations on ``terrains``, and the fixed CPG's."""
+    and sampled evaluations on ``terrains`` (:data:`DETERMINISTIC_ONLY` has none sampled), and the fixed CPG's."""
     out = []
     for method in METHODS:
         want = range(1, SEEDS.get(method, seeds) + 1)
@@ -128,7 +131,8 @@ def missing(runs: dict, evals: dict, terrains: tuple[str, ...], seeds: int) -> l
     for actions in ACTIONS:
         for terrain in terrains:
             got = evals.get(actions, {}).get(terrain, {})
-            need = [f"{m}_s{s}" for m, ss in runs.items() for s in ss if s not in got.get(m, {})]
+            need = [f"{m}_s{s}" for m, ss in runs.items() for s in ss if s not in got.get(m, {})
+                    and not (actions == "sampled" and m in DETERMINISTIC_ONLY)]  # fmt: skip
             if actions == "deterministic" and 0 not in got.get("cpg", {}):
                 need.insert(0, "cpg_s0")
             if need:
@@ -202,6 +206,9 @@ def report_markdown(budgets: dict, tables: dict, distances: tuple[float, ...], f
         lines += ["", f"## Table 3, {actions} action: success at each distance, mean over seeds (min-max)", ""]
         beside = tables.get("sampled") if actions == "deterministic" else None
         lines += _table_lines(tables[actions], distances, beside)
+        if actions == "sampled":
+            lines += ["", ", ".join(LABELS.get(m, m) for m in DETERMINISTIC_ONLY) + ": no sampled action (a "
+                      "deterministic actor; its exploration noise is no policy of its own)."]  # fmt: skip
     if figs:
         lines += ["", "## Fig. 5a", ""] + [f"![Fig. 5a]({f})" for f in figs]
         lines += ["", "Mean episode return and training success (the last 1024 finished episodes, sampled actions) "

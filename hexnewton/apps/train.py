@@ -44,6 +44,7 @@ from hexnewton.apps.cli import (
     run,
 )
 from hexnewton.config import apply_overrides
+from hexnewton.learning.stopping import exit_status
 
 
 def _base_task(argv: list[str] | None):
@@ -317,10 +318,9 @@ def main(argv: list[str] | None = None) -> int:
     if rank.world_size > 1:
         check_ranks_agree(runner, rank)
         runner.leave_group()
-    if not rank.is_main:
-        return 0
-    finish(args, runner, cfg, agent, rank, run_dir, views, train_s, first_it)
-    return 0
+    if rank.is_main:
+        finish(args, runner, cfg, agent, rank, run_dir, views, train_s, first_it)
+    return exit_status(reason)
 
 
 if __name__ == "__main__":

@@ -1,6 +1,6 @@
 """Ending a training run cleanly: Ctrl-C and SIGTERM raise :class:`TrainingStopped`, which both trainers (rsl-rl's
 :class:`~hexnewton.learning.runner.HexRunner` and the skrl baselines' :class:`~hexnewton.learning.baselines.BaselineTrainer`) catch
-to save what was learnt. Plain Python: no torch, no Warp.
+to save what was learnt; the command then exits with :func:`exit_status`. Plain Python: no torch, no Warp.
 """
 
 from __future__ import annotations
@@ -19,6 +19,13 @@ class TrainingStopped(Exception):
 def raise_stopped(signum, frame) -> None:
     """Signal handler: raise :class:`TrainingStopped` named after the signal (``SIGINT``, ``SIGTERM``)."""
     raise TrainingStopped(signal.Signals(signum).name)
+
+
+def exit_status(reason: str) -> int:
+    """A finished run's exit status: 128 + the signal's number when a stop signal ended it (``reason`` names it:
+    130 for Ctrl-C, 143 for SIGTERM, the shell's convention), else 0: what was learnt is saved either way, and a
+    queue that reads the status never takes a stopped run for a finished one."""
+    return next((128 + int(sig) for sig in STOP_SIGNALS if reason == sig.name), 0)
 
 
 def catch_stop_signals() -> dict:

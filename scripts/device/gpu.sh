@@ -210,13 +210,17 @@ _evals)   # the queue behind `evals`
     run=$(ls -d "$RUNS/methods/$name"/*/ | tail -1); ck=$(ls -v "$run"model_*[0-9].pt 2>/dev/null | tail -1)
     [ -z "$ck" ] && { echo "no checkpoint in $run"; continue; }
     for terrain in "$@"; do
-      specs+=("${name}_$terrain $ctrl $ck $terrain -"); sampled+=("${name}_${terrain}_sampled $ctrl $ck $terrain --stochastic")
+      specs+=("${name}_$terrain $ctrl $ck $terrain -")
+      # TD3's actor is deterministic: no sampled action to evaluate (compare.DETERMINISTIC_ONLY)
+      [ "$m" != td3_cpg ] && sampled+=("${name}_${terrain}_sampled $ctrl $ck $terrain --stochastic")
     done
   done
   specs+=("${sampled[@]}")   # every deterministic evaluation first, then the sampled ones
   for spec in "${specs[@]}"; do
     set -- $spec; out=$1 ctrl=$2 ck=$3 terrain=$4 flags=$5
     [ -f "$dest/$out/results.json" ] && continue
+    # a job is claimed before it waits for a slot, so queues started on other GPUs meanwhile take the next ones
+    mkdir "$dest/$out.claim" 2>/dev/null || continue
     rm -rf "$dest/$out"; free=
     while [ -z "$free" ]; do
       for i in "${!slots[@]}"; do p=${pid[$i]:-}; { [ -z "$p" ] || ! kill -0 "$p" 2>/dev/null; } && { free=$i; break; }; done

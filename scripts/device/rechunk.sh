@@ -1,30 +1,41 @@
 #!/bin/bash
-# Halve the chunks of ../shared/device/pack.sh so each device call carries ~26 MB instead of ~51 MB.
-# A call carries the working tree as well (64 MiB in all), and the tree has grown past 14 MB:
-# one 51 MB chunk plus the tree was 63.7 MiB. Run right after pack.sh, from the repository root:
+# Re-split the wheel chunks (.dw0/part0, .dw1/part1, ... from ../shared/device/pack.sh) so that each device call,
+# one chunk plus the working tree, stays under the call's 64 MiB: chunk = 64 MiB - the tree - 2 MiB. The tree grows
+# with the kept study (results/paper_comparison), so run this at the start of every lease, from the repository root:
 #
-#   bash ../shared/device/pack.sh && bash scripts/device/rechunk.sh
+#   bash ../shared/device/pack.sh ...    # once per machine, when no .dw* folders exist
+#   bash scripts/device/rechunk.sh       # then the device calls it prints
 #
-# .dwN/partN becomes .dwNa/partNa and .dwNb/partNb (install.sh joins /opt/w/part* in name order, so the
-# order is kept); install.sh moves to the last folder. Prints the device calls to make.
+# The chunks are joined in name order and split again into .dw0 ... .dwN (install.sh joins /opt/w/part* in name
+# order); install.sh moves to the last folder.
 set -euo pipefail
 cd "$(git rev-parse --show-toplevel)"
-dirs=$(ls -d .dw[0-9] 2>/dev/null | sort -V) || true
+dirs=$(ls -d .dw[0-9]* 2>/dev/null | sort -V) || true
 [ -n "$dirs" ] || { echo "rechunk.sh: no .dw0 .dw1 ... folders: run ../shared/device/pack.sh first" >&2; exit 1; }
-last=""
-for d in $dirs; do
-  part=$(ls "$d"/part*)
-  size=$(stat -c %s "$part")
-  split -b $(( (size + 1) / 2 )) -a 1 "$part" "$part"     # partN -> partNa, partNb
-  for half in a b; do mkdir -p "${d}${half}"; mv "${part}${half}" "${d}${half}/"; done
-  [ -f "$d/install.sh" ] && mv "$d/install.sh" "${d}b/install.sh" && last="${d}b"
-  rm -rf "$d"
+install=$(ls $(for d in $dirs; do echo "$d/install.sh"; done) 2>/dev/null | tail -1) || true
+[ -n "$install" ] || { echo "rechunk.sh: no install.sh in the .dw* folders" >&2; exit 1; }
+tree=$( (git ls-files -z; git ls-files -z --others --exclude-standard) | xargs -0 du -cb 2>/dev/null | tail -1 | cut -f1)
+chunk=$(( 64 * 1048576 - tree - 2 * 1048576 ))
+[ "$chunk" -gt 4194304 ] || { echo "rechunk.sh: the tree ($tree bytes) leaves no room for wheel chunks" >&2; exit 1; }
+work=$(mktemp -d)
+cp "$install" "$work/install.sh"
+for d in $dirs; do cat "$d"/part*; done > "$work/wheels.tar"
+rm -rf $dirs
+split -b "$chunk" -d -a 2 "$work/wheels.tar" "$work/part"
+n=0
+for part in $(ls "$work"/part* | sort -V); do
+  mkdir -p ".dw$n" && mv "$part" ".dw$n/part$(printf %02d $n)"
+  n=$((n + 1))
 done
-echo "Make these device calls back to back (the machine is given back 30 s after a call ends):"
-for d in $(ls -d .dw[0-9][ab] | sort -V); do
-  if [ "$d" = "$last" ]; then
-    echo "  run carry=[\"$d\", ...] command: cp $d/part* /opt/w/ && bash $d/install.sh && export PYTHONPATH=/opt/site && YOUR COMMAND"
+last=".dw$((n - 1))"
+mv "$work/install.sh" "$last/install.sh"
+rm -rf "$work"
+echo "tree $((tree / 1048576)) MiB: $n chunks of at most $((chunk / 1048576)) MiB. Device calls, back to back:"
+echo "  run carry=[\".dw0\"]  command: rm -rf /opt/w && mkdir -p /opt/w && cp .dw0/part* /opt/w/"
+for i in $(seq 1 $((n - 1))); do
+  if [ ".dw$i" = "$last" ]; then
+    echo "  run carry=[\"$last\"]  command: cp $last/part* /opt/w/ && bash scripts/device/gpu.sh install && ..."
   else
-    echo "  run carry=[\"$d\"]  command: mkdir -p /opt/w && cp $d/part* /opt/w/"
+    echo "  run carry=[\".dw$i\"]  command: cp .dw$i/part* /opt/w/"
   fi
 done

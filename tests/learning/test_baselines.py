@@ -59,6 +59,30 @@ def test_baseline_trains_saves_and_runs_the_rounds(algo, tmp_path, capsys):
     assert cfg["baseline"]["learning_rate"] == agent_config(algo).learning_rate
 
 
+def test_a_stop_signal_saves_and_exits_143(tmp_path, monkeypatch, capsys):
+    """SIGTERM during training (raised where the handler raises it, inside the loop): the checkpoint is written and
+    the command exits 143, so a queue never takes the stopped run for a finished one."""
+    from hexnewton.learning import baselines
+    from hexnewton.learning.stopping import TrainingStopped, exit_status
+
+    log = baselines.BaselineTrainer._log
+    calls = []
+
+    def stop_once(self, *a):
+        log(self, *a)
+        if not calls:
+            calls.append(1)
+            raise TrainingStopped("SIGTERM")
+
+    monkeypatch.setattr(baselines.BaselineTrainer, "_log", stop_once)
+    argv = ["--task", "flat", "--algo", "a2c", "--num_envs", "8", "--device", "cpu", "--total_steps", "96",
+            "--log_dir", str(tmp_path), "--agent.log_interval", "4", *SMALL["a2c"]]  # fmt: skip
+    assert _main(argv) == 143 == exit_status("SIGTERM")
+    assert "finished after 32 env-steps" in capsys.readouterr().out
+    assert list(tmp_path.glob("hexnewton_flat_a2c/*/model_4.pt"))
+    assert (exit_status("SIGINT"), exit_status("96 env-steps")) == (130, 0)
+
+
 def test_adapter_passes_device_tensors_in_skrls_layout():
     from hexnewton.config import HexConfig, SimConfig
     from hexnewton.learning.baselines import wrap_env
