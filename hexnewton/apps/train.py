@@ -16,8 +16,9 @@ with the configs its checkpoint recorded, overrides on top.
 
 Each run writes ``logs/hexnewton_<task>/<date_time>/``: TensorBoard event files; ``model_<it>.pt`` checkpoints with
 the task, the configs and the action mode (``play.py``, ``evaluate`` and ``export`` need nothing else);
-``model_best.pt``; ``config.json``; ``git/`` (hexnewton's commit and diff); at the end ``policy.onnx``, the
-deterministic policy with a dynamic batch dimension, checked against torch with onnxruntime. With ``--video``,
+``model_best.pt``; ``config.json``; ``git/`` (hexnewton's commit and diff); at the end ``model_result.pt``, the
+result chosen on deterministic validation rounds (``--agent.validation_rounds``: docs/training.md), and
+``policy.onnx``, its deterministic policy with a dynamic batch dimension, checked against torch with onnxruntime. With ``--video``,
 ``videos/iteration_<k>.mp4``: ``--video_length`` control steps of the first robots as training plays them, from
 iteration 0 and every ``--video_interval`` iterations (Newton's ViewerGL, headless; ``hexnewton.physics.viewer.VideoEnv``).
 With ``--viewer viser`` the first ``--robots_shown`` training robots are drawn in a web page every ``--viewer_stride``
@@ -31,6 +32,7 @@ import dataclasses
 import datetime
 import json
 import os
+import shutil
 import sys
 import time
 
@@ -238,6 +240,34 @@ def check_ranks_agree(runner, rank) -> None:
         raise RuntimeError(f"the ranks' parameters differ by {spread:.2e}: the gradients were not shared")
 
 
+def choose_on_validation(runner, cfg, agent, run_dir: str, first_it: int) -> tuple[str, dict]:
+    """The run's result chosen on deterministic validation (:mod:`hexnewton.analysis.validation`) among the last
+    stage's candidates, loaded into the actor and kept as ``model_result.pt``; returns it and what was measured."""
+    from hexnewton.analysis.validation import VALIDATION_SEED, Candidate, candidates, choose, report_lines, validate
+
+    it, best = runner.current_learning_iteration, runner.best
+    stage_start = max([start for start, _ in agent.stages if start <= it] + [first_it])
+    last = Candidate(it, os.path.join(run_dir, f"model_{it}.pt"), "last")
+    kept = Candidate(best.iteration, best.path, f"best training success {best.rate:.3f}") if best.iteration is not None \
+        else None  # fmt: skip
+    cands = candidates(run_dir, stage_start, last, kept, agent.validation_candidates)
+    controller = "joint" if runner.meta["action_mode"] == "joint" else "cpg_rl"
+    t0 = time.time()
+    results = validate(cands, controller, cfg.terrain, agent.validation_rounds, cfg.sim.device,
+                       agent.validation_steps, cfg.task.goal_distance)  # fmt: skip
+    k = choose(cands, results)
+    seconds = time.time() - t0
+    print(f"deterministic validation, {agent.validation_rounds} rounds of the {cfg.terrain.name} course (seed "
+          f"{VALIDATION_SEED}) per candidate, {seconds:.0f} s:\n" + "\n".join(report_lines(cands, results, k)))
+    runner.load(cands[k].path, {"actor": True}, map_location=runner.device)
+    result = os.path.join(run_dir, "model_result.pt")
+    shutil.copyfile(cands[k].path, result)
+    print(f"the result: {os.path.basename(cands[k].path)} ({cands[k].why}), kept as {result}")
+    return result, {"seconds": seconds, "chosen": cands[k].path, "rounds": agent.validation_rounds,
+                    "candidates": [dict(r, path=c.path, iteration=c.iteration, why=c.why)
+                                   for c, r in zip(cands, results)]}  # fmt: skip
+
+
 def finish(args, runner, cfg, agent, rank, run_dir: str, views, train_s: float, first_it: int) -> None:
     """Rank 0 after training: the last episodes, the policy to ship (the best iteration's or the last) exported as
     ONNX, ``timing.json``, and the commands that use the result."""
@@ -252,11 +282,14 @@ def finish(args, runner, cfg, agent, rank, run_dir: str, views, train_s: float, 
               "wall_s_to_result": None}  # fmt: skip
     stats = runner.env.episode_stats()
     print("last episodes: " + ", ".join(f"{k} {v:.3f}" for k, v in stats.items()))
-    final = runner.final_policy()
-    if final == runner.best.path:
-        print(f"best training success {runner.best.rate:.3f} at iteration {runner.best.iteration} ({final}); the last "
-              f"iteration ended at {training_success(stats, cfg.terrain.levels) or float('nan'):.3f}: exporting the "
-              "best")  # fmt: skip
+    if agent.validation_rounds:
+        final, timing["validation"] = choose_on_validation(runner, cfg, agent, run_dir, first_it)
+    else:
+        final = runner.final_policy()
+        if final == runner.best.path:
+            print(f"best training success {runner.best.rate:.3f} at iteration {runner.best.iteration} ({final}); the "
+                  f"last iteration ended at {training_success(stats, cfg.terrain.levels) or float('nan'):.3f}: "
+                  "exporting the best")  # fmt: skip
     onnx_path = os.path.join(run_dir, "policy.onnx")
     err = runner.export(onnx_path)
     print(f"exported {onnx_path} (dynamic batch; onnxruntime vs torch max |diff| {err:.2e})")

@@ -88,6 +88,14 @@ class AgentConfig:
     #: curriculum of the reflex gain and the reward weights: ((first iteration, {field: value}), ...), applied from
     #: that iteration on; fields are ``posture_reflex`` (CPGConfig) and RewardConfig's
     stages: tuple = ()
+    #: deterministic validation at the end (``hexnewton.analysis.validation``): the run's result is the candidate
+    #: checkpoint of the last stage (the last, the best by training success and the newest saved ones, at most
+    #: ``validation_candidates``) whose deterministic action reaches the goal most often in this many validation
+    #: rounds of the task's course; 0: the result is the best by training success (sampled actions)
+    validation_rounds: int = 0
+    validation_candidates: int = 4
+    #: control steps per validation round: a robot still on its way then has not reached the goal
+    validation_steps: int = 3000
     distribution: DistributionConfig = field(default_factory=DistributionConfig)
     model: ModelConfig = field(default_factory=ModelConfig)
     algorithm: AlgorithmConfig = field(default_factory=AlgorithmConfig)
@@ -98,7 +106,10 @@ class AgentConfig:
             raise ValueError("agent.max_minutes must be positive")
         if self.target_success is not None and not 0 < self.target_success <= 1:
             raise ValueError("agent.target_success must lie in (0, 1]")
-        for name in ("num_steps_per_env", "max_iterations", "save_interval"):
+        if self.validation_rounds < 0:
+            raise ValueError("agent.validation_rounds must be 0 (off) or positive")
+        for name in ("num_steps_per_env", "max_iterations", "save_interval", "validation_candidates",
+                     "validation_steps"):  # fmt: skip
             if getattr(self, name) <= 0:
                 raise ValueError(f"agent.{name} must be positive")
         if self.distribution.name == "gaussian" and not self.distribution.init_std > 0:

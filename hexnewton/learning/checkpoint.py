@@ -124,14 +124,16 @@ def checkpoint_task(ckpt: dict | None) -> str | None:
 
 
 def newest_checkpoint(log_dir: str, experiment: str) -> str:
-    """The newest run's result under ``log_dir/experiment`` (a glob pattern: ``*`` for any): its ``model_best.pt``
-    where it kept one (what ``train.py`` reports and exports then), else its last numbered checkpoint. Runs are named
-    by their start time, so the newest is the last name across experiments."""
+    """The newest run's result under ``log_dir/experiment`` (a glob pattern: ``*`` for any): its ``model_result.pt``
+    (chosen on deterministic validation), else its ``model_best.pt`` where it kept one (what ``train.py`` reports and
+    exports then), else its last numbered checkpoint. Runs are named by their start time, so the newest is the last
+    name across experiments."""
     runs = sorted(glob.glob(os.path.join(log_dir, experiment, "*")), key=os.path.basename)
     for run_dir in reversed(runs):
         models = glob.glob(os.path.join(run_dir, "model_[0-9]*.pt"))
-        if os.path.isfile(os.path.join(run_dir, "model_best.pt")):
-            return os.path.join(run_dir, "model_best.pt")
+        for kept in ("model_result.pt", "model_best.pt"):
+            if os.path.isfile(os.path.join(run_dir, kept)):
+                return os.path.join(run_dir, kept)
         if models:
             return max(models, key=lambda m: int(m.rsplit("_", 1)[1].split(".")[0]))
     raise ValueError(f"no checkpoint under {os.path.join(log_dir, experiment)}: pass --checkpoint PATH")

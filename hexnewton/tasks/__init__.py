@@ -147,17 +147,25 @@ def _recipe(terrain: str, goal_distance: float = TaskConfig.goal_distance, postu
     )
 
 
+#: the terrain recipes' deterministic validation (AgentConfig.validation_rounds): 256 rounds per candidate of the
+#: task's course, at most 60 s each
+TERRAIN_VALIDATION = dict(validation_rounds=256, validation_candidates=4, validation_steps=3000)
+#: flat ground's, sized for the CPU main job: 16 rounds per candidate, at most 12 s each (the goal takes ~9 s)
+FLAT_VALIDATION = dict(validation_rounds=16, validation_candidates=3, validation_steps=600)
+
+
 def _stable_agent(long: bool = False) -> AgentConfig:
     if long:
-        return AgentConfig(max_iterations=LONG_STABLE_ITERATIONS, stages=LONG_STABLE_STAGES)
-    return AgentConfig(max_iterations=STABLE_ITERATIONS, stages=STABLE_STAGES)
+        return AgentConfig(max_iterations=LONG_STABLE_ITERATIONS, stages=LONG_STABLE_STAGES, **TERRAIN_VALIDATION)
+    return AgentConfig(max_iterations=STABLE_ITERATIONS, stages=STABLE_STAGES, **TERRAIN_VALIDATION)
 
 
 register(Task("flat", "flat ground, the plain MDP (Table 1 with our goal and off-course terms), 300 iterations",
-              HexConfig(task=TaskConfig(seed=1))))
-register(Task("rugged", "2 cm blocks of 0-6 cm (§3.1), the terrain recipe, 300 iterations", _recipe("rugged")))
+              HexConfig(task=TaskConfig(seed=1)), AgentConfig(**FLAT_VALIDATION)))
+register(Task("rugged", "2 cm blocks of 0-6 cm (§3.1), the terrain recipe, 300 iterations", _recipe("rugged"),
+              AgentConfig(**TERRAIN_VALIDATION)))
 register(Task("stepped", "15 stairs of 6 cm rise, 25 cm deep (§3.1), the terrain recipe, 300 iterations",
-              _recipe("stepped")))
+              _recipe("stepped"), AgentConfig(**TERRAIN_VALIDATION)))
 register(Task("complex", "1.5 m of blocks then 1.5 m of stairs (§3.1) with the body posture and the stable-gait "
               "curriculum, 300 iterations (about 3 minutes on one H100)", _recipe("complex", posture=True), _stable_agent()))
 register(Task("complex-5m", "the complex course walked 5 m (goal 5.5 m ahead) with the complex recipe",
@@ -171,8 +179,9 @@ register(Task("paper", "the complex course with Table 1's reward and Table 2's P
               HexConfig(terrain=TerrainConfig(name="complex"), task=TaskConfig(seed=1),
                         reward=RewardConfig().paper_reward()), paper_agent()))
 register(Task("complex-joint", "pure DRL on the complex course: the 18 joint targets, the complex recipe's "
-              "terrain, physics and reward without the CPG", _recipe("complex"), action_mode="joint"))
+              "terrain, physics and reward without the CPG", _recipe("complex"), AgentConfig(**TERRAIN_VALIDATION),
+              action_mode="joint"))
 
 
-__all__ = ["ACTION_MODES", "FOOT_CONTACT_RANGES", "LONG_STABLE_STAGES", "STABLE_SHAPING", "STABLE_STAGES", "TASKS", "Task", "course", "register", "task",
-           "task_table"]
+__all__ = ["ACTION_MODES", "FLAT_VALIDATION", "FOOT_CONTACT_RANGES", "LONG_STABLE_STAGES", "STABLE_SHAPING",
+           "STABLE_STAGES", "TASKS", "TERRAIN_VALIDATION", "Task", "course", "register", "task", "task_table"]

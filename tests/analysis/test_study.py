@@ -22,7 +22,7 @@ def _lease(tmp_path):
               "--env.task.max_episode_steps", "20"]  # episodes end within an iteration
     for seed in (1, 2):
         for name, main, prog, extra in (
-            ("cpg_rl", train.main, "train.py", ["--max_iterations", "2", "--headless"]),
+            ("cpg_rl", train.main, "train.py", ["--max_iterations", "2", "--headless", "--agent.validation_rounds", "0"]),
             ("a2c_cpg", baselines.main, "python -m hexnewton.apps.baselines",
              ["--algo", "a2c", "--total_steps", "384", "--agent.rollouts", "24"]),
         ):  # fmt: skip

@@ -156,7 +156,7 @@ def test_training_draws_its_first_robots_for_the_browser(tmp_path, capsys):
     pytest.importorskip("viser")
     argv = ["--task", "flat", "--num_envs", "4", "--max_iterations", "1", "--device", "cpu", "--log_dir",
             str(tmp_path), "--viewer", "viser", "--viewer_stride", "6", "--robots_shown", "2", "--host", "0.0.0.0",
-            "--port", str(_free_port())]  # fmt: skip
+            "--port", str(_free_port()), "--agent.validation_rounds", "0"]  # fmt: skip
     assert run(main, "python train.py", argv) == 0
     out = capsys.readouterr().out
     assert "viewer viser: open http://localhost:" in out and "listening on every interface (0.0.0.0)" in out

@@ -20,7 +20,7 @@ def test_play_loads_the_trained_checkpoint(trained):
                            "--env.terrain.step_rise", "0.08", "--env.task.goal_distance", "5.5"],
                           capture_output=True, text=True, timeout=600)  # fmt: skip
     assert proc.returncode == 0, proc.stderr[-3000:]
-    assert "[cpg_rl (" in proc.stdout and "model_1.pt" in proc.stdout
+    assert "[cpg_rl (" in proc.stdout and "model_result.pt" in proc.stdout
 
 
 def test_play_without_arguments_plays_the_newest_policy(trained, tmp_path):
@@ -30,7 +30,7 @@ def test_play_without_arguments_plays_the_newest_policy(trained, tmp_path):
     base = [sys.executable, "play.py", "--num_envs", "1", "--steps", "3", "--device", "cpu", "--no-progress"]
     proc = subprocess.run([*base, "--log_dir", str(logs)], capture_output=True, text=True, timeout=600, cwd=ROOT)
     assert proc.returncode == 0, proc.stderr[-3000:]
-    assert "playing " in proc.stdout and "model_1.pt" in proc.stdout and "[cpg_rl (" in proc.stdout
+    assert "playing " in proc.stdout and "model_result.pt" in proc.stdout and "[cpg_rl (" in proc.stdout
     assert "flat" in proc.stdout.split("[cpg_rl (")[1]
     proc = subprocess.run([*base, "--log_dir", str(tmp_path / "none")], capture_output=True, text=True, timeout=600,
                           cwd=ROOT)  # fmt: skip

@@ -35,7 +35,7 @@ def test_training_writes_checkpoint_onnx_and_tensorboard(trained):
 def _train(logs, *args, timeout=900):
     task = [] if "--resume" in args else ["--task", "flat"]  # a resumed run continues its own task
     cmd = [sys.executable, "train.py", "--num_envs", "8", "--device", "cpu", *task, "--log_dir", str(logs),
-           "--agent.num_steps_per_env", "8", *args]  # fmt: skip
+           "--agent.num_steps_per_env", "8", "--agent.validation_rounds", "0", *args]  # fmt: skip
     proc = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout)
     assert proc.returncode == 0, proc.stdout[-2000:] + proc.stderr[-3000:]
     return proc.stdout
@@ -100,7 +100,7 @@ def read_scalars_lr(run_dir):
 def test_interrupt_saves_and_exports(tmp_path):
     """SIGINT in the middle of training: a final checkpoint and the ONNX policy are written, exit status 130 (128 +
     SIGINT: a queue never takes a stopped run for a finished one)."""
-    cmd = [sys.executable, "train.py", "--num_envs", "8", "--device", "cpu", "--task", "flat", "--log_dir",
+    cmd = [sys.executable, "train.py", "--num_envs", "8", "--device", "cpu", "--task", "flat", "--agent.validation_rounds", "0", "--log_dir",
            str(tmp_path), "--agent.num_steps_per_env", "8", "--max_iterations", "100000", "--agent.save_interval", "1"]
     proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     deadline = time.time() + 600  # interrupt once training is under way (iteration 1 saved), whatever the load
@@ -149,7 +149,7 @@ def test_torchrun_two_cpu_processes_train_as_one(tmp_path):
     """``torchrun --nproc_per_node=2 train.py --device cpu``: two processes (Gloo) train two iterations with their
     gradients averaged; their parameters agree at the end, and only rank 0 writes a run directory."""
     cmd = ["torchrun", "--standalone", "--nproc_per_node=2", "train.py", "--task", "flat", "--num_envs", "4",
-           "--max_iterations", "2", "--device", "cpu", "--log_dir", str(tmp_path)]  # fmt: skip
+           "--max_iterations", "2", "--device", "cpu", "--agent.validation_rounds", "0", "--log_dir", str(tmp_path)]  # fmt: skip
     proc = subprocess.run(cmd, capture_output=True, text=True, timeout=900, cwd=ROOT)
     assert proc.returncode == 0, proc.stdout[-2000:] + proc.stderr[-3000:]
     assert "rank 0 of 2" in proc.stdout and "rank 1 of 2" in proc.stdout
@@ -216,10 +216,17 @@ def test_curriculum_stages_change_reflex_and_weights_in_one_run(tmp_path, capsys
 
     stages = "((1, {'posture_reflex': 2.0, 'w_tilt': 15.0}), (2, {'w_tilt': 40.0, 'w_ang_vel': 0.3}))"
     assert train.main(["--task", "complex", "--num_envs", "8", "--agent.num_steps_per_env", "4", "--max_iterations",
-                       "3", "--device", "cpu", "--log_dir", str(tmp_path), "--agent.stages", stages]) == 0  # fmt: skip
+                       "3", "--device", "cpu", "--log_dir", str(tmp_path), "--agent.stages", stages,
+                       "--agent.save_interval", "1", "--agent.validation_rounds", "2", "--agent.validation_steps",
+                       "8"]) == 0  # fmt: skip
     out = capsys.readouterr().out
     assert "iteration 1: curriculum stage 2 of 3: posture_reflex 2, w_tilt 15" in out
     assert "iteration 2: curriculum stage 3 of 3: posture_reflex 2, w_tilt 40, w_ang_vel 0.3" in out
+    # deterministic validation among the last stage's checkpoints only (iteration 2 on), on the complex course
+    assert "deterministic validation, 2 rounds of the complex course (seed 3000) per candidate" in out
+    assert "model_2.pt (last, iteration 2)" in out and "model_1.pt" not in out and "model_0.pt" not in out
+    (kept,) = tmp_path.glob("*/*/model_result.pt")
+    assert "python play.py --checkpoint " + str(kept) in out
     last = sorted(tmp_path.glob("*/*/model_2.pt"))[-1]
     meta = torch.load(last, weights_only=True)["infos"]["hexnewton"]
     cfg = meta["config"]
@@ -227,7 +234,7 @@ def test_curriculum_stages_change_reflex_and_weights_in_one_run(tmp_path, capsys
     assert cfg["cpg"]["posture"] and cfg["cpg"]["posture_reflex"] == 2.0 and cfg["reward"]["w_tilt"] == 40.0
     # resumed: the run goes on with its own task and configs, in the stage its iteration is in
     assert train.main(["--resume", str(last), "--num_envs", "8", "--max_iterations", "1", "--device", "cpu",
-                       "--log_dir", str(tmp_path)]) == 0  # fmt: skip
+                       "--log_dir", str(tmp_path), "--agent.validation_rounds", "0"]) == 0  # fmt: skip
     out = capsys.readouterr().out
     assert "training task complex" in out and "iteration 3: curriculum stage 3 of 3" in out
 
@@ -246,6 +253,13 @@ def test_training_reports_its_start_up_and_writes_timing(trained):
     assert 0 < timing["first_iteration_s"] < timing["wall_s_to_result"]
     assert sum(timing["startup_phases_s"].values()) == pytest.approx(timing["first_iteration_s"], abs=0.5)
     assert os.path.isfile(timing["result"])
+    # the result chosen on deterministic validation (the fixture: 4 rounds of 30 steps per candidate), kept as
+    # model_result.pt, which play.py and evaluate take for the run's result
+    v = timing["validation"]
+    assert timing["result"] == os.path.join(run_dir, "model_result.pt") and v["rounds"] == 4
+    assert [c["iteration"] for c in v["candidates"]] == [0, 1] and v["chosen"] in [c["path"] for c in v["candidates"]]
+    assert "deterministic validation, 4 rounds of the flat course (seed 3000) per candidate" in out
+    assert "the result: " in out
 
 
 def test_progress_line_says_when_no_episode_has_ended():

@@ -12,7 +12,7 @@ def test_tasks_hold_the_recipes():
     stability shaping), the complex course's posture and curriculum, Table 1 and Table 2 in ``paper``; every task has
     a Gymnasium id, and ``task`` hands out copies."""
     from hexnewton.learning.agent import AgentConfig
-    from hexnewton.tasks import LONG_STABLE_STAGES, STABLE_STAGES, TASKS, task
+    from hexnewton.tasks import FLAT_VALIDATION, LONG_STABLE_STAGES, STABLE_STAGES, TASKS, task
 
     c = task("complex")
     assert (c.env.terrain.levels, c.env.terrain.start_levels, c.env.cpg.a2_range, c.env.randomization.enabled,
@@ -25,8 +25,11 @@ def test_tasks_hold_the_recipes():
     assert not r.env.cpg.posture and r.agent.stages == () and r.agent.max_iterations == 300
     f = task("flat")
     assert (f.env.terrain.levels, f.env.randomization.enabled, f.env.sim.frame_dt) == (0, False, 0.01)
-    assert f.env.reward == RewardConfig() and f.agent == AgentConfig()
+    assert f.env.reward == RewardConfig() and f.agent == AgentConfig(**FLAT_VALIDATION)
+    # every task chooses its result on deterministic validation, except the paper's own setting
+    assert all(task(n).agent.validation_rounds == 256 for n in ("rugged", "stepped", "complex", "complex-joint"))
     p = task("paper")
+    assert f.agent.validation_rounds == 16 and p.agent.validation_rounds == 0
     assert p.env.reward == RewardConfig().paper_reward() and p.env.reward.goal_bonus == 0 and p.env.reward.w_tilt == 0
     a = p.agent.to_rsl_rl(1024)["algorithm"]
     assert (a["learning_rate"], a["schedule"], a["gamma"], a["lam"], a["clip_param"]) == (1e-4, "fixed", 0.99, 0.95, 0.2)

@@ -1,0 +1,120 @@
+"""Deterministic validation, the end of a training run (``train.py``, ``AgentConfig.validation_rounds``): candidate
+checkpoints of the last curriculum stage walk the task's course on validation rounds (terrain seed 3000, start seed
+4000, as ``evaluate --seed 3000``: never the test seeds), each with its deterministic action, all of them side by side
+in one batched env (candidate k drives robots k, k + K, k + 2K, ...); the run's result is the candidate that reaches
+the goal most often, then walks 3 m most often, then falls least, then the later one.
+
+Training success counts sampled actions on the training levels; a policy's deterministic action can walk past the
+goal where its samples reach it (results/cpu_main_job), so the result is chosen on what is shipped and evaluated.
+"""
+
+from __future__ import annotations
+
+import glob
+import os
+import re
+from dataclasses import dataclass
+
+import numpy as np
+
+from hexnewton.mdp.status import FELL, NONFINITE, OFF_COURSE, SUCCESS
+
+#: the validation rounds' terrain seed (start seed + 1000): ``evaluate --seed 3000`` (RESULTS.md, conventions)
+VALIDATION_SEED = 3000
+_SAVED = re.compile(r"model_(\d+)\.pt$")
+
+
+@dataclass
+class Candidate:
+    """A checkpoint to validate: its iteration, path and why it is a candidate."""
+
+    iteration: int
+    path: str
+    why: str
+
+
+def candidates(run_dir: str, first_iteration: int, last: Candidate, best: Candidate | None,
+               limit: int) -> list[Candidate]:  # fmt: skip
+    """At most ``limit`` candidates, oldest first: the ``last`` checkpoint, the ``best`` by training success and the
+    newest ``model_<it>.pt`` of ``run_dir`` saved from ``first_iteration`` on (the last stage's)."""
+    chosen = [last] + ([best] if best is not None and best.iteration != last.iteration else [])
+    saved = sorted(((int(m.group(1)), p) for p in glob.glob(os.path.join(run_dir, "model_*.pt"))
+                    if (m := _SAVED.search(os.path.basename(p)))), reverse=True)  # fmt: skip
+    for it, path in saved:
+        if len(chosen) >= limit:
+            break
+        if it >= first_iteration and all(c.iteration != it for c in chosen):
+            chosen.append(Candidate(it, path, "saved"))
+    return sorted(chosen[:limit], key=lambda c: c.iteration)
+
+
+def _batched_policy(env, controller: str, cands: list[Candidate]):
+    """``policy(obs) -> actions``: candidate k's deterministic action for robots k, k + K, ..."""
+    import torch
+
+    from hexnewton.analysis.rollout import controller_policy, read_controller_checkpoint
+
+    k = len(cands)
+    device = env.get_observations().device
+    rows = [torch.arange(i, env.num_envs, k, device=device) for i in range(k)]
+    policies = [controller_policy(env, controller, c.path, read_controller_checkpoint(controller, c.path))
+                for c in cands]  # fmt: skip
+
+    def policy(obs):
+        out = None
+        for idx, act in zip(rows, policies):
+            a = act(obs[idx])
+            if out is None:
+                out = torch.empty((env.num_envs, a.shape[-1]), dtype=a.dtype, device=a.device)
+            out[idx] = a
+        return out
+
+    return policy
+
+
+def validate(cands: list[Candidate], controller: str, terrain, rounds: int, device: str | None, max_steps: int,
+             goal_distance: float | None = None) -> list[dict]:  # fmt: skip
+    """Each candidate's validation: ``rounds`` robots each on the course of ``terrain`` (a name, or the task's
+    ``TerrainConfig``: its rises and blocks without the curriculum lanes) with the goal ``goal_distance`` ahead (None:
+    the default), with the physics and CPG of the newest candidate's checkpoint (one stage: one configuration).
+    Returns per candidate the shares of rounds that reached the goal, walked 3 m, fell and left the course."""
+    from hexnewton.analysis.rollout import CONTROLLERS, START_SEED_OFFSET, read_controller_checkpoint, stepped
+    from hexnewton.learning.checkpoint import trained_config
+    from hexnewton.mdp.env import make_env
+    from hexnewton.tasks import course
+
+    k = len(cands)
+    trained = trained_config(read_controller_checkpoint(controller, cands[-1].path))
+    goal = {} if goal_distance is None else {"goal_distance": goal_distance}
+    cfg = course(terrain, trained, None, rounds * k, device, VALIDATION_SEED, seed=VALIDATION_SEED + START_SEED_OFFSET,
+                 **goal)  # fmt: skip
+    env = make_env(cfg, CONTROLLERS[controller])
+    policy = _batched_policy(env, controller, cands)
+    n = env.num_envs
+    end, farthest, finished = np.zeros(n, np.int64), np.full(n, -np.inf), np.zeros(n, bool)
+    for _, status, _, pos, _ in stepped(env, policy, max_steps, "validation", progress=False):
+        live = ~finished
+        moved = live & ~np.isin(status, (FELL, OFF_COURSE, NONFINITE))  # a fall's row is no progress
+        farthest[moved] = np.maximum(farthest[moved], pos[moved, 0])
+        ended = live & (status != 0)
+        end[ended] = status[ended]
+        finished |= ended
+        if finished.all():
+            break
+    env.world.check_contacts()
+    return [{"goal": float((end[i::k] == SUCCESS).mean()), "walk_3m": float((farthest[i::k] >= 3.0).mean()),
+             "fell": float((end[i::k] == FELL).mean()), "off_course": float((end[i::k] == OFF_COURSE).mean()),
+             "rounds": int(end[i::k].size)} for i in range(k)]  # fmt: skip
+
+
+def choose(cands: list[Candidate], results: list[dict]) -> int:
+    """The index of the result: the most goals, then the most 3 m walks, then the fewest falls, then the later."""
+    return max(range(len(cands)), key=lambda i: (results[i]["goal"], results[i]["walk_3m"], -results[i]["fell"],
+                                                  cands[i].iteration))  # fmt: skip
+
+
+def report_lines(cands: list[Candidate], results: list[dict], chosen: int) -> list[str]:
+    """One console line per candidate, the chosen one marked."""
+    return [f"  {'->' if i == chosen else '  '} {os.path.basename(c.path)} ({c.why}, iteration {c.iteration}): goal "
+            f"{100 * r['goal']:.1f} %, 3 m {100 * r['walk_3m']:.1f} %, fell {100 * r['fell']:.1f} %, off course "
+            f"{100 * r['off_course']:.1f} %" for i, (c, r) in enumerate(zip(cands, results))]  # fmt: skip
