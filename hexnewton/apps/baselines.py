@@ -92,7 +92,7 @@ def main(argv: list[str] | None = None) -> int:
     from hexnewton.learning.baselines import BaselineTrainer, Budget, make_agent, wrap_env
     from hexnewton.learning.runner import seed_everything
     from hexnewton.mdp.env import make_env
-    from hexnewton.physics.world import resolve_device
+    from hexnewton.physics.device import resolve_device
 
     device = resolve_device(args.device)
     num_envs = args.num_envs or (4096 if device.startswith("cuda") else 16)
