@@ -1,7 +1,7 @@
 """The package's house rules, read from its source (AST) and checked in a few fresh interpreters: layers as folders
 whose imports only go down, no circles, no private names across modules, every command line in ``apps/`` and nothing
 else there, light command-line start-up (``--help`` and argument errors without Warp or Newton), a deployment runtime
-without Warp, Newton or torch, short functions."""
+without Warp, Newton or torch, short functions and modules, console scripts that answer as their python commands."""
 
 import ast
 import json
@@ -15,8 +15,15 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 PACKAGE = os.path.join(ROOT, "hexnewton")
 #: the longest function or method allowed in the package (def line to last line, decorators excluded)
 MAX_FUNCTION_LINES = 80
-#: command-line modules without a ``main`` of their own: the argument parsing shared by the command lines
-COMMAND_LINE_HELPERS = {"hexnewton.apps.cli"}
+#: the longest module allowed in the package, in lines
+MAX_MODULE_LINES = 600
+#: modules allowed to be longer
+LONG_MODULES = {
+    "hexnewton/mdp/terms.py",  # split into the package hexnewton/mdp/terms/ on its own branch
+}
+#: command-line modules without a ``main`` of their own: the argument parsing shared by the command lines, the
+#: console scripts
+COMMAND_LINE_HELPERS = {"hexnewton.apps.cli", "hexnewton.apps.console"}
 #: the layers, bottom up: a module imports modules of its own layer or of layers below it ("" is the package's root:
 #: configuration, errors, start-up timing)
 LAYERS = ("", "physics", "deploy", "mdp", "learning", "tasks", "analysis", "apps")
@@ -148,6 +155,17 @@ def test_functions_are_short():
     assert not long, f"longer than {MAX_FUNCTION_LINES} lines: {long}"
 
 
+def test_modules_are_short():
+    long = []
+    for path in MODULES.values():
+        rel = os.path.relpath(path, ROOT).replace(os.sep, "/")
+        with open(path) as f:
+            lines = len(f.read().splitlines())
+        if lines > MAX_MODULE_LINES and rel not in LONG_MODULES:
+            long.append(f"{rel} ({lines} lines)")
+    assert not long, f"longer than {MAX_MODULE_LINES} lines: {long}"
+
+
 def _python(code: str) -> dict:
     """Run ``code`` in a fresh interpreter in the repository root; its last stdout line, as JSON."""
     proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300, cwd=ROOT)
@@ -203,6 +221,78 @@ def test_command_line_help_and_argument_errors_load_neither_warp_nor_newton(cli)
     assert len(lines) == 1 and ": error: " in lines[0] and "Traceback" not in error["stderr"], error["stderr"]
     if more:  # the task registry answers without Warp: the task's own values are the defaults shown
         assert "--env.terrain.name" in more[0]["stdout"] and "complex" in more[0]["stdout"]
+
+
+def _console_scripts() -> dict[str, str]:
+    """pyproject.toml's ``[project.scripts]``: {script: "module:function"}."""
+    import tomllib
+
+    with open(os.path.join(ROOT, "pyproject.toml"), "rb") as f:
+        return tomllib.load(f)["project"]["scripts"]
+
+
+#: console script -> the python command it answers as
+CONSOLE_SCRIPTS = {"hexnewton-train": "train.py", "hexnewton-play": "play.py",
+                   "hexnewton-evaluate": "hexnewton.apps.evaluate", "hexnewton-export": "hexnewton.apps.export",
+                   "hexnewton-bench": "hexnewton.apps.bench"}  # fmt: skip
+SCRIPT_PROBE = """
+import contextlib, importlib, io, json, runpy, sys, warnings
+
+# runpy's notice that the module ran before (the other way imported it) is no output of the command
+warnings.filterwarnings("ignore", message=".* found in sys.modules after import of package")
+entry, how, target, cases = sys.argv[1], sys.argv[2], sys.argv[3], json.loads(sys.argv[4])
+module, function = entry.split(":")
+out = []
+for argv in cases:
+    answers = []
+    for way in ("script", "python"):
+        sys.argv = ["x" if way == "script" else target, *argv]
+        err, code = io.StringIO(), None
+        with contextlib.redirect_stdout(io.StringIO()) as text, contextlib.redirect_stderr(err):
+            try:
+                if way == "script":  # what the installed script runs: sys.exit(function())
+                    code = getattr(importlib.import_module(module), function)()
+                else:
+                    runpy.run_path(target, run_name="__main__") if how == "path" else runpy.run_module(
+                        target, run_name="__main__", alter_sys=True)
+            except SystemExit as exc:
+                code = exc.code
+        answers.append({"code": code or 0, "stdout": text.getvalue(), "stderr": err.getvalue()})
+    out.append({"argv": argv, "script": answers[0], "python": answers[1],
+                "loaded": [m for m in HEAVY if m in sys.modules]})
+print(json.dumps(out))
+"""
+
+
+def test_console_scripts_are_the_python_commands():
+    """Every console script of pyproject.toml names a function that exists, and each command line has one."""
+    import importlib
+
+    scripts = _console_scripts()
+    assert set(scripts) == set(CONSOLE_SCRIPTS), sorted(scripts)
+    for entry in scripts.values():
+        module, function = entry.split(":")
+        assert callable(getattr(importlib.import_module(module), function, None)), entry
+
+
+@pytest.mark.parametrize("script", sorted(CONSOLE_SCRIPTS))
+def test_console_script_answers_as_its_python_command(script):
+    """``--help``, a bad flag and (``hexnewton-train``) a missing checkpoint: the console script's output and exit
+    status are its python command's (usage and exit 0; one stderr line and exit 2), without Warp or Newton."""
+    target = CONSOLE_SCRIPTS[script]
+    how = "path" if target.endswith(".py") else "module"
+    cases = [["--help"], ["--not_a_flag", "1"]] + ([["--resume", "no_such.pt"]] if script == "hexnewton-train" else [])
+    proc = subprocess.run([sys.executable, "-c", f"HEAVY = {HEAVY!r}\n" + SCRIPT_PROBE, _console_scripts()[script],
+                           how, target, json.dumps(cases)], capture_output=True, text=True, timeout=300,
+                          cwd=ROOT)  # fmt: skip
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    help_, *errors = json.loads(proc.stdout.strip().splitlines()[-1])
+    for case in (help_, *errors):
+        assert case["script"] == case["python"] and case["loaded"] == [], case
+    assert help_["script"]["code"] == 0 and "usage:" in help_["script"]["stdout"], help_
+    for case in errors:
+        lines = case["script"]["stderr"].strip().splitlines()
+        assert case["script"]["code"] == 2 and len(lines) == 1 and ": error: " in lines[0], case
 
 
 def test_deploy_runtime_loads_neither_warp_newton_nor_torch():

@@ -18,7 +18,7 @@ def gait_trajectory(cfg: HexConfig, cycles: float = 2.0, device: str = "cpu"):
 
     Returns (t (T,), cpg state (T, 4), joint targets (T, 18)) at the physics substep rate.
     """
-    from hexnewton.physics.world import init_warp
+    from hexnewton.physics.device import init_warp
 
     init_warp()
     c, r = cfg.cpg, cfg.robot

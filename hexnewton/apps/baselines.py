@@ -8,7 +8,7 @@ The task's environment config (``--env.<section>.<field>`` overrides it as in ``
 the algorithm's preset (``--agent.<field>`` overrides it; ``--task T --algo A --help`` lists the fields with their
 values). The budget: ``--total_steps`` env-steps over all envs (default: what the task's PPO recipe collects with
 the same number of envs, max_iterations x num_steps_per_env x num_envs) and ``--max_minutes`` of wall time, whichever
-ends first. Details: ``hexnewton/learning/baselines.py``.
+ends first. Details: ``hexnewton/learning/baselines/`` (``__init__.py``; the presets in ``config.py``).
 """
 
 from __future__ import annotations
@@ -59,7 +59,7 @@ def parser(base, algo: str | None, preset: str) -> ArgumentParser:
                     title="--env.*: the environment (HexConfig, hexnewton/config.py)")
     if algo in ALGOS and preset in PRESETS:
         add_config_args(p, "agent", agent_config(algo, preset),
-                        title=f"--agent.*: {algo.upper()} ({preset} preset; hexnewton/learning/baselines.py)")
+                        title=f"--agent.*: {algo.upper()} ({preset} preset; hexnewton/learning/baselines/config.py)")
     return p
 
 
@@ -92,7 +92,7 @@ def main(argv: list[str] | None = None) -> int:
     from hexnewton.learning.baselines import BaselineTrainer, Budget, make_agent, wrap_env
     from hexnewton.learning.runner import seed_everything
     from hexnewton.mdp.env import make_env
-    from hexnewton.physics.world import resolve_device
+    from hexnewton.physics.device import resolve_device
 
     device = resolve_device(args.device)
     num_envs = args.num_envs or (4096 if device.startswith("cuda") else 16)

@@ -132,7 +132,7 @@ def markdown(results: list[BenchResult], pipeline: list[PipelineResult], profile
 def main(argv: list[str] | None = None) -> int:
     args = parser().parse_args(argv)
     agent = apply_overrides(AgentConfig(), config_overrides(args, "agent"))
-    from hexnewton.physics.world import resolve_device
+    from hexnewton.physics.device import resolve_device
 
     device = resolve_device(args.device)
     gpu = device.startswith("cuda")

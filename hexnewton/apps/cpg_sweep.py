@@ -144,7 +144,7 @@ def main(argv: list[str] | None = None) -> int:
     check_new_dir(args.out)
     overrides = config_overrides(args, "env")
     gaits = gait_grid(args)
-    from hexnewton.physics.world import resolve_device
+    from hexnewton.physics.device import resolve_device
 
     device = resolve_device(args.device)
     seed = args.seed

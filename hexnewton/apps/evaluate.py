@@ -313,7 +313,7 @@ def main(argv: list[str] | None = None) -> int:
     out = args.out or default_out()
     check_new_dir(out)
 
-    from hexnewton.physics.world import resolve_device
+    from hexnewton.physics.device import resolve_device
 
     device = resolve_device(args.device)
     os.makedirs(out)

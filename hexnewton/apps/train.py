@@ -160,7 +160,7 @@ def rank_config(args, env_cfg):
     """This process's torchrun rank and its config: the device resolved, ``--num_envs`` (default 4096 on CUDA, 64 on
     the CPU), the rank's own seeds (seeded here)."""
     from hexnewton.learning.runner import distributed_rank, seed_everything
-    from hexnewton.physics.world import resolve_device
+    from hexnewton.physics.device import resolve_device
 
     rank = distributed_rank(dict(os.environ), args.device)
     device = resolve_device(rank.device or args.device)

@@ -82,8 +82,9 @@ from hexnewton.mdp.terms import (
     reward_weights,
 )
 from hexnewton.physics.cpg import CPGController, joint_actions_kernel
+from hexnewton.physics.graphs import capture_graph
 from hexnewton.physics.robot import BASE_Q
-from hexnewton.physics.world import World, capture_graph
+from hexnewton.physics.world import World
 
 RING = 1024  # finished episodes the logged rates average over
 # the ring's columns: one per episode end (its status code - 1), then distance, length and curriculum level

@@ -19,7 +19,6 @@ from __future__ import annotations
 
 import logging
 import math
-import os
 import warnings
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -32,6 +31,9 @@ from newton.solvers import SolverMuJoCo
 from hexnewton import startup
 from hexnewton.config import HexConfig, SimConfig
 from hexnewton.errors import HexnewtonError
+from hexnewton.physics.device import resolve_device
+from hexnewton.physics.graphs import capture_graph
+from hexnewton.physics.precompile import precompile
 from hexnewton.physics.robot import BASE_Q, BASE_QD, NUM_JOINTS, build_hexapod, leg_bounds, stand_height
 from hexnewton.physics.terrain import Terrain, make_terrain, max_terrain_height_np
 
@@ -47,54 +49,6 @@ NOT_CONVERGED_BITS = (1 << 9) | (1 << 10)
 
 class ContactOverflowError(HexnewtonError):
     pass
-
-
-def init_warp() -> None:
-    """``wp.init()`` without the notice Warp's native library prints on every start of a machine without a CUDA driver
-    ("Warp CUDA warning: Could not find or load the NVIDIA CUDA driver ...": the CPU machines this runs on by design);
-    anything else it writes to stderr passes through. Warp logs warnings and errors only: no init banner, no
-    per-module compile lines. Called where a command first needs Warp (:func:`resolve_device`, which every
-    :class:`World` calls), not on import."""
-    import sys
-    import tempfile
-
-    wp.config.log_level = wp.LOG_WARNING
-    if wp._src.context.runtime is not None:
-        return
-    sys.stderr.flush()
-    saved = os.dup(2)
-    with tempfile.TemporaryFile() as captured:
-        os.dup2(captured.fileno(), 2)
-        try:
-            wp.init()
-        finally:
-            os.dup2(saved, 2)
-            os.close(saved)
-        captured.seek(0)
-        text = captured.read().decode(errors="replace")
-    rest = [line for line in text.splitlines(keepends=True) if "Could not find or load the NVIDIA CUDA driver" not in line]
-    sys.stderr.write("".join(rest))
-
-
-
-def resolve_device(name: str | None) -> str:
-    """``None``/``"auto"`` -> ``cuda:0`` if CUDA is available else ``cpu``; explicit CUDA must exist."""
-    init_warp()
-    if name in (None, "", "auto"):
-        return "cuda:0" if wp.is_cuda_available() else "cpu"
-    if name.startswith("cuda"):
-        if not wp.is_cuda_available():
-            raise HexnewtonError(f"device '{name}' was requested but this machine has no CUDA device")
-        if name == "cuda":
-            return "cuda:0"
-        try:
-            wp.get_device(name)
-        except Exception:
-            raise HexnewtonError(f"device '{name}' does not exist (CUDA devices: {wp.get_cuda_device_count()})")
-        return name
-    if name != "cpu":
-        raise HexnewtonError(f"unknown device '{name}': use cpu, cuda or cuda:N")
-    return name
 
 
 MAX_ENVS = 1 << 20  # per device; an H100 holds 16384 envs in a few GB (BENCHMARKS.md)
@@ -192,44 +146,6 @@ def as_mask(mask: np.ndarray | wp.array | None, buffer: wp.array) -> wp.array:
         return mask
     buffer.assign(np.asarray(mask, dtype=bool))
     return buffer
-
-
-def capture_graph(device: str, step: Callable[[], None], restore: list[wp.array]) -> wp.Graph:
-    """Run ``step`` once uncaptured (kernel compilation, lazy solver allocations), put the ``restore`` arrays
-    back as they were, then record ``step`` into a graph (a CUDA graph on GPU, Warp's capture on CPU)."""
-    saved = [wp.clone(a) for a in restore]
-    step()
-    for dst, src in zip(restore, saved):
-        wp.copy(dst, src)
-    wp.synchronize_device(device)
-    with wp.ScopedDevice(device), wp.ScopedCapture() as cap:
-        step()
-    return cap.graph
-
-
-# Warp modules (defined at import time) that a World's step launches, as listed by a CPU run. They are compiled
-# in parallel before the first step (``precompile``), on CUDA (NVRTC) and on the CPU (LLVM) alike: on the 2-core
-# machine a cold start to the first iteration took 74 s against 82 s compiling them one by one. Kernels that
-# mujoco_warp builds on the fly still compile lazily (161 s of a 265 s cold start on an H100,
-# results/time_to_skill); a module missing from this list only costs time, never correctness.
-STEP_MODULES = (
-    "newton._src.geometry.broad_phase_nxn", "newton._src.geometry.bvh", "newton._src.geometry.narrow_phase",
-    "newton._src.sim.articulation", "newton._src.sim.collide", "newton._src.solvers.mujoco.kernels",
-    "mujoco_warp._src.constraint", "mujoco_warp._src.derivative", "mujoco_warp._src.forward",
-    "mujoco_warp._src.passive", "mujoco_warp._src.set_const", "mujoco_warp._src.smooth",
-    "mujoco_warp._src.solver", "mujoco_warp._src.support",
-)  # fmt: skip
-
-
-def precompile(device: str, max_workers: int | None = None) -> list[str]:
-    """Compile ``STEP_MODULES`` and every ``hexnewton`` Warp module for ``device`` on parallel threads
-    (default: one per CPU core); returns the module names loaded."""
-    from warp._src.context import user_modules
-
-    modules = [m for m in list(user_modules.values())
-               if m.kernels and (m.name in STEP_MODULES or m.name.startswith("hexnewton."))]  # fmt: skip
-    wp.force_load(device=device, modules=modules, max_workers=max_workers or os.cpu_count() or 1)
-    return [m.name for m in modules]
 
 
 @dataclass

@@ -9,10 +9,12 @@ import torch
 import warp as wp
 
 from hexnewton.config import TERRAINS, HexConfig, SimConfig, TerrainConfig
+from hexnewton.errors import HexnewtonError
 from hexnewton.physics.cpg import CPGController
+from hexnewton.physics.device import resolve_device
 from hexnewton.physics.robot import stand_height
 from hexnewton.physics.terrain import max_terrain_height_np
-from hexnewton.physics.world import ContactOverflowError, HexnewtonError, World, resolve_device
+from hexnewton.physics.world import ContactOverflowError, World
 
 N = 4
 
@@ -201,7 +203,7 @@ def test_cli_bad_input_is_one_line(args, message):
 
 def test_precompile_finds_every_step_module():
     """The CUDA cold-start list names modules that exist once a World is built (guards against renames)."""
-    from hexnewton.physics.world import STEP_MODULES, precompile
+    from hexnewton.physics.precompile import STEP_MODULES, precompile
 
     world = _world("flat")
     world.step(1)
