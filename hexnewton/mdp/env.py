@@ -6,9 +6,9 @@ five files:
 
     [latency, pushes (mdp/events.py)] -> actions to CPG parameters (physics/cpg.py)
     -> [CPG + mapping (physics/cpg.py) + physics (physics/world.py)] x frames x substeps
-    -> episode ends, rewards (mdp/terms.py) -> done flags and the episode ring (here)
+    -> episode ends, rewards (mdp/terms/) -> done flags and the episode ring (here)
     -> [curriculum lane change (mdp/events.py)] -> resets of finished envs (mdp/events.py, physics/world.py)
-    -> observations (mdp/terms.py) [+ noise (mdp/events.py)]
+    -> observations (mdp/terms/) [+ noise (mdp/events.py)]
 
 The bracketed parts run with ``RandomizationConfig.enabled`` and ``TerrainConfig.levels``; the per-env physical draws
 are ``events.randomize_physics``, once, when the env is built.
@@ -22,7 +22,7 @@ Finished envs auto-reset. ``extras["time_outs"]`` marks time-limit ends. ``extra
 - the mean of each reward term;
 - success, fall, off-course, timeout and non-finite rates, with distance and length, over the last 1024
   finished episodes;
-- ``Episode/nonfinite_resets_total``: how many blown-up envs (NaN/Inf or runaway state, ``mdp/terms.py``)
+- ``Episode/nonfinite_resets_total``: how many blown-up envs (NaN/Inf or runaway state, ``mdp/terms/terminations.py``)
   were reset since the env was built. Their reward stays finite (0 if the position itself is not) and their
   observation comes from the fresh start, so training never sees a NaN;
 - ``Episode/contact_overflow_frames``: frames with dropped contacts so far (checked every 250 steps);
@@ -62,13 +62,11 @@ from hexnewton.mdp.events import (
     reset_envs_kernel,
     start_levels,
 )
+from hexnewton.mdp.status import NONFINITE, SUCCESS, TIMEOUT
 from hexnewton.mdp.terms import (
     LAYOUTS,
-    NONFINITE,
     OBS_DIM,
-    SUCCESS,
     TERMINATIONS,
-    TIMEOUT,
     EndInputs,
     ObsInputs,
     RewardInputs,
