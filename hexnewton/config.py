@@ -219,7 +219,7 @@ class CPGConfig:
     a3_range: tuple[float, float] = (0.0, 0.8)  # ankle tuck; 0.15 + 0.8 < pi/3 keeps it inside the limit
     # ours: body posture (physics/cpg.py), three more parameters after the 15: knee offsets [rad] for height
     # (P_h) and for pitch and roll (P_p, P_r: +-range at the front/rear and right/left legs). Off: the paper's 15
-    # parameters; train.py --posture turns it on. The knee's standing angle is 0.15 above its lower limit.
+    # parameters; --env.cpg.posture true turns it on. The knee's standing angle is 0.15 above its lower limit.
     posture: bool = False
     posture_height_range: tuple[float, float] = (-0.15, 0.15)
     posture_tilt_range: tuple[float, float] = (-0.3, 0.3)

@@ -105,7 +105,7 @@ def test_reward_kernel_matches_reference_on_random_states():
     arrays = _random_reward_arrays(rng, n, grid)
     arrays["actions"][3, 2] = np.nan  # a non-finite action counts as 0
     shaping = dict(w_tilt=2.0, w_ang_vel=0.05, w_action_rate=0.3)
-    # ours; 40 ms control; Table 1 as written; a wider stability tilt (--stability_tilt) with the shaping on
+    # ours; 40 ms control; Table 1 as written; a wider stability tilt (--env.reward.stability_tilt) with the shaping on
     for task, reward in ((TASK, REW), (dataclasses.replace(TASK, control_dt=0.04), REW), (TASK, REW.paper_reward()),
                          (TASK, dataclasses.replace(REW, stability_tilt=0.8, **shaping))):  # fmt: skip
         (rew, terms, px, prev), (ref_rew, ref_terms, ref_px, ref_prev) = _run_rewards(grid, arrays, task, reward)
@@ -144,7 +144,7 @@ def test_reward_terms_on_hand_made_states():
     np.testing.assert_allclose(t["goal"], [0, 0, 300, 0, 0])  # ours: more than lingering by the goal is worth
     np.testing.assert_allclose(t["off_course"], [0, 0, 0, 0, -100])  # ours: leaving the course costs a fall
     np.testing.assert_allclose(t["direction"], [0, 0, 0, -2.0, 0], atol=1e-6)  # default dead band 0
-    # pitched 35 deg nose-up (an 8 cm staircase): fined under Table 1's pi/6, free under --stability_tilt 0.8
+    # pitched 35 deg nose-up (an 8 cm staircase): fined under Table 1's pi/6, free under --env.reward.stability_tilt 0.8
     rpy[0, 1] = -math.radians(35)
     for tilt, expect in ((math.pi / 6, -100.0), (0.8, 0.0)):
         assert terms(dataclasses.replace(REW, stability_tilt=tilt))["stability"][0] == pytest.approx(expect)
