@@ -322,7 +322,7 @@ class HexapodEnv(VecEnv):
         return arrays
 
     def _control_step(self) -> None:
-        """One control step's launches, in ``step``'s order (captured once as the step's graph with ``sim.use_graph``)."""
+        """One control step's launches, in ``step``'s order (with ``sim.use_graph``, captured once as a graph)."""
         actions = self._delay_and_push()
         self._apply_actions(actions)
         self._simulate()

@@ -4,10 +4,15 @@ observations, rewards, reward terms, episode statuses and done flags stored in `
 
 The episodes are short and the end thresholds tight, so every kind of episode end, the resets, the curriculum's lane
 changes and the pushes happen within the rollout. Regenerate the file (only for a change meant to alter the step):
-``HEXNEWTON_WRITE_GOLDEN=1 python -m pytest -q -n 0 tests/mdp/test_golden.py``."""
+``HEXNEWTON_WRITE_GOLDEN=1 python -m pytest -q -n 0 tests/mdp/test_golden.py``.
+
+The bits depend on the simulator packages and, since Warp compiles the CPU kernels for the host, on the processor's
+vector instructions: the file records both (:func:`platform_key`), and elsewhere the test is skipped, saying why."""
 
 import dataclasses
 import os
+import platform
+from importlib.metadata import version
 
 import numpy as np
 import pytest
@@ -25,8 +30,19 @@ CASES = {
                             "randomization": dict(push_interval=0.1)}),
     "joint_stairs": ("complex-joint", {"task": dict(max_episode_steps=10, min_height=0.105, max_tilt=0.15),
                                        "terrain": dict(name="stepped", levels=3, start_levels=2)}),
-    "paper": ("paper", {"task": dict(max_episode_steps=10, max_abs_y=0.01, max_joint_speed=17.0), "terrain": dict(name="flat")}),
+    "paper": ("paper", {"task": dict(max_episode_steps=10, max_abs_y=0.01, max_joint_speed=17.0),
+                        "terrain": dict(name="flat")}),
 }
+
+
+def platform_key() -> str:
+    """The packages and the processor features the rollout's bits depend on."""
+    packages = ", ".join(f"{name} {version(name)}" for name in ("warp-lang", "newton", "mujoco-warp", "numpy"))
+    flags = set()
+    if os.path.exists("/proc/cpuinfo"):
+        with open("/proc/cpuinfo") as f:
+            flags = set(next((line.split(":", 1)[1].split() for line in f if line.startswith("flags")), []))
+    return f"{packages}; {platform.machine()} {' '.join(sorted(flags & {'avx2', 'avx512f', 'fma'}))}"
 
 
 def _config(name: str):
@@ -57,12 +73,15 @@ def rollout(name: str) -> dict[str, np.ndarray]:
 
 @pytest.mark.skipif(os.environ.get("HEXNEWTON_WRITE_GOLDEN") != "1", reason="writes the golden file")
 def test_write_golden():
-    np.savez_compressed(PATH, **{f"{name}/{key}": value for name in CASES for key, value in rollout(name).items()})
+    arrays = {f"{name}/{key}": value for name in CASES for key, value in rollout(name).items()}
+    np.savez_compressed(PATH, platform=np.array(platform_key()), **arrays)
 
 
 @pytest.mark.parametrize("name", list(CASES))
 def test_rollout_matches_golden_bit_for_bit(name):
     golden = np.load(PATH)
+    if str(golden["platform"]) != platform_key():
+        pytest.skip(f"golden_rollout.npz was recorded with {golden['platform']}; here: {platform_key()}")
     got = rollout(name)
     assert sorted(got) == sorted(k.split("/", 1)[1] for k in golden.files if k.startswith(name + "/"))
     for key, value in got.items():
