@@ -6,7 +6,7 @@ terms are quoted for a 20 ms control step (``REF_DT``) and scaled by ``control_d
 order (each function's docstring gives its value):
 
 - ``height``: r_h, z - 0.11 above z = 0.12 m (z: torso height above the terrain under it);
-- ``direction``: r_theta, the heading error beyond a dead band, toward the goal;
+- ``direction``: r_theta, the heading error beyond a dead band, toward the goal (or, the paper's, along +x);
 - ``distance``: r_d, exp(-(d_n - d_t)), 1 on the goal circle;
 - ``stability``: r_s, -100 per step while low, tilted beyond ``stability_tilt`` or fallen;
 - ``forward``: r_f, -0.3 per step below ``FORWARD_MIN_SPEED`` along +x;
