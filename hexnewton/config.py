@@ -219,7 +219,7 @@ class CPGConfig:
     a3_range: tuple[float, float] = (0.0, 0.8)  # ankle tuck; 0.15 + 0.8 < pi/3 keeps it inside the limit
     # ours: body posture (physics/cpg.py), three more parameters after the 15: knee offsets [rad] for height
     # (P_h) and for pitch and roll (P_p, P_r: +-range at the front/rear and right/left legs). Off: the paper's 15
-    # parameters; train.py --posture turns it on. The knee's standing angle is 0.15 above its lower limit.
+    # parameters; --env.cpg.posture true turns it on. The knee's standing angle is 0.15 above its lower limit.
     posture: bool = False
     posture_height_range: tuple[float, float] = (-0.15, 0.15)
     posture_tilt_range: tuple[float, float] = (-0.3, 0.3)
@@ -305,7 +305,8 @@ class TaskConfig:
     # ours: the pure-DRL action mode's joint targets, standing pose + joint_action_scale * action [rad], clipped
     # to the limits (physics/cpg.py); 0 spans each joint's whole limit range with the actions
     joint_action_scale: float = 0.5
-    # the episode ends this task checks, rows of mdp/terms.py's TERMINATIONS in their order (nonfinite always)
+    # the episode ends this task checks, rows of mdp/terms/terminations.py's TERMINATIONS in their order (nonfinite
+    # always)
     terminations: tuple[str, ...] = ("nonfinite", "fell", "off_course", "success", "timeout")
 
 
@@ -315,28 +316,29 @@ PAPER_REWARD_TERMS = ("height", "direction", "distance", "stability", "forward")
 
 @dataclass
 class RewardConfig:
-    """Table 1 / Eq. 5 weights. The paper names w_h, w_d, w_theta but gives no values (mdp/terms.py)."""
+    """Table 1 / Eq. 5 weights. The paper names w_h, w_d, w_theta but gives no values (docs/internals.md, "The
+    MDP")."""
 
     w_height: float = 1.0  # ours
     w_direction: float = 1.0  # ours
     w_distance: float = 1.0  # ours
     # heading error [rad] within which the direction term is silent. Table 1's condition "θ > π/6" would be
-    # math.pi / 6 (``--direction_deadband 0.5236``); ours is 0: with the π/6 dead band a policy never learns
+    # math.pi / 6 (``--env.reward.direction_deadband 0.5236``); ours is 0: with the π/6 dead band a policy never learns
     # to correct start-yaw errors below 30° (H100, flat, 150 iterations: 32/64 vs 63/64 reach the goal from
     # ±0.2 rad start yaw, RESULTS.md).
     direction_deadband: float = 0.0
     # ours: Table 1's D is the start-to-goal vector; True takes it from the robot to the goal, so the direction
-    # term steers back toward a goal the robot has drifted away from (mdp/terms.py). False: the paper's.
+    # term steers back toward a goal the robot has drifted away from (docs/internals.md). False: the paper's.
     direction_to_goal: bool = True
     stability_penalty: float = 100.0  # Table 1: r_s = -100, weight 1
-    stability_tilt: float = math.pi / 6  # Table 1: r_s while |roll| or |pitch| > pi/6 [rad] (mdp/terms.py)
+    stability_tilt: float = math.pi / 6  # Table 1: r_s while |roll| or |pitch| > pi/6 [rad] (docs/internals.md)
     forward_penalty: float = 0.3  # Table 1: r_f = -0.3, weight 1
-    # ours: more than w_d / (1 - gamma) = 100, what lingering by the goal is worth (mdp/terms.py)
+    # ours: more than w_d / (1 - gamma) = 100, what lingering by the goal is worth (docs/internals.md)
     goal_bonus: float = 300.0
     # ours: paid once on leaving the course (§2.4.4 (2)); without it PPO walks off the course when stuck at a
-    # step (mdp/terms.py). 0 restores the paper's reward.
+    # step (docs/internals.md). 0 restores the paper's reward.
     off_course_penalty: float = 100.0
-    # ours: gait-quality terms (mdp/terms.py, "Stability shaping"), each per 20 ms step and 0 = off (Table 1
+    # ours: gait-quality terms (docs/internals.md, "Stability shaping"), each per 20 ms step and 0 = off (Table 1
     # has only the -100 fine beyond pi/6). Body tilt: -w_tilt (roll^2 + pitch^2) [rad^2]; body roll and pitch rate:
     # -w_ang_vel (w_x^2 + w_y^2) [(rad/s)^2, body frame]; action rate: -w_action_rate sum_k (a_k - a_k,prev)^2 over
     # the 15 actions in [-1, 1]. Off here; train.py's recipes for the paper's terrains switch them on
@@ -344,7 +346,8 @@ class RewardConfig:
     w_tilt: float = 0.0
     w_ang_vel: float = 0.0
     w_action_rate: float = 0.0
-    # the terms this task pays, rows of mdp/terms.py's REWARD_TERMS (logged as Reward/<name>, summed in table order)
+    # the terms this task pays, rows of mdp/terms/rewards.py's REWARD_TERMS (logged as Reward/<name>, summed in table
+    # order)
     terms: tuple[str, ...] = ("height", "direction", "distance", "stability", "forward", "goal", "off_course", "tilt",
                               "ang_vel", "action_rate")
 

@@ -18,7 +18,7 @@ from hexnewton.mdp.status import FELL, NONFINITE, OFF_COURSE, RUNNING, SUCCESS, 
 from hexnewton.physics.reference import quat_to_rpy_np
 from hexnewton.physics.robot.geometry import footprint, leg_bounds, spawn_clearance
 
-#: the terrain reading's window, as the training observation's (``mdp.terms.H_HALF_EXTENT``) [m]
+#: the terrain reading's window, as the training observation's (``mdp.terms.observations.H_HALF_EXTENT``) [m]
 H_HALF_EXTENT = 0.3
 
 
@@ -110,8 +110,9 @@ def start_poses(rounds: int, seed: int, task: TaskConfig | None = None, spread: 
 
 def episode_status(qpos: np.ndarray, qvel: np.ndarray, ground: np.ndarray, start_xy: np.ndarray, steps: int,
                    task: TaskConfig) -> tuple[np.ndarray, np.ndarray]:
-    """The episode ends of ``mdp/terms.py`` (TERMINATIONS, first match wins) for robots (N, 25) / (N, 24) after
-    ``steps`` control steps: (status codes (N,), roll / pitch / yaw (N, 3)). Quaternions are MuJoCo's (w, x, y, z)."""
+    """The episode ends of ``mdp/terms/terminations.py`` (TERMINATIONS, first match wins) for robots (N, 25) /
+    (N, 24) after ``steps`` control steps: (status codes (N,), roll / pitch / yaw (N, 3)). Quaternions are MuJoCo's
+    (w, x, y, z)."""
     finite = np.isfinite(qpos).all(axis=1) & np.isfinite(qvel).all(axis=1)
     quat = np.where(finite[:, None], qpos[:, [4, 5, 6, 3]], [0.0, 0.0, 0.0, 1.0])
     rpy = quat_to_rpy_np(quat)

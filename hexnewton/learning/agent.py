@@ -146,7 +146,7 @@ class AgentConfig:
             "obs_groups": {"actor": ["policy"], "critic": ["policy"]},
             "logger": "tensorboard",
             # rsl-rl's NaN check costs three device-to-host syncs per env step; the env already guarantees finite
-            # observations and rewards in-kernel (a blown-up env is reset and counted: mdp/terms.py,
+            # observations and rewards in-kernel (a blown-up env is reset and counted: mdp/terms/,
             # tested by injecting NaN/Inf), so the check only stalls the GPU
             "check_for_nan": False,
             "actor": dict(model, distribution_cfg=dist),

@@ -6,9 +6,9 @@ five files:
 
     [latency, pushes (mdp/events.py)] -> actions to CPG parameters (physics/cpg.py)
     -> [CPG + mapping (physics/cpg.py) + physics (physics/world.py)] x frames x substeps
-    -> episode ends, rewards (mdp/terms.py) -> done flags and the episode ring (here)
+    -> episode ends, rewards (mdp/terms/) -> done flags and the episode ring (here)
     -> [curriculum lane change (mdp/events.py)] -> resets of finished envs (mdp/events.py, physics/world.py)
-    -> observations (mdp/terms.py) [+ noise (mdp/events.py)]
+    -> observations (mdp/terms/) [+ noise (mdp/events.py)]
 
 The bracketed parts run with ``RandomizationConfig.enabled`` and ``TerrainConfig.levels``; the per-env physical draws
 are ``events.randomize_physics``, once, when the env is built.
@@ -22,7 +22,7 @@ Finished envs auto-reset. ``extras["time_outs"]`` marks time-limit ends. ``extra
 - the mean of each reward term;
 - success, fall, off-course, timeout and non-finite rates, with distance and length, over the last 1024
   finished episodes;
-- ``Episode/nonfinite_resets_total``: how many blown-up envs (NaN/Inf or runaway state, ``mdp/terms.py``)
+- ``Episode/nonfinite_resets_total``: how many blown-up envs (NaN/Inf or runaway state, ``mdp/terms/terminations.py``)
   were reset since the env was built. Their reward stays finite (0 if the position itself is not) and their
   observation comes from the fresh start, so training never sees a NaN;
 - ``Episode/contact_overflow_frames``: frames with dropped contacts so far (checked every 250 steps);
@@ -62,13 +62,11 @@ from hexnewton.mdp.events import (
     reset_envs_kernel,
     start_levels,
 )
+from hexnewton.mdp.status import NONFINITE, SUCCESS, TIMEOUT
 from hexnewton.mdp.terms import (
     LAYOUTS,
-    NONFINITE,
     OBS_DIM,
-    SUCCESS,
     TERMINATIONS,
-    TIMEOUT,
     EndInputs,
     ObsInputs,
     RewardInputs,
@@ -252,6 +250,21 @@ class HexapodEnv(VecEnv):
         return TensorDict({"policy": self._obs_t.clone()}, batch_size=[self.num_envs], device=self._obs_t.device)
 
     def step(self, actions: torch.Tensor) -> tuple[TensorDict, torch.Tensor, torch.Tensor, dict]:
+        """One control step of every env: ``actions`` copied into the step's buffer, then, in one captured graph
+        (:meth:`_control_step`):
+
+        1. actuation latency and pushes (with randomisation);
+        2. the actions to the CPG's parameters (or, in ``joint`` mode, to the joint targets);
+        3. the physics frames;
+        4. episode ends: each env's status;
+        5. rewards;
+        6. done flags, step counters and the finished episodes' ring;
+        7. the state at the end of the step kept for recording;
+        8. the curriculum's lane changes (with a terrain curriculum);
+        9. the resets of the finished envs;
+        10. observations (and their noise, with randomisation).
+
+        Returns copies of the observations, rewards and done flags, and the extras (time-outs, log)."""
         # torch writes the actions on its (legacy default) stream; Warp's own streams are blocking streams, so
         # the graph below starts after that copy and torch's later reads wait for the graph. (Wrapping torch's
         # stream with wp.stream_from_torch failed on an H100 with "Warp error: unknown stream".)
@@ -310,57 +323,100 @@ class HexapodEnv(VecEnv):
         return arrays
 
     def _control_step(self) -> None:
-        w, t, r, dev, n = self.world, self.cfg.task, self.cfg.reward, self.device, self.num_envs
-        actions = self.actions
-        if self.randomized:  # actuation latency and pushes
-            actions = self._effective_actions
-            wp.launch(delay_actions_kernel, dim=(n, self.num_actions), inputs=[self.actions, self._late],
-                      outputs=[self._prev_actions, actions], device=dev)  # fmt: skip
-            rz = self.cfg.randomization
-            wp.launch(push_kernel, dim=n, inputs=[self.episode_steps, self._push_steps, rz.push_velocity,
-                                                  t.seed + 104729, self.counter],
-                      outputs=[w.joint_qd_wp], device=dev)  # fmt: skip
+        """One control step's launches, in ``step``'s order (with ``sim.use_graph``, captured once as a graph)."""
+        actions = self._delay_and_push()
+        self._apply_actions(actions)
+        self._simulate()
+        self._end_episodes()
+        self._pay_rewards()
+        self._count_episodes()
+        self._keep_last_state()
+        self._change_lanes()
+        self._reset(self.done)
+        self._observe()
+
+    def _delay_and_push(self) -> wp.array:
+        """With randomisation, the late envs' actions held back a step and the pushes; the actions this step acts
+        on."""
+        if not self.randomized:
+            return self.actions
+        w, t, dev, n = self.world, self.cfg.task, self.device, self.num_envs
+        actions = self._effective_actions
+        wp.launch(delay_actions_kernel, dim=(n, self.num_actions), inputs=[self.actions, self._late],
+                  outputs=[self._prev_actions, actions], device=dev)  # fmt: skip
+        rz = self.cfg.randomization
+        wp.launch(push_kernel, dim=n, inputs=[self.episode_steps, self._push_steps, rz.push_velocity,
+                                              t.seed + 104729, self.counter],
+                  outputs=[w.joint_qd_wp], device=dev)  # fmt: skip
+        return actions
+
+    def _apply_actions(self, actions: wp.array) -> None:
+        """The actions to the CPG's parameters (``cpg``) or to the joint targets (``joint``)."""
         if self.controller is not None:
             self.controller.set_actions(actions)
-        else:
-            wp.launch(joint_actions_kernel, dim=(n, self.num_actions),
-                      inputs=[actions, w.stand_pose, w.joint_lower, w.joint_upper, t.joint_action_scale, BASE_Q],
-                      outputs=[w.joint_target_wp],
-                      device=dev)  # fmt: skip
+            return
+        w, t = self.world, self.cfg.task
+        wp.launch(joint_actions_kernel, dim=(self.num_envs, self.num_actions),
+                  inputs=[actions, w.stand_pose, w.joint_lower, w.joint_upper, t.joint_action_scale, BASE_Q],
+                  outputs=[w.joint_target_wp],
+                  device=self.device)  # fmt: skip
+
+    def _simulate(self) -> None:
+        """The physics frames of one control step."""
         for _ in range(self.decimation):
-            w.simulate_frame()
+            self.world.simulate_frame()
+
+    def _end_episodes(self) -> None:
+        """Each env's episode status (the task's ``TERMINATIONS`` rows) and its roll, pitch, yaw."""
+        w = self.world
         ends = make_struct(EndInputs, joint_q=w.joint_q_wp, joint_qd=w.joint_qd_wp, episode_steps=self.episode_steps,
-                           start=self.start, hf=self.height_field, task=t)  # fmt: skip
-        wp.launch(self.status_kernel, dim=n, inputs=[ends], outputs=[self.status, self.rpy], device=dev)
+                           start=self.start, hf=self.height_field, task=self.cfg.task)  # fmt: skip
+        wp.launch(self.status_kernel, dim=self.num_envs, inputs=[ends], outputs=[self.status, self.rpy],
+                  device=self.device)  # fmt: skip
+
+    def _pay_rewards(self) -> None:
+        """Each env's reward and reward terms (the task's ``REWARD_TERMS`` rows); ``prev_x`` and ``prev_actions``
+        for the next step."""
+        w, t, r = self.world, self.cfg.task, self.cfg.reward
         rewards = make_struct(RewardInputs, joint_q=w.joint_q_wp, joint_qd=w.joint_qd_wp, rpy=self.rpy,
                               status=self.status, episode_steps=self.episode_steps, actions=self.actions,
                               start=self.start, hf=self.height_field, prev_x=self.prev_x,
                               prev_actions=self.prev_actions, task=t, reward=r)  # fmt: skip
-        wp.launch(self.rewards_kernel, dim=n, inputs=[rewards, reward_weights(r, self.reward_terms)], outputs=[self.reward, self.terms],
-                  device=dev)  # fmt: skip
+        wp.launch(self.rewards_kernel, dim=self.num_envs, inputs=[rewards, reward_weights(r, self.reward_terms)],
+                  outputs=[self.reward, self.terms], device=self.device)  # fmt: skip
+
+    def _count_episodes(self) -> None:
+        """Done flags and step counters; the finished episodes into the ring."""
+        w = self.world
         wp.launch(
-            _bookkeeping, dim=n,
+            _bookkeeping, dim=self.num_envs,
             inputs=[self.status, w.joint_q_wp, self.start, self.level if self.level is not None else self._no_level],
             outputs=[self.episode_steps, self.done, self.done_u8, self.time_out, self._cursor, self._ring,
-                     self._nonfinite_total], device=dev,
+                     self._nonfinite_total], device=self.device,
         )  # fmt: skip
+
+    def _keep_last_state(self) -> None:
+        """The state at the end of the step, before finished envs are reset (``last_q`` ...: play.py records it)."""
+        w = self.world
         wp.copy(self.last_q, w.joint_q_wp)
         wp.copy(self.last_qd, w.joint_qd_wp)
         wp.copy(self.last_start, self.start)
         if self.controller is not None:
             wp.copy(self.last_cpg_state, self.controller.state)
             wp.copy(self.last_params, self.controller.params)
-        if self.level is not None:  # finished envs change lanes before they are reset onto them
-            tc = self.cfg.terrain
-            wp.launch(
-                curriculum_kernel, dim=n,
-                inputs=[self.status, w.joint_q_wp, self.start, t.goal_distance, tc.levels, tc.lane_width,
-                        self._lane_offset, self.height_field, w.footprint, w.spawn_clearance, t.seed + 7919,
-                        self.counter],
-                outputs=[self.level, self.lane, self.lane_z], device=dev,
-            )  # fmt: skip
-        self._reset(self.done)
-        self._observe()
+
+    def _change_lanes(self) -> None:
+        """With a terrain curriculum, finished envs change lanes (levels) before they are reset onto them."""
+        if self.level is None:
+            return
+        w, t, tc = self.world, self.cfg.task, self.cfg.terrain
+        wp.launch(
+            curriculum_kernel, dim=self.num_envs,
+            inputs=[self.status, w.joint_q_wp, self.start, t.goal_distance, tc.levels, tc.lane_width,
+                    self._lane_offset, self.height_field, w.footprint, w.spawn_clearance, t.seed + 7919,
+                    self.counter],
+            outputs=[self.level, self.lane, self.lane_z], device=self.device,
+        )  # fmt: skip
 
     def _reset(self, mask: wp.array | None) -> None:
         t, w, m = self.cfg.task, self.world, mask if mask is not None else self._all

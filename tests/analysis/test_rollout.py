@@ -16,10 +16,8 @@ from hexnewton.analysis.rollout import rollout
 from hexnewton.config import JOINT_NAMES, HexConfig, SimConfig, TaskConfig, TerrainConfig
 from hexnewton.learning.policy import fixed_cpg_actions
 from hexnewton.mdp.env import make_env
+from hexnewton.mdp.status import FELL, NONFINITE, SUCCESS
 from hexnewton.mdp.terms import (
-    FELL,
-    NONFINITE,
-    SUCCESS,
     EndInputs,
     episode_status_kernel,
     episode_status_np,

@@ -1,4 +1,4 @@
-"""The term tables (mdp/terms.py): each fused kernel against the rows' float64
+"""The term tables (mdp/terms/): each fused kernel against the rows' float64
 NumPy functions on random states, the paper's terms on hand-made states, and what the tables drive (kernel columns,
 log names, layouts, noise)."""
 
@@ -13,17 +13,14 @@ import warp as wp
 
 from hexnewton.config import HexConfig, RandomizationConfig, RewardConfig, SimConfig, TaskConfig, TerrainConfig
 from hexnewton.mdp.env import make_env
-from hexnewton.mdp.status import STATUS_NAMES
+from hexnewton.mdp.status import FELL, OFF_COURSE, STATUS_NAMES, SUCCESS
 from hexnewton.mdp.terms import (
-    FELL,
     LAYOUTS,
     OBS_DIM,
     OBS_LAYOUT,
     OBS_TERMS,
-    OFF_COURSE,
     REWARD_NAMES,
     REWARD_TERMS,
-    SUCCESS,
     TERMINATIONS,
     ObsInputs,
     RewardFrame,
@@ -108,7 +105,7 @@ def test_reward_kernel_matches_reference_on_random_states():
     arrays = _random_reward_arrays(rng, n, grid)
     arrays["actions"][3, 2] = np.nan  # a non-finite action counts as 0
     shaping = dict(w_tilt=2.0, w_ang_vel=0.05, w_action_rate=0.3)
-    # ours; 40 ms control; Table 1 as written; a wider stability tilt (--stability_tilt) with the shaping on
+    # ours; 40 ms control; Table 1 as written; a wider stability tilt (--env.reward.stability_tilt) with the shaping on
     for task, reward in ((TASK, REW), (dataclasses.replace(TASK, control_dt=0.04), REW), (TASK, REW.paper_reward()),
                          (TASK, dataclasses.replace(REW, stability_tilt=0.8, **shaping))):  # fmt: skip
         (rew, terms, px, prev), (ref_rew, ref_terms, ref_px, ref_prev) = _run_rewards(grid, arrays, task, reward)
@@ -147,7 +144,7 @@ def test_reward_terms_on_hand_made_states():
     np.testing.assert_allclose(t["goal"], [0, 0, 300, 0, 0])  # ours: more than lingering by the goal is worth
     np.testing.assert_allclose(t["off_course"], [0, 0, 0, 0, -100])  # ours: leaving the course costs a fall
     np.testing.assert_allclose(t["direction"], [0, 0, 0, -2.0, 0], atol=1e-6)  # default dead band 0
-    # pitched 35 deg nose-up (an 8 cm staircase): fined under Table 1's pi/6, free under --stability_tilt 0.8
+    # pitched 35 deg nose-up (an 8 cm staircase): fined under Table 1's pi/6, free under --env.reward.stability_tilt 0.8
     rpy[0, 1] = -math.radians(35)
     for tilt, expect in ((math.pi / 6, -100.0), (0.8, 0.0)):
         assert terms(dataclasses.replace(REW, stability_tilt=tilt))["stability"][0] == pytest.approx(expect)
@@ -210,11 +207,12 @@ def test_reward_table_drives_kernel_reference_and_log():
     assert len(set(REWARD_NAMES)) == len(REWARD_NAMES) and all(hasattr(REW, t.weight) for t in REWARD_TERMS)
 
     @wp.func
-    def lateral(i: RewardInputs, f: RewardFrame) -> float:
-        return wp.abs(f.py - i.start[f.e][1])
+    def lateral(inputs: RewardInputs, frame: RewardFrame) -> float:
+        return wp.abs(frame.py - inputs.start[frame.env][1])
 
     table = tuple(reversed(REWARD_TERMS)) + (
-        RewardTerm("lateral", "w_height", lateral, lambda i, f: np.abs(f.py - i.start[:, 1]), cost=True),
+        RewardTerm("lateral", "w_height", lateral, lambda inputs, frame: np.abs(frame.py - inputs.start[:, 1]),
+                   cost=True),
     )
     grid = make_terrain(TerrainConfig(name="rugged")).grid
     arrays = _random_reward_arrays(np.random.default_rng(3), 128, grid)
@@ -297,7 +295,7 @@ def test_observation_layout_covers_59_62_and_44():
         assert all(a[2] == b[1] for a, b in zip(spans, spans[1:]))
         assert [name for name, _, _ in spans] == [t.name for t in OBS_TERMS if mode in t.layouts]
     # the layout documented in the module docstring is the table's
-    import hexnewton.mdp.terms as obs_module
+    import hexnewton.mdp.terms.observations as obs_module
 
     assert "    [54:57]   body posture P_h, P_p, P_r [rad] (filtered)" in obs_module.__doc__
 

@@ -5,7 +5,7 @@
 infinite ground plane at z = 0; or boxes plus meshes of the same surface, :mod:`.parts`) and helpers to add
 it to a ``newton.ModelBuilder`` and to query heights on the host. The grids and their box decomposition load without
 Warp or Newton (the MuJoCo model, :mod:`hexnewton.deploy.mjcf`, is built from them). :mod:`.query` holds the float64 height
-queries (the MDP's in-kernel ones are their Warp twins, ``hexnewton/mdp/terms.py``).
+queries (the MDP's in-kernel ones are their Warp twins, ``hexnewton/mdp/terms/ground.py``).
 """
 
 from __future__ import annotations

@@ -2,7 +2,7 @@
 under a point (:func:`terrain_height_np`, one cell lookup, indices clamped to the grid edge, so points off the patch
 see the nearest edge cell) and the highest cell overlapping an axis-aligned square (:func:`max_terrain_height_np`).
 They are the references of the MDP's in-kernel queries (``terrain_height`` and ``max_terrain_height`` in
-``hexnewton/mdp/terms.py``), and the host's own queries (spawn heights, C MuJoCo's terrain scanner).
+``hexnewton/mdp/terms/ground.py``), and the host's own queries (spawn heights, C MuJoCo's terrain scanner).
 
 Note on precision: the kernels compute cell indices in float32. Within about 1e-4 cells of a cell
 edge the float32 index can differ by one from the float64 reference, so comparisons against the
@@ -25,7 +25,7 @@ def _cell_index_np(coord: np.ndarray, origin: float, res: float, n: int) -> np.n
 
 
 def terrain_height_np(grid: HeightGrid, x: np.ndarray, y: np.ndarray) -> np.ndarray:
-    """Float64 reference of ``mdp.terms.terrain_height`` (vectorised over broadcastable x, y)."""
+    """Float64 reference of ``mdp.terms.ground.terrain_height`` (vectorised over broadcastable x, y)."""
     x, y = np.broadcast_arrays(np.asarray(x, dtype=np.float64), np.asarray(y, dtype=np.float64))
     i = _cell_index_np(x, grid.x0, grid.res, grid.nx)
     j = _cell_index_np(y, grid.y0, grid.res, grid.ny)
@@ -33,7 +33,7 @@ def terrain_height_np(grid: HeightGrid, x: np.ndarray, y: np.ndarray) -> np.ndar
 
 
 def max_terrain_height_np(grid: HeightGrid, x: np.ndarray, y: np.ndarray, half_extent: float) -> np.ndarray:
-    """Float64 reference of ``mdp.terms.max_terrain_height`` (vectorised over broadcastable x, y)."""
+    """Float64 reference of ``mdp.terms.ground.max_terrain_height`` (vectorised over broadcastable x, y)."""
     x, y = np.broadcast_arrays(np.asarray(x, dtype=np.float64), np.asarray(y, dtype=np.float64))
     i0 = _cell_index_np(x - half_extent, grid.x0, grid.res, grid.nx)
     i1 = _cell_index_np(x + half_extent, grid.x0, grid.res, grid.nx)

@@ -1,0 +1,61 @@
+"""The MDP's terms (Huang et al. 2025, §2.4), by kind: episode ends (``terminations``), rewards (``rewards``) and
+observations (``observations``), one table of rows and one fused Warp kernel each, on the ground as the terms see it
+(``ground``) and the configuration structs the tables share (``structs``).
+
+After the physics frames of a control step the env (``hexnewton/mdp/env.py``) launches, in this order, the episode
+status kernel (:func:`make_status_kernel`: which envs' episodes end, and why), the rewards kernel of the task's reward
+terms (:func:`make_rewards_kernel`), then, after the resets of the finished envs (``hexnewton/mdp/events.py``),
+:func:`observations_kernel`. Each kind declares its terms once, in a table of rows (name, parameters, a ``@wp.func`` for
+one env, a float64 NumPy function for all envs): ``TERMINATIONS``, ``REWARD_TERMS``, ``OBS_TERMS``. The fused kernel
+(the rows unrolled with ``wp.static``, one launch), the log names and the float64 reference follow from the table. A
+task chooses its rows: ``TaskConfig.terminations``, ``RewardConfig.terms`` and the observation layout of its action
+mode (``LAYOUTS``). ``docs/internals.md`` ("The MDP") gives every term's reasons and how to add one."""
+
+from hexnewton.mdp.terms.ground import (
+    HeightField,
+    height_field_from_grid,
+    max_terrain_height,
+    sample_heights,
+    terrain_height,
+)
+from hexnewton.mdp.terms.observations import (
+    H_HALF_EXTENT,
+    LAYOUTS,
+    OBS_DIM,
+    OBS_LAYOUT,
+    OBS_TERMS,
+    ObsInputs,
+    ObsTerm,
+    observation_noise,
+    observations_kernel,
+    observations_reference,
+)
+from hexnewton.mdp.terms.rewards import (
+    REWARD_NAMES,
+    REWARD_TERMS,
+    RewardFrame,
+    RewardInputs,
+    RewardTerm,
+    make_rewards_kernel,
+    reward_table,
+    reward_weights,
+    rewards_kernel,
+    rewards_reference,
+)
+from hexnewton.mdp.terms.structs import RewardParams, TaskParams, config_params, make_struct
+from hexnewton.mdp.terms.terminations import (
+    TERMINATIONS,
+    EndInputs,
+    Termination,
+    episode_status_kernel,
+    episode_status_np,
+    make_status_kernel,
+)
+
+__all__ = ["H_HALF_EXTENT", "LAYOUTS", "OBS_DIM", "OBS_LAYOUT", "OBS_TERMS", "REWARD_NAMES", "REWARD_TERMS",
+           "TERMINATIONS", "EndInputs", "HeightField", "ObsInputs", "ObsTerm", "RewardFrame", "RewardInputs",
+           "RewardParams", "RewardTerm", "TaskParams", "Termination", "config_params", "episode_status_kernel",
+           "episode_status_np", "height_field_from_grid", "make_rewards_kernel", "make_status_kernel", "make_struct",
+           "max_terrain_height", "observation_noise", "observations_kernel", "observations_reference",
+           "reward_table", "reward_weights", "rewards_kernel", "rewards_reference", "sample_heights",
+           "terrain_height"]
