@@ -393,3 +393,10 @@ def test_one_control_step_passes_the_files_the_readme_names():
     named = set(re.findall(r"hexnewton/[\w/]+\.py", section))
     assert files == named and len(files) <= 5, (sorted(files), sorted(named))
     assert np.isfinite(env.obs.numpy()).all()
+
+
+def test_results_holds_folders_only():
+    """``results/`` holds one folder per result (each with its report), no loose files at its root."""
+    results = os.path.join(ROOT, "results")
+    loose = sorted(f for f in os.listdir(results) if os.path.isfile(os.path.join(results, f)))
+    assert not loose, f"files at results/'s root (each belongs in its result's folder): {loose}"
