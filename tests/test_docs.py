@@ -1,9 +1,11 @@
 """Every command line the documents show parses with the current code.
 
-Documents: ``README.md``, ``RESULTS.md``, ``BENCHMARKS.md`` and ``docs/*.md``. Commands: the lines of fenced code
-blocks and the inline ``code`` spans that start with ``python``, ``python3``, ``torchrun`` or ``bash scripts/`` (after
-``VAR=value`` prefixes; a fenced line joined with its ``\\`` continuations, cut at ``&&``, ``||``, ``;`` and `` | ``
-(a pipe between spaces: ``{a|b}`` is one word), its ``# comment`` dropped; an inline span may wrap over lines). Each is
+Documents: ``README.md``, ``RESULTS.md``, ``BENCHMARKS.md`` and ``docs/*.md``, and for their commands also the
+reports under ``results/`` that they cite (a result's provenance: the report named, or the one beside a named file or
+in a named folder). Commands: the lines of fenced code blocks and the inline ``code`` spans that start with
+``python``, ``python3``, ``torchrun`` or ``bash scripts/`` (after ``VAR=value`` prefixes; a fenced line joined with
+its ``\\`` continuations, cut at ``&&``, ``||``, ``;`` and `` | `` (a pipe between spaces: ``{a|b}`` is one word),
+its ``# comment`` and a trailing `` &`` dropped; an inline span may wrap over lines). Each is
 checked without running it:
 
 - ``python train.py ARGS`` and ``torchrun [torchrun flags] train.py ARGS`` -> ``hexnewton.apps.train.main``;
@@ -64,6 +66,25 @@ ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), ".."))
 DOCUMENTS = ["README.md", "RESULTS.md", "BENCHMARKS.md"] + sorted(
     os.path.relpath(p, ROOT) for p in glob.glob(os.path.join(ROOT, "docs", "*.md"))
 )
+
+
+def _cited_reports() -> list[str]:
+    """The reports under ``results/`` that a document cites: ``results/<what>/report.md`` itself, the report of a
+    folder ``results/<what>`` it names, or the report beside a file it names (``results/<what>/curves.csv.gz``). They
+    hold a result's provenance, so their commands are checked like the documents'."""
+    out = set()
+    for doc in DOCUMENTS:
+        with open(os.path.join(ROOT, doc)) as f:
+            text = f.read()
+        for path in re.findall(r"(?<![\w/])results/[\w./-]*\w", text):
+            folder = path if os.path.isdir(os.path.join(ROOT, path)) else os.path.dirname(path)
+            report = path if path.endswith("report.md") else os.path.join(folder, "report.md")
+            if os.path.isfile(os.path.join(ROOT, report)):
+                out.add(os.path.normpath(report))
+    return sorted(out)
+
+
+REPORTS = _cited_reports()
 PLACEHOLDERS = {"CKPT": "results/policies/cpg_rl_complex.pt", "BUNDLE": "results/controllers/cpg_rl_complex",
                 "DIR": "out", "N": "2"}  # fmt: skip
 MARK = re.compile(r"\(at\s+([0-9a-f]{7,40})\)")
@@ -95,6 +116,7 @@ def _segments(text: str) -> list[str]:
         piece = piece.strip()
         while re.match(r"^[A-Z_][A-Z0-9_]*=\S*\s", piece):
             piece = piece.split(None, 1)[1]
+        piece = piece.removesuffix(" &").rstrip()  # run in the background
         if piece.startswith(STARTS):
             out.append(piece)
     return out
@@ -274,7 +296,7 @@ def _has_history() -> bool:
     return proc.returncode == 0 and proc.stdout.strip() == "false"
 
 
-ALL = [c for doc in DOCUMENTS for c in extract(doc)]
+ALL = [c for doc in DOCUMENTS + REPORTS for c in extract(doc)]
 
 
 def test_extractor_finds_the_commands():
@@ -287,7 +309,7 @@ def test_extractor_finds_the_commands():
     assert any(c.doc == "README.md" and c.text.startswith("python train.py") for c in ALL)
 
 
-@pytest.mark.parametrize("doc", DOCUMENTS)
+@pytest.mark.parametrize("doc", DOCUMENTS + REPORTS)
 def test_documented_commands_parse(doc, tmp_path):
     failures = []
     for command in (c for c in ALL if c.doc == doc):
