@@ -266,6 +266,8 @@ def check(command: Command, tmp_dir: str) -> str | None:
             main = importlib.import_module(module).main
         except ImportError as exc:
             return f"no module {module}: {exc}"
+        except AttributeError:
+            return f"{module} is not a command line (no main)"
         err = io.StringIO()
         argparse.ArgumentParser.parse_args = _parse_then_stop
         try:
@@ -345,3 +347,120 @@ def test_cited_results_exist():
                     if not found:
                         missing.append(f"{doc}:{n}: {path}")
     assert not missing, "documents name results that are not in the repository:\n" + "\n".join(missing)
+
+
+# --- the package's docstrings: their command lines parse, every flag they quote exists -------------------------------
+
+PACKAGE = os.path.join(ROOT, "hexnewton")
+#: flags of the tools that start a command (torchrun's), not of a hexnewton parser
+TOOL_FLAGS = {"--nproc_per_node", "--nnodes", "--node_rank", "--standalone", "--rdzv_backend", "--rdzv_endpoint",
+              "--rdzv_id", "--master_addr", "--master_port"}  # fmt: skip
+#: (folder or module, flag) quoted in a docstring and not checked: hexnewton/mdp/ is rewritten on another branch
+DOCSTRING_FLAG_EXCEPTIONS = {("hexnewton/mdp/", "--stability_tilt")}
+FLAG = re.compile(r"(?<![\w-])--[A-Za-z][\w.-]*")
+
+
+def _docstrings() -> list[tuple[str, int, str]]:
+    """(path relative to the repository, line, text) of every module, class and function docstring of the package."""
+    import ast
+
+    out = []
+    for folder, _, files in os.walk(PACKAGE):
+        for f in sorted(files):
+            if f.endswith(".py"):
+                path = os.path.join(folder, f)
+                with open(path) as fh:
+                    tree = ast.parse(fh.read(), path)
+                for node in ast.walk(tree):
+                    if isinstance(node, (ast.Module, ast.ClassDef, ast.FunctionDef, ast.AsyncFunctionDef)):
+                        doc = ast.get_docstring(node, clean=False)
+                        if doc:
+                            out.append((os.path.relpath(path, ROOT), getattr(node, "lineno", 1), doc))
+    return out
+
+
+def _docstring_commands(doc: str) -> list[tuple[str, str | None]]:
+    """(command, commit of a historical one) for each command line of a docstring: its lines that start like a
+    command (joined with their ``\\`` continuations, the ``# comment`` dropped). A ``code`` span names a command
+    (``python -m hexnewton.apps.export``, ``--task T``) rather than running it: its flags are checked alone."""
+    out = []
+    lines = doc.split("\n")
+    i = 0
+    while i < len(lines):
+        text = lines[i].strip()
+        while text.endswith("\\") and i + 1 < len(lines):
+            i += 1
+            text = text[:-1].rstrip() + " " + lines[i].strip()
+        text, comment = _strip_comment(text)
+        mark = MARK.search(comment)
+        out += [(seg, mark.group(1) if mark else None) for seg in _segments(text)]
+        i += 1
+    return out
+
+
+def _parser_flags() -> set[str]:
+    """Every option string of every command line's parser (``hexnewton/apps/``, ``train.py``, ``play.py``); the
+    baselines' once per algorithm, whose presets have fields of their own."""
+    flags: set[str] = set()
+    real_parse, real_known = argparse.ArgumentParser.parse_args, argparse.ArgumentParser.parse_known_args
+
+    def parse_args(self, args=None, namespace=None):
+        flags.update(self._option_string_actions)
+        raise _Parsed(None)
+
+    def parse_known_args(self, args=None, namespace=None):
+        flags.update(self._option_string_actions)
+        return real_known(self, args, namespace)
+
+    runs = [(name[:-3], []) for name in sorted(os.listdir(os.path.join(PACKAGE, "apps")))
+            if name.endswith(".py") and name[:-3] not in ("__init__", "cli", "console")]  # fmt: skip
+    runs += [("baselines", ["--algo", algo]) for algo in ("sac", "td3", "a2c")]
+    argparse.ArgumentParser.parse_args, argparse.ArgumentParser.parse_known_args = parse_args, parse_known_args
+    try:
+        for name, argv in runs:
+            main = importlib.import_module(f"hexnewton.apps.{name}").main
+            with contextlib.suppress(_Parsed, SystemExit), contextlib.redirect_stdout(io.StringIO()), \
+                    contextlib.redirect_stderr(io.StringIO()):  # fmt: skip
+                main(list(argv))
+    finally:
+        argparse.ArgumentParser.parse_args, argparse.ArgumentParser.parse_known_args = real_parse, real_known
+    return flags
+
+
+def test_docstring_commands_parse(tmp_path):
+    """Every command line a docstring of the package shows parses like the documents' (historical ones, marked with
+    their commit, are skipped)."""
+    failures, n = [], 0
+    for path, line, doc in _docstrings():
+        for text, at in _docstring_commands(doc):
+            if at is not None:
+                continue
+            n += 1
+            reason = check(Command(path, line, text), str(tmp_path))
+            if reason is not None:
+                failures.append(f"{path}:{line}: {text}\n    {reason}")
+    assert n > 20, "too few docstring commands: the extractor is broken"
+    assert not failures, f"{len(failures)} docstring command(s) do not parse:\n" + "\n".join(failures)
+
+
+def test_docstring_flags_exist():
+    """Every ``--flag`` a docstring of the package quotes is a flag of one of the command lines' parsers (or of
+    torchrun); ``--env.<section>.<field>`` and ``--env.sim.*`` stand for the flags they start. A flag followed by a
+    commit mark, ``(at <sha>)``, is historical and skipped."""
+    flags = _parser_flags() | TOOL_FLAGS
+    assert {"--task", "--num_envs", "--checkpoint", "--controllers", "--env.sim.frame_dt"} <= flags
+    missing = []
+    for path, line, doc in _docstrings():
+        for m in FLAG.finditer(doc):
+            flag, after = m.group(0), doc[m.end() : m.end() + 1]
+            if after in "<*" and after and flag.endswith("."):  # a pattern: --env.<section>.<field>, --env.sim.*
+                if not any(f.startswith(flag) for f in flags):
+                    missing.append(f"{path}:{line}: {flag}{after}...")
+                continue
+            flag = flag.rstrip(".")
+            if flag in flags or MARK.match(doc[m.end() :].lstrip("`' ")):
+                continue
+            if any(path.startswith(where) and flag == f for where, f in DOCSTRING_FLAG_EXCEPTIONS):
+                continue
+            missing.append(f"{path}:{line}: {flag}")
+    assert not missing, "docstrings quote flags that no command line has:\n" + "\n".join(missing)
