@@ -1,9 +1,11 @@
 """Every command line the documents show parses with the current code.
 
-Documents: ``README.md``, ``RESULTS.md``, ``BENCHMARKS.md`` and ``docs/*.md``. Commands: the lines of fenced code
-blocks and the inline ``code`` spans that start with ``python``, ``python3``, ``torchrun`` or ``bash scripts/`` (after
-``VAR=value`` prefixes; a fenced line joined with its ``\\`` continuations, cut at ``&&``, ``||``, ``;`` and `` | ``
-(a pipe between spaces: ``{a|b}`` is one word), its ``# comment`` dropped; an inline span may wrap over lines). Each is
+Documents: ``README.md``, ``RESULTS.md``, ``BENCHMARKS.md`` and ``docs/*.md``, and for their commands also the
+reports under ``results/`` that they cite (a result's provenance: the report named, or the one beside a named file or
+in a named folder). Commands: the lines of fenced code blocks and the inline ``code`` spans that start with
+``python``, ``python3``, ``torchrun`` or ``bash scripts/`` (after ``VAR=value`` prefixes; a fenced line joined with
+its ``\\`` continuations, cut at ``&&``, ``||``, ``;`` and `` | `` (a pipe between spaces: ``{a|b}`` is one word),
+its ``# comment`` and a trailing `` &`` dropped; an inline span may wrap over lines). Each is
 checked without running it:
 
 - ``python train.py ARGS`` and ``torchrun [torchrun flags] train.py ARGS`` -> ``hexnewton.apps.train.main``;
@@ -64,6 +66,25 @@ ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), ".."))
 DOCUMENTS = ["README.md", "RESULTS.md", "BENCHMARKS.md"] + sorted(
     os.path.relpath(p, ROOT) for p in glob.glob(os.path.join(ROOT, "docs", "*.md"))
 )
+
+
+def _cited_reports() -> list[str]:
+    """The reports under ``results/`` that a document cites: ``results/<what>/report.md`` itself, the report of a
+    folder ``results/<what>`` it names, or the report beside a file it names (``results/<what>/curves.csv.gz``). They
+    hold a result's provenance, so their commands are checked like the documents'."""
+    out = set()
+    for doc in DOCUMENTS:
+        with open(os.path.join(ROOT, doc)) as f:
+            text = f.read()
+        for path in re.findall(r"(?<![\w/])results/[\w./-]*\w", text):
+            folder = path if os.path.isdir(os.path.join(ROOT, path)) else os.path.dirname(path)
+            report = path if path.endswith("report.md") else os.path.join(folder, "report.md")
+            if os.path.isfile(os.path.join(ROOT, report)):
+                out.add(os.path.normpath(report))
+    return sorted(out)
+
+
+REPORTS = _cited_reports()
 PLACEHOLDERS = {"CKPT": "results/policies/cpg_rl_complex.pt", "BUNDLE": "results/controllers/cpg_rl_complex",
                 "DIR": "out", "N": "2"}  # fmt: skip
 MARK = re.compile(r"\(at\s+([0-9a-f]{7,40})\)")
@@ -95,6 +116,7 @@ def _segments(text: str) -> list[str]:
         piece = piece.strip()
         while re.match(r"^[A-Z_][A-Z0-9_]*=\S*\s", piece):
             piece = piece.split(None, 1)[1]
+        piece = piece.removesuffix(" &").rstrip()  # run in the background
         if piece.startswith(STARTS):
             out.append(piece)
     return out
@@ -244,6 +266,8 @@ def check(command: Command, tmp_dir: str) -> str | None:
             main = importlib.import_module(module).main
         except ImportError as exc:
             return f"no module {module}: {exc}"
+        except AttributeError:
+            return f"{module} is not a command line (no main)"
         err = io.StringIO()
         argparse.ArgumentParser.parse_args = _parse_then_stop
         try:
@@ -274,7 +298,7 @@ def _has_history() -> bool:
     return proc.returncode == 0 and proc.stdout.strip() == "false"
 
 
-ALL = [c for doc in DOCUMENTS for c in extract(doc)]
+ALL = [c for doc in DOCUMENTS + REPORTS for c in extract(doc)]
 
 
 def test_extractor_finds_the_commands():
@@ -287,7 +311,7 @@ def test_extractor_finds_the_commands():
     assert any(c.doc == "README.md" and c.text.startswith("python train.py") for c in ALL)
 
 
-@pytest.mark.parametrize("doc", DOCUMENTS)
+@pytest.mark.parametrize("doc", DOCUMENTS + REPORTS)
 def test_documented_commands_parse(doc, tmp_path):
     failures = []
     for command in (c for c in ALL if c.doc == doc):
@@ -323,3 +347,116 @@ def test_cited_results_exist():
                     if not found:
                         missing.append(f"{doc}:{n}: {path}")
     assert not missing, "documents name results that are not in the repository:\n" + "\n".join(missing)
+
+
+# --- the package's docstrings: their command lines parse, every flag they quote exists -------------------------------
+
+PACKAGE = os.path.join(ROOT, "hexnewton")
+#: flags of the tools that start a command (torchrun's), not of a hexnewton parser
+TOOL_FLAGS = {"--nproc_per_node", "--nnodes", "--node_rank", "--standalone", "--rdzv_backend", "--rdzv_endpoint",
+              "--rdzv_id", "--master_addr", "--master_port"}  # fmt: skip
+FLAG = re.compile(r"(?<![\w-])--[A-Za-z][\w.-]*")
+
+
+def _docstrings() -> list[tuple[str, int, str]]:
+    """(path relative to the repository, line, text) of every module, class and function docstring of the package."""
+    import ast
+
+    out = []
+    for folder, _, files in os.walk(PACKAGE):
+        for f in sorted(files):
+            if f.endswith(".py"):
+                path = os.path.join(folder, f)
+                with open(path) as fh:
+                    tree = ast.parse(fh.read(), path)
+                for node in ast.walk(tree):
+                    if isinstance(node, (ast.Module, ast.ClassDef, ast.FunctionDef, ast.AsyncFunctionDef)):
+                        doc = ast.get_docstring(node, clean=False)
+                        if doc:
+                            out.append((os.path.relpath(path, ROOT), getattr(node, "lineno", 1), doc))
+    return out
+
+
+def _docstring_commands(doc: str) -> list[tuple[str, str | None]]:
+    """(command, commit of a historical one) for each command line of a docstring: its lines that start like a
+    command (joined with their ``\\`` continuations, the ``# comment`` dropped). A ``code`` span names a command
+    (``python -m hexnewton.apps.export``, ``--task T``) rather than running it: its flags are checked alone."""
+    out = []
+    lines = doc.split("\n")
+    i = 0
+    while i < len(lines):
+        text = lines[i].strip()
+        while text.endswith("\\") and i + 1 < len(lines):
+            i += 1
+            text = text[:-1].rstrip() + " " + lines[i].strip()
+        text, comment = _strip_comment(text)
+        mark = MARK.search(comment)
+        out += [(seg, mark.group(1) if mark else None) for seg in _segments(text)]
+        i += 1
+    return out
+
+
+def _parser_flags() -> set[str]:
+    """Every option string of every command line's parser (``hexnewton/apps/``, ``train.py``, ``play.py``); the
+    baselines' once per algorithm, whose presets have fields of their own."""
+    flags: set[str] = set()
+    real_parse, real_known = argparse.ArgumentParser.parse_args, argparse.ArgumentParser.parse_known_args
+
+    def parse_args(self, args=None, namespace=None):
+        flags.update(self._option_string_actions)
+        raise _Parsed(None)
+
+    def parse_known_args(self, args=None, namespace=None):
+        flags.update(self._option_string_actions)
+        return real_known(self, args, namespace)
+
+    runs = [(name[:-3], []) for name in sorted(os.listdir(os.path.join(PACKAGE, "apps")))
+            if name.endswith(".py") and name[:-3] not in ("__init__", "cli", "console")]  # fmt: skip
+    runs += [("baselines", ["--algo", algo]) for algo in ("sac", "td3", "a2c")]
+    argparse.ArgumentParser.parse_args, argparse.ArgumentParser.parse_known_args = parse_args, parse_known_args
+    try:
+        for name, argv in runs:
+            main = importlib.import_module(f"hexnewton.apps.{name}").main
+            with contextlib.suppress(_Parsed, SystemExit), contextlib.redirect_stdout(io.StringIO()), \
+                    contextlib.redirect_stderr(io.StringIO()):  # fmt: skip
+                main(list(argv))
+    finally:
+        argparse.ArgumentParser.parse_args, argparse.ArgumentParser.parse_known_args = real_parse, real_known
+    return flags
+
+
+def test_docstring_commands_parse(tmp_path):
+    """Every command line a docstring of the package shows parses like the documents' (historical ones, marked with
+    their commit, are skipped)."""
+    failures, n = [], 0
+    for path, line, doc in _docstrings():
+        for text, at in _docstring_commands(doc):
+            if at is not None:
+                continue
+            n += 1
+            reason = check(Command(path, line, text), str(tmp_path))
+            if reason is not None:
+                failures.append(f"{path}:{line}: {text}\n    {reason}")
+    assert n > 20, "too few docstring commands: the extractor is broken"
+    assert not failures, f"{len(failures)} docstring command(s) do not parse:\n" + "\n".join(failures)
+
+
+def test_docstring_flags_exist():
+    """Every ``--flag`` a docstring of the package quotes is a flag of one of the command lines' parsers (or of
+    torchrun); ``--env.<section>.<field>`` and ``--env.sim.*`` stand for the flags they start. A flag followed by a
+    commit mark, ``(at <sha>)``, is historical and skipped."""
+    flags = _parser_flags() | TOOL_FLAGS
+    assert {"--task", "--num_envs", "--checkpoint", "--controllers", "--env.sim.frame_dt"} <= flags
+    missing = []
+    for path, line, doc in _docstrings():
+        for m in FLAG.finditer(doc):
+            flag, after = m.group(0), doc[m.end() : m.end() + 1]
+            if after in "<*" and after and flag.endswith("."):  # a pattern: --env.<section>.<field>, --env.sim.*
+                if not any(f.startswith(flag) for f in flags):
+                    missing.append(f"{path}:{line}: {flag}{after}...")
+                continue
+            flag = flag.rstrip(".")
+            if flag in flags or MARK.match(doc[m.end() :].lstrip("`' ")):
+                continue
+            missing.append(f"{path}:{line}: {flag}")
+    assert not missing, "docstrings quote flags that no command line has:\n" + "\n".join(missing)

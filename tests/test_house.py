@@ -391,3 +391,35 @@ def test_one_control_step_passes_the_files_the_readme_names():
     files = {next((p for p in named if p.endswith("/") and f.startswith(p)), f) for f in files}
     assert files == named and len(files) <= 5, (sorted(files), sorted(named))
     assert np.isfinite(env.obs.numpy()).all()
+
+
+def test_results_holds_folders_only():
+    """``results/`` holds one folder per result (each with its report), no loose files at its root."""
+    results = os.path.join(ROOT, "results")
+    loose = sorted(f for f in os.listdir(results) if os.path.isfile(os.path.join(results, f)))
+    assert not loose, f"files at results/'s root (each belongs in its result's folder): {loose}"
+
+
+#: the README's longest length, in lines: what it is, set-up, quick start, tasks, layout, links (the evidence lives in
+#: RESULTS.md, BENCHMARKS.md and docs/)
+MAX_README_LINES = 130
+#: the longest summary RESULTS.md and BENCHMARKS.md open with, in lines
+MAX_SUMMARY_LINES = 60
+
+
+def test_readme_is_short():
+    with open(os.path.join(ROOT, "README.md")) as f:
+        lines = f.read().splitlines()
+    assert len(lines) <= MAX_README_LINES, f"README.md has {len(lines)} lines (at most {MAX_README_LINES})"
+
+
+@pytest.mark.parametrize("doc", ["RESULTS.md", "BENCHMARKS.md"])
+def test_results_and_benchmarks_open_with_a_short_summary(doc):
+    """The document's summary is everything from its top to the first ``## `` heading after ``## Summary``, which is
+    its first ``## `` heading: the headline numbers with links down into the evidence below."""
+    with open(os.path.join(ROOT, doc)) as f:
+        lines = f.read().splitlines()
+    headings = [n for n, line in enumerate(lines) if line.startswith("## ")]
+    assert headings and lines[headings[0]] == "## Summary", f"{doc}'s first ## heading is not '## Summary'"
+    end = headings[1] if len(headings) > 1 else len(lines)
+    assert end <= MAX_SUMMARY_LINES, f"{doc}'s summary (its top to line {end + 1}) has {end} lines"

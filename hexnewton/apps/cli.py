@@ -44,11 +44,13 @@ def check_writable(path: str, ext: str) -> None:
 
 
 def check_new_dir(path: str) -> None:
-    """Fail before any simulation unless ``path`` is a folder that does not exist yet and can be made (nothing is
-    overwritten)."""
+    """Fail before any simulation unless ``path`` is a folder that does not exist yet and can be made with its
+    missing parents (``os.makedirs``; nothing is overwritten)."""
     if os.path.exists(path):
         raise ValueError(f"{path} exists: choose a new --out (nothing is overwritten)")
     parent = os.path.dirname(os.path.abspath(path))
+    while not os.path.lexists(parent) and os.path.dirname(parent) != parent:  # made with the folder
+        parent = os.path.dirname(parent)
     if not os.path.isdir(parent) or not os.access(parent, os.W_OK):
         raise ValueError(f"cannot create {path}: {parent} is not a writable directory")
 

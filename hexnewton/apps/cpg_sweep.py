@@ -1,7 +1,7 @@
 """The fair fixed baseline: a sweep of fixed CPG gaits, so that CPG_RL is compared with the best fixed gait.
 
     python -m hexnewton.apps.cpg_sweep --terrains rugged stepped complex --rounds 32 --out results/cpg_sweep \\
-        --frame_dt 0.02 --substeps 4
+        --env.sim.frame_dt 0.02 --env.sim.substeps 4
 
 Every gait of the grid (omega x A1 x A2 x A3, the same amplitude on every leg) walks ``--rounds`` rounds on each
 terrain, all gaits of a terrain at once (one robot per gait and round, one env batch), with the evaluation's

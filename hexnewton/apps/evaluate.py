@@ -255,6 +255,12 @@ def evaluator(args, checkpoints: dict[str, str], env_overrides: dict, fixed_phys
     return evaluate_one
 
 
+def failures(summary: dict) -> str:
+    """The rounds that ended in a fall and those that ended off the course, as percentages of the rounds."""
+    off = summary["ended"].get("off_course", 0) / summary["rounds"] if summary["rounds"] else None
+    return f"falls {percent(summary['fall_rate'])}  off course {percent(off)}"
+
+
 def evaluate_terrains(args, evaluate_one, distances: tuple[float, ...], out: str) -> dict[str, dict[str, dict]]:
     """Every controller on every terrain: one line each, the terrain's figures in ``out`` (Figs. 6-8; Fig. 5b for the
     first terrain). Returns {terrain: {controller: summary}}."""
@@ -267,7 +273,7 @@ def evaluate_terrains(args, evaluate_one, distances: tuple[float, ...], out: str
             episodes[ctrl], metrics[ctrl] = ep, m
             print(f"{terrain:8s} {LABELS[ctrl]:8s} " + "  ".join(f"{d:g} m {percent(s[f'success_{d:g}m'])}"
                                                                  for d in distances)
-                  + f"  ({s['rounds']} rounds, {len(ep.done)} steps)", flush=True)  # fmt: skip
+                  + f"  {failures(s)}  ({s['rounds']} rounds, {len(ep.done)} steps)", flush=True)  # fmt: skip
         # figures now, so that only one terrain's trajectories are held at a time (1000 rounds x 7000 steps)
         plot_terrain(os.path.join(out, f"fig_{terrain}.png"), terrain, episodes, metrics)
         if terrain == args.terrains[0] and any(not np.isnan(ep.params).all() for ep in episodes.values()):
@@ -287,7 +293,7 @@ def evaluate_perturbations(args, evaluate_one, distances: tuple[float, ...]) -> 
                 robustness.setdefault(name, {}).setdefault(ctrl, {})[terrain] = s
                 print(f"[{name}] {terrain:8s} {LABELS[ctrl]:8s} " + "  ".join(
                     f"{d:g} m {percent(s[f'success_{d:g}m'])}" for d in distances)
-                    + f"  falls {s['ended'].get('fell', 0)}", flush=True)  # fmt: skip
+                    + f"  {failures(s)}", flush=True)  # fmt: skip
     return robustness
 
 

@@ -32,7 +32,7 @@ PATH.mp4`` writes what ViewerGL renders, captioned with the task and the time; `
 page at ``--host``:``--port`` (127.0.0.1:8080: this machine only) in real time (x ``--video_speed``) until ``--steps``
 end, ``--out PATH.viser`` also records it for playback in the browser; ``usd``, ``rerun`` and ``file`` write
 ``--out PATH`` (``.usd``, ``.rrd``, ``.json``/``.bin``) for offline inspection and replay; ``null`` draws nothing (the
-default without a display). They show the first terrain's rollout, the first ``--robots_shown`` robots.
+default without a display, which play.py says in one line). They show the first terrain's rollout, the first ``--robots_shown`` robots.
 """
 
 from __future__ import annotations
@@ -109,6 +109,9 @@ def check_outputs(args) -> None:
             check_writable(path, ext)
     from hexnewton.physics.viewer import check_viewer_args, default_viewer, has_display
 
+    if args.viewer is None and default_viewer(args.video, args.out) == "null":
+        print("no display: nothing is drawn; --viewer viser serves the robots to a browser, --video PATH.mp4 renders "
+              "them off-screen (--viewer null for statistics alone)")
     args.viewer = args.viewer or default_viewer(args.video, args.out)
     args.headless = args.headless or (args.video is not None and not has_display())
     check_viewer_args(args.viewer, args.headless, args.video, args.out, args.host, args.port)

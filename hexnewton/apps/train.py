@@ -281,7 +281,7 @@ def finish(args, runner, cfg, agent, rank, run_dir: str, views, train_s: float, 
               "env_steps": iterations * num_envs * agent.num_steps_per_env * rank.world_size,
               "wall_s_to_result": None}  # fmt: skip
     stats = runner.env.episode_stats()
-    print("last episodes: " + ", ".join(f"{k} {v:.3f}" for k, v in stats.items()))
+    print("last episodes: " + ", ".join(f"{k} {v}" if isinstance(v, int) else f"{k} {v:.3f}" for k, v in stats.items()))
     if agent.validation_rounds:
         final, timing["validation"] = choose_on_validation(runner, cfg, agent, run_dir, first_it)
     else:

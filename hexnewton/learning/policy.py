@@ -63,7 +63,7 @@ def fixed_cpg_actions(env, gait: str = "default", params: np.ndarray | None = No
 
 def policy_checkpoint(path: str) -> tuple[dict, str]:
     """Any trained policy's checkpoint (an rsl-rl one from ``train.py`` or a skrl baseline's from ``python -m
-    hexnewton.learning.baselines``) read once, as data only, with the controller that runs it by default (``cpg_rl``,
+    hexnewton.apps.baselines``) read once, as data only, with the controller that runs it by default (``cpg_rl``,
     ``joint``, ``sac_cpg``, ``td3_cpg``, ``a2c_cpg``)."""
     ckpt = read_checkpoint(path)
     if is_baseline_checkpoint(ckpt):

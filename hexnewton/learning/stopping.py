@@ -12,8 +12,8 @@ STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM)
 
 
 class TrainingStopped(Exception):
-    """Raised by the signal handler (Ctrl-C, SIGTERM) or at the end of an iteration (--max_minutes,
-    --target_success) to end training cleanly."""
+    """Raised by the signal handler (Ctrl-C, SIGTERM) or at the end of an iteration (``train.py
+    --agent.max_minutes`` / ``--agent.target_success``, the baselines' ``--max_minutes``) to end training cleanly."""
 
 
 def raise_stopped(signum, frame) -> None:
