@@ -294,6 +294,9 @@ def joint_limits_list(robot: RobotConfig) -> list:
 RISES = (0.04, 0.06, 0.07, 0.08, 0.09, 0.10, 0.12, 0.14)
 TREADS = (0.10, 0.12, 0.15, 0.18, 0.20, 0.22, 0.25)
 BLOCKS = (0.04, 0.06, 0.08, 0.09, 0.10)
+#: a target whose worst standing tilt lies within this many degrees of the stability fine names the fine as its nearest
+#: limit (the body's dynamic pitch comes on top of the standing one)
+TIGHT_DEG = 10.0
 #: the A2 values of the lift-against-A2 table (the default range's, 0-1.3)
 A2_VALUES = (0.0, 0.3, 0.6, 0.9, 1.1, 1.3)
 
@@ -455,12 +458,42 @@ def verdicts(res: dict) -> list[dict]:
                    f"levelled), mean {row['pitch_mean_deg']:.1f}")  # fmt: skip
         v = {"target": name, "robot": robot, "cpg": cpg, "fine": tilt < fine, "fall": tilt < fall,
              "fine_margin_deg": math.degrees(fine - tilt), "reasons": list(why)}
+        v["gap"] = ("the robot's" if not robot else "the CPG's" if not cpg else "the task's" if not (v["fine"] and
+                    v["fall"]) else "the controller's")  # fmt: skip
+        if v["gap"] == "the controller's" and v["fine_margin_deg"] < TIGHT_DEG:
+            v["gap"] += f", with the task's stability fine the nearest limit (within {TIGHT_DEG:g} deg of the pitch)"
         v["line"] = (f"{name}: robot's reach {_yes(robot)} ({why[0]}); CPG's reach {_yes(cpg)} ({why[1]}); below the "
                      f"stability fine ({math.degrees(fine):.0f} deg) {_yes(v['fine'])}, below the fall "
                      f"({math.degrees(fall):.0f} deg) {_yes(v['fall'])} ({why[2]}, {v['fine_margin_deg']:+.1f} deg "
-                     "to the fine)")  # fmt: skip
+                     f"to the fine): a shortfall here is {v['gap']}")  # fmt: skip
         out.append(v)
     return out
+
+
+def notes(res: dict) -> list[str]:
+    """Each target against the trained course (6 cm rises, 25 cm treads, blocks of 0-6 cm): what changes."""
+    st = {(r["rise_m"], r["tread_m"]): r for r in res["stairs"]}
+    bl = {r["height_m"]: r for r in res["blocks"]}
+    base, r8, t20, t18 = st[(0.06, 0.25)], st[(0.08, 0.25)], st[(0.06, 0.20)], st[(0.06, 0.18)]
+    g, c, m = res["robot"], res["cpg"], res["margin_m"]
+    crouch = res["posture"]["height_m"][0] - g["torso_size_m"][2] / 2
+    return [
+        f"8 cm rise against 6 cm (25 cm treads): the blind gait clears {100 * r8['cleared_per_riser']:.0f} % of the "
+        f"risers against {100 * base['cleared_per_riser']:.0f} %; the worst standing pitch rises from "
+        f"{base['pitch_worst_deg']:.1f} to {r8['pitch_worst_deg']:.1f} deg (the fine at "
+        f"{math.degrees(res['task']['stability_tilt_rad']):.0f}), the tilt shaping from "
+        f"{base['tilt_cost_per_step']:.1f} to {r8['tilt_cost_per_step']:.1f} per step. The CPG lifts a foot "
+        f"{c['lift_max_m']:.3f} m: the rise ceiling with the {m:g} m margin is {c['lift_max_m'] - m:.3f} m.",
+        f"20 cm treads against 25 cm (6 cm rises): the same worst pitch ({t20['pitch_worst_deg']:.1f} deg, two "
+        f"risers under the {g['span_x_m']:.3f} m span) at {100 * t20['share_at_worst']:.0f} % of the positions "
+        f"against {100 * base['share_at_worst']:.0f} %, {t20['risers_to_goal']} risers before the "
+        f"{res['goal_m']:g} m mark against {base['risers_to_goal']}; at 18 cm {100 * t18['share_at_worst']:.0f} % and "
+        f"{t18['risers_to_goal']} risers, and a side's three feet ({g['side_spacing_x_m'][0]:.3f} m apart) meet the "
+        "risers at nearly the same place.",
+        f"8 cm blocks against 6 cm: the lowest A2 still lifts a foot {c['lift_at_a2_min_m'] - 0.08 - m:+.3f} m over "
+        f"the tallest block and the margin; the torso clears a full block by {bl[0.08]['torso_clearance_m']:.3f} m "
+        f"standing, {crouch - 0.08:.3f} m crouched (P_h at its top); p99.9 tilt {bl[0.08]['pitch_p999_deg']:.1f} deg.",
+    ]  # fmt: skip
 
 
 def ceilings(cfg, margin: float = 0.01, n: int = 5, dt: float = 0.002) -> dict:
@@ -485,4 +518,5 @@ def ceilings(cfg, margin: float = 0.01, n: int = 5, dt: float = 0.002) -> dict:
            "tread_limits": tread_limits(robot, level["pitch_deg"], task["stability_tilt_rad"]),
            "blocks": blocks_table(robot, reach, margin), "terrain": terrain_limits(cfg.terrain, goal)}  # fmt: skip
     res["verdicts"] = verdicts(res)
+    res["notes"] = notes(res)
     return res

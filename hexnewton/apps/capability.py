@@ -131,6 +131,7 @@ def report_markdown(res: dict) -> str:
     lines += _table(["quantity", "value", "how computed", "what it bounds"], [list(r) for r in summary_rows(res)])
     lines += ["", "## Verdicts (the issue's targets: >= 95 % at 8 cm rise, 20 cm treads, 8 cm blocks)", ""]
     lines += [f"- {v['line']}" for v in res["verdicts"]]
+    lines += ["", "Against the trained course:", "", *(f"- {n}" for n in res["notes"])]
     lines += ["", *detail_tables(res)]
     return "\n".join(lines) + "\n"
 

@@ -120,14 +120,21 @@ def test_ceilings_and_verdicts(small):
     lines = {v["target"]: v for v in small["verdicts"]}
     assert set(lines) == {t[0] for t in cap.TARGETS}
     assert all(v["robot"] and v["cpg"] and v["fine"] and v["fall"] for v in lines.values())
+    assert [v["gap"].split(",")[0] for v in lines.values()] == ["the controller's"] * 3
+    assert "stability fine the nearest limit" in lines["8 cm rise"]["gap"]  # 24.6 deg standing, 5.4 below the fine
+    assert "nearest" not in lines["20 cm treads"]["gap"] + lines["8 cm blocks"]["gap"]
     # the worst standing pitch of 8 cm x 25 cm stairs: two risers under the 0.35 m span
     assert lines["8 cm rise"]["fine_margin_deg"] == pytest.approx(30.0 - math.degrees(math.atan(0.16 / 0.3491)),
                                                                   abs=0.1)
     # a stricter tilt limit turns the stairs' verdicts, and a taller target the CPG's
     strict = {**small, "task": {**small["task"], "stability_tilt_rad": math.radians(20.0)}}
-    assert [v["fine"] for v in cap.verdicts(strict)] == [False, True, True]
+    assert [v["gap"].split(",")[0] for v in cap.verdicts(strict)] == ["the task's", "the controller's",
+                                                                       "the controller's"]  # fmt: skip
     low = {**small, "cpg": {**small["cpg"], "lift_at_a2_min_m": 0.085}}
-    assert [v["cpg"] for v in cap.verdicts(low)] == [True, True, False]
+    assert [v["gap"].split(",")[0] for v in cap.verdicts(low)] == ["the controller's", "the controller's",
+                                                                    "the CPG's"]  # fmt: skip
+    short = {**small, "robot_lift_m": 0.05}
+    assert [v["gap"] for v in cap.verdicts(short)] == ["the robot's"] * 3
 
 
 def test_tread_limits_follow_the_span():
@@ -148,7 +155,7 @@ def test_command_line_writes_the_report(tmp_path, monkeypatch, small):
     report = (out / "report.md").read_text()
     assert res["meta"]["command"].startswith("python -m hexnewton.apps.capability --out")
     assert res["meta"]["command"] in report
-    assert all(v["line"] in report for v in res["verdicts"])
+    assert all(v["line"] in report for v in res["verdicts"]) and all(n in report for n in res["notes"])
 
 
 def test_bad_input_is_one_clear_error(tmp_path, capsys):
