@@ -18,6 +18,9 @@ body is a rigid frame over its feet, and the ground is the terrain generator's o
   foot radius of a riser's line (a stubbed riser or a foot on the nose) fails, anything else is a clean foothold.
 - Body tilt on the terrain (:func:`tripod_tilt`): the plane through a tripod's three standing feet on the generated
   grid (each foot on the highest cell under its sphere), at body positions along the course.
+- Verdicts (:func:`verdicts`): per target of :data:`TARGETS`, whether it lies within the robot's reach (its joint
+  limits), the CPG's (the policy's parameter ranges) and the task's tilt limits (the stability fine, the fall), and so
+  whose limit a shortfall there is.
 """
 
 from __future__ import annotations
@@ -30,7 +33,7 @@ import numpy as np
 from hexnewton.config import LEG_NAMES, LEG_OSCILLATOR, CPGConfig, RobotConfig, TerrainConfig
 from hexnewton.physics.reference import hopf_cpg_reference, initial_cpg_state, mapping_reference
 from hexnewton.physics.robot.geometry import hip_mount, joint_limits, leg_bounds, leg_yaw, stand_height
-from hexnewton.physics.terrain.heightmap import build_height_grid
+from hexnewton.physics.terrain.heightmap import build_height_grid, complex_step_count, validate_config
 from hexnewton.physics.terrain.query import max_terrain_height_np
 
 #: the issue's targets: (name, what is swept, value [m], the course it is walked on, the rest of that course)
@@ -39,8 +42,6 @@ TARGETS = (("8 cm rise", "step_rise", 0.08, "stepped", dict(step_depth=0.25)),
            ("8 cm blocks", "block_height_max", 0.08, "rugged", {}))  # fmt: skip
 #: tripods: the legs on oscillator 0 and on oscillator 1
 TRIPODS = tuple(tuple(i for i, o in enumerate(LEG_OSCILLATOR) if o == k) for k in (0, 1))
-#: front, middle and rear rows (the right legs; the left mirror them)
-ROWS = {"front": 0, "middle": 1, "rear": 2}
 
 
 # ------------------------------------------------------------------------------------------------------------------
@@ -398,8 +399,6 @@ def robot_lift(robot: RobotConfig, n: int = 181) -> float:
 def terrain_limits(terrain: TerrainConfig, goal: float) -> dict:
     """What the generator builds: treads on its grid (a tread off it is one error line), any rise >= 0, the stairs
     a walk to ``goal`` metres meets and the complex course's stair count per tread, the block lattice."""
-    from hexnewton.physics.terrain.heightmap import complex_step_count, validate_config
-
     def message(**fields):
         try:
             validate_config(replace(terrain, name="stepped", levels=0, **fields))
@@ -451,7 +450,8 @@ def verdicts(res: dict) -> list[dict]:
             robot = res["robot_lift_m"] - margin >= rise and depth > 2 * g["foot_radius_m"]
             cpg = reach["lift_max_m"] - margin >= rise and row["cleared_per_riser"] > 0
             tilt = math.radians(row["pitch_worst_deg"])
-            why = (f"foot lift {res['robot_lift_m']:.3f} m, tread {depth:g} m against a {2 * g['foot_radius_m']:g} m foot",
+            foot = 2 * g["foot_radius_m"]
+            why = (f"foot lift {res['robot_lift_m']:.3f} m, tread {depth:g} m against a {foot:g} m foot",
                    f"peak lift {reach['lift_max_m']:.3f} m; a blind gait clears {100 * row['cleared_per_riser']:.0f} "
                    f"% of the risers it meets",
                    f"worst standing pitch {row['pitch_worst_deg']:.1f} deg ({row['pitch_worst_levelled_deg']:.1f} "

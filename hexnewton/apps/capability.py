@@ -113,7 +113,8 @@ def detail_tables(res: dict) -> list[str]:
     lines += ["", "## The terrain generator", "",
               f"- Treads lie on the {tr['query_resolution_m']:g} m grid: a 0.175 m tread is refused with "
               f"`{tr['tread_off_grid_error']}`.",
-              f"- Rises have no upper bound: a 0.5 m rise is {'built' if tr['rise_0_5m_error'] is None else 'refused'}.",
+              f"- Rises have no upper bound: a 0.5 m rise is "
+              f"{'built' if tr['rise_0_5m_error'] is None else 'refused'}.",
               f"- Blocks are {tr['block_size_m']:g} m squares, narrower than the {2 * res['robot']['foot_radius_m']:g} "
               "m foot: a foot always rests on the highest of the blocks under it.", ""]  # fmt: skip
     lines += _table(["tread [m]", "flight ends at [m]", "risers before the mark", "stairs on the complex course"],
