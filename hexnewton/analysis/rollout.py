@@ -225,8 +225,8 @@ class RoundLog:
     every round; in CPG mode round 0's parameters, every round's parameter change and, on the complex course (the
     blocks end at ``split_x``), the mean parameters on the blocks and on the stairs."""
 
-    def __init__(self, cfg: HexConfig, rounds: int, mode: str, split_x: float | None = None):
-        self.rounds, self.mode, self.split_x = rounds, mode, split_x
+    def __init__(self, cfg: HexConfig, rounds: int, action_mode: str, split_x: float | None = None):
+        self.rounds, self.action_mode, self.split_x = rounds, action_mode, split_x
         self.lo, self.hi = (np.asarray(b, np.float64) for b in cfg.cpg.param_ranges())
         npar = cfg.cpg.num_params
         self.seg_sum, self.seg_n = {"blocks": np.zeros(npar), "stairs": np.zeros(npar)}, {"blocks": 0, "stairs": 0}
@@ -250,7 +250,7 @@ class RoundLog:
         self.status.append(st.copy())
         qd = env.last_qd.numpy()
         self.ang_rate.append(quat_rotate_inv_np(q[:, 3:7], qd[:, 3:6])[:, :2].astype(np.float32))
-        if self.mode == "cpg":
+        if self.action_mode == "cpg":
             pr, tg = env.last_params.numpy(), env.controller.params_target.numpy()
             self.params.append(pr[0].copy())
             self.dparam.append(self.change(pr, self.prev_p))
@@ -291,22 +291,22 @@ def run_rounds(controller: str, checkpoint: str | None, terrain: str, rounds: in
     from hexnewton.mdp.env import make_env
     from hexnewton.tasks import course
 
-    mode = CONTROLLERS[controller]
+    action_mode = CONTROLLERS[controller]
     ckpt = read_controller_checkpoint(controller, checkpoint)
     trained = trained_config(ckpt) if ckpt is not None else HexConfig()
     overrides = dict(overrides or {})
-    if "cpg.posture_reflex" in overrides and mode == "cpg":
+    if "cpg.posture_reflex" in overrides and action_mode == "cpg":
         if controller not in FIXED and not trained.cpg.posture:
             raise ValueError(f"{checkpoint} has no body posture: a posture_reflex needs a policy trained with it")
         overrides["cpg.posture"] = True
     cfg = course(terrain, trained, overrides, rounds, device, seed, seed=seed + START_SEED_OFFSET)
-    env = make_env(cfg, mode)
+    env = make_env(cfg, action_mode)
     policy = controller_policy(env, controller, checkpoint, ckpt, stochastic, expected, fixed_params)
     if stochastic:
         import torch
 
         torch.manual_seed(seed + START_SEED_OFFSET)
-    log = RoundLog(cfg, rounds, mode, cfg.terrain.complex_rugged_length if terrain == "complex" else None)
+    log = RoundLog(cfg, rounds, action_mode, cfg.terrain.complex_rugged_length if terrain == "complex" else None)
     for _, st, q, p, r in stepped(env, policy, max_steps, f"{LABELS[controller]} on {terrain}", progress):
         log.add(env, st, q, p, r)
         if log.finished.all():

@@ -243,10 +243,10 @@ def evaluator(args, checkpoints: dict[str, str], env_overrides: dict, fixed_phys
 
     def evaluate_one(ctrl: str, terrain: str, perturbed: dict | None = None):
         ck = None if ctrl in FIXED else checkpoint_for(checkpoints, ctrl, terrain)
-        gait = gait_params(*args.swept_gait) if ctrl == "cpg_swept" and args.swept_gait else None
+        fixed_params = gait_params(*args.swept_gait) if ctrl == "cpg_swept" and args.swept_gait else None
         overrides = {**env_overrides, **(fixed_physics if ctrl in FIXED else {}), **(perturbed or {})}
         ep = run_rounds(ctrl, ck, terrain, args.rounds, device, args.max_steps, progress, args.seed, overrides,
-                        args.stochastic, args.expected, gait)  # fmt: skip
+                        args.stochastic, args.expected, fixed_params)  # fmt: skip
         m = round_metrics(ep.pos, ep.rpy, ep.done, ep.status, ep.dt, distances)
         s = summarize(m, ep.rpy, distances)
         s.update(gait_quality(m, ep.ang_rate, ep.dparam, ep.daction), segments=ep.segments, checkpoint=ck)

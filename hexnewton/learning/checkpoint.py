@@ -94,9 +94,9 @@ def trained_config(ckpt: dict | None) -> HexConfig:
 
 
 def check_compatible(ckpt: dict, path: str, num_obs: int, num_actions: int, action_mode: str) -> None:
-    mode = checkpoint_meta(ckpt).get("action_mode")
-    if mode is not None and mode != action_mode:
-        raise ValueError(f"{path} was trained with action mode '{mode}', not '{action_mode}'")
+    trained_mode = checkpoint_meta(ckpt).get("action_mode")
+    if trained_mode is not None and trained_mode != action_mode:
+        raise ValueError(f"{path} was trained with action mode '{trained_mode}', not '{action_mode}'")
     for key, value in ckpt["actor_state_dict"].items():
         if key.endswith("mlp.0.weight") and value.shape[1] != num_obs:
             raise ValueError(f"{path} expects {value.shape[1]} observations; this environment has {num_obs}")
