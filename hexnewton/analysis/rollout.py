@@ -251,7 +251,7 @@ class RoundLog:
         qd = env.last_qd.numpy()
         self.ang_rate.append(quat_rotate_inv_np(q[:, 3:7], qd[:, 3:6])[:, :2].astype(np.float32))
         if self.action_mode == "cpg":
-            pr, tg = env.last_params.numpy(), env.controller.params_target.numpy()
+            pr, tg = env.last_params.numpy(), env.cpg.params_target.numpy()
             self.params.append(pr[0].copy())
             self.dparam.append(self.change(pr, self.prev_p))
             self.daction.append(self.change(tg, self.prev_t))

@@ -100,7 +100,7 @@ def record(env, policy, steps: int) -> dict[str, np.ndarray]:
 
     log = None
     if env.cfg.cpg.posture and env.cfg.cpg.posture_reflex:
-        log = AttitudeLog(env.controller)
+        log = AttitudeLog(env.cpg)
         env.world.set_controller(log)
     rec = {"obs": [], "targets": [], "substep_quat": []}
     obs = env.get_observations()

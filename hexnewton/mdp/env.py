@@ -154,8 +154,8 @@ class HexapodEnv(VecEnv):
         self.max_episode_length = task.max_episode_steps
         self.device = world.device
 
-        self.controller = CPGController(world) if action_mode == "cpg" else None
-        world.set_controller(self.controller)
+        self.cpg = CPGController(world) if action_mode == "cpg" else None
+        world.set_controller(self.cpg)
 
         self._buffers()
         self._curriculum_buffers()
@@ -314,8 +314,8 @@ class HexapodEnv(VecEnv):
                   self._ring, self._cursor, self.obs, self.reward, self.done_u8, self.time_out]  # fmt: skip
         # (the draw counter stays where the trial run leaves it: the draws need only differ from step to step)
         arrays.append(self.prev_actions)
-        if self.controller is not None:
-            arrays += [self.controller.params, self.controller.params_target, self.controller.state]
+        if self.cpg is not None:
+            arrays += [self.cpg.params, self.cpg.params_target, self.cpg.state]
         if self.level is not None:
             arrays += [self.level, self.lane, self.lane_z]
         if self.randomized:
@@ -352,8 +352,8 @@ class HexapodEnv(VecEnv):
 
     def _apply_actions(self, actions: wp.array) -> None:
         """The actions to the CPG's parameters (``cpg``) or to the joint targets (``joint``)."""
-        if self.controller is not None:
-            self.controller.set_actions(actions)
+        if self.cpg is not None:
+            self.cpg.set_actions(actions)
             return
         w, t = self.world, self.cfg.task
         wp.launch(joint_actions_kernel, dim=(self.num_envs, self.num_actions),
@@ -401,9 +401,9 @@ class HexapodEnv(VecEnv):
         wp.copy(self.last_q, w.joint_q_wp)
         wp.copy(self.last_qd, w.joint_qd_wp)
         wp.copy(self.last_start, self.start)
-        if self.controller is not None:
-            wp.copy(self.last_cpg_state, self.controller.state)
-            wp.copy(self.last_params, self.controller.params)
+        if self.cpg is not None:
+            wp.copy(self.last_cpg_state, self.cpg.state)
+            wp.copy(self.last_params, self.cpg.params)
 
     def _change_lanes(self) -> None:
         """With a terrain curriculum, finished envs change lanes (levels) before they are reset onto them."""
@@ -427,11 +427,11 @@ class HexapodEnv(VecEnv):
                   device=self.device)  # fmt: skip
         wp.launch(advance_counter_kernel, dim=1, inputs=[self.counter], device=self.device)
         w.restart(m)
-        if self.controller is not None:
-            self.controller.reset(mask)
+        if self.cpg is not None:
+            self.cpg.reset(mask)
 
     def _observe(self) -> None:
-        w, ctrl = self.world, self.controller
+        w, ctrl = self.world, self.cpg
         params = ctrl.params if ctrl is not None else self.terms  # unread placeholder in joint mode
         inputs = make_struct(ObsInputs, joint_q=w.joint_q_wp, joint_qd=w.joint_qd_wp, params=params,
                              start=self.start, hf=self.height_field, task=self.cfg.task)  # fmt: skip
@@ -489,8 +489,8 @@ class HexapodEnv(VecEnv):
             raise ValueError("a training curriculum changes reward weights, not the task's reward terms")
         self.cfg = dataclasses.replace(self.cfg, reward=reward,
                                        cpg=dataclasses.replace(self.cfg.cpg, posture_reflex=posture_reflex))
-        if self.controller is not None:
-            self.controller.cfg = self.cfg.cpg
+        if self.cpg is not None:
+            self.cpg.cfg = self.cfg.cpg
         self.graph = self.world.graph = None
 
     def close(self) -> None:

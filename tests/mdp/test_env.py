@@ -217,7 +217,7 @@ def test_posture_env_acts_with_18_and_levels_with_the_reflex():
     np.testing.assert_allclose(obs["policy"][:, sl["posture"]].numpy(), 0.0, atol=1e-6)  # action 0: neutral
     q = env.world.joint_q
     q[:, 3:7] = q.new_tensor([0.0, math.sin(0.05), 0.0, math.cos(0.05)])  # pitched by 0.1 rad
-    env.controller(env.world)  # one CPG + mapping substep on this attitude
+    env.cpg(env.world)  # one CPG + mapping substep on this attitude
     knee = env.world.joint_target_wp.numpy()[:, 7:].reshape(2, 6, 3)[:, :, 1]
     stand = cfg.robot.stand_pose[1]
     # P_p' = -2 * 0.1 lowers the front knees' targets and raises the rear ones (swing lift only adds to the knee)
@@ -237,7 +237,7 @@ def test_set_shaping_recaptures_the_step_with_new_weights_and_reflex():
         outs = [env.step(act) for env in envs]
     envs[1].set_shaping(cfg.reward, 0.0)  # unchanged
     envs[2].set_shaping(dataclasses.replace(cfg.reward, w_tilt=5000.0), 2.0)
-    assert envs[2].controller.cfg.posture_reflex == 2.0 and envs[2].cfg.reward.w_tilt == 5000.0
+    assert envs[2].cpg.cfg.posture_reflex == 2.0 and envs[2].cfg.reward.w_tilt == 5000.0
     outs = [env.step(act) for env in envs]
     torch.testing.assert_close(outs[1][0]["policy"], outs[0][0]["policy"])
     torch.testing.assert_close(outs[1][1], outs[0][1])

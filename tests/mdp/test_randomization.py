@@ -96,8 +96,8 @@ def test_randomised_env_steps(pair):
     plain.step(a0)
     obs, rew, done, _ = env.step(a1)
     plain.step(a1)
-    lo, hi = env.controller.lower.numpy(), env.controller.upper.numpy()
-    target = env.controller.params_target.numpy()
+    lo, hi = env.cpg.lower.numpy(), env.cpg.upper.numpy()
+    target = env.cpg.params_target.numpy()
     np.testing.assert_allclose(target[late], scale_actions_reference(a0.numpy()[late], lo, hi), rtol=1e-6)  # 20 ms late
     np.testing.assert_allclose(target[~late], scale_actions_reference(a1.numpy()[~late], lo, hi), rtol=1e-6)
     for _ in range(10):  # a push every 5 steps (push_interval 0.1 s)
