@@ -80,11 +80,19 @@ def load_runner(env, path: str, action_mode: str, ckpt: dict | None = None):
     the checkpoint at ``path`` already read (:func:`~hexnewton.learning.checkpoint.load_checkpoint`), else it is read here."""
     from rsl_rl.runners import OnPolicyRunner
 
+    class PolicyRunner(OnPolicyRunner):
+        """A runner that only holds a policy: one process, also inside a torchrun job (rsl-rl's own set-up reads
+        torchrun's variables and would join, or start, a process group)."""
+
+        def _configure_multi_gpu(self) -> None:
+            self.gpu_world_size, self.gpu_local_rank, self.gpu_global_rank = 1, 0, 0
+            self.is_distributed, self.cfg["multi_gpu"] = False, None
+
     ckpt = load_checkpoint(path) if ckpt is None else ckpt
     check_compatible(ckpt, path, env.num_obs, env.num_actions, action_mode)
     tcfg = checkpoint_agent(ckpt).to_rsl_rl(env.num_envs)
     with contextlib.redirect_stdout(io.StringIO()):  # rsl-rl prints both networks in full
-        runner = OnPolicyRunner(env, copy.deepcopy(tcfg), log_dir=None, device=str(env._obs_t.device))
+        runner = PolicyRunner(env, copy.deepcopy(tcfg), log_dir=None, device=str(env._obs_t.device))
     # the actor alone: full training checkpoints and actor-only policy files (results/policies) both load
     load_into_runner(runner, ckpt, {"actor": True})
     return runner

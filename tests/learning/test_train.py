@@ -147,9 +147,11 @@ def test_torchrun_ranks_devices_and_seeds():
 
 def test_torchrun_two_cpu_processes_train_as_one(tmp_path):
     """``torchrun --nproc_per_node=2 train.py --device cpu``: two processes (Gloo) train two iterations with their
-    gradients averaged; their parameters agree at the end, and only rank 0 writes a run directory."""
+    gradients averaged; their parameters agree at the end, and only rank 0 writes a run directory and chooses the
+    result on validation rounds, as one process does."""
     cmd = ["torchrun", "--standalone", "--nproc_per_node=2", "train.py", "--task", "flat", "--num_envs", "4",
-           "--max_iterations", "2", "--device", "cpu", "--agent.validation_rounds", "0", "--log_dir", str(tmp_path)]  # fmt: skip
+           "--max_iterations", "2", "--device", "cpu", "--agent.validation_rounds", "2", "--agent.validation_steps", "5",
+           "--log_dir", str(tmp_path)]  # fmt: skip
     proc = subprocess.run(cmd, capture_output=True, text=True, timeout=900, cwd=ROOT)
     assert proc.returncode == 0, proc.stdout[-2000:] + proc.stderr[-3000:]
     assert "rank 0 of 2" in proc.stdout and "rank 1 of 2" in proc.stdout
@@ -157,6 +159,8 @@ def test_torchrun_two_cpu_processes_train_as_one(tmp_path):
     assert agree and float(agree.group(1)) <= 1e-6, proc.stdout[-2000:]
     runs = glob.glob(str(tmp_path / "hexnewton_flat" / "*"))
     assert len(runs) == 1 and os.path.isfile(os.path.join(runs[0], "model_1.pt"))
+    assert proc.stdout.count("deterministic validation, 2 rounds") == 1
+    assert os.path.isfile(os.path.join(runs[0], "model_result.pt"))
     from hexnewton.learning.checkpoint import checkpoint_meta, load_checkpoint
 
     assert checkpoint_meta(load_checkpoint(os.path.join(runs[0], "model_1.pt")))["world_size"] == 2
