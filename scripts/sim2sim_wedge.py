@@ -1,10 +1,12 @@
 """Wedged feet on the rugged course, counted the same way in C MuJoCo and in Newton under several collision settings
 (results/sim2sim/wedge/report.md): the shipped complex policy, deterministic action, CPU, the same lanes and rounds.
 
-    PYTHONPATH=. python scripts/sim2sim_wedge.py --robots 20 --steps 2000 --settings newton_frame newton_substep \
-        --out results/sim2sim/wedge/newton.json
-    PYTHONPATH=. python scripts/sim2sim_wedge.py --robots 20 --steps 2000 --settings mujoco \
-        --out results/sim2sim/wedge/mujoco.json
+    PYTHONPATH=. python scripts/sim2sim_wedge.py --robots 20 --steps 3000 --seed 1000 \
+        --settings newton_frame newton_substep --out results/sim2sim/wedge/newton_1000.json
+    PYTHONPATH=. python scripts/sim2sim_wedge.py --robots 20 --steps 3000 --seed 1000 --settings mujoco \
+        --out results/sim2sim/wedge/mujoco_1000.json
+    PYTHONPATH=. python scripts/sim2sim_wedge.py --combine results/sim2sim/wedge/*_100?.json \
+        --out results/sim2sim/wedge/results.json
 
 Settings: ``newton_frame`` (the policy's own physics: collision detection once per 20 ms frame, 4 substeps),
 ``newton_substep`` (detection at every 5 ms step: ``sim.frame_dt 0.005, sim.substeps 1``), ``newton_mesh`` (the whole
@@ -159,14 +161,43 @@ def mujoco_setting(robots: int, steps: int, seed: int) -> dict:
     return out
 
 
+COUNTS = ("rounds", "success", "fell", "off_course", "still_walking", "stuck", "wedged", "contact_wedged_of_stuck")
+
+
+def combine(paths: list[str]) -> dict:
+    """Per setting, the counts of the runs in ``paths`` (their JSON) summed, with each run's terrain seed."""
+    out: dict = {"runs": []}
+    for path in paths:
+        with open(path) as f:
+            run = json.load(f)
+        out["runs"].append({"file": path, "command": run["command"], "terrain_seed": run["terrain_seed"]})
+        for s in SETTINGS:
+            if s in run:
+                tot = out.setdefault(s, {k: 0 for k in COUNTS if k in run[s]})
+                for k in COUNTS:
+                    if k in tot:
+                        tot[k] += run[s][k]
+                tot.setdefault("terrain_seeds", []).append(run["terrain_seed"])
+    return out
+
+
 def main() -> None:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--robots", type=int, default=20)
     p.add_argument("--steps", type=int, default=2000, help="control steps per round (20 ms each)")
     p.add_argument("--seed", type=int, default=1000, help="terrain seed (starts: seed + 1000), as the evaluation's")
     p.add_argument("--settings", nargs="+", default=list(SETTINGS), choices=list(SETTINGS))
+    p.add_argument("--combine", nargs="+", metavar="JSON", help="sum the counts of these runs' files into --out")
     p.add_argument("--out", required=True)
     a = p.parse_args()
+    if a.combine:
+        missing = [f for f in a.combine if not os.path.isfile(f)]
+        if missing:
+            p.error(f"no such file: {missing[0]}")
+        res = {"command": "PYTHONPATH=. python scripts/sim2sim_wedge.py " + " ".join(sys.argv[1:]), **combine(a.combine)}
+        with open(a.out, "w") as f:
+            json.dump(res, f, indent=1)
+        return
     if a.robots < 1 or a.steps <= WINDOW:
         p.error(f"--robots must be >= 1 and --steps > {WINDOW} (the 10 s window)")
     res = {"command": "PYTHONPATH=. python scripts/sim2sim_wedge.py " + " ".join(sys.argv[1:]), "terrain": TERRAIN,

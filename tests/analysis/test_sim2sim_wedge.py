@@ -58,3 +58,16 @@ def test_bad_steps_is_one_line():
     p = subprocess.run([sys.executable, SCRIPT, "--steps", "100", "--out", "x.json"], capture_output=True, text=True,
                        cwd=ROOT)
     assert p.returncode == 2 and p.stderr.strip().splitlines()[-1].endswith("(the 10 s window)")
+
+
+def test_combine_sums_the_runs(tmp_path):
+    w = _script()
+    paths = []
+    for seed, wedged in ((1000, 1), (1001, 2)):
+        run = {"command": "c", "terrain_seed": seed, "mujoco": {"rounds": 20, "success": 10, "fell": 0, "off_course": 1,
+                                                                "still_walking": 9, "stuck": 3, "wedged": wedged}}
+        paths.append(str(tmp_path / f"m{seed}.json"))
+        with open(paths[-1], "w") as f:
+            f.write(__import__("json").dumps(run))
+    out = w.combine(paths)
+    assert out["mujoco"]["rounds"] == 40 and out["mujoco"]["wedged"] == 3 and out["mujoco"]["terrain_seeds"] == [1000, 1001]
