@@ -37,6 +37,8 @@ TERRAIN = "rugged"
 WINDOW = 500  # control steps (10 s at 20 ms)
 STUCK_M = 0.05  # base progress over the window below which a walking robot is stuck [m]
 HOLD_M = 0.02  # a foot's horizontal range over the window below which it is held [m]
+FOOT_RADIUS = 0.012  # RobotConfig.foot_radius [m]
+SUNK_M = 0.003  # how far a foot's bottom sits below both walls beside it for it to count as between them [m]
 SETTINGS = {
     "newton_frame": {},
     "newton_substep": {"sim.frame_dt": 0.005, "sim.substeps": 1},
@@ -45,12 +47,20 @@ SETTINGS = {
 }
 
 
+LOGS: dict = {}  # per setting, the last 10 s of its log (saved beside --out as .npz)
+
+
+def _name(overrides: dict) -> str:
+    return next(k for k, v in SETTINGS.items() if v == overrides)
+
+
 def wedge_rounds(base_x: np.ndarray, feet: np.ndarray, running: np.ndarray, heights, block: float) -> dict:
     """The stuck and wedged rounds at the end of the log. ``base_x`` (T, N) x progress, ``feet`` (T, N, F, 3) foot
     centres in the terrain frame, ``running`` (N,) still in the first episode at the end, ``heights(x, y)`` the
     terrain height (vectorised), ``block`` the block size [m]. A wall on one side of a foot along a direction: the
-    highest terrain at 0.65, 1 and 1.5 blocks from its centre that way; a foot is between walls where both sides'
-    walls are higher than its centre along x, y or a diagonal."""
+    highest terrain at 0.65, 1 and 1.5 blocks from its centre that way; a foot is between walls where its bottom
+    (centre - FOOT_RADIUS) is more than SUNK_M below both sides' walls along x, y or a diagonal (a 24 mm foot resting
+    on the edges of a 20 mm gap has its bottom 5.4 mm below them)."""
     t = base_x.shape[0]
     w = min(WINDOW, t - 1)
     stuck = running & (base_x[-1] - base_x[-1 - w] < STUCK_M)
@@ -60,7 +70,7 @@ def wedge_rounds(base_x: np.ndarray, feet: np.ndarray, running: np.ndarray, heig
     for ux, uy in ((1.0, 0.0), (0.0, 1.0), (0.7071, 0.7071), (0.7071, -0.7071)):
         side = [np.max([heights(x + s * d * block * ux, y + s * d * block * uy) for d in (0.65, 1.0, 1.5)], axis=0)
                 for s in (1.0, -1.0)]
-        between |= np.minimum(*side) > z
+        between |= np.minimum(*side) - (z - FOOT_RADIUS) > SUNK_M
     foot = held & between
     wedged = stuck & foot.any(axis=1)
     return {"stuck": np.flatnonzero(stuck).tolist(), "wedged": np.flatnonzero(wedged).tolist(),
@@ -125,6 +135,7 @@ def newton_setting(overrides: dict, robots: int, steps: int, seed: int) -> dict:
     ends, x_end, running = first_episode(base_x, feet, np.stack(sts))
     grid = env.world.terrain.grid
     wedge = wedge_rounds(base_x, feet, running, lambda x, y: terrain_height_np(grid, x, y), cfg.terrain.block_size)
+    LOGS[_name(overrides)] = {"base_x": base_x[-WINDOW - 1:], "feet": feet[-WINDOW - 1:], "running": running}
     out = summarize_rounds(ends, x_end, wedge, steps, time.perf_counter() - t0)
     out["physics"] = {"frame_dt": cfg.sim.frame_dt, "substeps": cfg.sim.substeps, "collision": cfg.terrain.collision}
     return out
@@ -156,6 +167,7 @@ def mujoco_setting(robots: int, steps: int, seed: int) -> dict:
     feet = np.stack(fs)
     ends, x_end, running = first_episode(base_x, feet, r_run["status"])
     wedge = wedge_rounds(base_x, feet, running, lambda x, y: terrain_height_np(r.grid, x, y), 0.02)
+    LOGS["mujoco"] = {"base_x": base_x[-WINDOW - 1:], "feet": feet[-WINDOW - 1:], "running": running}
     out = summarize_rounds(ends, x_end, wedge, len(fs), time.perf_counter() - t0)
     out["contact_wedged_of_stuck"] = wedged_feet(r, wedge["stuck"])
     return out
@@ -210,6 +222,8 @@ def main() -> None:
         os.makedirs(os.path.dirname(os.path.abspath(a.out)), exist_ok=True)
         with open(a.out, "w") as f:
             json.dump(res, f, indent=1)
+        np.savez_compressed(os.path.splitext(a.out)[0] + ".npz",
+                            **{f"{k}_{n}": v for k, log in LOGS.items() for n, v in log.items()})
 
 
 if __name__ == "__main__":
