@@ -1,0 +1,230 @@
+"""Wedged feet on the rugged course, counted the same way in C MuJoCo and in Newton under several collision settings
+(results/sim2sim/wedge/report.md): the shipped complex policy, deterministic action, CPU, the same lanes and rounds.
+
+    PYTHONPATH=. python scripts/sim2sim_wedge.py --robots 20 --steps 3000 --seed 1000 \
+        --settings newton_frame newton_substep --out results/sim2sim/wedge/newton_1000.json
+    PYTHONPATH=. python scripts/sim2sim_wedge.py --robots 20 --steps 3000 --seed 1000 --settings mujoco \
+        --out results/sim2sim/wedge/mujoco_1000.json
+    PYTHONPATH=. python scripts/sim2sim_wedge.py --combine results/sim2sim/wedge/*_100?.json \
+        --out results/sim2sim/wedge/results.json
+
+Settings: ``newton_frame`` (the policy's own physics: collision detection once per 20 ms frame, 4 substeps),
+``newton_substep`` (detection at every 5 ms step: ``sim.frame_dt 0.005, sim.substeps 1``), ``newton_mesh`` (the whole
+terrain as one triangle mesh, ``terrain.collision mesh``), ``mujoco`` (the bundle closed loop, every block a box).
+
+Per round (each robot's first episode, up to ``--steps`` control steps): its end (success at 3 m, fell, off course,
+still walking), x progress, stuck (still walking, less than 5 cm in the last 10 s) and wedged: stuck with a foot that
+stayed within a 2 cm square over those 10 s while its centre is lower than the terrain on both sides of it along x, y
+or a diagonal (the highest cell 1.3-3 cm away each side: the foot sits in a gap between two taller blocks). Foot centres: MuJoCo's
+foot geoms, Newton's foot spheres (body pose x shape offset); heights from the course's height grid. MuJoCo also
+reports the contact check of scripts/sim2sim_side_by_side.py (two contacts of one foot with opposing horizontal
+normals).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+import time
+
+import numpy as np
+
+POLICY = "results/policies/cpg_rl_complex.pt"
+BUNDLE = "results/controllers/cpg_rl_complex"
+TERRAIN = "rugged"
+WINDOW = 500  # control steps (10 s at 20 ms)
+STUCK_M = 0.05  # base progress over the window below which a walking robot is stuck [m]
+HOLD_M = 0.02  # a foot's horizontal range over the window below which it is held [m]
+FOOT_RADIUS = 0.012  # RobotConfig.foot_radius [m]
+SUNK_M = 0.003  # how far a foot's bottom sits below both walls beside it for it to count as between them [m]
+SETTINGS = {
+    "newton_frame": {},
+    "newton_substep": {"sim.frame_dt": 0.005, "sim.substeps": 1},
+    "newton_mesh": {"terrain.collision": "mesh"},
+    "mujoco": None,
+}
+
+
+LOGS: dict = {}  # per setting, the last 10 s of its log (saved beside --out as .npz)
+
+
+def _name(overrides: dict) -> str:
+    return next(k for k, v in SETTINGS.items() if v == overrides)
+
+
+def wedge_rounds(base_x: np.ndarray, feet: np.ndarray, running: np.ndarray, heights, block: float) -> dict:
+    """The stuck and wedged rounds at the end of the log. ``base_x`` (T, N) x progress, ``feet`` (T, N, F, 3) foot
+    centres in the terrain frame, ``running`` (N,) still in the first episode at the end, ``heights(x, y)`` the
+    terrain height (vectorised), ``block`` the block size [m]. A wall on one side of a foot along a direction: the
+    highest terrain at 0.65, 1 and 1.5 blocks from its centre that way; a foot is between walls where its bottom
+    (centre - FOOT_RADIUS) is more than SUNK_M below both sides' walls along x, y or a diagonal (a 24 mm foot resting
+    on the edges of a 20 mm gap has its bottom 5.4 mm below them)."""
+    t = base_x.shape[0]
+    w = min(WINDOW, t - 1)
+    stuck = running & (base_x[-1] - base_x[-1 - w] < STUCK_M)
+    held = np.all(np.ptp(feet[-1 - w:, ..., :2], axis=0) < HOLD_M, axis=-1)  # (N, F)
+    x, y, z = feet[-1, ..., 0], feet[-1, ..., 1], feet[-1, ..., 2]
+    between = np.zeros_like(held)
+    for ux, uy in ((1.0, 0.0), (0.0, 1.0), (0.7071, 0.7071), (0.7071, -0.7071)):
+        side = [np.max([heights(x + s * d * block * ux, y + s * d * block * uy) for d in (0.65, 1.0, 1.5)], axis=0)
+                for s in (1.0, -1.0)]
+        between |= np.minimum(*side) - (z - FOOT_RADIUS) > SUNK_M
+    foot = held & between
+    wedged = stuck & foot.any(axis=1)
+    return {"stuck": np.flatnonzero(stuck).tolist(), "wedged": np.flatnonzero(wedged).tolist(),
+            "wedged_feet": {int(k): np.flatnonzero(foot[k]).tolist() for k in np.flatnonzero(wedged)}}
+
+
+def summarize_rounds(ends: np.ndarray, x_end: np.ndarray, wedge: dict, steps: int, wall_s: float) -> dict:
+    from hexnewton.mdp.status import STATUS_NAMES
+
+    n = len(ends)
+    return {"rounds": n, "control_steps": steps, "ended": {STATUS_NAMES[c]: int((ends == c).sum()) for c in
+                                                         range(len(STATUS_NAMES)) if (ends == c).any()},
+            "success": int((ends == 3).sum()), "fell": int((ends == 1).sum()), "off_course": int((ends == 2).sum()),
+            "still_walking": int((ends == 0).sum()), "mean_x_m": round(float(np.mean(x_end)), 3),
+            "stuck": len(wedge["stuck"]), "wedged": len(wedge["wedged"]), "stuck_rounds": wedge["stuck"],
+            "wedged_rounds": wedge["wedged"], "wedged_feet": wedge["wedged_feet"], "wall_s": round(wall_s, 1)}
+
+
+def first_episode(base_x: np.ndarray, feet: np.ndarray, status: np.ndarray):
+    """Each round's end code, final x, and its arrays held at their last first-episode row after it ended."""
+    t, n = status.shape
+    ended = status != 0
+    last = np.where(ended.any(axis=0), np.argmax(ended, axis=0), t - 1)
+    ends = status[last, np.arange(n)]
+    for k in range(n):
+        base_x[last[k] + 1:, k] = base_x[last[k], k]
+        feet[last[k] + 1:, k] = feet[last[k], k]
+    return ends, base_x[last, np.arange(n)], ~ended.any(axis=0)
+
+
+def newton_setting(overrides: dict, robots: int, steps: int, seed: int) -> dict:
+    import torch
+
+    from hexnewton.analysis.rollout import CONTROLLERS, START_SEED_OFFSET, controller_policy, read_controller_checkpoint
+    from hexnewton.learning.checkpoint import trained_config
+    from hexnewton.mdp.env import make_env
+    from hexnewton.physics.terrain.query import terrain_height_np
+    from hexnewton.tasks import course
+
+    t0 = time.perf_counter()
+    ckpt = read_controller_checkpoint("cpg_rl", POLICY)
+    cfg = course(TERRAIN, trained_config(ckpt), dict(overrides), robots, "cpu", seed, seed=seed + START_SEED_OFFSET)
+    env = make_env(cfg, CONTROLLERS["cpg_rl"])
+    policy = controller_policy(env, "cpg_rl", POLICY, ckpt, False, False, None)
+    m = env.world.model
+    feet_idx = np.flatnonzero([str(s).endswith("_foot") for s in m.shape_label])
+    body = m.shape_body.numpy()[feet_idx]
+    offset = m.shape_transform.numpy()[feet_idx, :3]
+    per = len(feet_idx) // robots
+    xs, fs, sts = [], [], []
+    obs = env.get_observations()
+    with torch.inference_mode():
+        for _ in range(steps):
+            obs, _, _, _ = env.step(policy(obs))
+            bq = env.world.state_0.body_q.numpy()[body]
+            q = bq[:, 3:7]  # x y z w
+            fs.append((bq[:, :3] + _rotate(q, offset)).reshape(robots, per, 3))
+            xs.append(env.last_q.numpy()[:, 0] - env.last_start.numpy()[:, 0])
+            sts.append(env.status.numpy().copy())
+    env.world.check_contacts()
+    base_x, feet = np.stack(xs), np.stack(fs)
+    ends, x_end, running = first_episode(base_x, feet, np.stack(sts))
+    grid = env.world.terrain.grid
+    wedge = wedge_rounds(base_x, feet, running, lambda x, y: terrain_height_np(grid, x, y), cfg.terrain.block_size)
+    LOGS[_name(overrides)] = {"base_x": base_x[-WINDOW - 1:], "feet": feet[-WINDOW - 1:], "running": running}
+    out = summarize_rounds(ends, x_end, wedge, steps, time.perf_counter() - t0)
+    out["physics"] = {"frame_dt": cfg.sim.frame_dt, "substeps": cfg.sim.substeps, "collision": cfg.terrain.collision}
+    return out
+
+
+def _rotate(q: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """Rotate vectors ``v`` (K, 3) by unit quaternions ``q`` (K, 4), x y z w."""
+    u, w = q[:, :3], q[:, 3:4]
+    return v + 2.0 * np.cross(u, np.cross(u, v) + w * v)
+
+
+def mujoco_setting(robots: int, steps: int, seed: int) -> dict:
+    import mujoco
+
+    from hexnewton.analysis.sim2sim import Rounds
+    from hexnewton.physics.terrain.query import terrain_height_np
+
+    sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+    from sim2sim_side_by_side import wedged_feet
+
+    t0 = time.perf_counter()
+    r = Rounds(BUNDLE, TERRAIN, robots, seed)
+    names = [mujoco.mj_id2name(r.m, mujoco.mjtObj.mjOBJ_GEOM, g) or "" for g in range(r.m.ngeom)]
+    feet_idx = [[g for g, s in enumerate(names) if s.startswith(f"r{k}_") and s.endswith("_foot")]
+                for k in range(robots)]
+    fs = []
+    r_run = r.run(steps, lambda rr: fs.append(rr.d.geom_xpos[np.array(feet_idx)].copy()))
+    base_x = np.nan_to_num(r_run["pos"][..., 0], nan=0.0)
+    feet = np.stack(fs)
+    ends, x_end, running = first_episode(base_x, feet, r_run["status"])
+    wedge = wedge_rounds(base_x, feet, running, lambda x, y: terrain_height_np(r.grid, x, y), 0.02)
+    LOGS["mujoco"] = {"base_x": base_x[-WINDOW - 1:], "feet": feet[-WINDOW - 1:], "running": running}
+    out = summarize_rounds(ends, x_end, wedge, len(fs), time.perf_counter() - t0)
+    out["contact_wedged_of_stuck"] = wedged_feet(r, wedge["stuck"])
+    return out
+
+
+COUNTS = ("rounds", "success", "fell", "off_course", "still_walking", "stuck", "wedged", "contact_wedged_of_stuck")
+
+
+def combine(paths: list[str]) -> dict:
+    """Per setting, the counts of the runs in ``paths`` (their JSON) summed, with each run's terrain seed."""
+    out: dict = {"runs": []}
+    for path in paths:
+        with open(path) as f:
+            run = json.load(f)
+        out["runs"].append({"file": path, "command": run["command"], "terrain_seed": run["terrain_seed"]})
+        for s in SETTINGS:
+            if s in run:
+                tot = out.setdefault(s, {k: 0 for k in COUNTS if k in run[s]})
+                for k in COUNTS:
+                    if k in tot:
+                        tot[k] += run[s][k]
+                tot.setdefault("terrain_seeds", []).append(run["terrain_seed"])
+    return out
+
+
+def main() -> None:
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--robots", type=int, default=20)
+    p.add_argument("--steps", type=int, default=2000, help="control steps per round (20 ms each)")
+    p.add_argument("--seed", type=int, default=1000, help="terrain seed (starts: seed + 1000), as the evaluation's")
+    p.add_argument("--settings", nargs="+", default=list(SETTINGS), choices=list(SETTINGS))
+    p.add_argument("--combine", nargs="+", metavar="JSON", help="sum the counts of these runs' files into --out")
+    p.add_argument("--out", required=True)
+    a = p.parse_args()
+    if a.combine:
+        missing = [f for f in a.combine if not os.path.isfile(f)]
+        if missing:
+            p.error(f"no such file: {missing[0]}")
+        res = {"command": "PYTHONPATH=. python scripts/sim2sim_wedge.py " + " ".join(sys.argv[1:]), **combine(a.combine)}
+        with open(a.out, "w") as f:
+            json.dump(res, f, indent=1)
+        return
+    if a.robots < 1 or a.steps <= WINDOW:
+        p.error(f"--robots must be >= 1 and --steps > {WINDOW} (the 10 s window)")
+    res = {"command": "PYTHONPATH=. python scripts/sim2sim_wedge.py " + " ".join(sys.argv[1:]), "terrain": TERRAIN,
+           "terrain_seed": a.seed, "start_seed": a.seed + 1000,
+           "policy": POLICY, "bundle": BUNDLE}
+    for s in a.settings:
+        res[s] = (mujoco_setting(a.robots, a.steps, a.seed) if s == "mujoco"
+                  else newton_setting(SETTINGS[s], a.robots, a.steps, a.seed))
+        print(s, json.dumps(res[s]), flush=True)
+        os.makedirs(os.path.dirname(os.path.abspath(a.out)), exist_ok=True)
+        with open(a.out, "w") as f:
+            json.dump(res, f, indent=1)
+        np.savez_compressed(os.path.splitext(a.out)[0] + ".npz",
+                            **{f"{k}_{n}": v for k, log in LOGS.items() for n, v in log.items()})
+
+
+if __name__ == "__main__":
+    main()

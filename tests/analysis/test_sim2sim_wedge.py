@@ -1,0 +1,73 @@
+"""scripts/sim2sim_wedge.py's wedge criterion on made-up logs (no simulator): a stuck robot with a foot held between two
+taller blocks is wedged; one whose foot rests on top, or that still progresses, is not; bad arguments get one line."""
+
+import importlib.util
+import os
+import subprocess
+import sys
+
+import numpy as np
+
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+SCRIPT = os.path.join(ROOT, "scripts", "sim2sim_wedge.py")
+
+
+def _script():
+    spec = importlib.util.spec_from_file_location("sim2sim_wedge", SCRIPT)
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+def _heights(x, y):
+    """2 cm blocks: 4 cm tall except a 0 cm gap at x in [0.10, 0.12)."""
+    x = np.asarray(x, float) + 0 * np.asarray(y, float)
+    return np.where((x >= 0.10) & (x < 0.12), 0.0, 0.04)
+
+
+def test_wedge_rounds():
+    w = _script()
+    t, n = 600, 3
+    base_x = np.zeros((t, n))
+    base_x[:, 2] = np.linspace(0.0, 1.0, t)  # robot 2 walks on
+    feet = np.zeros((t, n, 6, 3))
+    feet[..., 0], feet[..., 1], feet[..., 2] = 0.3, 0.0, 0.05  # every foot on top of the blocks
+    feet[:, 0, 4] = (0.11, 0.0, 0.012)  # robot 0: foot 4 in the gap, below both neighbours
+    feet[:, 2, 1] = (0.11, 0.0, 0.012)  # robot 2: the same foot, but the robot progresses
+    out = w.wedge_rounds(base_x, feet, np.ones(n, bool), _heights, 0.02)
+    assert out["stuck"] == [0, 1]
+    assert out["wedged"] == [0] and out["wedged_feet"] == {0: [4]}
+    moving = feet.copy()
+    moving[:, 0, 4, 0] = np.linspace(0.0, 0.11, t)  # the foot travels: not held
+    assert w.wedge_rounds(base_x, moving, np.ones(n, bool), _heights, 0.02)["wedged"] == []
+    assert w.wedge_rounds(base_x, feet, np.array([False, True, True]), _heights, 0.02)["stuck"] == [1]
+
+
+def test_first_episode_holds_the_last_row():
+    w = _script()
+    status = np.zeros((5, 2), np.int32)
+    status[2, 0], status[3:, 0] = 3, 0  # robot 0 succeeds at step 2 and restarts
+    base_x = np.arange(10, dtype=float).reshape(5, 2)
+    feet = np.zeros((5, 2, 6, 3))
+    ends, x_end, running = w.first_episode(base_x, feet, status)
+    assert ends.tolist() == [3, 0] and running.tolist() == [False, True]
+    assert x_end.tolist() == [4.0, 9.0] and base_x[4, 0] == 4.0
+
+
+def test_bad_steps_is_one_line():
+    p = subprocess.run([sys.executable, SCRIPT, "--steps", "100", "--out", "x.json"], capture_output=True, text=True,
+                       cwd=ROOT)
+    assert p.returncode == 2 and p.stderr.strip().splitlines()[-1].endswith("(the 10 s window)")
+
+
+def test_combine_sums_the_runs(tmp_path):
+    w = _script()
+    paths = []
+    for seed, wedged in ((1000, 1), (1001, 2)):
+        run = {"command": "c", "terrain_seed": seed, "mujoco": {"rounds": 20, "success": 10, "fell": 0, "off_course": 1,
+                                                                "still_walking": 9, "stuck": 3, "wedged": wedged}}
+        paths.append(str(tmp_path / f"m{seed}.json"))
+        with open(paths[-1], "w") as f:
+            f.write(__import__("json").dumps(run))
+    out = w.combine(paths)
+    assert out["mujoco"]["rounds"] == 40 and out["mujoco"]["wedged"] == 3 and out["mujoco"]["terrain_seeds"] == [1000, 1001]
