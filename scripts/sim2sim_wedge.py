@@ -31,13 +31,15 @@ import time
 
 import numpy as np
 
+from hexnewton.config import RobotConfig
+
 POLICY = "results/policies/cpg_rl_complex.pt"
 BUNDLE = "results/controllers/cpg_rl_complex"
 TERRAIN = "rugged"
 WINDOW = 500  # control steps (10 s at 20 ms)
 STUCK_M = 0.05  # base progress over the window below which a walking robot is stuck [m]
 HOLD_M = 0.02  # a foot's horizontal range over the window below which it is held [m]
-FOOT_RADIUS = 0.012  # RobotConfig.foot_radius [m]
+FOOT_RADIUS = RobotConfig().foot_radius  # [m]
 SUNK_M = 0.003  # how far a foot's bottom sits below both walls beside it for it to count as between them [m]
 SETTINGS = {
     "newton_frame": {},
@@ -48,6 +50,10 @@ SETTINGS = {
 
 
 LOGS: dict = {}  # per setting, the last 10 s of its log (saved beside --out as .npz)
+
+
+#: the conjugate of a quaternion (x y z w) as a factor: R(q) v = R(q*)^T v (``quat_rotate_inv_np``)
+CONJUGATE = np.array([-1.0, -1.0, -1.0, 1.0])
 
 
 def _name(overrides: dict) -> str:
@@ -107,6 +113,7 @@ def newton_setting(overrides: dict, robots: int, steps: int, seed: int) -> dict:
     from hexnewton.analysis.rollout import CONTROLLERS, START_SEED_OFFSET, controller_policy, read_controller_checkpoint
     from hexnewton.learning.checkpoint import trained_config
     from hexnewton.mdp.env import make_env
+    from hexnewton.physics.reference import quat_rotate_inv_np
     from hexnewton.physics.terrain.query import terrain_height_np
     from hexnewton.tasks import course
 
@@ -127,7 +134,7 @@ def newton_setting(overrides: dict, robots: int, steps: int, seed: int) -> dict:
             obs, _, _, _ = env.step(policy(obs))
             bq = env.world.state_0.body_q.numpy()[body]
             q = bq[:, 3:7]  # x y z w
-            fs.append((bq[:, :3] + _rotate(q, offset)).reshape(robots, per, 3))
+            fs.append((bq[:, :3] + quat_rotate_inv_np(q * CONJUGATE, offset)).reshape(robots, per, 3))
             xs.append(env.last_q.numpy()[:, 0] - env.last_start.numpy()[:, 0])
             sts.append(env.status.numpy().copy())
     env.world.check_contacts()
@@ -139,12 +146,6 @@ def newton_setting(overrides: dict, robots: int, steps: int, seed: int) -> dict:
     out = summarize_rounds(ends, x_end, wedge, steps, time.perf_counter() - t0)
     out["physics"] = {"frame_dt": cfg.sim.frame_dt, "substeps": cfg.sim.substeps, "collision": cfg.terrain.collision}
     return out
-
-
-def _rotate(q: np.ndarray, v: np.ndarray) -> np.ndarray:
-    """Rotate vectors ``v`` (K, 3) by unit quaternions ``q`` (K, 4), x y z w."""
-    u, w = q[:, :3], q[:, 3:4]
-    return v + 2.0 * np.cross(u, np.cross(u, v) + w * v)
 
 
 def mujoco_setting(robots: int, steps: int, seed: int) -> dict:

@@ -17,7 +17,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from hexnewton.mdp.status import FELL, NONFINITE, OFF_COURSE, SUCCESS
+from hexnewton.analysis.metrics import round_metrics
+from hexnewton.mdp.status import FELL, OFF_COURSE, SUCCESS
 
 #: the validation rounds' terrain seed (start seed + 1000): ``evaluate --seed 3000`` (RESULTS.md, conventions)
 VALIDATION_SEED = 3000
@@ -90,19 +91,20 @@ def validate(cands: list[Candidate], controller: str, terrain, rounds: int, devi
                  **goal)  # fmt: skip
     env = make_env(cfg, CONTROLLERS[controller])
     policy = _batched_policy(env, controller, cands)
-    n = env.num_envs
-    end, farthest, finished = np.zeros(n, np.int64), np.full(n, -np.inf), np.zeros(n, bool)
-    for _, status, _, pos, _ in stepped(env, policy, max_steps, "validation", progress=False):
-        live = ~finished
-        moved = live & ~np.isin(status, (FELL, OFF_COURSE, NONFINITE))  # a fall's row is no progress
-        farthest[moved] = np.maximum(farthest[moved], pos[moved, 0])
-        ended = live & (status != 0)
-        end[ended] = status[ended]
-        finished |= ended
+    pos, rpy, status = [], [], []
+    finished = np.zeros(env.num_envs, bool)
+    for _, st, _, p, r in stepped(env, policy, max_steps, "validation", progress=False):
+        pos.append(p[:, :2])
+        rpy.append(r)
+        status.append(st.copy())
+        finished |= st != 0
         if finished.all():
             break
     env.world.check_contacts()
-    return [{"goal": float((end[i::k] == SUCCESS).mean()), "walk_3m": float((farthest[i::k] >= 3.0).mean()),
+    status = np.stack(status)
+    m = round_metrics(np.stack(pos), np.stack(rpy), status != 0, status, cfg.task.control_dt, (3.0,))
+    end, walked = m["end"], m["reached"][0]
+    return [{"goal": float((end[i::k] == SUCCESS).mean()), "walk_3m": float(walked[i::k].mean()),
              "fell": float((end[i::k] == FELL).mean()), "off_course": float((end[i::k] == OFF_COURSE).mean()),
              "rounds": int(end[i::k].size)} for i in range(k)]  # fmt: skip
 
