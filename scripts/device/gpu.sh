@@ -16,11 +16,13 @@
 #        # task paper) x seed on TASK (joint: $JOINT_TASK, default complex-joint), or the runs $JOBS names
 #        # ("cpg_rl:1 paper:1 ..."), each run ending at ENV_STEPS env-steps or MINUTES of wall time, whichever comes
 #        # first, one run per GPU at a time (equal GPUs: equal wall time); runs in $RUNS/methods/, NAME.done when a run
-#        # ends well (finished runs are skipped); none starts after $DEADLINE (seconds since the epoch)
+#        # ends well (finished runs are skipped); none starts after $DEADLINE (seconds since the epoch);
+#        # $EVALS_AFTER="ROUNDS TERRAIN...": a GPU with no more runs starts `evals ROUNDS GPU TERRAIN...` at once
 #   bash scripts/device/gpu.sh evals ROUNDS "GPUS" TERRAIN...    # in the background: the fixed CPG, then each
 #        # finished run's last checkpoint with its deterministic action, then with its sampled one, ROUNDS unseen
 #        # rounds per terrain, $PER_GPU jobs per GPU at a time (default 3), each cut off after $EVAL_TIMEOUT s ->
-#        # $RUNS/method_evals/<run>_<terrain>[_sampled]/ (done ones are skipped; $EVAL_ARGS: more evaluate flags)
+#        # $RUNS/method_evals/<run>_<terrain>[_sampled]/ (done ones are skipped; $EVAL_ARGS: more evaluate flags);
+#        # runs finishing meanwhile are taken too: the queue ends when nothing is left and no `methods` queue runs
 #   bash scripts/device/gpu.sh study DIR                        # a kept study's finished runs and evaluations into
 #        # $RUNS (results/paper_comparison): the queues skip what is finished
 #   bash scripts/device/gpu.sh collect                          # every finished run (policy, config, events, log)
@@ -166,6 +168,14 @@ _methods)   # the queue behind `methods`
       echo "$(date +%T) $name ended: exit $rc after $((SECONDS - t)) s" ) &
     pid[$free]=$!
   done
+  # $EVALS_AFTER="ROUNDS TERRAIN...": each GPU starts an evaluation queue (`evals`) as soon as its last run ends
+  if [ -n "${EVALS_AFTER:-}" ]; then
+    set -- $EVALS_AFTER; rounds=$1; shift
+    for g in $gpus; do
+      ( p=${pid[$g]:-}; while [ -n "$p" ] && kill -0 "$p" 2>/dev/null; do sleep 5; done
+        echo "$(date +%T) GPU $g: no more runs, evaluations"; bash "$0" evals "$rounds" "$g" "$@" ) &
+    done
+  fi
   wait
   echo "$(date +%T) all runs ended"
   ;;
@@ -197,42 +207,51 @@ evals)
   echo "queued the evaluations of $(ls -d "$RUNS"/methods/*_s*/ 2>/dev/null | wc -l) runs on $3..."
   ;;
 _evals)   # the queue behind `evals`
-  rounds=$1 gpus=$2; shift 2
+  rounds=$1 gpus=$2; shift 2; terrains=("$@")
   dest="$RUNS/method_evals"
   # evaluations are launch-bound: $PER_GPU jobs share a GPU (default 3)
   slots=(); for g in $gpus; do for k in $(seq "${PER_GPU:-3}"); do slots+=("$g"); done; done
   declare -A pid
-  sampled=(); specs=()   # "NAME CONTROLLER CHECKPOINT TERRAIN FLAGS": every finished run, deterministic and sampled, and the fixed CPG
-  for terrain in "$@"; do specs+=("cpg_s0_$terrain cpg - $terrain -"); done
-  for done in "$RUNS"/methods/*.done; do
-    [ -e "$done" ] || continue
-    name=$(basename "$done" .done); m=${name%_s*}; ctrl=$m; [ "$m" = paper ] && ctrl=cpg_rl
-    run=$(ls -d "$RUNS/methods/$name"/*/ | tail -1); ck=$(ls -v "$run"model_*[0-9].pt 2>/dev/null | tail -1)
-    [ -z "$ck" ] && { echo "no checkpoint in $run"; continue; }
-    for terrain in "$@"; do
-      specs+=("${name}_$terrain $ctrl $ck $terrain -")
-      # TD3's actor is deterministic: no sampled action to evaluate (compare.DETERMINISTIC_ONLY)
-      [ "$m" != td3_cpg ] && sampled+=("${name}_${terrain}_sampled $ctrl $ck $terrain --stochastic")
+  # the runs are scanned again after every pass: runs of a `methods` queue still going are evaluated as they finish;
+  # the queue ends when a pass starts nothing and no `methods` queue runs
+  while :; do
+    started=0
+    sampled=(); specs=()   # "NAME CONTROLLER CHECKPOINT TERRAIN FLAGS": every finished run, deterministic and sampled, and the fixed CPG
+    for terrain in "${terrains[@]}"; do specs+=("cpg_s0_$terrain cpg - $terrain -"); done
+    for done in "$RUNS"/methods/*.done; do
+      [ -e "$done" ] || continue
+      name=$(basename "$done" .done); m=${name%_s*}; ctrl=$m; [ "$m" = paper ] && ctrl=cpg_rl
+      run=$(ls -d "$RUNS/methods/$name"/*/ | tail -1); ck=$(ls -v "$run"model_*[0-9].pt 2>/dev/null | tail -1)
+      [ -z "$ck" ] && { echo "no checkpoint in $run"; continue; }
+      for terrain in "${terrains[@]}"; do
+        specs+=("${name}_$terrain $ctrl $ck $terrain -")
+        # TD3's actor is deterministic: no sampled action to evaluate (compare.DETERMINISTIC_ONLY)
+        [ "$m" != td3_cpg ] && sampled+=("${name}_${terrain}_sampled $ctrl $ck $terrain --stochastic")
+      done
     done
-  done
-  specs+=("${sampled[@]}")   # every deterministic evaluation first, then the sampled ones
-  for spec in "${specs[@]}"; do
-    set -- $spec; out=$1 ctrl=$2 ck=$3 terrain=$4 flags=$5
-    [ -f "$dest/$out/results.json" ] && continue
-    # a job is claimed before it waits for a slot, so queues started on other GPUs meanwhile take the next ones
-    mkdir "$dest/$out.claim" 2>/dev/null || continue
-    rm -rf "$dest/$out"; free=
-    while [ -z "$free" ]; do
-      for i in "${!slots[@]}"; do p=${pid[$i]:-}; { [ -z "$p" ] || ! kill -0 "$p" 2>/dev/null; } && { free=$i; break; }; done
-      [ -z "$free" ] && sleep 2
+    specs+=("${sampled[@]}")   # every deterministic evaluation first, then the sampled ones
+    for spec in "${specs[@]}"; do
+      set -- $spec; out=$1 ctrl=$2 ck=$3 terrain=$4 flags=$5
+      [ -f "$dest/$out/results.json" ] && continue
+      # a job is claimed before it waits for a slot, so queues started on other GPUs meanwhile take the next ones
+      mkdir "$dest/$out.claim" 2>/dev/null || continue
+      started=1
+      rm -rf "$dest/$out"; free=
+      while [ -z "$free" ]; do
+        for i in "${!slots[@]}"; do p=${pid[$i]:-}; { [ -z "$p" ] || ! kill -0 "$p" 2>/dev/null; } && { free=$i; break; }; done
+        [ -z "$free" ] && sleep 2
+      done
+      args=(--controllers "$ctrl" --terrains "$terrain" --rounds "$rounds" --out "$dest/$out" --no-progress)
+      [ "$ck" != - ] && args+=(--checkpoint "$ctrl=$ck")
+      [ "$flags" != - ] && args+=($flags)
+      echo "$(date +%T) $out on GPU ${slots[$free]}: ${args[*]}"
+      ( CUDA_VISIBLE_DEVICES=${slots[$free]} timeout -k 10 "${EVAL_TIMEOUT:-3000}" python -m hexnewton.apps.evaluate "${args[@]}" ${EVAL_ARGS:-} \
+          > "$dest/$out.log" 2>&1; echo "$(date +%T) $out ended: exit $?" ) &
+      pid[$free]=$!
     done
-    args=(--controllers "$ctrl" --terrains "$terrain" --rounds "$rounds" --out "$dest/$out" --no-progress)
-    [ "$ck" != - ] && args+=(--checkpoint "$ctrl=$ck")
-    [ "$flags" != - ] && args+=($flags)
-    echo "$(date +%T) $out on GPU ${slots[$free]}: ${args[*]}"
-    ( CUDA_VISIBLE_DEVICES=${slots[$free]} timeout -k 10 "${EVAL_TIMEOUT:-3000}" python -m hexnewton.apps.evaluate "${args[@]}" ${EVAL_ARGS:-} \
-        > "$dest/$out.log" 2>&1; echo "$(date +%T) $out ended: exit $?" ) &
-    pid[$free]=$!
+    [ "$started" = 1 ] && continue
+    pgrep -f -- "gpu.sh _methods" > /dev/null || break
+    sleep 10
   done
   wait
   echo "$(date +%T) all evaluations ended"
