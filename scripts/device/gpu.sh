@@ -214,6 +214,7 @@ _evals)   # the queue behind `evals`
   declare -A pid
   # the runs are scanned again after every pass: runs of a `methods` queue still going are evaluated as they finish;
   # the queue ends when a pass starts nothing and no `methods` queue runs
+  final=0
   while :; do
     started=0
     sampled=(); specs=()   # "NAME CONTROLLER CHECKPOINT TERRAIN FLAGS": every finished run, deterministic and sampled, and the fixed CPG
@@ -250,7 +251,9 @@ _evals)   # the queue behind `evals`
       pid[$free]=$!
     done
     [ "$started" = 1 ] && continue
-    pgrep -f -- "gpu.sh _methods" > /dev/null || break
+    [ "$final" = 1 ] && break
+    # one more pass once no `methods` queue runs: its last runs may have finished since this pass began
+    pgrep -f -- "gpu.sh _methods" > /dev/null || final=1
     sleep 10
   done
   wait
