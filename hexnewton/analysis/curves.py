@@ -121,12 +121,13 @@ def plot_fig5a(path: str, methods: dict[str, list[str]], axes: tuple[str, ...] =
     for col, x in enumerate(axes):
         for row, (tag, ylabel) in enumerate(FIG5A_TAGS.items()):
             ax = grid[row, col]
-            for name, specs in methods.items():
+            for k, (name, specs) in enumerate(methods.items()):
                 band = seed_band(specs, x, tag)
                 if band is None:
                     continue
-                line, = ax.plot(band["x"], band["mean"], label=f"{LABELS.get(name, name)} ({band['seeds']} seeds)")
-                ax.fill_between(band["x"], band["min"], band["max"], color=line.get_color(), alpha=0.2, lw=0)
+                # one colour per method on every panel, whichever tags its runs lack
+                ax.plot(band["x"], band["mean"], color=f"C{k}", label=f"{LABELS.get(name, name)} ({band['seeds']} seeds)")
+                ax.fill_between(band["x"], band["min"], band["max"], color=f"C{k}", alpha=0.2, lw=0)
                 summary.setdefault(name, {}).setdefault(x, {})[tag] = {"at": float(band["x"][-1]),
                                                                       "final": band["final"]}  # fmt: skip
                 rows += [[name, tag, x, float(a), float(m), float(lo), float(hi)]

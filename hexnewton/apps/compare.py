@@ -212,7 +212,8 @@ def report_markdown(budgets: dict, tables: dict, distances: tuple[float, ...], f
     if figs:
         lines += ["", "## Fig. 5a", ""] + [f"![Fig. 5a]({f})" for f in figs]
         lines += ["", "Mean episode return and training success (the last 1024 finished episodes, sampled actions) "
-                  "against env-steps and against wall time; the line is the mean over seeds, the band their range. "
+                  "and the mean terrain curriculum level against env-steps and against wall time; the line is the mean "
+                  "over seeds, the band their range, up to where a method's shortest run ends (the budget table). "
                   "Wall-time curves compare runs of one GPU kind (the budget table)."]  # fmt: skip
     return "\n".join(lines) + "\n"
 
@@ -290,7 +291,7 @@ def main(argv: list[str] | None = None) -> int:
     final, figs = {}, []
     for x in ("env_steps", "wall_time"):
         figs.append(f"fig5a_{x}.png")
-        title = "Fig. 5a: mean over seeds, min to max shaded" + (f" ({', '.join(gpus)})" if x == "wall_time" else "")
+        title = "Fig. 5a: mean over seeds, min to max shaded" + (f"\n({', '.join(gpus)})" if x == "wall_time" else "")
         for m, v in plot_fig5a(os.path.join(args.out, figs[-1]), specs, (x,), title).items():
             final.setdefault(m, {}).update(v)
     gaps = missing(runs, evals, tuple(args.terrains), args.seeds)
