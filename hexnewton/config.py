@@ -112,8 +112,8 @@ class TerrainConfig:
     # ours: terrain curriculum (legged_gym style), off at 0. With levels = L > 0 the terrain is L
     # lanes side by side along y, each lane_width wide (replacing ``width``); lane k (0-based) is this
     # terrain with its block heights and step rise scaled by (k + 1) / L, so the last lane is the terrain
-    # above (unless lanes go past it: ``levels_past``). Robots move up a lane after reaching the goal and down one after walking less than half of it
-    # (mdp/events.py). 3 m = 2 x TaskConfig.max_abs_y: a robot leaves the course as it leaves its lane.
+    # above (unless lanes go past it: ``levels_past``). Robots move up a lane after reaching the goal and down one
+    # after walking less than half of it (mdp/events.py). 3 m = 2 x TaskConfig.max_abs_y: a robot leaves the course as it leaves its lane.
     levels: int = 0
     lane_width: float = 3.0
     # ours: lanes past the course. The last ``levels_past`` of the ``levels`` lanes go beyond the terrain above, in

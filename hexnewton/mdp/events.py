@@ -4,8 +4,8 @@ step, and the physical draws made once when the env is built.
 Physical draws (``RandomizationConfig``, at construction: :func:`randomize_physics`)
 -------------------------------------------------------------------------------------
 Each env's friction, payload, link masses, PD gains, effort limits and, where set, foot radius, contact time
-constant and motor strength (a factor on both the gains and the effort limits), drawn once and written into the :class:`~hexnewton.physics.world.World`'s Newton model, then handed to
-MuJoCo.
+constant and motor strength (a factor on both the gains and the effort limits), drawn once and written into the
+:class:`~hexnewton.physics.world.World`'s Newton model, then handed to MuJoCo.
 
 Per-step randomisation (``RandomizationConfig.enabled``)
 --------------------------------------------------------
@@ -20,8 +20,8 @@ between lanes
 ------------------------------------------------------------------------------------------------------------------
 The curriculum terrain is L lanes side by side along y; lane k is the chosen terrain with its block heights and step
 rise scaled by (k + 1) / L, or with ``TerrainConfig.levels_past`` = P lanes past the course by (k + 1) / (L - P) up to
-the course and toward the ``hardest_*`` rise, tread and block height beyond it (``terrain.heightmap.lane_config``). When an env's episode ends (status != 0), before it
-is reset (:func:`curriculum_kernel`):
+the course and toward the ``hardest_*`` rise, tread and block height beyond it (``terrain.heightmap.lane_config``).
+When an env's episode ends (status != 0), before it is reset (:func:`curriculum_kernel`):
 - success (the goal reached, i.e. ``goal_distance - goal_radius`` walked): one level up; an env that solves
   the last level goes to a random level, so every level keeps being visited (as legged_gym does);
 - fell, off course or timed out having walked less than half of ``goal_distance`` along x: one level down
