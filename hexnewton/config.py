@@ -112,10 +112,19 @@ class TerrainConfig:
     # ours: terrain curriculum (legged_gym style), off at 0. With levels = L > 0 the terrain is L
     # lanes side by side along y, each lane_width wide (replacing ``width``); lane k (0-based) is this
     # terrain with its block heights and step rise scaled by (k + 1) / L, so the last lane is the terrain
-    # above. Robots move up a lane after reaching the goal and down one after walking less than half of it
-    # (mdp/events.py). 3 m = 2 x TaskConfig.max_abs_y: a robot leaves the course as it leaves its lane.
+    # above (unless lanes go past it: ``levels_past``). Robots move up a lane after reaching the goal and down one
+    # after walking less than half of it (mdp/events.py). 3 m = 2 x TaskConfig.max_abs_y: a robot leaves the course as it leaves its lane.
     levels: int = 0
     lane_width: float = 3.0
+    # ours: lanes past the course. The last ``levels_past`` of the ``levels`` lanes go beyond the terrain above, in
+    # equal steps from it to the hardest lane's step rise, tread and block height (the ``hardest_*`` fields; None: the
+    # terrain's own value), treads rounded to the query grid; the lanes before them scale the terrain by
+    # (k + 1) / (levels - levels_past), so lane levels - levels_past - 1 is the terrain itself. 0: the last lane is
+    # the terrain.
+    levels_past: int = 0
+    hardest_step_rise: float | None = None
+    hardest_step_depth: float | None = None
+    hardest_block_height_max: float | None = None
     # robots start evenly spread over levels 0 .. start_levels - 1 (legged_gym: max_init_terrain_level)
     start_levels: int = 1
     # ours: how the terrain collides (flat is always an infinite ground plane). "mesh_boxes" (the default): every
@@ -378,6 +387,10 @@ class RandomizationConfig:
     kp_scale: tuple[float, float] = (0.8, 1.2)
     kd_scale: tuple[float, float] = (0.8, 1.2)
     effort_scale: tuple[float, float] = (0.8, 1.2)
+    # motor strength (None: off): one more factor per env on both the PD stiffness and the effort limits, on top of
+    # their own kp_scale and effort_scale draws, so weak motors meet weak gains as in the evaluation's motor_strength
+    # (hexnewton.analysis.rollout.sweep_overrides)
+    motor_strength: tuple[float, float] | None = None
     # contact geometry and softness (None: the robot's own): the foot sphere's radius [m] (nominal 12 mm; its centre
     # stays at the tibia's end) and the time constant [s] of the robot's contacts with the ground (MuJoCo's solref,
     # damping ratio 1; nominal 0.02)

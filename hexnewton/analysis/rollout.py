@@ -29,7 +29,7 @@ LABELS = {"cpg": "CPG", "cpg_swept": "CPG (swept)", "cpg_rl": "CPG_RL", "joint":
 _NOMINAL = dict(friction=(0.9, 0.9), payload=(0.0, 0.0), link_mass_scale=(1.0, 1.0), kp_scale=(1.0, 1.0),
                 kd_scale=(1.0, 1.0), effort_scale=(1.0, 1.0), latency_share=0.0, noise_joint_pos=0.0,
                 noise_joint_vel=0.0, noise_target=0.0, noise_quat=0.0, noise_height=0.0, push_velocity=0.0,
-                foot_radius=None, contact_timeconst=None)
+                foot_radius=None, contact_timeconst=None, motor_strength=None)
 #: the RandomizationConfig fields that are per-env ranges (a sweep point sets such a field to (value, value))
 _RANGES = {name for name, hint in typing.get_type_hints(RandomizationConfig).items()
            if tuple in (typing.get_origin(hint), *map(typing.get_origin, typing.get_args(hint)))}

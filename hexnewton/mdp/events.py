@@ -3,9 +3,9 @@ step, and the physical draws made once when the env is built.
 
 Physical draws (``RandomizationConfig``, at construction: :func:`randomize_physics`)
 -------------------------------------------------------------------------------------
-Each env's friction, payload, link masses, PD gains, effort limits and, where set, foot radius and contact time
-constant, drawn once and written into the :class:`~hexnewton.physics.world.World`'s Newton model, then handed to
-MuJoCo.
+Each env's friction, payload, link masses, PD gains, effort limits and, where set, foot radius, contact time
+constant and motor strength (a factor on both the gains and the effort limits), drawn once and written into the
+:class:`~hexnewton.physics.world.World`'s Newton model, then handed to MuJoCo.
 
 Per-step randomisation (``RandomizationConfig.enabled``)
 --------------------------------------------------------
@@ -19,8 +19,9 @@ Terrain curriculum (legged_gym style, ``TerrainConfig.levels`` = L > 0): every f
 between lanes
 ------------------------------------------------------------------------------------------------------------------
 The curriculum terrain is L lanes side by side along y; lane k is the chosen terrain with its block heights and step
-rise scaled by (k + 1) / L (``terrain.heightmap.lane_config``). When an env's episode ends (status != 0), before it
-is reset (:func:`curriculum_kernel`):
+rise scaled by (k + 1) / L, or with ``TerrainConfig.levels_past`` = P lanes past the course by (k + 1) / (L - P) up to
+the course and toward the ``hardest_*`` rise, tread and block height beyond it (``terrain.heightmap.lane_config``).
+When an env's episode ends (status != 0), before it is reset (:func:`curriculum_kernel`):
 - success (the goal reached, i.e. ``goal_distance - goal_radius`` walked): one level up; an env that solves
   the last level goes to a random level, so every level keeps being visited (as legged_gym does);
 - fell, off course or timed out having walked less than half of ``goal_distance`` along x: one level down
@@ -61,7 +62,8 @@ from hexnewton.physics.world import World
 def randomize_physics(world: World, seed: int = 0) -> dict[str, np.ndarray]:
     """Draw each env's physical properties from ``world.cfg.randomization`` (``RandomizationConfig``), write them into
     the world's Newton model and hand them to MuJoCo: contact friction, torso payload, leg link masses, PD gains and
-    effort limits, foot radius and contact time constant (where set). Returns the per-env draws."""
+    effort limits, foot radius, contact time constant and motor strength (where set). Returns the per-env draws
+    (``kp_scale`` and ``effort_scale`` as applied: with ``motor_strength``, their own draws times it)."""
     r, m, n = world.cfg.randomization, world.model, world.num_envs
     rng = np.random.default_rng([seed, 0x5EED])
     u = lambda lo_hi: rng.uniform(lo_hi[0], lo_hi[1], n)  # noqa: E731
@@ -76,6 +78,11 @@ def randomize_physics(world: World, seed: int = 0) -> dict[str, np.ndarray]:
     mu[~robot] = min(r.friction)
     m.shape_material_mu.assign(mu)
     draws.update(_contact_draws(world, rng, robot, shape_world))
+    if r.motor_strength is not None:  # one factor on the gains and the effort limits together
+        if not 0 < r.motor_strength[0] <= r.motor_strength[1]:
+            raise ValueError(f"randomization.motor_strength must be LO HI with 0 < LO <= HI, got {r.motor_strength}")
+        draws["motor_strength"] = strength = u(r.motor_strength)
+        draws["kp_scale"], draws["effort_scale"] = draws["kp_scale"] * strength, draws["effort_scale"] * strength
     # masses: bodies are laid out env by env, torso first; inertia scales with the mass
     per_env = m.body_count // n
     mass = m.body_mass.numpy().reshape(n, per_env)

@@ -294,6 +294,7 @@ def test_sweep_points_change_one_thing():
     motors = sweep_overrides("motor_strength", 0.5)
     assert motors["randomization.kp_scale"] == motors["randomization.effort_scale"] == (0.5, 0.5)
     assert motors["randomization.payload"] == (0.0, 0.0) and motors["randomization.enabled"]
+    assert motors["randomization.motor_strength"] is None  # a course's robot draws no motor strength of its own
     assert sweep_overrides("randomization.push_velocity", 0.6)["randomization.push_interval"] == 3.0
     feet = sweep_overrides("randomization.foot_radius", 0.01)
     assert feet["randomization.foot_radius"] == (0.01, 0.01) and feet["randomization.contact_timeconst"] is None

@@ -40,7 +40,60 @@ def test_lanes_scale_the_terrain():
         assert 0.5 * rugged.block_height_max * (k + 1) / 3 < h.max() <= rugged.block_height_max * (k + 1) / 3 + 1e-6
 
 
+def _lanes_past_reference(cfg: TerrainConfig) -> list[tuple[float, float, float]]:
+    """Float64 (rise, tread, block height) of every lane: up to the course's lane the course scaled by
+    (k + 1) / (L - P), past it P equal steps toward the hardest lane, treads on the 1 cm grid."""
+    course, out = cfg.levels - cfg.levels_past, []
+    for k in range(cfg.levels):
+        if k < course:
+            s = (k + 1) / course
+            out.append((cfg.step_rise * s, cfg.step_depth, cfg.block_height_max * s))
+            continue
+        t = (k + 1 - course) / cfg.levels_past
+        tread = np.round((cfg.step_depth + t * (cfg.hardest_step_depth - cfg.step_depth)) * 100.0) / 100.0
+        out.append((cfg.step_rise + t * (cfg.hardest_step_rise - cfg.step_rise), tread,
+                    cfg.block_height_max + t * (cfg.hardest_block_height_max - cfg.block_height_max)))
+    return out
+
+
+def test_lanes_past_the_course():
+    """``levels_past``: the hardest lanes go beyond the complex course (``complex-margin``'s lanes) and the generated
+    grid holds, lane by lane, the float64 reference's stairs (every step's height along the centre line) and blocks
+    (the lane's own seeded draws of 0 to its block height)."""
+    from hexnewton.tasks import MARGIN_LANES
+
+    cfg = TerrainConfig(name="complex", levels=10, start_levels=3, **MARGIN_LANES)
+    ref = _lanes_past_reference(cfg)
+    assert [(round(r, 4), round(d, 2), round(b, 4)) for r, d, b in ref[6:]] == [
+        (0.06, 0.25, 0.06), (0.07, 0.23, 0.07), (0.08, 0.2, 0.08), (0.09, 0.18, 0.09)]
+    grid = build_height_grid(cfg)
+    x = np.arange(cfg.x_min, cfg.x_max, cfg.query_resolution) + 0.5 * cfg.query_resolution
+    for k, (rise, tread, block) in enumerate(ref):
+        y = lane_center_y(cfg, k)
+        count = round(cfg.complex_stepped_length / tread)
+        step = np.clip(np.floor((x - cfg.complex_rugged_length) / tread + 1e-9) + 1, 0, count)
+        stairs = x >= cfg.complex_rugged_length
+        np.testing.assert_allclose(terrain_height_np(grid, x[stairs], np.full(stairs.sum(), y)), rise * step[stairs],
+                                   atol=1e-6)  # fmt: skip
+        # the blocks: one draw in [0, block] per 2 cm block of the lane's lattice (seed 1000 x terrain seed + lane)
+        nbx, nby = round((cfg.x_max - cfg.x_min) / cfg.block_size), round(cfg.lane_width / cfg.block_size)
+        draws = np.random.default_rng(cfg.seed * 1000 + k).uniform(0.0, block, size=(nbx, nby))
+        bx = cfg.x_min + (np.arange(nbx) + 0.5) * cfg.block_size
+        by = y - cfg.lane_width / 2 + (np.arange(nby) + 0.5) * cfg.block_size
+        rugged = bx < cfg.complex_rugged_length
+        got = terrain_height_np(grid, bx[rugged][:, None], by[None, :])
+        np.testing.assert_allclose(got, draws[rugged], atol=1e-6)
+        assert got.max() > 0.99 * block
+    # the hardest_* values change nothing without lanes past the course
+    plain = build_height_grid(replace(cfg, levels_past=0))
+    last = TerrainConfig(name="complex", levels=10, start_levels=3)
+    np.testing.assert_array_equal(plain.heights, build_height_grid(last).heights)
+
+
 @pytest.mark.parametrize("bad, message", [
+    ({"levels": 3, "levels_past": 3}, "levels_past must be an integer in [0, levels - 1 = 2]"),
+    ({"levels": 3, "levels_past": 1, "hardest_step_rise": -0.01}, "hardest_step_rise must be >= 0 or None"),
+    ({"levels": 3, "levels_past": 1, "hardest_step_depth": 0.0}, "step_depth must be positive"),
     ({"levels": -1}, "levels must be an integer >= 0"),
     ({"levels": 3, "start_levels": 4}, "start_levels must be an integer in [1, levels = 3]"),
     ({"levels": 3, "lane_width": 0.0}, "lane_width must be positive"),

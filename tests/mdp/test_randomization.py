@@ -162,3 +162,54 @@ def test_larger_feet_stand_higher():
         w.step(50)
         heights.append(w.base_pos()[:, 2])
     np.testing.assert_allclose(heights[1] - heights[0], 0.004, atol=0.001)
+
+
+def test_margin_ranges_are_applied():
+    """``complex-margin``'s randomisation on 256 robots (CPU): each env's friction, payload, motor strength and own
+    gain and effort factors uniform over their ranges (sample mean and quartiles), one motor strength on both the
+    gains and the effort limits, and the draws in MuJoCo's model (the ground at the range's lowest friction)."""
+    from hexnewton.mdp.events import randomize_physics
+    from hexnewton.physics.world import World
+    from hexnewton.tasks import task
+
+    rz, n = task("complex-margin").env.randomization, 256
+    w = World(HexConfig(sim=replace(SimConfig(), num_envs=n, device=DEV), randomization=rz))
+    d = randomize_physics(w, seed=5)
+    strength = d["motor_strength"]
+    own = {"friction": d["friction"], "payload": d["payload"], "motor_strength": strength,
+           "kp_scale": d["kp_scale"] / strength, "effort_scale": d["effort_scale"] / strength}  # fmt: skip
+    for key, x in own.items():
+        lo, hi = getattr(rz, key)
+        u = (x - lo) / (hi - lo)  # uniform in [0, 1]
+        assert np.all((u >= 0) & (u <= 1)) and u.min() < 0.05 and u.max() > 0.95, key
+        assert abs(u.mean() - 0.5) < 4 * np.sqrt(1 / 12 / n), key
+        np.testing.assert_allclose(np.quantile(u, [0.25, 0.5, 0.75]), [0.25, 0.5, 0.75], atol=0.1, err_msg=key)
+    # the shared factor: weak gains come with weak effort limits
+    assert np.corrcoef(d["kp_scale"], d["effort_scale"])[0, 1] > 0.8
+    assert d["kp_scale"].min() >= rz.motor_strength[0] * rz.kp_scale[0] - 1e-12
+    m = w.solver.mjw_model
+    friction = m.geom_friction.numpy()[:, :, 0]
+    np.testing.assert_allclose(friction[:, 0], 0.25, rtol=1e-6)
+    np.testing.assert_allclose(friction[:, 1:].max(axis=1), d["friction"], rtol=1e-6)
+    np.testing.assert_allclose(m.body_mass.numpy()[:, 1], 1.6 + d["payload"], rtol=1e-5)
+    np.testing.assert_allclose(m.actuator_gainprm.numpy()[:, :, 0], 40.0 * d["kp_scale"][:, None] * np.ones((1, 18)),
+                               rtol=1e-5)  # fmt: skip
+    np.testing.assert_allclose(m.jnt_actfrcrange.numpy()[:, 1:, 1], 3.5 * d["effort_scale"][:, None] * np.ones((1, 18)),
+                               rtol=1e-5)  # fmt: skip
+
+
+def test_motor_strength_off_keeps_the_draws():
+    """Without ``motor_strength`` (the default) the draws are those of the recipe's ranges, the same numbers; a bad
+    range is one ValueError."""
+    from hexnewton.mdp.events import randomize_physics
+    from hexnewton.physics.world import World
+
+    cfg = HexConfig(sim=replace(SimConfig(), num_envs=4, device=DEV), randomization=RZ)
+    plain = randomize_physics(World(cfg), seed=2)
+    strong = randomize_physics(World(replace(cfg, randomization=replace(RZ, motor_strength=(2.0, 2.0)))), seed=2)
+    assert "motor_strength" not in plain and np.all(strong["motor_strength"] == 2.0)
+    for key in ("friction", "payload", "link_mass_scale", "kd_scale"):
+        np.testing.assert_array_equal(plain[key], strong[key])
+    np.testing.assert_allclose(strong["kp_scale"], 2.0 * plain["kp_scale"])
+    with pytest.raises(ValueError, match="motor_strength must be LO HI with 0 < LO <= HI"):
+        randomize_physics(World(replace(cfg, randomization=replace(RZ, motor_strength=(0.0, 1.0)))))

@@ -112,9 +112,21 @@ def validate_config(cfg: TerrainConfig) -> None:
                  f"start_levels must be an integer in [1, levels = {cfg.levels}], got {cfg.start_levels!r}")
         _require(math.isfinite(cfg.lane_width) and cfg.lane_width > 0,
                  f"lane_width must be positive, got {cfg.lane_width!r}")
-        validate_config(lane_config(cfg, cfg.levels - 1))
+        _check_levels_past(cfg)
+        for level in range(cfg.levels - cfg.levels_past - 1, cfg.levels):  # the course's lane and those past it
+            validate_config(lane_config(cfg, level))
         return
     TERRAIN_KINDS[cfg.name].check(cfg)
+
+
+def _check_levels_past(cfg: TerrainConfig) -> None:
+    """``levels_past`` leaves the course a lane; the ``hardest_*`` values are finite and not negative."""
+    _require(int(cfg.levels_past) == cfg.levels_past and 0 <= cfg.levels_past < cfg.levels,
+             f"levels_past must be an integer in [0, levels - 1 = {cfg.levels - 1}], got {cfg.levels_past!r}")
+    for field_name in ("hardest_step_rise", "hardest_step_depth", "hardest_block_height_max"):
+        value = getattr(cfg, field_name)
+        _require(value is None or (math.isfinite(value) and value >= 0),
+                 f"{field_name} must be >= 0 or None, got {value!r}")
 
 
 def _check_flat(cfg: TerrainConfig) -> None:
@@ -245,12 +257,24 @@ assert tuple(TERRAIN_KINDS) == TERRAINS, "one row per name of config.TERRAINS, i
 
 
 def lane_config(cfg: TerrainConfig, level: int) -> TerrainConfig:
-    """The terrain of curriculum lane ``level``: ``cfg`` one lane wide, heights scaled by (level + 1) / levels,
-    its own block seed."""
-    scale = (level + 1) / cfg.levels
-    return replace(cfg, levels=0, width=cfg.lane_width, rugged_half_width=min(cfg.rugged_half_width, cfg.lane_width / 2),
-                   block_height_max=cfg.block_height_max * scale, step_rise=cfg.step_rise * scale,
-                   seed=cfg.seed * 1000 + level)  # fmt: skip
+    """The terrain of curriculum lane ``level``: ``cfg`` one lane wide, its own block seed, and up to the course's lane
+    (``levels - levels_past - 1``) the heights scaled by (level + 1) / (levels - levels_past); past it the step
+    rise, tread and block height a share (level + 1 - course lanes) / levels_past of the way from ``cfg``'s to the
+    ``hardest_*`` values (None: ``cfg``'s), the tread rounded to the query grid."""
+    lanes = dict(levels=0, width=cfg.lane_width, rugged_half_width=min(cfg.rugged_half_width, cfg.lane_width / 2),
+                 seed=cfg.seed * 1000 + level)  # fmt: skip
+    course = cfg.levels - cfg.levels_past
+    if level < course:
+        scale = (level + 1) / course
+        return replace(cfg, block_height_max=cfg.block_height_max * scale, step_rise=cfg.step_rise * scale, **lanes)
+    t = (level + 1 - course) / cfg.levels_past
+
+    def toward(value: float, hardest: float | None) -> float:
+        return value if hardest is None else value + t * (hardest - value)
+
+    depth = round(toward(cfg.step_depth, cfg.hardest_step_depth) / cfg.query_resolution) * cfg.query_resolution
+    return replace(cfg, block_height_max=toward(cfg.block_height_max, cfg.hardest_block_height_max),
+                   step_rise=toward(cfg.step_rise, cfg.hardest_step_rise), step_depth=depth, **lanes)  # fmt: skip
 
 
 def lane_center_y(cfg: TerrainConfig, level: int | np.ndarray) -> float | np.ndarray:
