@@ -61,7 +61,7 @@ def _workers(max_workers: int | None) -> int:
 
 
 def _live_kernels() -> list[wp.Kernel]:
-    return [o for o in gc.get_objects() if isinstance(o, wp.Kernel)]
+    return [o for o in gc.get_objects() if type(o) is wp.Kernel]  # type(): no attribute lookups on lazy objects
 
 
 def live_kernel_ids() -> set[int]:
