@@ -86,7 +86,8 @@ def create_step_kernels(device: str, solver) -> bool:
     try:
         with wp.ScopedDevice(device):
             scratch = mujoco_warp.put_data(solver.mj_model, solver.mj_data, nworld=1,
-                                           nconmax=max(1, data.naconmax // max(1, data.nworld)), njmax=data.njmax)  # fmt: skip
+                                           nconmax=max(1, data.naconmax // max(1, data.nworld)),
+                                           njmax=data.njmax)  # fmt: skip
             scratch.nworld = 0  # every per-world launch gets an empty grid: Warp creates, never loads, its kernel
             scratch.naconmax = 0  # the same for the per-contact launches
             with wp.ScopedCapture(force_module_load=False):
