@@ -5,7 +5,8 @@ A physics step launches two kinds of Warp modules: those defined when their Pyth
 (closures of its kernel builders, one module each, created by the call that launches them). Both are compiled here,
 on parallel threads, on CUDA (NVRTC) and on the CPU (LLVM) alike:
 
-``precompile(device, solver, since)`` runs once the solver and the collision pipeline exist (building the solver
+``precompile(device)`` compiles the import-time modules; ``precompile(device, solver, since)``
+(``SimConfig.precompile`` "generated") also the generated kernels. It runs once the solver and the collision pipeline exist (building the solver
 sets module options on mujoco_warp's modules, which would make a module compiled before it compile again). First
 mujoco_warp's ``step`` runs on a scratch ``Data`` of the solver's sizes whose world count reads 0, inside a graph
 capture that is thrown away: every launch has an empty grid, which Warp returns from before loading the module, so
@@ -127,13 +128,16 @@ def generated_modules(device: str, since: set[int]) -> list[wp.Module]:
     return list(found.values())
 
 
-def precompile(device: str, solver, since: set[int], max_workers: int | None = None) -> list[str]:
-    """Create mujoco_warp's generated step kernels (:func:`create_step_kernels`), then compile them with
-    :func:`imported_modules` and every other kernel created after ``since`` that is not loaded yet, all on parallel
-    threads (default: one per CPU core); returns the module names."""
-    create_step_kernels(device, solver)
-    modules = imported_modules() + generated_modules(device, since)
-    block_dims = getattr(solver.mjw_model, "block_dim", None)
+def precompile(device: str, solver=None, since: set[int] | None = None, max_workers: int | None = None) -> list[str]:
+    """Compile :func:`imported_modules` on parallel threads (default: one per CPU core); given ``solver``, first create
+    mujoco_warp's generated step kernels (:func:`create_step_kernels`) and compile them and every other kernel created
+    after ``since`` that is not loaded yet with them (``SimConfig.precompile`` "generated"); returns the module
+    names."""
+    modules = imported_modules()
+    if solver is not None:
+        create_step_kernels(device, solver)
+        modules += generated_modules(device, since or set())
+    block_dims = getattr(solver.mjw_model, "block_dim", None) if solver is not None else None
     jobs = [(m, _block_dim(m, device, block_dims)) for m in modules]
     with ThreadPoolExecutor(max_workers=_workers(max_workers)) as pool:
         futures = [pool.submit(wp.force_load, device=device, modules=[m], block_dim=b, max_workers=0) for m, b in jobs]

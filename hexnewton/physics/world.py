@@ -276,7 +276,7 @@ class World:
         self._collide_dt = sim.frame_dt if sim.speculative_gap is not None else None
         self.contacts = self.pipeline.contacts()
         startup.mark("collision pipeline")
-        precompile(self.device, self.solver, since)
+        precompile(self.device, self.solver if sim.precompile == "generated" else None, since)
         startup.mark("kernels")
 
     def _init_buffers(self) -> None:

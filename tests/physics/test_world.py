@@ -216,7 +216,7 @@ def test_precompile_leaves_the_first_step_nothing_to_compile():
     kernels included, each compiled once."""
     import gc
 
-    world = _world("flat")
+    world = _world("flat", precompile="generated")
 
     def loaded() -> list[tuple[str, int]]:
         return [(m.name, key[1]) for m in gc.get_objects() if isinstance(m, wp.Module) for key in list(m.execs)]
