@@ -173,6 +173,11 @@ class SimConfig:
     # triangle-pair candidates per env for mesh terrain (H100, complex, 16384 envs: 64/env overflowed)
     triangle_pairs_per_env: int = 256
     use_graph: bool = True
+    # ours: which Warp modules a World compiles in parallel before its first step (hexnewton/physics/precompile.py):
+    # "imported" those defined at import time, "generated" also the kernels mujoco_warp generates for the model
+    # (created by a dry step; on the 2-core CPU a cold build took 149 s against 60 s with "imported"; its CUDA cost
+    # is measured by scripts/device/time_to_skill.sh startup)
+    precompile: str = field(default="imported", metadata={"choices": ("imported", "generated")})
     # ours: env i starts at (0, y_i), y_i evenly spread over [-spread, spread] [m], so robots meet different
     # rugged blocks; goal and off-course limit (TaskConfig) are relative to each env's start
     spawn_y_spread: float = 0.5

@@ -1,17 +1,36 @@
-"""Parallel compilation of the Warp modules a physics step launches, before the first step."""
+"""Parallel compilation of the Warp modules a physics step launches, before the first step.
+
+A physics step launches two kinds of Warp modules: those defined when their Python modules are imported
+(``STEP_MODULES``, hexnewton's own) and the kernels that mujoco_warp generates for the model on first use
+(closures of its kernel builders, one module each, created by the call that launches them). Both are compiled here,
+on parallel threads, on CUDA (NVRTC) and on the CPU (LLVM) alike:
+
+``precompile(device)`` compiles the import-time modules; ``precompile(device, solver, since)``
+(``SimConfig.precompile`` "generated") also the generated kernels. It runs once the solver and the collision pipeline exist (building the solver
+sets module options on mujoco_warp's modules, which would make a module compiled before it compile again). First
+mujoco_warp's ``step`` runs on a scratch ``Data`` of the solver's sizes whose world count reads 0, inside a graph
+capture that is thrown away: every launch has an empty grid, which Warp returns from before loading the module, so
+the generated kernels are created without being compiled (the same objects the real step takes from mujoco_warp's
+kernel cache: their builders' arguments are the model's and the sizes'), and the capture makes the solver's
+iteration loop record its body once. Then the import-time modules and mujoco_warp's kernels created since ``since``
+(:func:`live_kernel_ids`, taken before the model was built) that are not loaded yet are compiled together.
+
+A module missing here only costs its compile time at the first step, never correctness: the first step compiles
+whatever is not loaded.
+"""
 
 from __future__ import annotations
 
+import gc
+import logging
 import os
+from concurrent.futures import ThreadPoolExecutor
 
 import warp as wp
 
+log = logging.getLogger("hexnewton")
 
-# Warp modules (defined at import time) that a World's step launches, as listed by a CPU run. They are compiled
-# in parallel before the first step (``precompile``), on CUDA (NVRTC) and on the CPU (LLVM) alike: on the 2-core
-# machine a cold start to the first iteration took 74 s against 82 s compiling them one by one. Kernels that
-# mujoco_warp builds on the fly still compile lazily (161 s of a 265 s cold start on an H100,
-# results/time_to_skill); a module missing from this list only costs time, never correctness.
+# Warp modules (defined at import time) that a World's step launches, as listed by a CPU run.
 STEP_MODULES = (
     "newton._src.geometry.broad_phase_nxn", "newton._src.geometry.bvh", "newton._src.geometry.narrow_phase",
     "newton._src.sim.articulation", "newton._src.sim.collide", "newton._src.solvers.mujoco.kernels",
@@ -20,13 +39,108 @@ STEP_MODULES = (
     "mujoco_warp._src.solver", "mujoco_warp._src.support",
 )  # fmt: skip
 
+# Generated kernels that mujoco_warp launches with a block size of its model's ``block_dim`` settings (the field
+# named here) rather than Warp's default; on CUDA each block size is a variant compiled of its own. Keyed by the
+# kernel builder's name (mujoco_warp 3.17's smooth.py, constraint.py, solver.py). CPU launches use one thread per
+# block whatever is asked.
+TILED_BLOCK_DIMS = {
+    "_small_cholesky_factorize_block": "small_cholesky", "_small_cholesky_solve_block": "small_cholesky",
+    "_small_cholesky_factorize_solve_block": "small_cholesky", "_tile_cholesky_factorize_block": "cholesky_factorize",
+    "_tile_cholesky_factorize_solve_block": "cholesky_factorize_solve", "_efc_contact_jac_dense": "contact_jac_tiled",
+    "_efc_contact_jac_dense_flex": "contact_jac_tiled", "_solve_LD_sparse_fused": "solve_LD_sparse_fused",
+    "_update_gradient_JTDAJ_dense_tiled": "update_gradient_JTDAJ_dense",
+    "_update_gradient_JTDAJ_dense_tiled_compact": "update_gradient_JTDAJ_dense",
+    "_update_gradient_cholesky": "update_gradient_cholesky",
+    "_update_gradient_cholesky_blocked": "update_gradient_cholesky_blocked",
+    "_cholesky_factorize_solve_blocked": "update_gradient_cholesky_blocked",
+    "_update_gradient_grad": "update_gradient_grad", "_linesearch_iterative_kernel": "linesearch_iterative",
+}  # fmt: skip
 
-def precompile(device: str, max_workers: int | None = None) -> list[str]:
-    """Compile ``STEP_MODULES`` and every ``hexnewton`` Warp module for ``device`` on parallel threads
-    (default: one per CPU core); returns the module names loaded."""
+
+def _workers(max_workers: int | None) -> int:
+    return max_workers or os.cpu_count() or 1
+
+
+def _live_kernels() -> list[wp.Kernel]:
+    return [o for o in gc.get_objects() if type(o) is wp.Kernel]  # type(): no attribute lookups on lazy objects
+
+
+def live_kernel_ids() -> set[int]:
+    """The ids of the Warp kernels that exist now: :func:`precompile` compiles those created after."""
+    return {id(k) for k in _live_kernels()}
+
+
+def imported_modules() -> list[wp.Module]:
+    """The Warp modules of ``STEP_MODULES`` and hexnewton's own that hold kernels."""
     from warp._src.context import user_modules
 
-    modules = [m for m in list(user_modules.values())
-               if m.kernels and (m.name in STEP_MODULES or m.name.startswith("hexnewton."))]  # fmt: skip
-    wp.force_load(device=device, modules=modules, max_workers=max_workers or os.cpu_count() or 1)
+    return [m for m in list(user_modules.values())
+            if m.kernels and (m.name in STEP_MODULES or m.name.startswith("hexnewton."))]  # fmt: skip
+
+
+def create_step_kernels(device: str, solver) -> bool:
+    """Create, without compiling them, the kernels mujoco_warp generates for ``solver``'s model in a step (the
+    module docstring); False (logged) if the dry step failed, which only leaves them to the first step."""
+    import mujoco_warp
+
+    data = solver.mjw_data
+    try:
+        with wp.ScopedDevice(device):
+            scratch = mujoco_warp.put_data(solver.mj_model, solver.mj_data, nworld=1,
+                                           nconmax=max(1, data.naconmax // max(1, data.nworld)),
+                                           njmax=data.njmax)  # fmt: skip
+            scratch.nworld = 0  # every per-world launch gets an empty grid: Warp creates, never loads, its kernel
+            scratch.naconmax = 0  # the same for the per-contact launches
+            with wp.ScopedCapture(force_module_load=False):
+                mujoco_warp.step(solver.mjw_model, scratch)
+    except Exception as exc:  # noqa: BLE001 - an optimisation only: the first step compiles what is missing
+        log.warning("precompile: the dry step for mujoco_warp's generated kernels failed (%s: %s); they compile at "
+                    "the first step", type(exc).__name__, exc)  # fmt: skip
+        return False
+    return True
+
+
+def _block_dim(module: wp.Module, device: str, block_dims) -> int | None:
+    """The block size ``module``'s launch asks for on ``device`` (None: Warp's default)."""
+    if block_dims is None or not wp.get_device(device).is_cuda:
+        return None
+    for kernel in module.kernels.values():
+        builder = kernel.func.__qualname__.split(".<locals>")[0]
+        if builder in TILED_BLOCK_DIMS:
+            return getattr(block_dims, TILED_BLOCK_DIMS[builder], None)
+    return None
+
+
+def generated_modules(device: str, since: set[int]) -> list[wp.Module]:
+    """The modules of mujoco_warp's kernels created after ``since`` and of the unique-module kernels of
+    ``STEP_MODULES``' Python modules, those not loaded on ``device`` yet (kernels Newton creates for features this
+    scene leaves unused stay out)."""
+    context = wp.get_device(device).context
+    named = {id(m) for m in imported_modules()}
+    found: dict[int, wp.Module] = {}
+    for kernel in _live_kernels():
+        module = kernel.module
+        if id(module) in named or any(ctx == context for ctx, _ in module.execs):
+            continue
+        source = kernel.func.__module__
+        if (id(kernel) not in since and source.startswith("mujoco_warp.")) or source in STEP_MODULES:
+            found[id(module)] = module
+    return list(found.values())
+
+
+def precompile(device: str, solver=None, since: set[int] | None = None, max_workers: int | None = None) -> list[str]:
+    """Compile :func:`imported_modules` on parallel threads (default: one per CPU core); given ``solver``, first create
+    mujoco_warp's generated step kernels (:func:`create_step_kernels`) and compile them and every other kernel created
+    after ``since`` that is not loaded yet with them (``SimConfig.precompile`` "generated"); returns the module
+    names."""
+    modules = imported_modules()
+    if solver is not None:
+        create_step_kernels(device, solver)
+        modules += generated_modules(device, since or set())
+    block_dims = getattr(solver.mjw_model, "block_dim", None) if solver is not None else None
+    jobs = [(m, _block_dim(m, device, block_dims)) for m in modules]
+    with ThreadPoolExecutor(max_workers=_workers(max_workers)) as pool:
+        futures = [pool.submit(wp.force_load, device=device, modules=[m], block_dim=b, max_workers=0) for m, b in jobs]
+        for future in futures:
+            future.result()
     return [m.name for m in modules]

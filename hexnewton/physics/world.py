@@ -33,7 +33,7 @@ from hexnewton.config import HexConfig, SimConfig
 from hexnewton.errors import HexnewtonError
 from hexnewton.physics.device import resolve_device
 from hexnewton.physics.graphs import capture_graph
-from hexnewton.physics.precompile import precompile
+from hexnewton.physics.precompile import live_kernel_ids, precompile
 from hexnewton.physics.robot import BASE_Q, BASE_QD, NUM_JOINTS, build_hexapod, leg_bounds, stand_height
 from hexnewton.physics.terrain import Terrain, make_terrain, max_terrain_height_np
 
@@ -189,6 +189,7 @@ class World:
         self.sim_dt = sim.frame_dt / sim.substeps
         self.substeps = sim.substeps
         startup.mark("python and imports")
+        since = live_kernel_ids()  # the kernels mujoco_warp and Newton generate for this model come after
 
         self.terrain = terrain if terrain is not None else make_terrain(cfg.terrain)
         startup.mark("terrain")
@@ -199,9 +200,7 @@ class World:
         startup.mark("finalize")
         self._init_model_arrays()
         startup.mark("model arrays")
-        self._init_physics()
-        precompile(self.device)
-        startup.mark("kernels")
+        self._init_physics(since)
         self._init_buffers()
         self._bind_views()
         self.sim_time = 0.0
@@ -248,8 +247,10 @@ class World:
         self.control = self.model.control()
         newton.eval_fk(self.model, self.model.joint_q, self.model.joint_qd, self.state_0)
 
-    def _init_physics(self) -> None:
-        """The MuJoCo solver and Newton's collision pipeline with the contact capacity the solver takes."""
+    def _init_physics(self, since: set[int]) -> None:
+        """The MuJoCo solver and Newton's collision pipeline with the contact capacity the solver takes; then the
+        step's Warp modules, with the kernels generated for this model since ``since``, compiled in parallel
+        (``hexnewton.physics.precompile``)."""
         sim = self.cfg.sim
         self.solver = SolverMuJoCo(
             self.model,
@@ -275,6 +276,8 @@ class World:
         self._collide_dt = sim.frame_dt if sim.speculative_gap is not None else None
         self.contacts = self.pipeline.contacts()
         startup.mark("collision pipeline")
+        precompile(self.device, self.solver if sim.precompile == "generated" else None, since)
+        startup.mark("kernels")
 
     def _init_buffers(self) -> None:
         """The step's and the resets' buffers: overflow flags, reset masks, the solver's constraint rows per world,

@@ -2,8 +2,9 @@
 # The time-to-skill measurements (results/time_to_skill/, BENCHMARKS.md "Start-up" and "Terrain contact"), one
 # subcommand per device call, after the wheel chunks and `gpu.sh install` (scripts/device/README.md):
 #
-#   bash scripts/device/time_to_skill.sh startup       # `train.py --task complex` to its first iterations, twice:
-#                                                      # a cold Warp kernel cache, then the warm one; phase tables
+#   bash scripts/device/time_to_skill.sh startup [ARGS...]   # `train.py --task complex ARGS` to its first
+#                                                      # iterations, twice: a cold Warp kernel cache, then the warm one;
+#                                                      # phase tables (ARGS given: in $OUT/startup_<ARGS>/)
 #   bash scripts/device/time_to_skill.sh contact       # sim-only complex and stepped at 16384 envs under each terrain
 #                                                      # contact setting, the task's physics (20 ms frame, 4 substeps)
 #   bash scripts/device/time_to_skill.sh train NAME SEED [ARGS...]   # `python train.py --task complex --seed SEED
@@ -24,16 +25,17 @@ cmd=${1:-}; shift || true
 gpu_name() { nvidia-smi --query-gpu=name --format=csv,noheader | head -1; }
 case "$cmd" in
 startup)
-  mkdir -p "$OUT/startup"
-  gpu_name > "$OUT/startup/gpu.txt"
+  what=startup; [ $# -gt 0 ] && what="startup_$(echo "$*" | tr -c 'A-Za-z0-9.\n' _ | sed 's/^_*//')"
+  mkdir -p "$OUT/$what"
+  gpu_name > "$OUT/$what/gpu.txt"
   for cache in cold warm; do
     [ "$cache" = cold ] && rm -rf /root/.cache/warp
     t0=$(date +%s.%N)
-    python train.py --task complex --max_iterations 3 --log_dir "$RUNS/startup" --experiment "$cache" \
-      > "$OUT/startup/$cache.log" 2>&1
-    echo "exit $? after $(awk "BEGIN {print $(date +%s.%N) - $t0}") s (shell)" >> "$OUT/startup/$cache.log"
-    grep -E "^start-up|from process start|^exit" "$OUT/startup/$cache.log"
-    cp "$(ls -d "$RUNS/startup/$cache"/*/ | tail -1)/timing.json" "$OUT/startup/timing_$cache.json"
+    python train.py --task complex --max_iterations 3 "$@" --log_dir "$RUNS/$what" --experiment "$cache" \
+      > "$OUT/$what/$cache.log" 2>&1
+    echo "exit $? after $(awk "BEGIN {print $(date +%s.%N) - $t0}") s (shell)" >> "$OUT/$what/$cache.log"
+    grep -E "^start-up|from process start|^exit" "$OUT/$what/$cache.log"
+    cp "$(ls -d "$RUNS/$what/$cache"/*/ | tail -1)/timing.json" "$OUT/$what/timing_$cache.json"
   done
   tar czf /root/warpcache.tgz -C /root/.cache warp && ls -la /root/warpcache.tgz
   ;;

@@ -203,13 +203,29 @@ def test_cli_bad_input_is_one_line(args, message):
 
 def test_precompile_finds_every_step_module():
     """The CUDA cold-start list names modules that exist once a World is built (guards against renames)."""
-    from hexnewton.physics.precompile import STEP_MODULES, precompile
+    from hexnewton.physics.precompile import STEP_MODULES, imported_modules
 
-    world = _world("flat")
-    world.step(1)
-    names = precompile("cpu", max_workers=2)
+    _world("flat").step(1)
+    names = [m.name for m in imported_modules()]
     assert set(STEP_MODULES) <= set(names)
     assert any(n.startswith("hexnewton.") for n in names)
+
+
+def test_precompile_leaves_the_first_step_nothing_to_compile():
+    """A built World has every module its first step (and graph capture) launches loaded: mujoco_warp's generated
+    kernels included, each compiled once."""
+    import gc
+
+    world = _world("flat", precompile="generated")
+
+    def loaded() -> list[tuple[str, int]]:
+        return [(m.name, key[1]) for m in gc.get_objects() if isinstance(m, wp.Module) for key in list(m.execs)]
+
+    before = loaded()
+    assert any("__locals__" in name for name, _ in before)  # a generated kernel's module, compiled by the build
+    world.step(2)
+    assert sorted(set(loaded()) - set(before)) == []
+    assert len(before) == len(set(before))
 
 
 def test_bench_reports_sim_env_and_training(tmp_path):
