@@ -25,7 +25,7 @@ LEG_NAMES = ("R1", "R2", "R3", "L1", "L2", "L3")
 JOINT_KINDS = ("hip", "knee", "ankle")
 JOINT_NAMES = tuple(f"{leg}_{kind}" for leg in LEG_NAMES for kind in JOINT_KINDS)
 TERRAINS = ("flat", "rugged", "stepped", "complex")
-TERRAIN_COLLISIONS = ("mesh", "mesh_boxes")
+TERRAIN_COLLISIONS = ("mesh", "mesh_boxes", "boxes")
 #: what the policy's actions set: the CPG's parameters (the paper's CPG_RL) or the 18 joint targets (pure DRL)
 ACTION_MODES = ("cpg", "joint")
 
