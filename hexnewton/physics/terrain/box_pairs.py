@@ -53,14 +53,17 @@ def find_box_pairs(
     w = half_width[n]
     nx = cell_box.shape[0]
     ny = cell_box.shape[1]
-    ilo = wp.clamp(int(wp.floor((c[0] - w - x0) / res)), 0, nx - 1)
-    ihi = wp.clamp(int(wp.floor((c[0] + w - x0) / res)), 0, nx - 1)
-    jlo = wp.clamp(int(wp.floor((c[1] - w - y0) / res)), 0, ny - 1)
-    jhi = wp.clamp(int(wp.floor((c[1] + w - y0) / res)), 0, ny - 1)
+    ilo = int(wp.floor((c[0] - w - x0) / res))
+    ihi = int(wp.floor((c[0] + w - x0) / res))
+    jlo = int(wp.floor((c[1] - w - y0) / res))
+    jhi = int(wp.floor((c[1] + w - y0) / res))
+    inside = c[2] + w >= bottom and ihi >= 0 and ilo < nx and jhi >= 0 and jlo < ny
+    ilo, ihi = wp.max(ilo, 0), wp.min(ihi, nx - 1)
+    jlo, jhi = wp.max(jlo, 0), wp.min(jhi, ny - 1)
     start = first_slot[n]
     cap = slots[n]
     count = int(0)
-    if c[2] + w >= bottom:
+    if inside:
         for i in range(ilo, ihi + 1):
             for j in range(jlo, jhi + 1):
                 k = cell_box[i, j]
