@@ -43,6 +43,7 @@ log = logging.getLogger("hexnewton")
 # overflow bits beyond MuJoCo's own (bits 0-15) and Newton's (16 pipeline contacts, 17 nconmax)
 OVERFLOW_TRIANGLE_PAIRS = 1 << 20
 OVERFLOW_CONTACT_REDUCTION = 1 << 21
+OVERFLOW_BOX_PAIRS = 1 << 22  # terrain collision "boxes": a robot shape met more boxes than its pair slots
 # mujoco_warp's ITERATIONS (1 << 9) and LS_ITERATIONS (1 << 10) flags mean "solver hit its iteration cap",
 # not a dropped contact or constraint: counted apart from capacity overflow.
 NOT_CONVERGED_BITS = (1 << 9) | (1 << 10)
@@ -173,6 +174,8 @@ class OverflowReport:
             names.append("triangle-pair buffer (raise sim.triangle_pairs_per_env)")
         if b & OVERFLOW_CONTACT_REDUCTION:
             names.append("contact-reduction buffer (raise sim.contacts_per_env)")
+        if b & OVERFLOW_BOX_PAIRS:
+            names.append("terrain box pairs (terrain.collision boxes): a robot shape overlapped more boxes than its slots")
         return (f"contact buffers overflowed in {self.worlds} world(s), contacts were dropped: " + "; ".join(names)
                 + "; or lower sim.rigid_gap (fewer contact candidates)")
 
@@ -446,6 +449,9 @@ class World:
         flags = self._overflow_world.numpy()
         capacity = flags & ~NOT_CONVERGED_BITS
         bits = int(np.bitwise_or.reduce(capacity)) | int(self._overflow_global.numpy()[0])
+        if self.box_pairs is not None and self.box_pairs.overflow.numpy()[0]:
+            bits |= OVERFLOW_BOX_PAIRS
+            self.box_pairs.overflow.zero_()
         report = OverflowReport(
             worlds=int((capacity != 0).sum()),
             bits=bits,

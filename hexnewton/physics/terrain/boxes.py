@@ -18,7 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from hexnewton.physics.terrain.heightmap import HeightGrid
-from hexnewton.physics.terrain.mesh import _merge_rows
+from hexnewton.physics.terrain.mesh import merge_rows
 
 
 @dataclass(frozen=True)
@@ -48,7 +48,7 @@ def grid_boxes(grid: HeightGrid, base_depth: float = 0.1) -> BoxIndex:
     if not base_depth > 0:
         raise ValueError(f"base_depth must be positive, got {base_depth!r}")
     h = np.ascontiguousarray(grid.heights, dtype=np.float32)
-    i0, i1, j0, j1, top = _merge_rows(h)
+    i0, i1, j0, j1, top = merge_rows(h)
     cell_box = np.full(h.shape, -1, dtype=np.int32)
     for k in range(len(top)):
         cell_box[i0[k]:i1[k], j0[k]:j1[k]] = k
