@@ -25,7 +25,7 @@ LEG_NAMES = ("R1", "R2", "R3", "L1", "L2", "L3")
 JOINT_KINDS = ("hip", "knee", "ankle")
 JOINT_NAMES = tuple(f"{leg}_{kind}" for leg in LEG_NAMES for kind in JOINT_KINDS)
 TERRAINS = ("flat", "rugged", "stepped", "complex")
-TERRAIN_COLLISIONS = ("mesh", "mesh_boxes")
+TERRAIN_COLLISIONS = ("mesh", "mesh_boxes", "boxes")
 #: what the policy's actions set: the CPG's parameters (the paper's CPG_RL) or the 18 joint targets (pure DRL)
 ACTION_MODES = ("cpg", "joint")
 
@@ -132,7 +132,10 @@ class TerrainConfig:
     # treads, landings, flat ground beyond the blocks -- as one static box, the rugged blocks as one triangle mesh,
     # all down to one common bottom; the same surface as "mesh", one closed triangle mesh of the whole grid, with
     # fewer mesh lookups per robot (none on stepped): 5 % more robot-s/s on complex, 36 % on stepped at 16384 envs
-    # on an H100 (BENCHMARKS.md, "Terrain contact"; results/time_to_skill).
+    # on an H100 (BENCHMARKS.md, "Terrain contact"; results/time_to_skill). "boxes": every rectangle of equal-height
+    # cells one static box, each 2 cm rugged block one (~50,000 on rugged, the whole patch, as in the C MuJoCo
+    # model), each robot shape paired only with the boxes under it (physics/terrain/box_pairs.py): the box edges
+    # MuJoCo's feet meet (results/sim2sim/wedge/report.md).
     collision: str = field(default="mesh_boxes", metadata={"choices": TERRAIN_COLLISIONS})
 
 

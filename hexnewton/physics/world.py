@@ -36,12 +36,14 @@ from hexnewton.physics.graphs import capture_graph
 from hexnewton.physics.precompile import live_kernel_ids, precompile
 from hexnewton.physics.robot import BASE_Q, BASE_QD, NUM_JOINTS, build_hexapod, leg_bounds, stand_height
 from hexnewton.physics.terrain import Terrain, make_terrain, max_terrain_height_np
+from hexnewton.physics.terrain.box_pairs import TerrainBoxPairs
 
 log = logging.getLogger("hexnewton")
 
 # overflow bits beyond MuJoCo's own (bits 0-15) and Newton's (16 pipeline contacts, 17 nconmax)
 OVERFLOW_TRIANGLE_PAIRS = 1 << 20
 OVERFLOW_CONTACT_REDUCTION = 1 << 21
+OVERFLOW_BOX_PAIRS = 1 << 22  # terrain collision "boxes": a robot shape met more boxes than its pair slots
 # mujoco_warp's ITERATIONS (1 << 9) and LS_ITERATIONS (1 << 10) flags mean "solver hit its iteration cap",
 # not a dropped contact or constraint: counted apart from capacity overflow.
 NOT_CONVERGED_BITS = (1 << 9) | (1 << 10)
@@ -172,6 +174,8 @@ class OverflowReport:
             names.append("triangle-pair buffer (raise sim.triangle_pairs_per_env)")
         if b & OVERFLOW_CONTACT_REDUCTION:
             names.append("contact-reduction buffer (raise sim.contacts_per_env)")
+        if b & OVERFLOW_BOX_PAIRS:
+            names.append("terrain box pairs (terrain.collision boxes): a robot shape overlapped more boxes than its slots")
         return (f"contact buffers overflowed in {self.worlds} world(s), contacts were dropped: " + "; ".join(names)
                 + "; or lower sim.rigid_gap (fewer contact candidates)")
 
@@ -266,8 +270,10 @@ class World:
         self.solver.mjw_model.opt.warn_overflow &= ~NOT_CONVERGED_BITS
         max_contacts = self.solver.get_max_contact_count()
         startup.mark("solver")
+        self.box_pairs = self._terrain_box_pairs()
         self.pipeline = newton.CollisionPipeline(
             self.model,
+            shape_pairs_filtered=None if self.box_pairs is None else self.box_pairs.pairs,
             rigid_contact_max=max_contacts,
             max_triangle_pairs=max(1_000_000, sim.triangle_pairs_per_env * self.num_envs),
             speculative_contact_gap_max=sim.speculative_gap,
@@ -278,6 +284,24 @@ class World:
         startup.mark("collision pipeline")
         precompile(self.device, self.solver if sim.precompile == "generated" else None, since)
         startup.mark("kernels")
+
+    def _terrain_box_pairs(self) -> TerrainBoxPairs | None:
+        """With terrain collision "boxes": the robot shapes' pairs with the terrain boxes under them, refreshed before
+        every detection (:mod:`hexnewton.physics.terrain.box_pairs`); None otherwise."""
+        boxes = self.terrain.boxes
+        if boxes is None:
+            return None
+        sim = self.cfg.sim
+        robot_shapes = np.flatnonzero(self.model.shape_body.numpy() >= 0)
+        first = int(np.flatnonzero(self.model.shape_body.numpy() < 0)[0])
+        pairs = TerrainBoxPairs(self.model, boxes, self.terrain.grid, robot_shapes, first, first + boxes.count,
+                                sim.rigid_gap if sim.terrain_gap is None else sim.terrain_gap)
+        pairs.update(self.state_0.body_q)
+        # MuJoCo holds the far box only (add_boxes): every box's contacts take its geom (the same contact parameters)
+        geom = self.solver.newton_shape_to_mjc_geom.numpy()
+        geom[first:first + boxes.count] = geom[first + boxes.count]
+        self.solver.newton_shape_to_mjc_geom.assign(geom)
+        return pairs
 
     def _init_buffers(self) -> None:
         """The step's and the resets' buffers: overflow flags, reset masks, the solver's constraint rows per world,
@@ -335,6 +359,8 @@ class World:
     # ------------------------------------------------------------------ stepping
     def simulate_frame(self) -> None:
         """One physics frame (collision + substeps), uncaptured: callers may record it into their own graph."""
+        if self.box_pairs is not None:
+            self.box_pairs.update(self.state_0.body_q)
         self.pipeline.collide(self.state_0, self.contacts, dt=self._collide_dt)
         for i in range(self.substeps):
             if self.controller is not None:
@@ -426,6 +452,9 @@ class World:
         flags = self._overflow_world.numpy()
         capacity = flags & ~NOT_CONVERGED_BITS
         bits = int(np.bitwise_or.reduce(capacity)) | int(self._overflow_global.numpy()[0])
+        if self.box_pairs is not None and self.box_pairs.overflow.numpy()[0]:
+            bits |= OVERFLOW_BOX_PAIRS
+            self.box_pairs.overflow.zero_()
         report = OverflowReport(
             worlds=int((capacity != 0).sum()),
             bits=bits,

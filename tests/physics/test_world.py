@@ -187,7 +187,7 @@ def test_bad_num_envs_raises():
         (["--num_envs", "0"], "positive integer"),
         (["--num_envs", "-5"], "positive integer"),
         (["--device", "tpu"], "unknown device"),
-        (["--env.terrain.collision", "boxes"], "'boxes' is not one of mesh, mesh_boxes"),
+        (["--env.terrain.collision", "voxels"], "'voxels' is not one of mesh, mesh_boxes, boxes"),
         (["--terrain", "stepped", "--env.terrain.step_depth", "0.255"], "step_depth"),
     ]
     + ([(["--device", "cuda"], "no CUDA device")] if not wp.is_cuda_available() else []),

@@ -16,6 +16,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from hexnewton.config import TerrainConfig
+from hexnewton.physics.terrain.boxes import BoxIndex, add_boxes, grid_boxes
 from hexnewton.physics.terrain.heightmap import HeightGrid, build_height_grid, complex_step_count, validate_config
 from hexnewton.physics.terrain.mesh import grid_to_mesh
 from hexnewton.physics.terrain.parts import Part, add_mesh_boxes, split_strips
@@ -25,13 +26,16 @@ if TYPE_CHECKING:
     import newton
 
 __all__ = [
+    "BoxIndex",
     "HeightGrid",
     "Part",
     "Terrain",
+    "add_boxes",
     "add_mesh_boxes",
     "build_height_grid",
     "complex_step_count",
     "generate",
+    "grid_boxes",
     "grid_to_mesh",
     "make_terrain",
     "max_terrain_height_np",
@@ -49,6 +53,7 @@ class Terrain:
     cfg: TerrainConfig
     grid: HeightGrid
     mesh: newton.Mesh | None
+    boxes: BoxIndex | None = None  # with collision "boxes": the boxes added by add_to_builder
 
     def add_to_builder(self, builder: newton.ModelBuilder, cfg: newton.ModelBuilder.ShapeConfig) -> int:
         """Add the terrain as static shapes (body -1); returns the index of the first one.
@@ -56,13 +61,18 @@ class Terrain:
         flat: an infinite ground plane at z = 0. Otherwise, by ``TerrainConfig.collision``: "mesh", one triangle
         mesh; "mesh_boxes", the same surface as boxes for the constant-height strips plus meshes for the rugged
         blocks (:func:`~hexnewton.physics.terrain.parts.add_mesh_boxes`, consecutive shapes; with curriculum levels the
-        strips are one lane wide).
+        strips are one lane wide); "boxes", every rectangle of equal-height cells one box, each rugged block one
+        (:mod:`~hexnewton.physics.terrain.boxes`, consecutive shapes, then one box far below: :attr:`boxes` holds
+        them, their pairs with the robot shapes come from :mod:`~hexnewton.physics.terrain.box_pairs`).
         """
         if self.mesh is None:
             return builder.add_ground_plane(cfg=cfg)
         if self.cfg.collision == "mesh_boxes":
             band = round(self.cfg.lane_width / self.grid.res) if self.cfg.levels else None
             return add_mesh_boxes(self.grid, builder, cfg, self.name, band)[0]
+        if self.cfg.collision == "boxes":
+            self.boxes = grid_boxes(self.grid)
+            return add_boxes(self.boxes, self.grid, builder, cfg, self.name)
         return builder.add_shape_mesh(-1, mesh=self.mesh, cfg=cfg, label=f"terrain_{self.name}")
 
     def height_at(self, x: np.ndarray | float, y: np.ndarray | float) -> np.ndarray:

@@ -39,7 +39,7 @@ def _row_runs(valid: np.ndarray, *keys: np.ndarray) -> tuple[np.ndarray, np.ndar
     return start_r, start_c, last_c + 1
 
 
-def _merge_rows(h: np.ndarray) -> tuple[np.ndarray, ...]:
+def merge_rows(h: np.ndarray) -> tuple[np.ndarray, ...]:
     """Greedy rectangles of equal-height cells: row runs, then identical runs of consecutive rows.
 
     Returns ``(r0, r1, c0, c1, height)`` with rectangle ``n`` = rows r0..r1-1 x columns c0..c1-1.
@@ -57,8 +57,8 @@ def _merge_rows(h: np.ndarray) -> tuple[np.ndarray, ...]:
 
 def _top_quads(h: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Top faces (normal +z) as quad corner arrays ``(ix, iy, z)`` each of shape (Q, 4)."""
-    by_rows = _merge_rows(h)
-    by_cols = _merge_rows(h.T)
+    by_rows = merge_rows(h)
+    by_cols = merge_rows(h.T)
     if len(by_cols[0]) < len(by_rows[0]):
         j0, j1, i0, i1, z = by_cols
     else:
