@@ -4,6 +4,8 @@ fits (:func:`largest_that_fits`). The command line and its tables: ``python -m h
 
 from __future__ import annotations
 
+import contextlib
+import io
 import platform
 import tempfile
 import time
@@ -13,6 +15,7 @@ import numpy as np
 
 from hexnewton.config import HexConfig, SimConfig, TerrainConfig
 from hexnewton.learning.agent import AgentConfig
+from hexnewton.learning.runner import Rank, barrier
 
 
 @dataclass
@@ -33,14 +36,16 @@ class BenchResult:
 
 
 def _config(terrain: str, num_envs: int, device: str, seed: int, sim: SimConfig | None = None,
-            ground: TerrainConfig | None = None) -> HexConfig:  # fmt: skip
-    """``ground``: the other terrain settings (``--env.terrain.*``); ``terrain`` and ``seed`` replace its name, seed."""
-    return HexConfig(sim=replace(sim or SimConfig(), num_envs=num_envs, device=device),
-                     terrain=replace(ground or TerrainConfig(), name=terrain, seed=seed))  # fmt: skip
+            ground: TerrainConfig | None = None, base: HexConfig | None = None) -> HexConfig:  # fmt: skip
+    """``base`` (default ``HexConfig()``: a task's env) with ``sim`` and ``ground`` (the other terrain settings,
+    ``--env.terrain.*``) in place of its own, ``terrain`` and ``seed`` replacing the terrain's name and seed."""
+    base = base or HexConfig()
+    return replace(base, sim=replace(sim or base.sim, num_envs=num_envs, device=device),
+                   terrain=replace(ground or base.terrain, name=terrain, seed=seed))  # fmt: skip
 
 
 def bench_one(terrain: str, num_envs: int, device: str, frames: int, sim: SimConfig, seed: int = 0,
-              ground: TerrainConfig | None = None) -> BenchResult:  # fmt: skip
+              ground: TerrainConfig | None = None, base: HexConfig | None = None) -> BenchResult:  # fmt: skip
     """The physics world alone: ``frames`` timed frames of ``num_envs`` robots walking under the CPG controller, each
     with the fixed gait scaled by a random factor in [0.7, 1.3]; contact overflow checked after the timed frames."""
     import warp as wp
@@ -48,7 +53,7 @@ def bench_one(terrain: str, num_envs: int, device: str, frames: int, sim: SimCon
     from hexnewton.physics.cpg import CPGController
     from hexnewton.physics.world import World
 
-    cfg = _config(terrain, num_envs, device, seed, sim, ground)
+    cfg = _config(terrain, num_envs, device, seed, sim, ground, base)
     t0 = time.perf_counter()
     world = World(cfg)
     rng = np.random.default_rng(seed)
@@ -65,6 +70,7 @@ def bench_one(terrain: str, num_envs: int, device: str, frames: int, sim: SimCon
     world.step(max(frames // 10, 1))  # warm-up
     wp.synchronize_device(world.device)
     x0 = world.base_pos()[:, 0].copy()
+    barrier()  # under torchrun every rank's timed window starts together
     t0 = time.perf_counter()
     world.step(frames)
     wp.synchronize_device(world.device)
@@ -114,21 +120,22 @@ def _device_memory(device: str) -> int:
     return wp.get_mempool_used_mem_current(device) + torch.cuda.memory_allocated(torch.device(device))
 
 
-def bench_env(terrain: str, num_envs: int, device: str, steps: int, seed: int = 0,
-              sim: SimConfig | None = None, ground: TerrainConfig | None = None) -> PipelineResult:
+def bench_env(terrain: str, num_envs: int, device: str, steps: int, seed: int = 0, sim: SimConfig | None = None,
+              ground: TerrainConfig | None = None, base: HexConfig | None = None) -> PipelineResult:
     """``steps`` timed ``HexapodEnv.step`` calls with uniform random actions (drawn before the timing)."""
     import torch
     import warp as wp
 
     from hexnewton.mdp.env import make_env
 
-    cfg = _config(terrain, num_envs, device, seed, sim, ground)
+    cfg = _config(terrain, num_envs, device, seed, sim, ground, base)
     env = make_env(cfg)
     gen = torch.Generator(device=env._obs_t.device).manual_seed(seed)
     actions = torch.rand((8, num_envs, env.num_actions), generator=gen, device=env._obs_t.device) * 2 - 1
     for k in range(max(steps // 10, 2)):  # capture + warm-up
         env.step(actions[k % 8])
     wp.synchronize_device(env.device)
+    barrier()
     t0 = time.perf_counter()
     for k in range(steps):
         obs, rew, done, extras = env.step(actions[k % 8])
@@ -144,10 +151,11 @@ PHASES = (("env.step", "env", "step"), ("policy act", "alg", "act"), ("storage",
 
 
 def bench_train(terrain: str, num_envs: int, device: str, iterations: int, seed: int = 0, profile: bool = False,
-                sim: SimConfig | None = None, agent=None, ground: TerrainConfig | None = None,
-                ) -> tuple[PipelineResult, dict[str, float] | None]:  # fmt: skip
+                sim: SimConfig | None = None, agent=None, ground: TerrainConfig | None = None, rank: Rank = Rank(),
+                base: HexConfig | None = None) -> tuple[PipelineResult, dict[str, float] | None]:  # fmt: skip
     """``iterations`` timed PPO iterations of ``agent`` (default: ``AgentConfig()``) after one untimed warm-up iteration
-    (two with ``torch.compile``, whose first update compiles).
+    (two with ``torch.compile``, whose first update compiles). Under torchrun (``rank``) every rank trains its own
+    envs and the ranks average their gradients in every mini-batch, as ``train.py`` does.
 
     With ``profile``, the same runner then trains ``iterations`` more with a device sync around each rsl-rl
     phase (so their total exceeds an unprofiled iteration's): seconds per iteration per phase, plus "other"."""
@@ -155,20 +163,20 @@ def bench_train(terrain: str, num_envs: int, device: str, iterations: int, seed:
 
     import torch
     import warp as wp
-    from rsl_rl.runners import OnPolicyRunner
 
-    from hexnewton.learning.runner import seed_everything
+    from hexnewton.learning.runner import RankedRunner, seed_everything
     from hexnewton.mdp.env import make_env
 
     seed_everything(seed)
     cuda = device.startswith("cuda")
     used0 = _device_memory(device) if cuda else 0
-    cfg = _config(terrain, num_envs, device, seed, sim, ground)
+    cfg = _config(terrain, num_envs, device, seed, sim, ground, base)
     env = make_env(cfg)
     tcfg = (agent or AgentConfig()).to_rsl_rl(num_envs)
     # a TensorBoard writer as in train.py: rsl-rl's logger only does its per-step bookkeeping with one
     logs = tempfile.TemporaryDirectory(prefix="hexnewton-bench-")
-    runner = OnPolicyRunner(env, copy.deepcopy(tcfg), log_dir=logs.name, device=device)
+    with contextlib.redirect_stdout(io.StringIO()):  # rsl-rl prints both networks in full
+        runner = RankedRunner(env, copy.deepcopy(tcfg), log_dir=logs.name, device=device, rank=rank)
     runner.learn(2 if tcfg["torch_compile_mode"] else 1)  # capture, kernel loading, optimizer state, compile
     wall = _timed_learn(runner, env, iterations)
     rate = num_envs * tcfg["num_steps_per_env"] * iterations / wall
@@ -207,6 +215,7 @@ def _timed_learn(runner, env, iterations: int) -> float:
     import warp as wp
 
     wp.synchronize_device(env.device)
+    barrier()
     t0 = time.perf_counter()
     runner.learn(iterations)
     wp.synchronize_device(env.device)
@@ -252,18 +261,19 @@ def device_name(device: str) -> str:
 
 
 def bench_pipeline(terrain: str, n: int, device: str, modes: list[str], env_steps: int, iterations: int,
-                   profile: bool, sim: SimConfig, agent: AgentConfig, ground: TerrainConfig,
-                   ) -> tuple[PipelineResult, dict[str, float] | None]:  # fmt: skip
+                   profile: bool, sim: SimConfig, agent: AgentConfig, ground: TerrainConfig, rank: Rank = Rank(),
+                   base: HexConfig | None = None) -> tuple[PipelineResult, dict[str, float] | None]:  # fmt: skip
     """The env-step (``env`` in ``modes``) and training (``train``) throughput of ``n`` envs on ``terrain``, each
     printed as it is measured; with ``profile`` also the training phases' seconds per iteration (else None)."""
     pr, prof = PipelineResult(terrain, n), None
     if "env" in modes:
-        e = bench_env(terrain, n, device, env_steps, sim=sim, ground=ground)
+        e = bench_env(terrain, n, device, env_steps, sim=sim, ground=ground, base=base)
         pr.env_steps_per_s, pr.env_robot_s_per_s = e.env_steps_per_s, e.env_robot_s_per_s
         print(f"{terrain:8s} N={n:6d} env   {e.env_robot_s_per_s:12,.0f} robot-s/s  "
               f"({e.env_steps_per_s:,.0f} env-steps/s)", flush=True)  # fmt: skip
     if "train" in modes:
-        t, prof = bench_train(terrain, n, device, iterations, profile=profile, sim=sim, agent=agent, ground=ground)
+        t, prof = bench_train(terrain, n, device, iterations, profile=profile, sim=sim, agent=agent, ground=ground,
+                              rank=rank, base=base)  # fmt: skip
         for k in ("train_steps_per_s", "train_robot_s_per_s", "train_iteration_s", "memory_per_env_kb"):
             setattr(pr, k, getattr(t, k))
         print(f"{terrain:8s} N={n:6d} train {t.train_robot_s_per_s:12,.0f} robot-s/s  ({t.train_steps_per_s:,.0f} "

@@ -5,6 +5,14 @@
     python -m hexnewton.apps.bench --mode sim              # simulation only
     python -m hexnewton.apps.bench --mode sim --terrain stepped --env.terrain.collision mesh_boxes  # terrain settings
     python -m hexnewton.apps.bench --append BENCHMARKS.md  # also append the table (date, device, git rev)
+    python -m hexnewton.apps.bench --task complex --mode train --num_envs 4096    # the complex task's physics, learner
+    torchrun --standalone --nproc_per_node=4 -m hexnewton.apps.bench --task complex --mode train --num_envs 4096 \
+        --baseline bench_1gpu.json --json bench_4gpu.json  # 4096 envs on each of 4 GPUs; efficiency vs 1 GPU
+
+Under torchrun each rank measures on its own GPU (``cuda:LOCAL_RANK``; ``--device cpu``: Gloo on the CPU), every timed
+window starting together (a barrier), train mode averaging the ranks' gradients as ``train.py`` does; rank 0 gathers
+the ranks' rates and writes the tables: the total (their sum) and, with ``--baseline`` (a 1-GPU run's ``--json``), the
+scaling efficiency, total / (GPUs x the 1-GPU rate) (:mod:`hexnewton.analysis.scale_out`).
 
 Three measurements, each in robot-seconds simulated per wall second (robot-s/s) so they compare directly:
 - ``sim``: the physics world alone. Every robot walks under the CPG controller (Eq. 3 + Eq. 4 kernels at
@@ -21,8 +29,11 @@ Three measurements, each in robot-seconds simulated per wall second (robot-s/s) 
 
 from __future__ import annotations
 
+import contextlib
 import datetime
+import io
 import json
+import os
 import sys
 from dataclasses import asdict, replace
 
@@ -36,6 +47,7 @@ from hexnewton.analysis.bench import (
     largest_that_fits,
 )
 from hexnewton.analysis.report import git_rev
+from hexnewton.analysis.scale_out import rate_rows, scaling_markdown, scaling_rows, with_ranks
 from hexnewton.apps.cli import ArgumentParser, add_config_args, config_overrides, positive_int, run, terrain_name
 from hexnewton.config import TERRAINS, SimConfig, TerrainConfig, apply_overrides
 from hexnewton.learning.agent import AgentConfig
@@ -85,9 +97,16 @@ def table(results: list[BenchResult], sim: SimConfig, command: str) -> str:
 def parser() -> ArgumentParser:
     """The command line of ``python -m hexnewton.apps.bench``."""
     p = ArgumentParser(prog="python -m hexnewton.apps.bench", description=__doc__.split("\n")[0])
-    p.add_argument("--device", default=None, help="cpu, cuda or cuda:N (default: cuda if present, else cpu)")
+    p.add_argument("--device", default=None, help="cpu, cuda or cuda:N (default: cuda if present, else cpu; under "
+                   "torchrun cuda:LOCAL_RANK)")
+    from hexnewton.tasks import TASKS
+
+    p.add_argument("--task", choices=list(TASKS), default=None,
+                   help="take this task's physics, terrain settings and learner (default: the configs' defaults); "
+                        "--terrain defaults to its terrain")  # fmt: skip
     p.add_argument("--num_envs", type=positive_int, nargs="+", default=None)
-    p.add_argument("--terrain", type=terrain_name, nargs="+", default=list(TERRAINS))
+    p.add_argument("--terrain", type=terrain_name, nargs="+", default=None, help="default: every terrain (with "
+                   "--task: its own)")
     p.add_argument("--frames", type=positive_int, default=None, help="timed physics frames (default 400 GPU, 100 CPU)")
     p.add_argument("--mode", nargs="+", choices=["sim", "env", "train"], default=["sim", "env", "train"])
     p.add_argument("--env_steps", type=positive_int, default=None, help="timed env steps (default 200 GPU, 25 CPU)")
@@ -98,7 +117,9 @@ def parser() -> ArgumentParser:
     p.add_argument("--largest", action="store_true",
                    help="sim-only: double the largest --num_envs until the device runs out of memory")
     p.add_argument("--append", metavar="PATH", help="append the markdown table to this file")
-    p.add_argument("--json", metavar="PATH", help="write the raw results as JSON")
+    p.add_argument("--json", metavar="PATH", help="write the raw results as JSON (with every rank's rates)")
+    p.add_argument("--baseline", metavar="PATH",
+                   help="a 1-GPU run's --json: the scaling efficiency of this run's rates against it")
     add_config_args(p, "env.sim", SimConfig(), skip=("num_envs", "device"),
                     title="--env.sim.*: the physics (SimConfig), as train.py's")
     add_config_args(p, "env.terrain", TerrainConfig(), skip=("name", "seed"),
@@ -129,40 +150,102 @@ def markdown(results: list[BenchResult], pipeline: list[PipelineResult], profile
     return md
 
 
-def main(argv: list[str] | None = None) -> int:
-    args = parser().parse_args(argv)
-    agent = apply_overrides(AgentConfig(), config_overrides(args, "agent"))
-    from hexnewton.physics.device import resolve_device
+def settings(args):
+    """The run's physics, terrain settings, learner and env base: ``--task``'s (or the defaults) with the command
+    line's ``--env.sim.*``, ``--env.terrain.*`` and ``--agent.*`` on top, and the terrains to measure."""
+    from hexnewton.config import HexConfig
+    from hexnewton.tasks import task
 
-    device = resolve_device(args.device)
+    base = task(args.task) if args.task else None
+    env, agent = (base.env, base.agent) if base else (HexConfig(), AgentConfig())
+    agent = apply_overrides(agent, config_overrides(args, "agent"))
+    sim = apply_overrides(env.sim, config_overrides(args, "env.sim"))
+    ground = apply_overrides(env.terrain, config_overrides(args, "env.terrain"))
+    terrains = args.terrain or ([env.terrain.name] if base else list(TERRAINS))
+    for name in terrains:
+        validate_config(replace(ground, name=name))
+    return sim, ground, agent, (env if base else None), terrains
+
+
+def measure(args, device: str, rank, sim, ground, agent, base, terrains):
+    """Every asked measurement on this rank, printed as it is made: sim-only, env-step and training results, phases."""
     gpu = device.startswith("cuda")
     envs = args.num_envs or ([1024] if gpu else [64])
     frames = args.frames or (400 if gpu else 100)
-    sim = apply_overrides(SimConfig(), config_overrides(args, "env.sim"))
-    ground = apply_overrides(TerrainConfig(), config_overrides(args, "env.terrain"))
-    for name in args.terrain:
-        validate_config(replace(ground, name=name))
-    command = "python -m hexnewton.apps.bench " + " ".join(sys.argv[1:] if argv is None else argv)
-    results, pipeline, profiles = [], [], []
     env_steps = args.env_steps or (200 if gpu else 25)
     iterations = args.train_iterations or (10 if gpu else 2)
-    for terrain in args.terrain:
+    results, pipeline, profiles = [], [], []
+    for terrain in terrains:
         for n in envs:
             if "sim" in args.mode:
-                r = bench_one(terrain, n, device, frames, sim, ground=ground)
+                r = bench_one(terrain, n, device, frames, sim, ground=ground, base=base)
                 print(f"{terrain:8s} N={n:6d} sim   {r.robot_s_per_s:12,.0f} robot-s/s  ({r.robot_frames_per_s:,.0f} "
                       f"robot-frames/s, build {r.build_s:.1f} s, capture {r.capture_s:.1f} s, overflow: {r.overflow})",
                       flush=True)  # fmt: skip
                 results.append(r)
             if "env" in args.mode or "train" in args.mode:
                 pr, prof = bench_pipeline(terrain, n, device, args.mode, env_steps, iterations, args.profile, sim,
-                                          agent, ground)  # fmt: skip
+                                          agent, ground, rank, base)  # fmt: skip
                 if prof is not None:
                     profiles.append({"terrain": terrain, "num_envs": n, **prof})
                 pipeline.append(pr)
         if args.largest:
             results += largest_that_fits(terrain, max(envs), device, frames, sim, ground=ground)
+    return results, pipeline, profiles
+
+
+def check_outputs(args) -> dict | None:
+    """Fail before any simulation on outputs that could not be written or a baseline that is not a 1-GPU bench
+    JSON; returns the baseline (None without one)."""
+    from hexnewton.apps.cli import check_writable
+
+    for path, ext in ((args.json, ".json"), (args.append, ".md")):
+        if path:
+            check_writable(path, ext)
+    if not args.baseline:
+        return None
+    try:
+        with open(args.baseline) as f:
+            baseline = json.load(f)
+    except (OSError, ValueError) as exc:
+        raise ValueError(f"--baseline {args.baseline}: {exc}")
+    if baseline.get("world_size") != 1 or "ranks" not in baseline:
+        raise ValueError(f"--baseline {args.baseline}: not a 1-GPU hexnewton-bench --json (world_size 1, ranks)")
+    return baseline
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = parser().parse_args(argv)
+    baseline = check_outputs(args)
+    sim, ground, agent, base, terrains = settings(args)
+    from hexnewton.learning.runner import close_group, distributed_rank, gather_floats, init_group
+    from hexnewton.physics.device import resolve_device
+
+    rank = distributed_rank(dict(os.environ), args.device)
+    device = resolve_device(rank.device or args.device)
+    init_group(rank, device)
+    launcher = f"torchrun --standalone --nproc_per_node={rank.world_size}" if rank.world_size > 1 else "python"
+    command = f"{launcher} -m hexnewton.apps.bench " + " ".join(sys.argv[1:] if argv is None else argv)
+    quiet = contextlib.redirect_stdout(io.StringIO()) if not rank.is_main else contextlib.nullcontext()
+    with quiet:  # rank 0 alone prints
+        results, pipeline, profiles = measure(args, device, rank, sim, ground, agent, base, terrains)
+    rows = rate_rows(results, pipeline)
+    ranks = with_ranks(rows, gather_floats([r["rate"] for r in rows], device))
+    close_group()
+    if rank.is_main:
+        report(args, results, pipeline, profiles, sim, command, device, ranks, baseline)
+    return 0
+
+
+def report(args, results, pipeline, profiles, sim, command: str, device: str, ranks: list[dict],
+           baseline: dict | None) -> None:  # fmt: skip
+    """Rank 0: the tables (with the ranks' total and efficiency under torchrun or with ``--baseline``), printed,
+    appended and written as JSON."""
     md = markdown(results, pipeline, profiles, sim, command, device)
+    world = len(ranks[0]["per_rank"]) if ranks else 1
+    run = {"world_size": world, "device_name": device_name(device), "command": command, "ranks": ranks}
+    if world > 1 or baseline:
+        md += "\n" + scaling_markdown(scaling_rows([baseline, run] if baseline else [run]))
     print()
     print(md)
     if args.append:
@@ -171,8 +254,7 @@ def main(argv: list[str] | None = None) -> int:
     if args.json:
         with open(args.json, "w") as f:
             json.dump({"sim": [asdict(r) for r in results], "pipeline": [asdict(r) for r in pipeline],
-                       "profile": profiles}, f, indent=1)  # fmt: skip
-    return 0
+                       "profile": profiles, **run}, f, indent=1)  # fmt: skip
 
 
 if __name__ == "__main__":

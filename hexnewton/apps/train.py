@@ -231,6 +231,17 @@ def resume(runner, ckpt: dict, args, agent) -> None:
           f"learning rate {runner.alg.learning_rate:.2e}")
 
 
+def ranks_agent(agent, rank):
+    """The learner each torchrun rank trains with (``--agent.scale_with_ranks``), announced by rank 0 when scaled."""
+    scaled = agent.for_ranks(rank.world_size)
+    if scaled is not agent and rank.is_main:
+        a, b = agent.to_rsl_rl(1024)["algorithm"], scaled.to_rsl_rl(1024)["algorithm"]
+        print(f"scaled for {rank.world_size} ranks ({' '.join(agent.scale_with_ranks)}): {scaled.max_iterations} "
+              f"iterations, stages at {[start for start, _ in scaled.stages]}, mini-batches per rank at 1024 envs "
+              f"{b['num_mini_batches']} (unscaled {a['num_mini_batches']}), learning rate {b['learning_rate']:g}")
+    return scaled
+
+
 def check_ranks_agree(runner, rank) -> None:
     """RuntimeError unless every torchrun rank ended with the same parameters (the gradients were shared)."""
     spread = runner.rank_spread()
@@ -268,6 +279,15 @@ def choose_on_validation(runner, cfg, agent, run_dir: str, first_it: int) -> tup
                                    for c, r in zip(cands, results)]}  # fmt: skip
 
 
+def device_label(device: str) -> str:
+    """The GPU's name for ``timing.json`` (``cpu`` on the CPU)."""
+    if not device.startswith("cuda"):
+        return "cpu"
+    import torch
+
+    return torch.cuda.get_device_name(torch.device(device))
+
+
 def finish(args, runner, cfg, agent, rank, run_dir: str, views, train_s: float, first_it: int) -> None:
     """Rank 0 after training: the last episodes, the policy to ship (the best iteration's or the last) exported as
     ONNX, ``timing.json``, and the commands that use the result."""
@@ -279,6 +299,7 @@ def finish(args, runner, cfg, agent, rank, run_dir: str, views, train_s: float, 
     timing = {"startup_phases_s": startup.phases(), "first_iteration_s": runner.first_iteration_s,
               "train_s": train_s, "iterations": iterations,
               "env_steps": iterations * num_envs * agent.num_steps_per_env * rank.world_size,
+              "world_size": rank.world_size, "num_envs_per_rank": num_envs, "device_name": device_label(cfg.sim.device),
               "wall_s_to_result": None}  # fmt: skip
     stats = runner.env.episode_stats()
     print("last episodes: " + ", ".join(f"{k} {v}" if isinstance(v, int) else f"{k} {v:.3f}" for k, v in stats.items()))
@@ -333,6 +354,7 @@ def main(argv: list[str] | None = None) -> int:
     meta = {"task": base.name, "action_mode": base.action_mode, "num_obs": env.num_obs,
             "num_actions": env.num_actions, "config": dataclasses.asdict(cfg), "agent": dataclasses.asdict(agent),
             "world_size": rank.world_size}  # fmt: skip
+    agent = ranks_agent(agent, rank)  # checkpoints keep the unscaled one: a resumed run scales for its own ranks
     run_dir = make_run_dir(args, meta, agent.to_rsl_rl(cfg.sim.num_envs), rank)
     runner, views = make_runner(args, env, agent, meta, run_dir, rank, ckpt)
     where = f"rank {rank.rank} of {rank.world_size}, " if rank.world_size > 1 else ""

@@ -23,6 +23,8 @@ from dataclasses import asdict, dataclass, field, replace
 DISTRIBUTIONS = ("beta", "gaussian")
 #: torch.compile modes rsl-rl accepts (it rejects the CUDA-graph ones)
 COMPILE_MODES = ("default", "max-autotune-no-cudagraphs")
+#: what ``AgentConfig.scale_with_ranks`` may scale with the number of torchrun ranks
+RANK_SCALINGS = ("mini_batches", "iterations", "learning_rate")
 
 
 @dataclass
@@ -96,6 +98,12 @@ class AgentConfig:
     validation_candidates: int = 4
     #: control steps per validation round: a robot still on its way then has not reached the goal
     validation_steps: int = 3000
+    #: under torchrun with K ranks (:meth:`for_ranks`): ``mini_batches``: K times the mini-batches per rank (the
+    #: mini-batch summed over the ranks stays one process's, K times the optimizer steps per iteration);
+    #: ``iterations``: max_iterations, save_interval and the stages' first iterations divided by K (one process's
+    #: env-steps and curriculum per env-step); ``learning_rate``: K times the learning rate (fixed schedule only: the
+    #: adaptive one sets it from the ranks' mean KL). Empty: every rank runs this config as it is (rsl-rl's way)
+    scale_with_ranks: tuple[str, ...] = field(default=(), metadata={"choices": RANK_SCALINGS})
     distribution: DistributionConfig = field(default_factory=DistributionConfig)
     model: ModelConfig = field(default_factory=ModelConfig)
     algorithm: AlgorithmConfig = field(default_factory=AlgorithmConfig)
@@ -125,6 +133,34 @@ class AgentConfig:
         for start, changes in self.stages:
             if not isinstance(start, int) or not isinstance(changes, dict):
                 raise ValueError("agent.stages: expected ((first_iteration, {field: value}), ...)")
+        unknown = [s for s in self.scale_with_ranks if s not in RANK_SCALINGS]
+        if unknown:
+            raise ValueError(f"agent.scale_with_ranks: {unknown[0]} is not one of {', '.join(RANK_SCALINGS)}")
+        if "learning_rate" in self.scale_with_ranks and a.schedule == "adaptive":
+            raise ValueError("agent.scale_with_ranks learning_rate needs --agent.algorithm.schedule fixed: the adaptive "
+                             "schedule sets the rate from the ranks' mean KL after every mini-batch")
+
+    def for_ranks(self, world_size: int) -> AgentConfig:
+        """The config each of ``world_size`` torchrun ranks trains with: this one scaled as ``scale_with_ranks``
+        says (itself for one rank or no scaling). rsl-rl 5.5.1 averages the ranks' gradients in every mini-batch
+        (so the mini-batch summed over the ranks is K per-rank ones, at the same optimizer steps per iteration) and,
+        with the adaptive schedule, averages the KL over the ranks; rank 0 sets the rate and broadcasts it."""
+        k, todo = world_size, set(self.scale_with_ranks)
+        if k <= 1 or not todo:
+            return self
+        out, a = self, self.algorithm
+        if "mini_batches" in todo:
+            a = replace(a, mini_batch_size=max(1, a.mini_batch_size // k)) if a.mini_batch_size else \
+                replace(a, num_mini_batches=a.num_mini_batches * k)  # fmt: skip
+        if "learning_rate" in todo:
+            a = replace(a, learning_rate=a.learning_rate * k)
+        if "iterations" in todo:
+            def div(n: int) -> int:
+                return max(1, -(-n // k))
+
+            out = replace(out, max_iterations=div(out.max_iterations), save_interval=div(out.save_interval),
+                          stages=tuple((start // k, changes) for start, changes in out.stages))  # fmt: skip
+        return replace(out, algorithm=a)
 
     def to_rsl_rl(self, num_envs: int) -> dict:
         """rsl-rl-lib 5.5.1's ``OnPolicyRunner`` configuration for ``num_envs`` envs per process."""

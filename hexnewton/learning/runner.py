@@ -139,6 +139,53 @@ def distributed_rank(environ: dict, device: str | None) -> Rank:
     return Rank(rank, local, world, f"cuda:{local}")
 
 
+def init_group(rank: Rank, device: str) -> None:
+    """Open this torchrun job's process group once (NCCL on ``cuda:LOCAL_RANK``, Gloo on the CPU) and make
+    ``cuda:LOCAL_RANK`` the current device; nothing for a run of one process."""
+    import torch
+    import torch.distributed as td
+
+    if rank.world_size <= 1:
+        return
+    cuda = str(device).startswith("cuda")
+    if not td.is_initialized():
+        td.init_process_group(backend="nccl" if cuda else "gloo", rank=rank.rank, world_size=rank.world_size)
+    if cuda:
+        torch.cuda.set_device(rank.local_rank)
+
+
+def barrier() -> None:
+    """Wait for every rank of the open process group (nothing without one)."""
+    import torch.distributed as td
+
+    if td.is_initialized():
+        td.barrier()
+
+
+def gather_floats(values: list[float], device: str) -> list[list[float]]:
+    """Every rank's ``values`` (the same length on each), in rank order, on every rank; ``[values]`` without a
+    process group. Every rank must call it."""
+    import torch
+    import torch.distributed as td
+
+    if not td.is_initialized():
+        return [list(values)]
+    mine = torch.tensor(values, dtype=torch.float64, device=device)
+    out = [torch.empty_like(mine) for _ in range(td.get_world_size())]
+    td.all_gather(out, mine)
+    return [t.tolist() for t in out]
+
+
+def close_group() -> None:
+    """Every rank at the end of a torchrun job: wait for the others, then close the process group (a process that
+    exits with its Gloo group open can abort in the group's teardown)."""
+    import torch.distributed as td
+
+    if td.is_initialized():
+        td.barrier()
+        td.destroy_process_group()
+
+
 def seed_everything(seed: int) -> None:
     import torch
 
@@ -158,39 +205,19 @@ def check_log_dir(log_dir: str) -> None:
         raise ValueError(f"cannot write runs under {log_dir}: {path} is not a writable directory")
 
 
-class HexRunner(OnPolicyRunner):
-    """rsl-rl's ``OnPolicyRunner`` for a hexnewton task.
+class RankedRunner(OnPolicyRunner):
+    """rsl-rl's ``OnPolicyRunner`` placed in a torchrun job by a :class:`Rank` (rank 0 of 1 without one) rather than by
+    rsl-rl's own reading of the environment: NCCL on ``cuda:LOCAL_RANK``, Gloo on the CPU. ``train.py`` trains with
+    :class:`HexRunner`, a subclass; ``hexnewton-bench``'s train mode times this one."""
 
-    ``meta`` (task, action mode, observation size, env and agent configs) goes into every checkpoint's
-    ``infos["hexnewton"]``; saves go to a temporary file and are renamed. After every iteration (rsl-rl calls
-    ``logger.log`` once per iteration, its only per-iteration hook) the runner prints :func:`progress_line`,
-    keeps ``model_best.pt`` (:class:`BestCheckpoint`), enters the curriculum's next stage
-    (``AgentConfig.stages``) and stops on ``max_minutes`` / ``target_success`` (:func:`stop_reason`)."""
-
-    def __init__(self, env, agent, meta: dict, log_dir: str | None, device: str, rank: Rank = Rank()):
+    def __init__(self, env, train_cfg: dict, log_dir: str | None, device: str, rank: Rank = Rank()):
         self.rank = rank  # before rsl-rl's set-up, which calls _configure_multi_gpu
-        with contextlib.redirect_stdout(io.StringIO()):  # rsl-rl prints both networks in full
-            super().__init__(env, agent.to_rsl_rl(env.num_envs), log_dir=log_dir, device=device)
-        # the run's git/ folder records hexnewton's commit and diff (rsl-rl's default looks for its own repo)
-        self.logger.git_status_repos = [os.path.dirname(os.path.abspath(__file__))]
-        self.agent, self.meta = agent, meta
-        self.run_dir = log_dir
-        self.levels = env.cfg.terrain.levels
-        self.best = BestCheckpoint(log_dir or "", self.levels)
-        self._reduce = _sum_over_ranks(device) if rank.world_size > 1 else None
-        self._rsl_log, self.logger.log = self.logger.log, self._after_iteration
-        self._rsl_init_writer, self.logger.init_logging_writer = self.logger.init_logging_writer, self._init_writer
-        self._stage, self._time_up, self._t0 = None, False, time.time()
-        self.first_iteration_s = None  # seconds from the process's start to the end of the first iteration
-        startup.mark("runner")
+        super().__init__(env, train_cfg, log_dir=log_dir, device=device)
 
     def _configure_multi_gpu(self) -> None:
         """rsl-rl's multi-process set-up (``cfg["multi_gpu"]``, ranks, the process group) from this run's
         :class:`Rank`, with the backend its device needs: NCCL on ``cuda:LOCAL_RANK``, Gloo on the CPU (rsl-rl 5.5.1
         itself always takes NCCL and CUDA)."""
-        import torch
-        import torch.distributed as td
-
         r = self.rank
         self.gpu_world_size, self.is_distributed = r.world_size, r.world_size > 1
         self.gpu_local_rank, self.gpu_global_rank = r.local_rank, r.rank
@@ -201,21 +228,12 @@ class HexRunner(OnPolicyRunner):
         cuda = str(self.device).startswith("cuda")
         if self.device != (f"cuda:{r.local_rank}" if cuda else "cpu"):
             raise ValueError(f"rank {r.rank} runs on cuda:{r.local_rank} or cpu, not on {self.device}")
-        if not td.is_initialized():
-            td.init_process_group(backend="nccl" if cuda else "gloo", rank=r.rank, world_size=r.world_size)
-        if cuda:
-            torch.cuda.set_device(r.local_rank)
+        init_group(r, self.device)
 
     def leave_group(self) -> None:
-        """Every rank at the end of a torchrun run: wait for the others, then close the process group (a process that
-        exits with its Gloo group open can abort in the group's teardown)."""
-        if not self.is_distributed:
-            return
-        import torch.distributed as td
-
-        if td.is_initialized():
-            td.barrier()
-            td.destroy_process_group()
+        """Every rank at the end of a torchrun run: :func:`close_group`."""
+        if self.is_distributed:
+            close_group()
 
     def rank_spread(self) -> float:
         """The largest difference between any rank's actor and critic parameters and rank 0's (0 in a run of one
@@ -231,6 +249,32 @@ class HexRunner(OnPolicyRunner):
         spread = (mine - ref).abs().max().reshape(1)
         td.all_reduce(spread, op=td.ReduceOp.MAX)
         return float(spread)
+
+
+class HexRunner(RankedRunner):
+    """rsl-rl's ``OnPolicyRunner`` for a hexnewton task.
+
+    ``meta`` (task, action mode, observation size, env and agent configs) goes into every checkpoint's
+    ``infos["hexnewton"]``; saves go to a temporary file and are renamed. After every iteration (rsl-rl calls
+    ``logger.log`` once per iteration, its only per-iteration hook) the runner prints :func:`progress_line`,
+    keeps ``model_best.pt`` (:class:`BestCheckpoint`), enters the curriculum's next stage
+    (``AgentConfig.stages``) and stops on ``max_minutes`` / ``target_success`` (:func:`stop_reason`)."""
+
+    def __init__(self, env, agent, meta: dict, log_dir: str | None, device: str, rank: Rank = Rank()):
+        with contextlib.redirect_stdout(io.StringIO()):  # rsl-rl prints both networks in full
+            super().__init__(env, agent.to_rsl_rl(env.num_envs), log_dir=log_dir, device=device, rank=rank)
+        # the run's git/ folder records hexnewton's commit and diff (rsl-rl's default looks for its own repo)
+        self.logger.git_status_repos = [os.path.dirname(os.path.abspath(__file__))]
+        self.agent, self.meta = agent, meta
+        self.run_dir = log_dir
+        self.levels = env.cfg.terrain.levels
+        self.best = BestCheckpoint(log_dir or "", self.levels)
+        self._reduce = _sum_over_ranks(device) if rank.world_size > 1 else None
+        self._rsl_log, self.logger.log = self.logger.log, self._after_iteration
+        self._rsl_init_writer, self.logger.init_logging_writer = self.logger.init_logging_writer, self._init_writer
+        self._stage, self._time_up, self._t0 = None, False, time.time()
+        self.first_iteration_s = None  # seconds from the process's start to the end of the first iteration
+        startup.mark("runner")
 
     # -------------------------------------------------------------- checkpoints
     def save(self, path: str, infos: dict | None = None) -> None:

@@ -1,0 +1,45 @@
+"""Scale-out report: throughput and time to the result at 1, 2, 4 ... GPUs of one host, from a lease's outputs.
+
+    python -m hexnewton.apps.scale_out LEASE --out results/scale_out
+
+LEASE is what ``bash scripts/device/scale_out.sh pack`` brings back, unpacked: ``bench_<K>gpu.json`` (``hexnewton-bench
+--json`` under torchrun at K GPUs), ``runs/<name>/`` (a ``train.py`` run's ``timing.json`` and ``config.json``, its
+console log and ``wall.txt``), ``evals/<name>_<terrain>/`` (``python -m hexnewton.apps.evaluate --out`` of the run's
+result) and ``commands.txt`` (the calls, quoted in the report). Writes ``report.md`` and ``results.json``
+(:mod:`hexnewton.analysis.scale_out`): per GPU count the device, envs per GPU, env-steps/s, the scaling efficiency,
+the seconds from process start to the result and, per terrain, the result's success at 3 m and fall rate.
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+
+from hexnewton.apps.cli import ArgumentParser, check_new_dir, run
+
+
+def parser() -> ArgumentParser:
+    """The command line of ``python -m hexnewton.apps.scale_out``."""
+    p = ArgumentParser(prog="python -m hexnewton.apps.scale_out", description=__doc__.split("\n")[0])
+    p.add_argument("lease", help="the unpacked outputs of scripts/device/scale_out.sh pack")
+    p.add_argument("--out", required=True, help="a new folder for report.md and results.json")
+    return p
+
+
+def main(argv: list[str] | None = None) -> int:
+    from hexnewton.analysis.scale_out import build_report
+
+    args = parser().parse_args(argv)
+    if not os.path.isdir(args.lease):
+        raise ValueError(f"{args.lease} is not a folder")
+    check_new_dir(args.out)
+    path = os.path.join(args.lease, "commands.txt")
+    commands = open(path).read().splitlines() if os.path.isfile(path) else []
+    results = build_report(args.lease, args.out, commands)
+    print(f"{len(results['bench'])} throughput rows, {len(results['runs'])} runs -> {args.out}/ (report.md, "
+          "results.json)")  # fmt: skip
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(run(main, "python -m hexnewton.apps.scale_out"))
