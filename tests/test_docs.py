@@ -9,6 +9,7 @@ its ``# comment`` and a trailing `` &`` dropped; an inline span may wrap over li
 checked without running it:
 
 - ``python train.py ARGS`` and ``torchrun [torchrun flags] train.py ARGS`` -> ``hexnewton.apps.train.main``;
+  ``torchrun [torchrun flags] -m hexnewton.apps.X ARGS`` as ``python -m hexnewton.apps.X ARGS``;
   ``python play.py ARGS`` -> ``hexnewton.apps.play.main``; ``python -m hexnewton.apps.X ARGS`` ->
   ``hexnewton.apps.X.main``: the entry point's own argument parser parses
   ARGS in-process (``argparse.ArgumentParser.parse_args`` is patched to stop right after a successful parse), so a
@@ -89,6 +90,8 @@ PLACEHOLDERS = {"CKPT": "results/policies/cpg_rl_complex.pt", "BUNDLE": "results
                 "DIR": "out", "N": "2"}  # fmt: skip
 MARK = re.compile(r"\(at\s+([0-9a-f]{7,40})\)")
 STARTS = ("python ", "python3 ", "torchrun ", "bash scripts/")
+#: torchrun's flags that take no value
+TORCHRUN_SWITCHES = ("--standalone", "--no-python", "--no_python", "--run-path", "--run_path")
 #: fewer commands than this means the extractor is broken, not that the documents have none
 MIN_COMMANDS = 80
 
@@ -204,10 +207,11 @@ def _parse_then_stop(self, args=None, namespace=None):
 
 def _entry(words: list[str]) -> tuple[str, list[str]] | None:
     """(module whose main parses, its argv) for a command the test parses; None for one it does not."""
-    if words[0] == "torchrun":
+    if words[0] == "torchrun":  # its own flags up to the script, or up to -m and the module
         rest = words[1:]
-        while rest and rest[0].startswith("-"):
-            rest = rest[1:] if "=" in rest[0] or len(rest) < 2 or rest[1].endswith(".py") else rest[2:]
+        while rest and rest[0].startswith("-") and rest[0] != "-m":
+            one = "=" in rest[0] or rest[0] in TORCHRUN_SWITCHES or len(rest) < 2 or rest[1].endswith(".py")
+            rest = rest[1:] if one else rest[2:]
         words = ["python"] + rest
     if words[0] not in ("python", "python3") or len(words) < 2:
         return None

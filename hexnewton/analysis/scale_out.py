@@ -67,11 +67,11 @@ def scaling_markdown(rows: list[dict]) -> str:
     md = ("| measure | terrain | envs per GPU | GPUs | total | per GPU | slowest / fastest rank | efficiency |\n"
           "|---|---|---:|---:|---:|---:|---:|---:|\n")  # fmt: skip
     for r in rows:
-        eff = "—" if r["efficiency"] is None else f"{r['efficiency']:.1%}" + (
-            "" if r["gpus"] == 1 or r["efficiency"] >= TARGET_EFFICIENCY else " (below 90 %)")
-        spread = min(r["per_rank"]) / max(r["per_rank"]) if max(r["per_rank"]) else float("nan")
+        eff = _pct(r["efficiency"]) + ("" if r["efficiency"] is None or r["gpus"] == 1 or
+                                       r["efficiency"] >= TARGET_EFFICIENCY else " (below 90 %)")  # fmt: skip
+        spread = min(r["per_rank"]) / max(r["per_rank"]) if max(r["per_rank"]) else None
         md += (f"| {r['measure']} | {r['terrain']} | {r['envs_per_gpu']} | {r['gpus']} | {r['total']:,.0f} "
-               f"{UNITS[r['measure']]} | {r['per_gpu']:,.0f} | {spread:.1%} | {eff} |\n")  # fmt: skip
+               f"{UNITS[r['measure']]} | {r['per_gpu']:,.0f} | {_pct(spread)} | {eff} |\n")  # fmt: skip
     return md
 
 
@@ -101,32 +101,48 @@ def run_summary(run_dir: str, evals: list[str]) -> dict:
             "train_s": timing["train_s"], "env_steps_per_s": timing["env_steps"] / timing["train_s"],
             "first_iteration_s": timing["first_iteration_s"], "wall_s_to_result": timing["wall_s_to_result"],
             "shell_wall_s": float(open(shell).read().split()[0]) if os.path.isfile(shell) else None,
-            "result": os.path.basename(timing.get("result") or ""), "terrains": terrains}  # fmt: skip
+            "process_start": timing.get("process_start"), "result": os.path.basename(timing.get("result") or ""),
+            "terrains": terrains}  # fmt: skip
 
 
 def with_training_efficiency(runs: dict[str, dict]) -> dict[str, dict]:
-    """Each run's training efficiency: its env-steps/s over K x the 1-GPU run's at the same envs per GPU (None
-    without one)."""
-    single = {r["envs_per_gpu"]: r["env_steps_per_s"] for r in runs.values() if r["gpus"] == 1}
+    """Each run's training efficiency, its env-steps/s over K x the 1-GPU run's at the same envs per GPU, and its
+    speed-up, the 1-GPU run's seconds from process start to the result over its own (against the 1-GPU run of the
+    same total envs, else of the same envs per GPU); None without such a run."""
+    single = {r["envs_per_gpu"]: r for r in runs.values() if r["gpus"] == 1}
     for r in runs.values():
         base = single.get(r["envs_per_gpu"])
-        r["efficiency"] = r["env_steps_per_s"] / (r["gpus"] * base) if base else None
+        r["efficiency"] = r["env_steps_per_s"] / (r["gpus"] * base["env_steps_per_s"]) if base else None
+        base = single.get(r["total_envs"]) or base
+        r["speedup"] = base["wall_s_to_result"] / r["wall_s_to_result"] if base else None
+    for name, r in runs.items():  # the runs whose time from process start to result overlapped this one's
+        t0 = r["process_start"]
+        r["beside"] = sorted(n for n, o in runs.items() if n != name and None not in (t0, o["process_start"]) and
+                             o["process_start"] < t0 + r["wall_s_to_result"] and t0 < o["process_start"] +
+                             o["wall_s_to_result"])  # fmt: skip
     return runs
+
+
+def _pct(v: float | None) -> str:
+    return "—" if v is None else f"{100 * v:.1f} %"
 
 
 def runs_markdown(runs: dict[str, dict]) -> str:
     """One row per training run: GPUs, envs, training rate and efficiency, seconds to the result, per terrain."""
     terrains = list(dict.fromkeys(t for r in runs.values() for t in r["terrains"]))
     md = ("| run | device | GPUs | envs per GPU | total envs | iterations | env-steps/s (training) | efficiency | first "
-          "iteration [s] | training [s] | process start to result [s] | "
-          + " | ".join(f"{t} 3 m / falls" for t in terrains) + " |\n|---|---|" + "---:|" * (9 + len(terrains)) + "\n")
+          "iteration [s] | training [s] | process start to result [s] | speed-up | ran beside | "
+          + " | ".join(f"{t} 3 m / falls" for t in terrains) + " |\n|---|---|" + "---:|" * 10 + "---|"
+          + "---:|" * len(terrains) + "\n")
     for name, r in sorted(runs.items(), key=lambda kv: (kv[1]["total_envs"], kv[1]["gpus"])):
-        eff = "—" if r["efficiency"] is None else f"{r['efficiency']:.1%}"
-        cells = [f"{100 * r['terrains'][t]['success_3m']:.1f} % / {100 * r['terrains'][t]['fall_rate']:.1f} %"
+        cells = [f"{_pct(r['terrains'][t]['success_3m'])} / {_pct(r['terrains'][t]['fall_rate'])}"
                  if t in r["terrains"] else "—" for t in terrains]  # fmt: skip
+        speedup = "—" if r["speedup"] is None else f"{r['speedup']:.2f}x"
         md += (f"| {name} | {r['device_name']} | {r['gpus']} | {r['envs_per_gpu']} | {r['total_envs']} | "
-               f"{r['iterations']} | {r['env_steps_per_s']:,.0f} | {eff} | {r['first_iteration_s']:.1f} | "
-               f"{r['train_s']:.1f} | {r['wall_s_to_result']:.1f} | " + " | ".join(cells) + " |\n")  # fmt: skip
+               f"{r['iterations']} | {r['env_steps_per_s']:,.0f} | {_pct(r['efficiency'])} | "
+               f"{r['first_iteration_s']:.1f} | {r['train_s']:.1f} | {r['wall_s_to_result']:.1f} | {speedup} | "
+               f"{', '.join(r['beside']) or 'alone'} | "
+               + " | ".join(cells) + " |\n")  # fmt: skip
     return md
 
 
@@ -164,11 +180,14 @@ def build_report(folder: str, out: str, commands: list[str]) -> dict:
                "the total over (GPUs x the 1-GPU rate at the same envs per GPU); the target is 90 %.", "",
                *[f"`{c}`" for c in results["bench_commands"]], "", scaling_markdown(rows)]  # fmt: skip
     if runs:
-        md += ["## Time to the result (`train.py` under torchrun, then 1000 test rounds per terrain)", "",
+        md += ["## Time to the result (`train.py` under torchrun, then the result's test rounds per terrain)", "",
                "Process start to result: rank 0's `timing.json` (`wall_s_to_result`: from its process start through "
-               "training, deterministic validation on rank 0 and the ONNX export). Success at 3 m and falls: the "
+               "training, deterministic validation on rank 0 and the ONNX export; `shell_wall_s` in results.json: "
+               "the shell's seconds from the launch, torchrun's own start included). Speed-up: the 1-GPU run's seconds "
+               "over the run's (same total envs, else same envs per GPU). Success at 3 m and falls: the "
                "result's deterministic action on unseen rounds (`python -m hexnewton.apps.evaluate`). Efficiency: "
-               "training env-steps/s over (GPUs x the 1-GPU run's at the same envs per GPU).", "",
+               "training env-steps/s over (GPUs x the 1-GPU run's at the same envs per GPU). Ran beside: the runs whose "
+               "process start to result overlapped (on other GPUs of the host).", "",
                runs_markdown(runs)]  # fmt: skip
     os.makedirs(out, exist_ok=True)
     with open(os.path.join(out, "results.json"), "w") as f:

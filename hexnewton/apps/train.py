@@ -300,6 +300,7 @@ def finish(args, runner, cfg, agent, rank, run_dir: str, views, train_s: float, 
               "train_s": train_s, "iterations": iterations,
               "env_steps": iterations * num_envs * agent.num_steps_per_env * rank.world_size,
               "world_size": rank.world_size, "num_envs_per_rank": num_envs, "device_name": device_label(cfg.sim.device),
+              "process_start": startup.process_start(),
               "wall_s_to_result": None}  # fmt: skip
     stats = runner.env.episode_stats()
     print("last episodes: " + ", ".join(f"{k} {v}" if isinstance(v, int) else f"{k} {v:.3f}" for k, v in stats.items()))

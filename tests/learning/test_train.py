@@ -148,10 +148,11 @@ def test_torchrun_ranks_devices_and_seeds():
 def test_torchrun_two_cpu_processes_train_as_one(tmp_path):
     """``torchrun --nproc_per_node=2 train.py --device cpu``: two processes (Gloo) train two iterations with their
     gradients averaged; their parameters agree at the end, and only rank 0 writes a run directory and chooses the
-    result on validation rounds, as one process does."""
+    result on validation rounds, as one process does. ``--agent.scale_with_ranks iterations``: 4 iterations of one
+    process are 2 per rank; the checkpoints keep the unscaled config, timing.json the ranks and envs per rank."""
     cmd = ["torchrun", "--standalone", "--nproc_per_node=2", "train.py", "--task", "flat", "--num_envs", "4",
-           "--max_iterations", "2", "--device", "cpu", "--agent.validation_rounds", "2", "--agent.validation_steps", "5",
-           "--log_dir", str(tmp_path)]  # fmt: skip
+           "--max_iterations", "4", "--agent.scale_with_ranks", "iterations", "--device", "cpu",
+           "--agent.validation_rounds", "2", "--agent.validation_steps", "5", "--log_dir", str(tmp_path)]  # fmt: skip
     proc = subprocess.run(cmd, capture_output=True, text=True, timeout=900, cwd=ROOT)
     assert proc.returncode == 0, proc.stdout[-2000:] + proc.stderr[-3000:]
     assert "rank 0 of 2" in proc.stdout and "rank 1 of 2" in proc.stdout
@@ -163,7 +164,13 @@ def test_torchrun_two_cpu_processes_train_as_one(tmp_path):
     assert os.path.isfile(os.path.join(runs[0], "model_result.pt"))
     from hexnewton.learning.checkpoint import checkpoint_meta, load_checkpoint
 
-    assert checkpoint_meta(load_checkpoint(os.path.join(runs[0], "model_1.pt")))["world_size"] == 2
+    meta = checkpoint_meta(load_checkpoint(os.path.join(runs[0], "model_1.pt")))
+    assert meta["world_size"] == 2 and meta["agent"]["max_iterations"] == 4
+    assert "scaled for 2 ranks (iterations): 2 iterations" in proc.stdout
+    assert not os.path.exists(os.path.join(runs[0], "model_2.pt"))
+    timing = json.load(open(os.path.join(runs[0], "timing.json")))
+    assert (timing["world_size"], timing["num_envs_per_rank"], timing["device_name"]) == (2, 4, "cpu")
+    assert timing["env_steps"] == 2 * 4 * 24 * 2 and timing["process_start"] <= time.time()
 
 
 def test_stop_reason_is_one_decision_for_all_ranks():

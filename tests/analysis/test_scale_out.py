@@ -1,0 +1,105 @@
+"""The scale-out report (hexnewton/analysis/scale_out.py, ``python -m hexnewton.apps.scale_out``) from fixture outputs
+of a lease: bench JSONs at 1, 2 and 4 GPUs, train.py runs and their evaluations."""
+
+import json
+import os
+
+import pytest
+
+from hexnewton.analysis.scale_out import rate_rows, scaling_rows, with_ranks
+from hexnewton.analysis.bench import BenchResult, PipelineResult
+from hexnewton.apps.cli import run
+from hexnewton.apps.scale_out import main
+
+
+def _bench(k: int, train: dict[int, list[float]]) -> dict:
+    """A ``hexnewton-bench --json`` of K ranks: train mode at each envs per GPU, the ranks' rates."""
+    ranks = [{"measure": "train", "terrain": "complex", "num_envs": n, "per_rank": rates, "total": sum(rates)}
+             for n, rates in train.items()]  # fmt: skip
+    return {"sim": [], "pipeline": [], "profile": [], "world_size": k, "device_name": "NVIDIA H100 80GB HBM3",
+            "command": f"torchrun --standalone --nproc_per_node={k} -m hexnewton.apps.bench --task complex", "ranks": ranks}
+
+
+def _run(folder, name: str, k: int, envs: int, train_s: float, wall: float, start: float, evals: dict) -> None:
+    run_dir = folder / "runs" / name
+    run_dir.mkdir(parents=True)
+    steps = 300 * 24 * envs * k
+    (run_dir / "timing.json").write_text(json.dumps({
+        "startup_phases_s": {}, "first_iteration_s": 40.0, "train_s": train_s, "iterations": 300, "env_steps": steps,
+        "world_size": k, "num_envs_per_rank": envs, "device_name": "NVIDIA H100 80GB HBM3", "process_start": start,
+        "wall_s_to_result": wall, "result": f"/root/scale_out/{name}/x/model_result.pt"}))  # fmt: skip
+    (run_dir / "config.json").write_text(json.dumps({"hexnewton": {"world_size": k, "config": {"sim": {
+        "num_envs": envs, "device": "cuda:0"}}}, "train": {}}))  # fmt: skip
+    (run_dir / "wall.txt").write_text(f"{wall + 3.0}\n")
+    for terrain, (success, falls) in evals.items():
+        d = folder / "evals" / f"{name}_{terrain}"
+        d.mkdir(parents=True)
+        (d / "results.json").write_text(json.dumps({"meta": {}, "results": {terrain: {"cpg_rl": {
+            "rounds": 1000, "success_3m": success, "fall_rate": falls}}}}))  # fmt: skip
+
+
+@pytest.fixture
+def lease(tmp_path):
+    folder = tmp_path / "lease"
+    folder.mkdir()
+    for k, rate in ((1, 100000.0), (2, 95000.0), (4, 80000.0)):
+        bench = _bench(k, {4096: [rate] * k, 16384: [2 * rate] * k})
+        (folder / f"bench_{k}gpu.json").write_text(json.dumps(bench))
+    ev = {"rugged": (0.99, 0.01), "stepped": (1.0, 0.0), "complex": (0.975, 0.002)}
+    _run(folder, "g1x4096", 1, 4096, 120.0, 170.0, 1000.0, ev)
+    _run(folder, "g2x4096", 2, 4096, 126.0, 176.0, 2000.0, ev)
+    _run(folder, "g2x2048", 2, 2048, 80.0, 125.0, 2010.0, ev)
+    _run(folder, "g4x1024", 4, 1024, 60.0, 100.0, 3000.0, {"rugged": (0.95, 0.04)})
+    (folder / "commands.txt").write_text("CUDA_VISIBLE_DEVICES=0 python train.py --task complex --num_envs 4096\n")
+    return folder
+
+
+def test_report_from_a_lease(lease, tmp_path, capsys):
+    out = tmp_path / "report"
+    assert run(main, "python -m hexnewton.apps.scale_out", [str(lease), "--out", str(out)]) == 0
+    res = json.load(open(out / "results.json"))
+    eff = {(r["envs_per_gpu"], r["gpus"]): r["efficiency"] for r in res["bench"]}
+    assert eff[(4096, 1)] == pytest.approx(1.0) and eff[(4096, 2)] == pytest.approx(0.95)
+    assert eff[(16384, 4)] == pytest.approx(0.8)
+    totals = {(r["envs_per_gpu"], r["gpus"]): r["total"] for r in res["bench"]}
+    assert totals[(4096, 4)] == pytest.approx(320000.0)
+    runs = res["runs"]
+    assert set(runs) == {"g1x4096", "g2x4096", "g2x2048", "g4x1024"}
+    g2 = runs["g2x4096"]
+    assert g2["gpus"] == 2 and g2["envs_per_gpu"] == 4096 and g2["total_envs"] == 8192
+    assert g2["efficiency"] == pytest.approx(120.0 / 126.0)  # twice the steps in 126 s against once in 120 s, per GPU
+    assert g2["speedup"] == pytest.approx(170.0 / 176.0) and g2["shell_wall_s"] == pytest.approx(179.0)
+    assert runs["g4x1024"]["speedup"] == pytest.approx(1.7) and runs["g4x1024"]["efficiency"] is None
+    assert g2["beside"] == ["g2x2048"] and runs["g1x4096"]["beside"] == []
+    assert g2["terrains"]["complex"] == {"rounds": 1000, "success_3m": 0.975, "fall_rate": 0.002}
+    assert g2["device_name"] == "NVIDIA H100 80GB HBM3" and g2["result"] == "model_result.pt"
+    md = open(out / "report.md").read()
+    assert "| train | complex | 16384 | 4 | 640,000 env-steps/s | 160,000 | 100.0 % | 80.0 % (below 90 %) |" in md
+    assert "CUDA_VISIBLE_DEVICES=0 python train.py --task complex --num_envs 4096" in md
+    assert "| g4x1024 | NVIDIA H100 80GB HBM3 | 4 | 1024 | 4096 |" in md and "95.0 % / 4.0 %" in md
+    # nothing is overwritten; an empty folder or a run without timing.json is one line, exit 2
+    for argv, message in (([str(lease), "--out", str(out)], "exists"),
+                          ([str(tmp_path / "report"), "--out", str(tmp_path / "r2")], "nothing to report"),
+                          ([str(tmp_path / "none"), "--out", str(tmp_path / "r3")], "is not a folder")):  # fmt: skip
+        capsys.readouterr()
+        assert run(main, "python -m hexnewton.apps.scale_out", argv) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and message in err[0], err
+    os.remove(lease / "runs" / "g2x2048" / "timing.json")
+    assert run(main, "python -m hexnewton.apps.scale_out", [str(lease), "--out", str(tmp_path / "r4")]) == 2
+    assert "holds no timing.json" in capsys.readouterr().err
+
+
+def test_rate_rows_line_up_with_the_ranks():
+    """Each rank's rows in one order (sim, then env and train per pipeline result, unmeasured modes left out); the
+    gathered rates give the total; one run of one GPU is its own baseline."""
+    sim = [BenchResult("complex", 64, "cpu", 10, 1.0, 50.0, 2500.0, 0.0, 0.0, "none", 0, 0.1, 1.0)]
+    pipe = [PipelineResult("complex", 64, env_steps_per_s=300.0, train_steps_per_s=200.0),
+            PipelineResult("flat", 64, env_steps_per_s=400.0)]
+    rows = rate_rows(sim, pipe)
+    assert [(r["measure"], r["terrain"], r["rate"]) for r in rows] == [
+        ("sim", "complex", 50.0), ("env", "complex", 300.0), ("train", "complex", 200.0), ("env", "flat", 400.0)]
+    gathered = with_ranks(rows, [[r["rate"] for r in rows], [49.0, 310.0, 190.0, 390.0]])
+    assert gathered[2]["per_rank"] == [200.0, 190.0] and gathered[2]["total"] == 390.0
+    one = scaling_rows([{"world_size": 1, "ranks": with_ranks(rows, [[r["rate"] for r in rows]])}])
+    assert all(r["efficiency"] == pytest.approx(1.0) for r in one)
