@@ -146,6 +146,23 @@ def runs_markdown(runs: dict[str, dict]) -> str:
     return md
 
 
+def by_gpu_count(rows: list[dict], runs: dict[str, dict]) -> dict[int, dict]:
+    """Per GPU count: the devices, each bench measure's rate and efficiency per envs per GPU, and the runs' rate,
+    efficiency, seconds to the result and per-terrain success and falls."""
+    out: dict[int, dict] = {}
+    for r in rows:
+        k = out.setdefault(r["gpus"], {"devices": [], "bench": {}, "runs": {}})
+        k["devices"] = sorted(set(k["devices"]) | {r["device_name"]})
+        k["bench"].setdefault(r["measure"], {})[r["envs_per_gpu"]] = {
+            "total": r["total"], "per_gpu": r["per_gpu"], "efficiency": r["efficiency"]}  # fmt: skip
+    keys = ("envs_per_gpu", "total_envs", "env_steps_per_s", "efficiency", "wall_s_to_result", "speedup", "terrains")
+    for name, r in runs.items():
+        k = out.setdefault(r["gpus"], {"devices": [], "bench": {}, "runs": {}})
+        k["devices"] = sorted(set(k["devices"]) | {r["device_name"]})
+        k["runs"][name] = {key: r[key] for key in keys}
+    return dict(sorted(out.items()))
+
+
 def collect(folder: str) -> tuple[list[dict], dict[str, dict]]:
     """A scale-out lease's outputs (``scripts/device/scale_out.sh pack``): ``bench_*.json`` (bench runs),
     ``runs/<name>/`` (train.py runs) and ``evals/<name>_<terrain>/`` (their evaluations)."""
@@ -169,7 +186,8 @@ def build_report(folder: str, out: str, commands: list[str]) -> dict:
     benches, runs = collect(folder)
     rows = scaling_rows(benches)
     devices = sorted({b.get("device_name", "?") for b in benches} | {r["device_name"] for r in runs.values()})
-    results = {"devices": devices, "target_efficiency": TARGET_EFFICIENCY, "bench": rows, "runs": runs,
+    results = {"devices": devices, "target_efficiency": TARGET_EFFICIENCY, "by_gpus": by_gpu_count(rows, runs),
+               "bench": rows, "runs": runs,
                "bench_commands": sorted({b.get("command", "?") for b in benches}), "commands": commands}  # fmt: skip
     md = [f"# Scale-out on one host: {', '.join(devices)}", "", "Made by `python -m hexnewton.apps.scale_out "
           f"{folder} --out {out}` from the outputs of these calls (`scripts/device/scale_out.sh`):", "", "```bash",

@@ -235,10 +235,11 @@ def ranks_agent(agent, rank):
     """The learner each torchrun rank trains with (``--agent.scale_with_ranks``), announced by rank 0 when scaled."""
     scaled = agent.for_ranks(rank.world_size)
     if scaled is not agent and rank.is_main:
-        a, b = agent.to_rsl_rl(1024)["algorithm"], scaled.to_rsl_rl(1024)["algorithm"]
+        a = scaled.algorithm
+        batches = f"mini-batch size {a.mini_batch_size}" if a.mini_batch_size else f"{a.num_mini_batches} mini-batches"
         print(f"scaled for {rank.world_size} ranks ({' '.join(agent.scale_with_ranks)}): {scaled.max_iterations} "
-              f"iterations, stages at {[start for start, _ in scaled.stages]}, mini-batches per rank at 1024 envs "
-              f"{b['num_mini_batches']} (unscaled {a['num_mini_batches']}), learning rate {b['learning_rate']:g}")
+              f"iterations, stages from {[start for start, _ in scaled.stages]}, {batches} per rank, learning rate "
+              f"{a.learning_rate:g}")  # fmt: skip
     return scaled
 
 

@@ -28,8 +28,8 @@ GPU_COUNTS=${GPU_COUNTS:-1 2 4}
 BENCH_ENVS=${BENCH_ENVS:-4096 16384}
 BENCH_MODES=${BENCH_MODES:-train}
 BENCH_ITERATIONS=${BENCH_ITERATIONS:-10}
-# same envs per GPU (4096) and same total envs (4096) at 1, 2 and 4 GPUs
-ROUNDS=${ROUNDS:-g4x4096:0,1,2,3:4096 | g4x1024:0,1,2,3:1024 | g2x4096:0,1:4096 g2x2048:2,3:2048 | g1x4096:0:4096}
+# same envs per GPU (4096) and same total envs (4096) at 1, 2 and 4 GPUs; the 1-GPU run first and alone
+ROUNDS=${ROUNDS:-g1x4096:0:4096 | g4x4096:0,1,2,3:4096 | g2x4096:0,1:4096 g2x2048:2,3:2048 | g4x1024:0,1,2,3:1024}
 ROUNDS_PER_TERRAIN=${ROUNDS_PER_TERRAIN:-1000}
 TERRAINS=${TERRAINS:-rugged stepped complex}
 # more flags for each command (a CPU smoke test: "--device cpu ..."; none on the GPU machine)
@@ -56,7 +56,7 @@ bench)
     fi
     log_cmd "CUDA_VISIBLE_DEVICES=$gpus $run"
     CUDA_VISIBLE_DEVICES=$gpus $run > "$RUNS/bench_${k}gpu.log" 2>&1
-    echo "exit $? ($k GPUs)"; grep -E "^\| (train|env|sim) " "$RUNS/bench_${k}gpu.log"
+    echo "exit $? ($k GPUs)"; grep -E "^\| (train|env|sim|complex) " "$RUNS/bench_${k}gpu.log"
   done
   ;;
 train)

@@ -73,6 +73,10 @@ def test_report_from_a_lease(lease, tmp_path, capsys):
     assert g2["beside"] == ["g2x2048"] and runs["g1x4096"]["beside"] == []
     assert g2["terrains"]["complex"] == {"rounds": 1000, "success_3m": 0.975, "fall_rate": 0.002}
     assert g2["device_name"] == "NVIDIA H100 80GB HBM3" and g2["result"] == "model_result.pt"
+    four = res["by_gpus"]["4"]
+    assert four["bench"]["train"]["16384"]["efficiency"] == pytest.approx(0.8) and set(four["runs"]) == {"g4x1024"}
+    assert four["runs"]["g4x1024"]["terrains"]["rugged"]["fall_rate"] == 0.04
+    assert four["devices"] == ["NVIDIA H100 80GB HBM3"] and set(res["by_gpus"]) == {"1", "2", "4"}
     md = open(out / "report.md").read()
     assert "| train | complex | 16384 | 4 | 640,000 env-steps/s | 160,000 | 100.0 % | 80.0 % (below 90 %) |" in md
     assert "CUDA_VISIBLE_DEVICES=0 python train.py --task complex --num_envs 4096" in md
