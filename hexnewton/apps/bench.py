@@ -222,6 +222,8 @@ def main(argv: list[str] | None = None) -> int:
     from hexnewton.physics.device import resolve_device
 
     rank = distributed_rank(dict(os.environ), args.device)
+    if rank.world_size > 1 and args.largest:
+        raise ValueError("--largest runs in one process (each rank would stop at its own env count): leave out torchrun")
     device = resolve_device(rank.device or args.device)
     init_group(rank, device)
     launcher = f"torchrun --standalone --nproc_per_node={rank.world_size}" if rank.world_size > 1 else "python"

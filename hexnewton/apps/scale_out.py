@@ -22,7 +22,7 @@ def parser() -> ArgumentParser:
     """The command line of ``python -m hexnewton.apps.scale_out``."""
     p = ArgumentParser(prog="python -m hexnewton.apps.scale_out", description=__doc__.split("\n")[0])
     p.add_argument("lease", help="the unpacked outputs of scripts/device/scale_out.sh pack")
-    p.add_argument("--out", required=True, help="a new folder for report.md and results.json")
+    p.add_argument("--out", required=True, help="the folder to make for report.md and results.json (nothing is overwritten)")
     return p
 
 

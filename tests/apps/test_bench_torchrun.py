@@ -36,9 +36,15 @@ def test_two_cpu_ranks_gather_their_rates(tmp_path):
     assert proc.stdout.count("### Throughput") == 1  # rank 0 alone prints
 
 
-def test_a_baseline_of_several_gpus_is_one_error_line(tmp_path, capsys):
+def test_a_baseline_of_several_gpus_or_largest_under_torchrun_is_one_error_line(tmp_path, capsys, monkeypatch):
     _baseline(tmp_path / "two.json", world_size=2)
     argv = ["--device", "cpu", "--baseline", str(tmp_path / "two.json")]
     assert run(main, "python -m hexnewton.apps.bench", argv) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "not a 1-GPU hexnewton-bench --json" in err[0], err
+    # --largest stops at each rank's own env count: one process only
+    for key, value in (("WORLD_SIZE", "2"), ("RANK", "0"), ("LOCAL_RANK", "0")):
+        monkeypatch.setenv(key, value)
+    assert run(main, "python -m hexnewton.apps.bench", ["--device", "cpu", "--largest"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "--largest runs in one process" in err[0], err
