@@ -199,9 +199,8 @@ def check_outputs(args) -> dict | None:
     JSON; returns the baseline (None without one)."""
     from hexnewton.apps.cli import check_writable
 
-    for path, ext in ((args.json, ".json"), (args.append, ".md")):
-        if path:
-            check_writable(path, ext)
+    if args.json:
+        check_writable(args.json, ".json")
     if not args.baseline:
         return None
     try:
@@ -235,18 +234,17 @@ def main(argv: list[str] | None = None) -> int:
     ranks = with_ranks(rows, gather_floats([r["rate"] for r in rows], device))
     close_group()
     if rank.is_main:
-        report(args, results, pipeline, profiles, sim, command, device, ranks, baseline)
+        report(args, results, pipeline, profiles, sim, command, device, rank.world_size, ranks, baseline)
     return 0
 
 
-def report(args, results, pipeline, profiles, sim, command: str, device: str, ranks: list[dict],
+def report(args, results, pipeline, profiles, sim, command: str, device: str, world: int, ranks: list[dict],
            baseline: dict | None) -> None:  # fmt: skip
     """Rank 0: the tables (with the ranks' total and efficiency under torchrun or with ``--baseline``), printed,
     appended and written as JSON."""
     md = markdown(results, pipeline, profiles, sim, command, device)
-    world = len(ranks[0]["per_rank"]) if ranks else 1
     run = {"world_size": world, "device_name": device_name(device), "command": command, "ranks": ranks}
-    if world > 1 or baseline:
+    if ranks and (world > 1 or baseline):
         md += "\n" + scaling_markdown(scaling_rows([baseline, run] if baseline else [run]))
     print()
     print(md)
