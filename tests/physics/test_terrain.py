@@ -448,5 +448,5 @@ def test_split_strips_bands_and_bad_input() -> None:
                      Part(2, 4, 2, 4, True), Part(4, 5, 0, 2, True), Part(4, 6, 2, 4, True)]  # fmt: skip
     with pytest.raises(ValueError, match="divide"):
         split_strips(HeightGrid(h, 0.0, 0.0, 0.01), band=3)
-    with pytest.raises(ValueError, match="unknown terrain collision 'boxes'"):
-        make_terrain(TerrainConfig(name="rugged", collision="boxes"))
+    with pytest.raises(ValueError, match="unknown terrain collision 'voxels'"):
+        make_terrain(TerrainConfig(name="rugged", collision="voxels"))
