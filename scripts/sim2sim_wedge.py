@@ -47,8 +47,18 @@ SETTINGS = {
     "newton_substep": {"sim.frame_dt": 0.005, "sim.substeps": 1},
     "newton_mesh": {"terrain.collision": "mesh"},
     "newton_boxes": {"terrain.collision": "boxes"},
-    "mujoco": None,
 }
+#: C MuJoCo settings: the bundle's closed loop on its MJCF, with one model option moved to Newton's training physics
+#: (``mujoco_variant``); the bundle's files stay as shipped
+MUJOCO = {
+    "mujoco": "the bundle's MJCF as shipped",
+    "mujoco_solver": "solver iterations 10, line-search iterations 10, tolerance 1e-6 (mujoco_warp's, SimConfig's)",
+    "mujoco_limits": "joint-limit solref from RobotConfig limit_ke / limit_kd as Newton's SolverMuJoCo converts them",
+    "mujoco_actfrc": "effort limit as the joint's actuator-force range (Newton's) instead of the actuator's forcerange",
+    "mujoco_newton": "mujoco_solver, mujoco_limits and mujoco_actfrc together",
+}
+#: mujoco_warp's solver settings in Newton (SimConfig iterations / ls_iterations; mujoco_warp's tolerance)
+NEWTON_SOLVER = {"iterations": 10, "ls_iterations": 10, "tolerance": 1e-6}
 
 
 LOGS: dict = {}  # per setting, the last 10 s of its log (saved beside --out as .npz)
@@ -150,7 +160,37 @@ def newton_setting(overrides: dict, robots: int, steps: int, seed: int) -> dict:
     return out
 
 
-def mujoco_setting(robots: int, steps: int, seed: int) -> dict:
+def newton_limit_solref(m, ke: float, kd: float) -> np.ndarray:
+    """The hinge joints' limit solref (timeconst, dampratio) that Newton's SolverMuJoCo writes for force-space limit
+    gains ``ke`` / ``kd`` (``update_jnt_solref_from_invweight0_kernel``): both scaled by ``dof_invweight0 (1 - dmax)``,
+    then timeconst = 2 / kd', dampratio = kd' / 2 / sqrt(ke')."""
+    import mujoco
+
+    hinge = np.flatnonzero(m.jnt_type == mujoco.mjtJoint.mjJNT_HINGE)
+    factor = m.dof_invweight0[m.jnt_dofadr[hinge]] * (1.0 - m.jnt_solimp[hinge, 1])
+    ks, kds = ke * factor, kd * factor
+    return np.stack([2.0 / kds, kds / 2.0 / np.sqrt(ks)], axis=1)
+
+
+def mujoco_variant(m, name: str, robot: RobotConfig | None = None) -> None:
+    """Move the compiled bundle model ``m`` to Newton's training physics in the way ``name`` says (``MUJOCO``)."""
+    import mujoco
+
+    robot = robot or RobotConfig()
+    parts = ("mujoco_solver", "mujoco_limits", "mujoco_actfrc") if name == "mujoco_newton" else (name,)
+    if "mujoco_solver" in parts:
+        for k, v in NEWTON_SOLVER.items():
+            setattr(m.opt, k, v)
+    hinge = np.flatnonzero(m.jnt_type == mujoco.mjtJoint.mjJNT_HINGE)
+    if "mujoco_limits" in parts:
+        m.jnt_solref[hinge] = newton_limit_solref(m, robot.limit_ke, robot.limit_kd)
+    if "mujoco_actfrc" in parts:
+        m.actuator_forcelimited[:] = 0
+        m.jnt_actfrclimited[hinge] = 1
+        m.jnt_actfrcrange[hinge] = (-robot.effort_limit, robot.effort_limit)
+
+
+def mujoco_setting(name: str, robots: int, steps: int, seed: int) -> dict:
     import mujoco
 
     from hexnewton.analysis.sim2sim import Rounds
@@ -161,6 +201,7 @@ def mujoco_setting(robots: int, steps: int, seed: int) -> dict:
 
     t0 = time.perf_counter()
     r = Rounds(BUNDLE, TERRAIN, robots, seed)
+    mujoco_variant(r.m, name)
     names = [mujoco.mj_id2name(r.m, mujoco.mjtObj.mjOBJ_GEOM, g) or "" for g in range(r.m.ngeom)]
     feet_idx = [[g for g, s in enumerate(names) if s.startswith(f"r{k}_") and s.endswith("_foot")]
                 for k in range(robots)]
@@ -170,9 +211,14 @@ def mujoco_setting(robots: int, steps: int, seed: int) -> dict:
     feet = np.stack(fs)
     ends, x_end, running = first_episode(base_x, feet, r_run["status"])
     wedge = wedge_rounds(base_x, feet, running, lambda x, y: terrain_height_np(r.grid, x, y), 0.02)
-    LOGS["mujoco"] = {"base_x": base_x[-WINDOW - 1:], "feet": feet[-WINDOW - 1:], "running": running}
+    LOGS[name] = {"base_x": base_x[-WINDOW - 1:], "feet": feet[-WINDOW - 1:], "running": running}
     out = summarize_rounds(ends, x_end, wedge, len(fs), time.perf_counter() - t0)
     out["contact_wedged_of_stuck"] = wedged_feet(r, wedge["stuck"])
+    out["physics"] = {"change": MUJOCO[name], "iterations": int(r.m.opt.iterations),
+                      "ls_iterations": int(r.m.opt.ls_iterations), "tolerance": float(r.m.opt.tolerance),
+                      "hinge_limit_solref_first_leg": r.m.jnt_solref[1:4].round(5).tolist(),
+                      "actuator_forcelimited": bool(r.m.actuator_forcelimited.any()),
+                      "joint_actfrclimited": bool(r.m.jnt_actfrclimited.any())}
     return out
 
 
@@ -186,7 +232,7 @@ def combine(paths: list[str]) -> dict:
         with open(path) as f:
             run = json.load(f)
         out["runs"].append({"file": path, "command": run["command"], "terrain_seed": run["terrain_seed"]})
-        for s in SETTINGS:
+        for s in (*SETTINGS, *MUJOCO):
             if s in run:
                 tot = out.setdefault(s, {k: 0 for k in COUNTS if k in run[s]})
                 for k in COUNTS:
@@ -201,7 +247,7 @@ def main() -> None:
     p.add_argument("--robots", type=int, default=20)
     p.add_argument("--steps", type=int, default=2000, help="control steps per round (20 ms each)")
     p.add_argument("--seed", type=int, default=1000, help="terrain seed (starts: seed + 1000), as the evaluation's")
-    p.add_argument("--settings", nargs="+", default=list(SETTINGS), choices=list(SETTINGS))
+    p.add_argument("--settings", nargs="+", default=[*SETTINGS, "mujoco"], choices=[*SETTINGS, *MUJOCO])
     p.add_argument("--combine", nargs="+", metavar="JSON", help="sum the counts of these runs' files into --out")
     p.add_argument("--out", required=True)
     a = p.parse_args()
@@ -219,7 +265,7 @@ def main() -> None:
            "terrain_seed": a.seed, "start_seed": a.seed + 1000,
            "policy": POLICY, "bundle": BUNDLE}
     for s in a.settings:
-        res[s] = (mujoco_setting(a.robots, a.steps, a.seed) if s == "mujoco"
+        res[s] = (mujoco_setting(s, a.robots, a.steps, a.seed) if s in MUJOCO
                   else newton_setting(SETTINGS[s], a.robots, a.steps, a.seed))
         print(s, json.dumps(res[s]), flush=True)
         os.makedirs(os.path.dirname(os.path.abspath(a.out)), exist_ok=True)
