@@ -11,7 +11,8 @@
 Settings: ``newton_frame`` (the policy's own physics: collision detection once per 20 ms frame, 4 substeps),
 ``newton_substep`` (detection at every 5 ms step: ``sim.frame_dt 0.005, sim.substeps 1``), ``newton_mesh`` (the whole
 terrain as one triangle mesh, ``terrain.collision mesh``), ``newton_boxes`` (every block a box, ``terrain.collision
-boxes``, otherwise ``newton_frame``), ``mujoco`` (the bundle closed loop, every block a box).
+boxes``, otherwise ``newton_frame``), ``mujoco`` (the bundle closed loop, every block a box), and ``mujoco_*``: the
+bundle closed loop with one option of its compiled model moved to Newton's training physics (``MUJOCO``).
 
 Per round (each robot's first episode, up to ``--steps`` control steps): its end (success at 3 m, fell, off course,
 still walking), x progress, stuck (still walking, less than 5 cm in the last 10 s) and wedged: stuck with a foot that
