@@ -105,3 +105,18 @@ def test_unknown_setting_is_one_line():
     p = subprocess.run([sys.executable, SCRIPT, "--settings", "mujoco_bogus", "--out", "x.json"], capture_output=True,
                        text=True, cwd=ROOT)
     assert p.returncode == 2 and "invalid choice: 'mujoco_bogus'" in p.stderr.strip().splitlines()[-1]
+
+
+def test_servo_clamp_step():
+    """scripts/servo_clamp_step.py: the joint's clamp (Newton's) keeps the implicit kv term, so a saturated servo
+    accelerates less than under the actuator's clamp (the bundle's), at the same applied torque."""
+    spec = importlib.util.spec_from_file_location("servo_clamp_step", os.path.join(ROOT, "scripts",
+                                                                                   "servo_clamp_step.py"))
+    s = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(s)
+    bundle, newton = s.step_response(False, 1.0), s.step_response(True, 1.0)
+    assert bundle["applied_torque_step_1"] == newton["applied_torque_step_1"] == 3.5
+    assert newton["qvel_after_1_step"] < 0.7 * bundle["qvel_after_1_step"]
+    p = subprocess.run([sys.executable, os.path.join(ROOT, "scripts", "servo_clamp_step.py"), "--step", "9", "--out",
+                        "x.json"], capture_output=True, text=True, cwd=ROOT)
+    assert p.returncode == 2 and p.stderr.strip().splitlines()[-1].endswith("--step must be in (0, 3] rad")
