@@ -11,8 +11,10 @@
 Settings: ``newton_frame`` (the policy's own physics: collision detection once per 20 ms frame, 4 substeps),
 ``newton_substep`` (detection at every 5 ms step: ``sim.frame_dt 0.005, sim.substeps 1``), ``newton_mesh`` (the whole
 terrain as one triangle mesh, ``terrain.collision mesh``), ``newton_boxes`` (every block a box, ``terrain.collision
-boxes``, otherwise ``newton_frame``), ``mujoco`` (the bundle closed loop, every block a box), and ``mujoco_*``: the
-bundle closed loop with one option of its compiled model moved to Newton's training physics (``MUJOCO``).
+boxes``, otherwise ``newton_frame``), ``newton_actuator_clamp`` (``newton_frame`` with the bundle's effort clamp: on
+the actuators' force instead of the joints', ``actuator_clamp``), ``mujoco`` (the bundle closed loop, every block a
+box), and ``mujoco_*``: the bundle closed loop with one option of its compiled model moved to Newton's training
+physics (``MUJOCO``).
 
 Per round (each robot's first episode, up to ``--steps`` control steps): its end (success at 3 m, fell, off course,
 still walking), x progress, stuck (still walking, less than 5 cm in the last 10 s) and wedged: stuck with a foot that
@@ -48,6 +50,7 @@ SETTINGS = {
     "newton_substep": {"sim.frame_dt": 0.005, "sim.substeps": 1},
     "newton_mesh": {"terrain.collision": "mesh"},
     "newton_boxes": {"terrain.collision": "boxes"},
+    "newton_actuator_clamp": {},  # newton_frame with the bundle's effort clamp (actuator_clamp)
 }
 #: C MuJoCo settings: the bundle's closed loop on its MJCF, with one model option moved to Newton's training physics
 #: (``mujoco_variant``); the bundle's files stay as shipped
@@ -67,10 +70,6 @@ LOGS: dict = {}  # per setting, the last 10 s of its log (saved beside --out as 
 
 #: the conjugate of a quaternion (x y z w) as a factor: R(q) v = R(q*)^T v (``quat_rotate_inv_np``)
 CONJUGATE = np.array([-1.0, -1.0, -1.0, 1.0])
-
-
-def _name(overrides: dict) -> str:
-    return next(k for k, v in SETTINGS.items() if v == overrides)
 
 
 def wedge_rounds(base_x: np.ndarray, feet: np.ndarray, running: np.ndarray, heights, block: float) -> dict:
@@ -120,7 +119,21 @@ def first_episode(base_x: np.ndarray, feet: np.ndarray, status: np.ndarray):
     return ends, base_x[last, np.arange(n)], ~ended.any(axis=0)
 
 
-def newton_setting(overrides: dict, robots: int, steps: int, seed: int) -> dict:
+def actuator_clamp(mw, effort: float) -> None:
+    """Newton's mujoco_warp model ``mw`` with the bundle's effort clamp: every actuator's force clamped to
+    +-``effort`` by its ``forcerange``, the joints' ``actuatorfrcrange`` clamp off (Newton puts it there)."""
+    import warp as wp
+
+    limited = mw.jnt_actfrclimited.numpy()
+    mw.jnt_actfrclimited.assign(np.zeros_like(limited))
+    mw.actuator_forcelimited.assign(np.ones(mw.actuator_forcelimited.shape, bool))
+    rng = mw.actuator_forcerange.numpy()
+    rng[..., 0], rng[..., 1] = -effort, effort
+    mw.actuator_forcerange.assign(rng)
+    wp.synchronize()
+
+
+def newton_setting(name: str, robots: int, steps: int, seed: int) -> dict:
     import torch
 
     from hexnewton.analysis.rollout import CONTROLLERS, START_SEED_OFFSET, controller_policy, read_controller_checkpoint
@@ -132,8 +145,11 @@ def newton_setting(overrides: dict, robots: int, steps: int, seed: int) -> dict:
 
     t0 = time.perf_counter()
     ckpt = read_controller_checkpoint("cpg_rl", POLICY)
-    cfg = course(TERRAIN, trained_config(ckpt), dict(overrides), robots, "cpu", seed, seed=seed + START_SEED_OFFSET)
+    cfg = course(TERRAIN, trained_config(ckpt), dict(SETTINGS[name]), robots, "cpu", seed,
+                 seed=seed + START_SEED_OFFSET)
     env = make_env(cfg, CONTROLLERS["cpg_rl"])
+    if name == "newton_actuator_clamp":
+        actuator_clamp(env.world.solver.mjw_model, cfg.robot.effort_limit)
     policy = controller_policy(env, "cpg_rl", POLICY, ckpt, False, False, None)
     m = env.world.model
     feet_idx = np.flatnonzero([str(s).endswith("_foot") for s in m.shape_label])
@@ -155,9 +171,10 @@ def newton_setting(overrides: dict, robots: int, steps: int, seed: int) -> dict:
     ends, x_end, running = first_episode(base_x, feet, np.stack(sts))
     grid = env.world.terrain.grid
     wedge = wedge_rounds(base_x, feet, running, lambda x, y: terrain_height_np(grid, x, y), cfg.terrain.block_size)
-    LOGS[_name(overrides)] = {"base_x": base_x[-WINDOW - 1:], "feet": feet[-WINDOW - 1:], "running": running}
+    LOGS[name] = {"base_x": base_x[-WINDOW - 1:], "feet": feet[-WINDOW - 1:], "running": running}
     out = summarize_rounds(ends, x_end, wedge, steps, time.perf_counter() - t0)
-    out["physics"] = {"frame_dt": cfg.sim.frame_dt, "substeps": cfg.sim.substeps, "collision": cfg.terrain.collision}
+    out["physics"] = {"frame_dt": cfg.sim.frame_dt, "substeps": cfg.sim.substeps, "collision": cfg.terrain.collision,
+                      "effort_clamp": "actuator" if name == "newton_actuator_clamp" else "joint"}
     return out
 
 
@@ -267,7 +284,7 @@ def main() -> None:
            "policy": POLICY, "bundle": BUNDLE}
     for s in a.settings:
         res[s] = (mujoco_setting(s, a.robots, a.steps, a.seed) if s in MUJOCO
-                  else newton_setting(SETTINGS[s], a.robots, a.steps, a.seed))
+                  else newton_setting(s, a.robots, a.steps, a.seed))
         print(s, json.dumps(res[s]), flush=True)
         os.makedirs(os.path.dirname(os.path.abspath(a.out)), exist_ok=True)
         with open(a.out, "w") as f:

@@ -120,3 +120,18 @@ def test_servo_clamp_step():
     p = subprocess.run([sys.executable, os.path.join(ROOT, "scripts", "servo_clamp_step.py"), "--step", "9", "--out",
                         "x.json"], capture_output=True, text=True, cwd=ROOT)
     assert p.returncode == 2 and p.stderr.strip().splitlines()[-1].endswith("--step must be in (0, 3] rad")
+
+
+def test_actuator_clamp_moves_the_clamp_to_the_actuators():
+    """newton_actuator_clamp: the mujoco_warp model's joint clamp off, every actuator clamped to +-effort."""
+    from types import SimpleNamespace
+
+    import warp as wp
+
+    w = _script()
+    mw = SimpleNamespace(jnt_actfrclimited=wp.array(np.array([False, True, True]), dtype=wp.bool, device="cpu"),
+                         actuator_forcelimited=wp.array(np.zeros(2, bool), dtype=wp.bool, device="cpu"),
+                         actuator_forcerange=wp.array(np.zeros((1, 2, 2)), dtype=wp.vec2, device="cpu"))
+    w.actuator_clamp(mw, 3.5)
+    assert not mw.jnt_actfrclimited.numpy().any() and mw.actuator_forcelimited.numpy().all()
+    assert np.allclose(mw.actuator_forcerange.numpy(), [[[-3.5, 3.5], [-3.5, 3.5]]])
