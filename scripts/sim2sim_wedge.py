@@ -11,7 +11,11 @@
 Settings: ``newton_frame`` (the policy's own physics: collision detection once per 20 ms frame, 4 substeps),
 ``newton_substep`` (detection at every 5 ms step: ``sim.frame_dt 0.005, sim.substeps 1``), ``newton_mesh`` (the whole
 terrain as one triangle mesh, ``terrain.collision mesh``), ``newton_boxes`` (every block a box, ``terrain.collision
-boxes``, otherwise ``newton_frame``), ``mujoco`` (the bundle closed loop, every block a box).
+boxes``, otherwise ``newton_frame``), ``newton_actuator_clamp`` (``newton_frame`` with the bundle's effort clamp: on
+the actuators' force instead of the joints', ``actuator_clamp``), ``newton_boxes_actuator_clamp`` (``newton_boxes``
+with that clamp), ``mujoco`` (the bundle closed loop, every block a
+box), and ``mujoco_*``: the bundle closed loop with one option of its compiled model moved to Newton's training
+physics (``MUJOCO``).
 
 Per round (each robot's first episode, up to ``--steps`` control steps): its end (success at 3 m, fell, off course,
 still walking), x progress, stuck (still walking, less than 5 cm in the last 10 s) and wedged: stuck with a foot that
@@ -47,8 +51,22 @@ SETTINGS = {
     "newton_substep": {"sim.frame_dt": 0.005, "sim.substeps": 1},
     "newton_mesh": {"terrain.collision": "mesh"},
     "newton_boxes": {"terrain.collision": "boxes"},
-    "mujoco": None,
+    "newton_actuator_clamp": {},  # newton_frame with the bundle's effort clamp (actuator_clamp)
+    "newton_boxes_actuator_clamp": {"terrain.collision": "boxes"},  # newton_boxes with the bundle's effort clamp
 }
+#: the Newton settings run with the bundle's effort clamp on the actuators (``actuator_clamp``)
+ACTUATOR_CLAMP = ("newton_actuator_clamp", "newton_boxes_actuator_clamp")
+#: C MuJoCo settings: the bundle's closed loop on its MJCF, with one model option moved to Newton's training physics
+#: (``mujoco_variant``); the bundle's files stay as shipped
+MUJOCO = {
+    "mujoco": "the bundle's MJCF as shipped",
+    "mujoco_solver": "solver iterations 10, line-search iterations 10, tolerance 1e-6 (mujoco_warp's, SimConfig's)",
+    "mujoco_limits": "joint-limit solref from RobotConfig limit_ke / limit_kd as Newton's SolverMuJoCo converts them",
+    "mujoco_actfrc": "effort limit as the joint's actuator-force range (Newton's) instead of the actuator's forcerange",
+    "mujoco_newton": "mujoco_solver, mujoco_limits and mujoco_actfrc together",
+}
+#: mujoco_warp's solver settings in Newton (SimConfig iterations / ls_iterations; mujoco_warp's tolerance)
+NEWTON_SOLVER = {"iterations": 10, "ls_iterations": 10, "tolerance": 1e-6}
 
 
 LOGS: dict = {}  # per setting, the last 10 s of its log (saved beside --out as .npz)
@@ -56,10 +74,6 @@ LOGS: dict = {}  # per setting, the last 10 s of its log (saved beside --out as 
 
 #: the conjugate of a quaternion (x y z w) as a factor: R(q) v = R(q*)^T v (``quat_rotate_inv_np``)
 CONJUGATE = np.array([-1.0, -1.0, -1.0, 1.0])
-
-
-def _name(overrides: dict) -> str:
-    return next(k for k, v in SETTINGS.items() if v == overrides)
 
 
 def wedge_rounds(base_x: np.ndarray, feet: np.ndarray, running: np.ndarray, heights, block: float) -> dict:
@@ -109,7 +123,21 @@ def first_episode(base_x: np.ndarray, feet: np.ndarray, status: np.ndarray):
     return ends, base_x[last, np.arange(n)], ~ended.any(axis=0)
 
 
-def newton_setting(overrides: dict, robots: int, steps: int, seed: int) -> dict:
+def actuator_clamp(mw, effort: float) -> None:
+    """Newton's mujoco_warp model ``mw`` with the bundle's effort clamp: every actuator's force clamped to
+    +-``effort`` by its ``forcerange``, the joints' ``actuatorfrcrange`` clamp off (Newton puts it there)."""
+    import warp as wp
+
+    limited = mw.jnt_actfrclimited.numpy()
+    mw.jnt_actfrclimited.assign(np.zeros_like(limited))
+    mw.actuator_forcelimited.assign(np.ones(mw.actuator_forcelimited.shape, bool))
+    rng = mw.actuator_forcerange.numpy()
+    rng[..., 0], rng[..., 1] = -effort, effort
+    mw.actuator_forcerange.assign(rng)
+    wp.synchronize()
+
+
+def newton_setting(name: str, robots: int, steps: int, seed: int) -> dict:
     import torch
 
     from hexnewton.analysis.rollout import CONTROLLERS, START_SEED_OFFSET, controller_policy, read_controller_checkpoint
@@ -121,8 +149,11 @@ def newton_setting(overrides: dict, robots: int, steps: int, seed: int) -> dict:
 
     t0 = time.perf_counter()
     ckpt = read_controller_checkpoint("cpg_rl", POLICY)
-    cfg = course(TERRAIN, trained_config(ckpt), dict(overrides), robots, "cpu", seed, seed=seed + START_SEED_OFFSET)
+    cfg = course(TERRAIN, trained_config(ckpt), dict(SETTINGS[name]), robots, "cpu", seed,
+                 seed=seed + START_SEED_OFFSET)
     env = make_env(cfg, CONTROLLERS["cpg_rl"])
+    if name in ACTUATOR_CLAMP:
+        actuator_clamp(env.world.solver.mjw_model, cfg.robot.effort_limit)
     policy = controller_policy(env, "cpg_rl", POLICY, ckpt, False, False, None)
     m = env.world.model
     feet_idx = np.flatnonzero([str(s).endswith("_foot") for s in m.shape_label])
@@ -144,13 +175,44 @@ def newton_setting(overrides: dict, robots: int, steps: int, seed: int) -> dict:
     ends, x_end, running = first_episode(base_x, feet, np.stack(sts))
     grid = env.world.terrain.grid
     wedge = wedge_rounds(base_x, feet, running, lambda x, y: terrain_height_np(grid, x, y), cfg.terrain.block_size)
-    LOGS[_name(overrides)] = {"base_x": base_x[-WINDOW - 1:], "feet": feet[-WINDOW - 1:], "running": running}
+    LOGS[name] = {"base_x": base_x[-WINDOW - 1:], "feet": feet[-WINDOW - 1:], "running": running}
     out = summarize_rounds(ends, x_end, wedge, steps, time.perf_counter() - t0)
-    out["physics"] = {"frame_dt": cfg.sim.frame_dt, "substeps": cfg.sim.substeps, "collision": cfg.terrain.collision}
+    out["physics"] = {"frame_dt": cfg.sim.frame_dt, "substeps": cfg.sim.substeps, "collision": cfg.terrain.collision,
+                      "effort_clamp": "actuator" if name in ACTUATOR_CLAMP else "joint"}
     return out
 
 
-def mujoco_setting(robots: int, steps: int, seed: int) -> dict:
+def newton_limit_solref(m, ke: float, kd: float) -> np.ndarray:
+    """The hinge joints' limit solref (timeconst, dampratio) that Newton's SolverMuJoCo writes for force-space limit
+    gains ``ke`` / ``kd`` (``update_jnt_solref_from_invweight0_kernel``): both scaled by ``dof_invweight0 (1 - dmax)``,
+    then timeconst = 2 / kd', dampratio = kd' / 2 / sqrt(ke')."""
+    import mujoco
+
+    hinge = np.flatnonzero(m.jnt_type == mujoco.mjtJoint.mjJNT_HINGE)
+    factor = m.dof_invweight0[m.jnt_dofadr[hinge]] * (1.0 - m.jnt_solimp[hinge, 1])
+    ks, kds = ke * factor, kd * factor
+    return np.stack([2.0 / kds, kds / 2.0 / np.sqrt(ks)], axis=1)
+
+
+def mujoco_variant(m, name: str, robot: RobotConfig | None = None) -> None:
+    """Move the compiled bundle model ``m`` to Newton's training physics in the way ``name`` says (``MUJOCO``)."""
+    import mujoco
+
+    robot = robot or RobotConfig()
+    parts = ("mujoco_solver", "mujoco_limits", "mujoco_actfrc") if name == "mujoco_newton" else (name,)
+    if "mujoco_solver" in parts:
+        for k, v in NEWTON_SOLVER.items():
+            setattr(m.opt, k, v)
+    hinge = np.flatnonzero(m.jnt_type == mujoco.mjtJoint.mjJNT_HINGE)
+    if "mujoco_limits" in parts:
+        m.jnt_solref[hinge] = newton_limit_solref(m, robot.limit_ke, robot.limit_kd)
+    if "mujoco_actfrc" in parts:
+        m.actuator_forcelimited[:] = 0
+        m.jnt_actfrclimited[hinge] = 1
+        m.jnt_actfrcrange[hinge] = (-robot.effort_limit, robot.effort_limit)
+
+
+def mujoco_setting(name: str, robots: int, steps: int, seed: int) -> dict:
     import mujoco
 
     from hexnewton.analysis.sim2sim import Rounds
@@ -161,6 +223,7 @@ def mujoco_setting(robots: int, steps: int, seed: int) -> dict:
 
     t0 = time.perf_counter()
     r = Rounds(BUNDLE, TERRAIN, robots, seed)
+    mujoco_variant(r.m, name)
     names = [mujoco.mj_id2name(r.m, mujoco.mjtObj.mjOBJ_GEOM, g) or "" for g in range(r.m.ngeom)]
     feet_idx = [[g for g, s in enumerate(names) if s.startswith(f"r{k}_") and s.endswith("_foot")]
                 for k in range(robots)]
@@ -170,9 +233,14 @@ def mujoco_setting(robots: int, steps: int, seed: int) -> dict:
     feet = np.stack(fs)
     ends, x_end, running = first_episode(base_x, feet, r_run["status"])
     wedge = wedge_rounds(base_x, feet, running, lambda x, y: terrain_height_np(r.grid, x, y), 0.02)
-    LOGS["mujoco"] = {"base_x": base_x[-WINDOW - 1:], "feet": feet[-WINDOW - 1:], "running": running}
+    LOGS[name] = {"base_x": base_x[-WINDOW - 1:], "feet": feet[-WINDOW - 1:], "running": running}
     out = summarize_rounds(ends, x_end, wedge, len(fs), time.perf_counter() - t0)
     out["contact_wedged_of_stuck"] = wedged_feet(r, wedge["stuck"])
+    out["physics"] = {"change": MUJOCO[name], "iterations": int(r.m.opt.iterations),
+                      "ls_iterations": int(r.m.opt.ls_iterations), "tolerance": float(r.m.opt.tolerance),
+                      "hinge_limit_solref_first_leg": r.m.jnt_solref[1:4].round(5).tolist(),
+                      "actuator_forcelimited": bool(r.m.actuator_forcelimited.any()),
+                      "joint_actfrclimited": bool(r.m.jnt_actfrclimited.any())}
     return out
 
 
@@ -186,7 +254,7 @@ def combine(paths: list[str]) -> dict:
         with open(path) as f:
             run = json.load(f)
         out["runs"].append({"file": path, "command": run["command"], "terrain_seed": run["terrain_seed"]})
-        for s in SETTINGS:
+        for s in (*SETTINGS, *MUJOCO):
             if s in run:
                 tot = out.setdefault(s, {k: 0 for k in COUNTS if k in run[s]})
                 for k in COUNTS:
@@ -201,7 +269,7 @@ def main() -> None:
     p.add_argument("--robots", type=int, default=20)
     p.add_argument("--steps", type=int, default=2000, help="control steps per round (20 ms each)")
     p.add_argument("--seed", type=int, default=1000, help="terrain seed (starts: seed + 1000), as the evaluation's")
-    p.add_argument("--settings", nargs="+", default=list(SETTINGS), choices=list(SETTINGS))
+    p.add_argument("--settings", nargs="+", default=[*SETTINGS, "mujoco"], choices=[*SETTINGS, *MUJOCO])
     p.add_argument("--combine", nargs="+", metavar="JSON", help="sum the counts of these runs' files into --out")
     p.add_argument("--out", required=True)
     a = p.parse_args()
@@ -219,8 +287,8 @@ def main() -> None:
            "terrain_seed": a.seed, "start_seed": a.seed + 1000,
            "policy": POLICY, "bundle": BUNDLE}
     for s in a.settings:
-        res[s] = (mujoco_setting(a.robots, a.steps, a.seed) if s == "mujoco"
-                  else newton_setting(SETTINGS[s], a.robots, a.steps, a.seed))
+        res[s] = (mujoco_setting(s, a.robots, a.steps, a.seed) if s in MUJOCO
+                  else newton_setting(s, a.robots, a.steps, a.seed))
         print(s, json.dumps(res[s]), flush=True)
         os.makedirs(os.path.dirname(os.path.abspath(a.out)), exist_ok=True)
         with open(a.out, "w") as f:

@@ -71,3 +71,67 @@ def test_combine_sums_the_runs(tmp_path):
             f.write(__import__("json").dumps(run))
     out = w.combine(paths)
     assert out["mujoco"]["rounds"] == 40 and out["mujoco"]["wedged"] == 3 and out["mujoco"]["terrain_seeds"] == [1000, 1001]
+
+
+#: Newton's hinge-limit solref of the first leg (R1 hip, knee, ankle) for RobotConfig's limit_ke / limit_kd, read from
+#: ``World(course("rugged", trained_config(ckpt), {}, 2, "cpu", 1000, seed=2000)).solver.mjw_model.jnt_solref[0, 1:4]``
+#: with the shipped policy's checkpoint
+NEWTON_LIMIT_SOLREF = ((0.02431918, 0.45343027), (0.02222878, 0.47427168), (0.02105086, 0.48736027))
+
+
+def test_mujoco_settings_move_the_bundle_model():
+    import mujoco
+
+    from hexnewton.analysis.sim2sim import Rounds
+
+    w = _script()
+    r = Rounds(w.BUNDLE, w.TERRAIN, 2, 1000)
+    assert r.m.opt.iterations == 100 and r.m.actuator_forcelimited.all() and not r.m.jnt_actfrclimited.any()
+    assert np.allclose(r.m.jnt_solref, (0.02, 1.0))
+    w.mujoco_variant(r.m, "mujoco")  # the shipped model: unchanged
+    assert r.m.opt.iterations == 100 and np.allclose(r.m.jnt_solref, (0.02, 1.0))
+    w.mujoco_variant(r.m, "mujoco_newton")
+    assert (r.m.opt.iterations, r.m.opt.ls_iterations, r.m.opt.tolerance) == (10, 10, 1e-6)
+    assert np.allclose(r.m.jnt_solref[1:4], NEWTON_LIMIT_SOLREF, rtol=1e-5)
+    hinge = r.m.jnt_type == mujoco.mjtJoint.mjJNT_HINGE
+    assert not r.m.actuator_forcelimited.any() and r.m.jnt_actfrclimited[hinge].all()
+    assert np.allclose(r.m.jnt_actfrcrange[hinge], (-3.5, 3.5))
+    for _ in range(3):
+        r.control_step()
+    assert np.isfinite(r.d.qpos).all() and (r.status()[0] == 0).all()
+
+
+def test_unknown_setting_is_one_line():
+    p = subprocess.run([sys.executable, SCRIPT, "--settings", "mujoco_bogus", "--out", "x.json"], capture_output=True,
+                       text=True, cwd=ROOT)
+    assert p.returncode == 2 and "invalid choice: 'mujoco_bogus'" in p.stderr.strip().splitlines()[-1]
+
+
+def test_servo_clamp_step():
+    """scripts/servo_clamp_step.py: the joint's clamp (Newton's) keeps the implicit kv term, so a saturated servo
+    accelerates less than under the actuator's clamp (the bundle's), at the same applied torque."""
+    spec = importlib.util.spec_from_file_location("servo_clamp_step", os.path.join(ROOT, "scripts",
+                                                                                   "servo_clamp_step.py"))
+    s = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(s)
+    bundle, newton = s.step_response(False, 1.0), s.step_response(True, 1.0)
+    assert bundle["applied_torque_step_1"] == newton["applied_torque_step_1"] == 3.5
+    assert newton["qvel_after_1_step"] < 0.7 * bundle["qvel_after_1_step"]
+    p = subprocess.run([sys.executable, os.path.join(ROOT, "scripts", "servo_clamp_step.py"), "--step", "9", "--out",
+                        "x.json"], capture_output=True, text=True, cwd=ROOT)
+    assert p.returncode == 2 and p.stderr.strip().splitlines()[-1].endswith("--step must be in (0, 3] rad")
+
+
+def test_actuator_clamp_moves_the_clamp_to_the_actuators():
+    """newton_actuator_clamp: the mujoco_warp model's joint clamp off, every actuator clamped to +-effort."""
+    from types import SimpleNamespace
+
+    import warp as wp
+
+    w = _script()
+    mw = SimpleNamespace(jnt_actfrclimited=wp.array(np.array([False, True, True]), dtype=wp.bool, device="cpu"),
+                         actuator_forcelimited=wp.array(np.zeros(2, bool), dtype=wp.bool, device="cpu"),
+                         actuator_forcerange=wp.array(np.zeros((1, 2, 2)), dtype=wp.vec2, device="cpu"))
+    w.actuator_clamp(mw, 3.5)
+    assert not mw.jnt_actfrclimited.numpy().any() and mw.actuator_forcelimited.numpy().all()
+    assert np.allclose(mw.actuator_forcerange.numpy(), [[[-3.5, 3.5], [-3.5, 3.5]]])
