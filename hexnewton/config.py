@@ -176,6 +176,12 @@ class SimConfig:
     # triangle-pair candidates per env for mesh terrain (H100, complex, 16384 envs: 64/env overflowed)
     triangle_pairs_per_env: int = 256
     use_graph: bool = True
+    # ours: where each servo's effort limit clamps its torque: "joint" (Newton's way: the joint's actuator-force
+    # range) or "actuator" (the controller bundle's MJCF: the actuator's force range). Under the implicitfast
+    # integrator they differ: a joint clamp keeps the servo's damping in the implicit update at the limit, an
+    # actuator clamp drops it, so a servo at its limit moves faster; C MuJoCo with the joint clamp wedges feet on the
+    # rugged blocks as rarely as Newton (results/sim2sim/wedge/report.md, "Which MuJoCo setting wedges")
+    effort_clamp: str = field(default="joint", metadata={"choices": ("joint", "actuator")})
     # ours: which Warp modules a World compiles in parallel before its first step (hexnewton/physics/precompile.py):
     # "imported" those defined at import time, "generated" also the kernels mujoco_warp generates for the model
     # (created by a dry step; on the 2-core CPU a cold build took 149 s against 60 s with "imported"; its CUDA cost

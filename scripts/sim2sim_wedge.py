@@ -12,7 +12,7 @@ Settings: ``newton_frame`` (the policy's own physics: collision detection once p
 ``newton_substep`` (detection at every 5 ms step: ``sim.frame_dt 0.005, sim.substeps 1``), ``newton_mesh`` (the whole
 terrain as one triangle mesh, ``terrain.collision mesh``), ``newton_boxes`` (every block a box, ``terrain.collision
 boxes``, otherwise ``newton_frame``), ``newton_actuator_clamp`` (``newton_frame`` with the bundle's effort clamp: on
-the actuators' force instead of the joints', ``actuator_clamp``), ``newton_boxes_actuator_clamp`` (``newton_boxes``
+the actuators' force instead of the joints', ``SimConfig.effort_clamp`` "actuator"), ``newton_boxes_actuator_clamp`` (``newton_boxes``
 with that clamp), ``mujoco`` (the bundle closed loop, every block a
 box), and ``mujoco_*``: the bundle closed loop with one option of its compiled model moved to Newton's training
 physics (``MUJOCO``).
@@ -51,11 +51,10 @@ SETTINGS = {
     "newton_substep": {"sim.frame_dt": 0.005, "sim.substeps": 1},
     "newton_mesh": {"terrain.collision": "mesh"},
     "newton_boxes": {"terrain.collision": "boxes"},
-    "newton_actuator_clamp": {},  # newton_frame with the bundle's effort clamp (actuator_clamp)
-    "newton_boxes_actuator_clamp": {"terrain.collision": "boxes"},  # newton_boxes with the bundle's effort clamp
+    # newton_frame and newton_boxes with the bundle's effort clamp (on the actuators: SimConfig.effort_clamp)
+    "newton_actuator_clamp": {"sim.effort_clamp": "actuator"},
+    "newton_boxes_actuator_clamp": {"terrain.collision": "boxes", "sim.effort_clamp": "actuator"},
 }
-#: the Newton settings run with the bundle's effort clamp on the actuators (``actuator_clamp``)
-ACTUATOR_CLAMP = ("newton_actuator_clamp", "newton_boxes_actuator_clamp")
 #: C MuJoCo settings: the bundle's closed loop on its MJCF, with one model option moved to Newton's training physics
 #: (``mujoco_variant``); the bundle's files stay as shipped
 MUJOCO = {
@@ -123,20 +122,6 @@ def first_episode(base_x: np.ndarray, feet: np.ndarray, status: np.ndarray):
     return ends, base_x[last, np.arange(n)], ~ended.any(axis=0)
 
 
-def actuator_clamp(mw, effort: float) -> None:
-    """Newton's mujoco_warp model ``mw`` with the bundle's effort clamp: every actuator's force clamped to
-    +-``effort`` by its ``forcerange``, the joints' ``actuatorfrcrange`` clamp off (Newton puts it there)."""
-    import warp as wp
-
-    limited = mw.jnt_actfrclimited.numpy()
-    mw.jnt_actfrclimited.assign(np.zeros_like(limited))
-    mw.actuator_forcelimited.assign(np.ones(mw.actuator_forcelimited.shape, bool))
-    rng = mw.actuator_forcerange.numpy()
-    rng[..., 0], rng[..., 1] = -effort, effort
-    mw.actuator_forcerange.assign(rng)
-    wp.synchronize()
-
-
 def newton_setting(name: str, robots: int, steps: int, seed: int) -> dict:
     import torch
 
@@ -152,8 +137,6 @@ def newton_setting(name: str, robots: int, steps: int, seed: int) -> dict:
     cfg = course(TERRAIN, trained_config(ckpt), dict(SETTINGS[name]), robots, "cpu", seed,
                  seed=seed + START_SEED_OFFSET)
     env = make_env(cfg, CONTROLLERS["cpg_rl"])
-    if name in ACTUATOR_CLAMP:
-        actuator_clamp(env.world.solver.mjw_model, cfg.robot.effort_limit)
     policy = controller_policy(env, "cpg_rl", POLICY, ckpt, False, False, None)
     m = env.world.model
     feet_idx = np.flatnonzero([str(s).endswith("_foot") for s in m.shape_label])
@@ -178,7 +161,7 @@ def newton_setting(name: str, robots: int, steps: int, seed: int) -> dict:
     LOGS[name] = {"base_x": base_x[-WINDOW - 1:], "feet": feet[-WINDOW - 1:], "running": running}
     out = summarize_rounds(ends, x_end, wedge, steps, time.perf_counter() - t0)
     out["physics"] = {"frame_dt": cfg.sim.frame_dt, "substeps": cfg.sim.substeps, "collision": cfg.terrain.collision,
-                      "effort_clamp": "actuator" if name in ACTUATOR_CLAMP else "joint"}
+                      "effort_clamp": cfg.sim.effort_clamp}
     return out
 
 

@@ -105,6 +105,7 @@ def randomize_physics(world: World, seed: int = 0) -> dict[str, np.ndarray]:
         getattr(m, name).assign(a.reshape(-1))
     world.solver.notify_model_changed(newton.ModelFlags.SHAPE_PROPERTIES | newton.ModelFlags.BODY_INERTIAL_PROPERTIES
                                       | newton.ModelFlags.JOINT_DOF_PROPERTIES | newton.ModelFlags.ACTUATOR_PROPERTIES)
+    world.apply_effort_clamp()  # the effort limits just handed to MuJoCo, moved to the actuators where configured
     return draws
 
 

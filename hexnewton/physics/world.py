@@ -284,6 +284,21 @@ class World:
         startup.mark("collision pipeline")
         precompile(self.device, self.solver if sim.precompile == "generated" else None, since)
         startup.mark("kernels")
+        self.apply_effort_clamp()
+
+    def apply_effort_clamp(self) -> None:
+        """``SimConfig.effort_clamp`` "actuator": every servo's effort limit moved from its joint's actuator-force
+        range (where Newton puts it) to its actuator's force range, world by world, the joint clamp off. Called again
+        after anything hands the model's effort limits to MuJoCo anew (``mdp.events.randomize_physics``)."""
+        if self.cfg.sim.effort_clamp != "actuator":
+            return
+        mw = self.solver.mjw_model
+        joint = mw.actuator_trnid.numpy()[:, 0]
+        limits = mw.jnt_actfrcrange.numpy().reshape(-1, mw.jnt_actfrcrange.shape[-1], 2)[:, joint]
+        forcerange = mw.actuator_forcerange.numpy()
+        mw.actuator_forcerange.assign(np.broadcast_to(limits, forcerange.shape).astype(forcerange.dtype))
+        mw.actuator_forcelimited.assign(np.ones(mw.actuator_forcelimited.shape, bool))
+        mw.jnt_actfrclimited.assign(np.zeros(mw.jnt_actfrclimited.shape, bool))
 
     def _terrain_box_pairs(self) -> TerrainBoxPairs | None:
         """With terrain collision "boxes": the robot shapes' pairs with the terrain boxes under them, refreshed before

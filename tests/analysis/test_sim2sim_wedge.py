@@ -122,16 +122,25 @@ def test_servo_clamp_step():
     assert p.returncode == 2 and p.stderr.strip().splitlines()[-1].endswith("--step must be in (0, 3] rad")
 
 
-def test_actuator_clamp_moves_the_clamp_to_the_actuators():
-    """newton_actuator_clamp: the mujoco_warp model's joint clamp off, every actuator clamped to +-effort."""
-    from types import SimpleNamespace
+def test_effort_clamp_on_the_actuators():
+    """SimConfig.effort_clamp "actuator" (newton_actuator_clamp): the mujoco_warp model's joint clamp off, every
+    actuator clamped to its joint's effort limit, world by world, also after randomize_physics hands MuJoCo new
+    limits; the robots step finitely."""
+    from hexnewton.config import HexConfig, SimConfig, TerrainConfig
+    from hexnewton.mdp.events import randomize_physics
+    from hexnewton.physics.world import World
 
-    import warp as wp
-
-    w = _script()
-    mw = SimpleNamespace(jnt_actfrclimited=wp.array(np.array([False, True, True]), dtype=wp.bool, device="cpu"),
-                         actuator_forcelimited=wp.array(np.zeros(2, bool), dtype=wp.bool, device="cpu"),
-                         actuator_forcerange=wp.array(np.zeros((1, 2, 2)), dtype=wp.vec2, device="cpu"))
-    w.actuator_clamp(mw, 3.5)
-    assert not mw.jnt_actfrclimited.numpy().any() and mw.actuator_forcelimited.numpy().all()
-    assert np.allclose(mw.actuator_forcerange.numpy(), [[[-3.5, 3.5], [-3.5, 3.5]]])
+    assert _script().SETTINGS["newton_actuator_clamp"] == {"sim.effort_clamp": "actuator"}
+    world = World(HexConfig(sim=SimConfig(num_envs=3, device="cpu", effort_clamp="actuator"),
+                            terrain=TerrainConfig(name="flat")))  # fmt: skip
+    mw = world.solver.mjw_model
+    for draw in range(2):
+        if draw:
+            randomize_physics(world, seed=0)
+        effort = world.model.joint_effort_limit.numpy().reshape(3, -1)[:, 6:]  # the 18 servos after the base dofs
+        assert not mw.jnt_actfrclimited.numpy().any() and mw.actuator_forcelimited.numpy().all()
+        rng = mw.actuator_forcerange.numpy()
+        assert np.allclose(rng[..., 1], effort, rtol=1e-6) and np.allclose(rng[..., 0], -effort, rtol=1e-6)
+    assert np.ptp(mw.actuator_forcerange.numpy()[:, 0, 1]) > 0  # the limits differ between worlds
+    world.step(5)
+    assert np.isfinite(world.state_0.body_q.numpy()).all()
