@@ -248,14 +248,18 @@ def combine(paths: list[str]) -> dict:
 
 
 def main() -> None:
+    global POLICY, BUNDLE
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--robots", type=int, default=20)
     p.add_argument("--steps", type=int, default=2000, help="control steps per round (20 ms each)")
     p.add_argument("--seed", type=int, default=1000, help="terrain seed (starts: seed + 1000), as the evaluation's")
     p.add_argument("--settings", nargs="+", default=[*SETTINGS, "mujoco"], choices=[*SETTINGS, *MUJOCO])
     p.add_argument("--combine", nargs="+", metavar="JSON", help="sum the counts of these runs' files into --out")
+    p.add_argument("--policy", default=POLICY, help="the policy checkpoint for the Newton settings")
+    p.add_argument("--bundle", default=BUNDLE, help="its controller bundle for the C MuJoCo settings")
     p.add_argument("--out", required=True)
     a = p.parse_args()
+    POLICY, BUNDLE = a.policy, a.bundle  # read by newton_setting and mujoco_setting
     if a.combine:
         missing = [f for f in a.combine if not os.path.isfile(f)]
         if missing:
@@ -266,6 +270,8 @@ def main() -> None:
         return
     if a.robots < 1 or a.steps <= WINDOW:
         p.error(f"--robots must be >= 1 and --steps > {WINDOW} (the 10 s window)")
+    if not os.path.isfile(a.policy) or not os.path.isdir(a.bundle):
+        p.error(f"no policy file {a.policy} or no bundle folder {a.bundle}")
     res = {"command": "PYTHONPATH=. python scripts/sim2sim_wedge.py " + " ".join(sys.argv[1:]), "terrain": TERRAIN,
            "terrain_seed": a.seed, "start_seed": a.seed + 1000,
            "policy": POLICY, "bundle": BUNDLE}
