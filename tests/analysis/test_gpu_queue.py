@@ -1,0 +1,51 @@
+"""scripts/device/gpu.sh's queues on the CPU, with stand-ins for ``python`` and ``nvidia-smi``: a methods queue with
+``EVALS_AFTER`` evaluates every run it finished (deterministic and sampled, TD3 deterministic only) and the fixed
+CPG, also the runs that end after an evaluation queue has started; no job runs twice."""
+
+import os
+import stat
+import subprocess
+import time
+
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+
+FAKE_PYTHON = """#!/bin/bash
+# train.py / baselines: a run folder with a checkpoint after a pause that grows with the name; evaluate: results.json
+out= ld= ex=
+while [ $# -gt 0 ]; do case $1 in --out) out=$2; shift;; --log_dir) ld=$2; shift;; --experiment) ex=$2; shift;; esac; shift; done
+if [ -n "$out" ]; then echo "$out" >> "$(dirname "$out")/../evaluated"; mkdir -p "$out"; echo '{}' > "$out/results.json"; exit 0; fi
+sleep $(( ${#ex} % 4 + 1 )); mkdir -p "$ld/$ex/run"; touch "$ld/$ex/run/model_10.pt"
+"""
+
+
+def _tool(folder, name, text):
+    path = folder / name
+    path.write_text(text)
+    path.chmod(path.stat().st_mode | stat.S_IEXEC)
+
+
+def test_methods_queue_then_evaluations(tmp_path):
+    bin_dir = tmp_path / "bin"
+    bin_dir.mkdir()
+    _tool(bin_dir, "python", FAKE_PYTHON)
+    _tool(bin_dir, "nvidia-smi", "#!/bin/bash\necho FakeGPU\n")
+    runs = tmp_path / "runs"
+    env = dict(os.environ, PATH=f"{bin_dir}:{os.environ['PATH']}", RUNS=str(runs), OUT=str(tmp_path / "out"),
+               JOBS="paper:1 td3_cpg:1 joint:2 sac_cpg:1", PER_GPU="2", EVALS_AFTER="10 rugged stepped")
+    subprocess.run(["bash", "scripts/device/gpu.sh", "methods", "complex", "20", "600", "16", "", "0 1"], cwd=ROOT,
+                   env=env, check=True, capture_output=True)
+    deadline = time.time() + 120
+    while time.time() < deadline:
+        busy = subprocess.run(["bash", "scripts/device/gpu.sh", "busy"], cwd=ROOT, env=env).returncode == 0
+        if not busy and (runs / "method_evals.log").exists():
+            break
+        time.sleep(1)
+    done = sorted(p.name for p in (runs / "method_evals").iterdir() if (p / "results.json").exists())
+    runs_done = ["joint_s2", "paper_s1", "sac_cpg_s1", "td3_cpg_s1"]
+    expected = [f"cpg_s0_{t}" for t in ("rugged", "stepped")]
+    expected += [f"{r}_{t}" for r in runs_done for t in ("rugged", "stepped")]
+    expected += [f"{r}_{t}_sampled" for r in runs_done if r != "td3_cpg_s1" for t in ("rugged", "stepped")]
+    assert done == sorted(expected)
+    evaluated = (runs / "evaluated").read_text().split()
+    assert len(evaluated) == len(set(evaluated)) == len(expected)
+    assert sorted(p.name for p in (runs / "methods").glob("*.done")) == [f"{r}.done" for r in runs_done]
