@@ -281,12 +281,10 @@ def choose_on_validation(runner, cfg, agent, run_dir: str, first_it: int) -> tup
 
 
 def device_label(device: str) -> str:
-    """The GPU's name for ``timing.json`` (``cpu`` on the CPU)."""
-    if not device.startswith("cuda"):
-        return "cpu"
-    import torch
+    """The GPU's name for ``timing.json``, as the benchmarks name it (``cpu`` on the CPU)."""
+    from hexnewton.analysis.bench import device_name
 
-    return torch.cuda.get_device_name(torch.device(device))
+    return device_name(device) if device.startswith("cuda") else "cpu"
 
 
 def finish(args, runner, cfg, agent, rank, run_dir: str, views, train_s: float, first_it: int) -> None:

@@ -193,7 +193,8 @@ class World:
         self.sim_dt = sim.frame_dt / sim.substeps
         self.substeps = sim.substeps
         startup.mark("python and imports")
-        since = live_kernel_ids()  # the kernels mujoco_warp and Newton generate for this model come after
+        # SimConfig.precompile "generated": the kernels mujoco_warp and Newton generate for this model come after these
+        since = live_kernel_ids() if sim.precompile == "generated" else None
 
         self.terrain = terrain if terrain is not None else make_terrain(cfg.terrain)
         startup.mark("terrain")
@@ -251,7 +252,7 @@ class World:
         self.control = self.model.control()
         newton.eval_fk(self.model, self.model.joint_q, self.model.joint_qd, self.state_0)
 
-    def _init_physics(self, since: set[int]) -> None:
+    def _init_physics(self, since: set[int] | None) -> None:
         """The MuJoCo solver and Newton's collision pipeline with the contact capacity the solver takes; then the
         step's Warp modules, with the kernels generated for this model since ``since``, compiled in parallel
         (``hexnewton.physics.precompile``)."""
@@ -282,7 +283,7 @@ class World:
         self._collide_dt = sim.frame_dt if sim.speculative_gap is not None else None
         self.contacts = self.pipeline.contacts()
         startup.mark("collision pipeline")
-        precompile(self.device, self.solver if sim.precompile == "generated" else None, since)
+        precompile(self.device, self.solver if since is not None else None, since)
         startup.mark("kernels")
         self.apply_effort_clamp()
 
