@@ -65,6 +65,12 @@ def _live_kernels() -> list[wp.Kernel]:
     return [o for o in gc.get_objects() if type(o) is wp.Kernel]  # type(): no attribute lookups on lazy objects
 
 
+def compiles_generated(setting: str, is_cuda: bool) -> bool:
+    """``SimConfig.precompile``: whether a World also compiles the kernels mujoco_warp generates for its model
+    (``"auto"``: on a CUDA device, where they cost a fresh machine ~150 s of serial compilation at the first step)."""
+    return setting == "generated" or (setting == "auto" and is_cuda)
+
+
 def live_kernel_ids() -> set[int]:
     """The ids of the Warp kernels that exist now: :func:`precompile` compiles those created after."""
     return {id(k) for k in _live_kernels()}

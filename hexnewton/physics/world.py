@@ -33,7 +33,7 @@ from hexnewton.config import HexConfig, SimConfig
 from hexnewton.errors import HexnewtonError
 from hexnewton.physics.device import resolve_device
 from hexnewton.physics.graphs import capture_graph
-from hexnewton.physics.precompile import live_kernel_ids, precompile
+from hexnewton.physics.precompile import compiles_generated, live_kernel_ids, precompile
 from hexnewton.physics.robot import BASE_Q, BASE_QD, NUM_JOINTS, build_hexapod, leg_bounds, stand_height
 from hexnewton.physics.terrain import Terrain, make_terrain, max_terrain_height_np
 from hexnewton.physics.terrain.box_pairs import TerrainBoxPairs
@@ -194,7 +194,7 @@ class World:
         self.substeps = sim.substeps
         startup.mark("python and imports")
         # SimConfig.precompile "generated": the kernels mujoco_warp and Newton generate for this model come after these
-        since = live_kernel_ids() if sim.precompile == "generated" else None
+        since = live_kernel_ids() if compiles_generated(sim.precompile, wp.get_device(self.device).is_cuda) else None
 
         self.terrain = terrain if terrain is not None else make_terrain(cfg.terrain)
         startup.mark("terrain")

@@ -211,6 +211,13 @@ def test_precompile_finds_every_step_module():
     assert any(n.startswith("hexnewton.") for n in names)
 
 
+def test_precompile_auto_compiles_generated_kernels_on_cuda_only():
+    from hexnewton.physics.precompile import compiles_generated
+
+    assert compiles_generated("auto", is_cuda=True) and not compiles_generated("auto", is_cuda=False)
+    assert compiles_generated("generated", is_cuda=False) and not compiles_generated("imported", is_cuda=True)
+
+
 def test_precompile_leaves_the_first_step_nothing_to_compile():
     """A built World has every module its first step (and graph capture) launches loaded: mujoco_warp's generated
     kernels included, each compiled once."""
