@@ -49,3 +49,24 @@ def test_methods_queue_then_evaluations(tmp_path):
     evaluated = (runs / "evaluated").read_text().split()
     assert len(evaluated) == len(set(evaluated)) == len(expected)
     assert sorted(p.name for p in (runs / "methods").glob("*.done")) == [f"{r}.done" for r in runs_done]
+
+
+def test_train_runs_in_a_session_of_its_own(tmp_path):
+    """``gpu.sh train`` starts the run in a process session of its own: the device tool ends a call's session when
+    the call returns, and the run must outlive it."""
+    bin_dir = tmp_path / "bin"
+    bin_dir.mkdir()
+    _tool(bin_dir, "python", FAKE_PYTHON)
+    runs = tmp_path / "runs"
+    env = dict(os.environ, PATH=f"{bin_dir}:{os.environ['PATH']}", RUNS=str(runs), OUT=str(tmp_path / "out"))
+    script = "bash scripts/device/gpu.sh train r1 0 -- --task complex; ps -o sid= -p $$"
+    call = subprocess.run(["setsid", "bash", "-c", script], cwd=ROOT, env=env, check=True, capture_output=True, text=True)
+    call_session = int(call.stdout.split()[-1])
+    run = subprocess.run(["pgrep", "-f", "--", "--experiment r1"], capture_output=True, text=True).stdout.split()
+    assert run, call.stdout
+    assert all(int(subprocess.run(["ps", "-o", "sid=", "-p", pid], capture_output=True, text=True).stdout or -1)
+               != call_session for pid in run)
+    deadline = time.time() + 30
+    while time.time() < deadline and not (runs / "r1" / "run" / "model_10.pt").exists():
+        time.sleep(0.5)
+    assert (runs / "r1" / "run" / "model_10.pt").exists()
