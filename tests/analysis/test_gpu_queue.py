@@ -3,9 +3,12 @@
 CPG, also the runs that end after an evaluation queue has started; no job runs twice."""
 
 import os
+import shutil
 import stat
 import subprocess
 import time
+
+import pytest
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
@@ -51,6 +54,7 @@ def test_methods_queue_then_evaluations(tmp_path):
     assert sorted(p.name for p in (runs / "methods").glob("*.done")) == [f"{r}.done" for r in runs_done]
 
 
+@pytest.mark.skipif(not all(shutil.which(t) for t in ("setsid", "pgrep", "ps")), reason="needs setsid, pgrep and ps")
 def test_train_runs_in_a_session_of_its_own(tmp_path):
     """``gpu.sh train`` starts the run in a process session of its own: the device tool ends a call's session when
     the call returns, and the run must outlive it."""
