@@ -109,6 +109,25 @@ def validate(cands: list[Candidate], controller: str, terrain, rounds: int, devi
              "rounds": int(end[i::k].size)} for i in range(k)]  # fmt: skip
 
 
+def validate_courses(cands: list[Candidate], controller: str, terrains: list, rounds: int, device: str | None,
+                     max_steps: int, goal_distance: float | None = None) -> tuple[list[dict], dict[str, list[dict]]]:
+    """:func:`validate` on each of ``terrains`` (names or ``TerrainConfig``\ s) one after another. Returns per
+    candidate its shares averaged over the courses, and each course's own results by its name."""
+    per = {}
+    for terrain in terrains:
+        name = terrain if isinstance(terrain, str) else terrain.name
+        per[name] = validate(cands, controller, terrain, rounds, device, max_steps, goal_distance)
+    keys = ("goal", "walk_3m", "fell", "off_course")
+    mean = [dict({k: float(np.mean([r[i][k] for r in per.values()])) for k in keys},
+                 rounds=sum(r[i]["rounds"] for r in per.values())) for i in range(len(cands))]  # fmt: skip
+    return mean, per
+
+
+def course_names(names: list[str]) -> str:
+    """``the complex course`` / ``the rugged and complex courses`` for the console."""
+    return f"the {names[0]} course" if len(names) == 1 else f"the {', '.join(names[:-1])} and {names[-1]} courses"
+
+
 def choose(cands: list[Candidate], results: list[dict]) -> int:
     """The index of the result: the most goals, then the most 3 m walks, then the fewest falls, then the later."""
     return max(range(len(cands)), key=lambda i: (results[i]["goal"], results[i]["walk_3m"], -results[i]["fell"],

@@ -255,7 +255,8 @@ def check_ranks_agree(runner, rank) -> None:
 def choose_on_validation(runner, cfg, agent, run_dir: str, first_it: int) -> tuple[str, dict]:
     """The run's result chosen on deterministic validation (:mod:`hexnewton.analysis.validation`) among the last
     stage's candidates, loaded into the actor and kept as ``model_result.pt``; returns it and what was measured."""
-    from hexnewton.analysis.validation import VALIDATION_SEED, Candidate, candidates, choose, report_lines, validate
+    from hexnewton.analysis.validation import (VALIDATION_SEED, Candidate, candidates, choose, course_names,
+                                               report_lines, validate_courses)
 
     it, best = runner.current_learning_iteration, runner.best
     stage_start = max([start for start, _ in agent.stages if start <= it] + [first_it])
@@ -265,17 +266,20 @@ def choose_on_validation(runner, cfg, agent, run_dir: str, first_it: int) -> tup
     cands = candidates(run_dir, stage_start, last, kept, agent.validation_candidates)
     controller = "joint" if runner.meta["action_mode"] == "joint" else "cpg_rl"
     t0 = time.time()
-    results = validate(cands, controller, cfg.terrain, agent.validation_rounds, cfg.sim.device,
-                       agent.validation_steps, cfg.task.goal_distance)  # fmt: skip
+    terrains = list(agent.validation_terrains) or [cfg.terrain]
+    results, per_course = validate_courses(cands, controller, terrains, agent.validation_rounds, cfg.sim.device,
+                                           agent.validation_steps, cfg.task.goal_distance)  # fmt: skip
     k = choose(cands, results)
     seconds = time.time() - t0
-    print(f"deterministic validation, {agent.validation_rounds} rounds of the {cfg.terrain.name} course (seed "
-          f"{VALIDATION_SEED}) per candidate, {seconds:.0f} s:\n" + "\n".join(report_lines(cands, results, k)))
+    how = " (shares averaged over the courses)" if len(per_course) > 1 else ""
+    print(f"deterministic validation, {agent.validation_rounds} rounds of {course_names(list(per_course))} (seed "
+          f"{VALIDATION_SEED}) per candidate, {seconds:.0f} s{how}:\n" + "\n".join(report_lines(cands, results, k)))
     runner.load(cands[k].path, {"actor": True}, map_location=runner.device)
     result = os.path.join(run_dir, "model_result.pt")
     shutil.copyfile(cands[k].path, result)
     print(f"the result: {os.path.basename(cands[k].path)} ({cands[k].why}), kept as {result}")
     return result, {"seconds": seconds, "chosen": cands[k].path, "rounds": agent.validation_rounds,
+                    "courses": per_course,
                     "candidates": [dict(r, path=c.path, iteration=c.iteration, why=c.why)
                                    for c, r in zip(cands, results)]}  # fmt: skip
 

@@ -20,6 +20,8 @@ from __future__ import annotations
 
 from dataclasses import asdict, dataclass, field, replace
 
+from hexnewton.config import TERRAINS
+
 DISTRIBUTIONS = ("beta", "gaussian")
 #: torch.compile modes rsl-rl accepts (it rejects the CUDA-graph ones)
 COMPILE_MODES = ("default", "max-autotune-no-cudagraphs")
@@ -98,6 +100,9 @@ class AgentConfig:
     validation_candidates: int = 4
     #: control steps per validation round: a robot still on its way then has not reached the goal
     validation_steps: int = 3000
+    #: the courses validated on (§3.1's, by name), each candidate judged on its shares averaged over them; empty: the
+    #: task's own course
+    validation_terrains: tuple[str, ...] = field(default=(), metadata={"choices": TERRAINS})
     #: under torchrun with K ranks (:meth:`for_ranks`): ``mini_batches``: K times the mini-batches per rank (the
     #: mini-batch summed over the ranks stays one process's, K times the optimizer steps per iteration);
     #: ``iterations``: max_iterations, save_interval and the stages' first iterations divided by K (one process's
@@ -133,6 +138,9 @@ class AgentConfig:
         for start, changes in self.stages:
             if not isinstance(start, int) or not isinstance(changes, dict):
                 raise ValueError("agent.stages: expected ((first_iteration, {field: value}), ...)")
+        unknown = [t for t in self.validation_terrains if t not in TERRAINS]
+        if unknown:
+            raise ValueError(f"agent.validation_terrains: {unknown[0]} is not one of {', '.join(TERRAINS)}")
         unknown = [s for s in self.scale_with_ranks if s not in RANK_SCALINGS]
         if unknown:
             raise ValueError(f"agent.scale_with_ranks: {unknown[0]} is not one of {', '.join(RANK_SCALINGS)}")

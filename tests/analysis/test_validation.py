@@ -29,3 +29,42 @@ def test_choice_goal_first_then_3m_then_falls_then_the_later():
     assert choose(cands, r) == 0
     lines = report_lines(cands, r, 0)
     assert lines[0].startswith("  -> model_100.pt (saved, iteration 100): goal 100.0 %") and "off course 100.0 %" in lines[1]
+
+
+def test_validation_on_several_courses_averages_each_candidates_shares(monkeypatch):
+    """``--agent.validation_terrains rugged complex``: each course validated one after another, each candidate judged
+    on its shares averaged over them, each course's own results kept; the flag parses and checks its names."""
+    import pytest
+
+    from hexnewton.analysis import validation
+    from hexnewton.apps.train import configs, parser
+    from hexnewton.tasks import task
+
+    per = {"rugged": [{"goal": 0.9, "walk_3m": 1.0, "fell": 0.1, "off_course": 0.0, "rounds": 8},
+                      {"goal": 1.0, "walk_3m": 1.0, "fell": 0.0, "off_course": 0.0, "rounds": 8}],
+           "complex": [{"goal": 1.0, "walk_3m": 1.0, "fell": 0.0, "off_course": 0.0, "rounds": 8},
+                       {"goal": 0.8, "walk_3m": 0.9, "fell": 0.0, "off_course": 0.2, "rounds": 8}]}  # fmt: skip
+    seen = []
+
+    def fake(cands, controller, terrain, rounds, device, max_steps, goal_distance=None):
+        seen.append(terrain)
+        return per[terrain]
+
+    monkeypatch.setattr(validation, "validate", fake)
+    cands = [Candidate(it, f"model_{it}.pt", "saved") for it in (250, 299)]
+    mean, got = validation.validate_courses(cands, "cpg_rl", ["rugged", "complex"], 8, "cpu", 30)
+    assert seen == ["rugged", "complex"] and got == per
+    assert mean[0] == {"goal": 0.95, "walk_3m": 1.0, "fell": 0.05, "off_course": 0.0, "rounds": 16}
+    assert mean[1]["goal"] == 0.9 and choose(cands, mean) == 0
+    assert validation.course_names(["complex"]) == "the complex course"
+    assert validation.course_names(["rugged", "stepped", "complex"]) == "the rugged, stepped and complex courses"
+
+    base = task("complex")
+    args = parser(base, False).parse_args(["--task", "complex", "--agent.validation_terrains", "rugged", "complex"])
+    assert configs(args, base, None)[1].validation_terrains == ("rugged", "complex")
+    with pytest.raises(SystemExit):  # argparse: one line naming the choices, exit 2
+        parser(base, False).parse_args(["--agent.validation_terrains", "moon"])
+    from hexnewton.learning.agent import AgentConfig
+
+    with pytest.raises(ValueError, match="agent.validation_terrains: moon is not one of"):
+        AgentConfig(validation_terrains=("moon",)).check()
