@@ -111,7 +111,7 @@ def validate(cands: list[Candidate], controller: str, terrain, rounds: int, devi
 
 def validate_courses(cands: list[Candidate], controller: str, terrains: list, rounds: int, device: str | None,
                      max_steps: int, goal_distance: float | None = None) -> tuple[list[dict], dict[str, list[dict]]]:
-    """:func:`validate` on each of ``terrains`` (names or ``TerrainConfig``\ s) one after another. Returns per
+    """:func:`validate` on each of ``terrains`` (names or ``TerrainConfig`` objects) one after another. Returns per
     candidate its shares averaged over the courses, and each course's own results by its name."""
     per = {}
     for terrain in terrains:

@@ -141,6 +141,8 @@ class AgentConfig:
         unknown = [t for t in self.validation_terrains if t not in TERRAINS]
         if unknown:
             raise ValueError(f"agent.validation_terrains: {unknown[0]} is not one of {', '.join(TERRAINS)}")
+        if len(set(self.validation_terrains)) < len(self.validation_terrains):
+            raise ValueError("agent.validation_terrains: name each course once")
         unknown = [s for s in self.scale_with_ranks if s not in RANK_SCALINGS]
         if unknown:
             raise ValueError(f"agent.scale_with_ranks: {unknown[0]} is not one of {', '.join(RANK_SCALINGS)}")

@@ -68,3 +68,5 @@ def test_validation_on_several_courses_averages_each_candidates_shares(monkeypat
 
     with pytest.raises(ValueError, match="agent.validation_terrains: moon is not one of"):
         AgentConfig(validation_terrains=("moon",)).check()
+    with pytest.raises(ValueError, match="name each course once"):
+        AgentConfig(validation_terrains=("rugged", "rugged")).check()
