@@ -4,8 +4,6 @@ fits (:func:`largest_that_fits`). The command line and its tables: ``python -m h
 
 from __future__ import annotations
 
-import contextlib
-import io
 import platform
 import tempfile
 import time
@@ -175,8 +173,7 @@ def bench_train(terrain: str, num_envs: int, device: str, iterations: int, seed:
     tcfg = (agent or AgentConfig()).to_rsl_rl(num_envs)
     # a TensorBoard writer as in train.py: rsl-rl's logger only does its per-step bookkeeping with one
     logs = tempfile.TemporaryDirectory(prefix="hexnewton-bench-")
-    with contextlib.redirect_stdout(io.StringIO()):  # rsl-rl prints both networks in full
-        runner = RankedRunner(env, copy.deepcopy(tcfg), log_dir=logs.name, device=device, rank=rank)
+    runner = RankedRunner(env, copy.deepcopy(tcfg), log_dir=logs.name, device=device, rank=rank)
     runner.learn(2 if tcfg["torch_compile_mode"] else 1)  # capture, kernel loading, optimizer state, compile
     wall = _timed_learn(runner, env, iterations)
     rate = num_envs * tcfg["num_steps_per_env"] * iterations / wall

@@ -212,7 +212,8 @@ class RankedRunner(OnPolicyRunner):
 
     def __init__(self, env, train_cfg: dict, log_dir: str | None, device: str, rank: Rank = Rank()):
         self.rank = rank  # before rsl-rl's set-up, which calls _configure_multi_gpu
-        super().__init__(env, train_cfg, log_dir=log_dir, device=device)
+        with contextlib.redirect_stdout(io.StringIO()):  # rsl-rl prints both networks in full
+            super().__init__(env, train_cfg, log_dir=log_dir, device=device)
 
     def _configure_multi_gpu(self) -> None:
         """rsl-rl's multi-process set-up (``cfg["multi_gpu"]``, ranks, the process group) from this run's
@@ -261,8 +262,7 @@ class HexRunner(RankedRunner):
     (``AgentConfig.stages``) and stops on ``max_minutes`` / ``target_success`` (:func:`stop_reason`)."""
 
     def __init__(self, env, agent, meta: dict, log_dir: str | None, device: str, rank: Rank = Rank()):
-        with contextlib.redirect_stdout(io.StringIO()):  # rsl-rl prints both networks in full
-            super().__init__(env, agent.to_rsl_rl(env.num_envs), log_dir=log_dir, device=device, rank=rank)
+        super().__init__(env, agent.to_rsl_rl(env.num_envs), log_dir=log_dir, device=device, rank=rank)
         # the run's git/ folder records hexnewton's commit and diff (rsl-rl's default looks for its own repo)
         self.logger.git_status_repos = [os.path.dirname(os.path.abspath(__file__))]
         self.agent, self.meta = agent, meta
