@@ -308,8 +308,9 @@ class World:
         if boxes is None:
             return None
         sim = self.cfg.sim
-        robot_shapes = np.flatnonzero(self.model.shape_body.numpy() >= 0)
-        first = int(np.flatnonzero(self.model.shape_body.numpy() < 0)[0])
+        shape_body = self.model.shape_body.numpy()
+        robot_shapes = np.flatnonzero(shape_body >= 0)
+        first = int(np.flatnonzero(shape_body < 0)[0])
         pairs = TerrainBoxPairs(self.model, boxes, self.terrain.grid, robot_shapes, first, first + boxes.count,
                                 sim.rigid_gap if sim.terrain_gap is None else sim.terrain_gap)
         pairs.update(self.state_0.body_q)
