@@ -3,8 +3,8 @@
 #
 #   bash scripts/device/gpu.sh install                       # after the chunk calls: wheels into /opt/site, the
 #                                                            # Warp kernel cache (/root/wc.tgz) into ~/.cache
-#   bash scripts/device/gpu.sh train NAME [GPU] -- ARGS...   # `python train.py ARGS` in the background (its own
-#                                                            # session: it outlives the call), log in $RUNS/NAME.log,
+#   bash scripts/device/gpu.sh train NAME [GPU] -- ARGS...   # `python train.py ARGS` in the background (setsid:
+#                                                            # it outlives the call), log in $RUNS/NAME.log,
 #                                                            # run directory $RUNS/NAME/
 #   bash scripts/device/gpu.sh wait SECONDS NAME...          # until those runs end (at most SECONDS), their progress
 #   bash scripts/device/gpu.sh pack NAME...                  # config, events, log, best and last checkpoint ->
@@ -62,7 +62,7 @@ train)
   name=$1; shift; gpu=${CUDA_VISIBLE_DEVICES:-0}
   [ "${1:-}" != "--" ] && { gpu=$1; shift; }
   shift   # --
-  # setsid: a process session of its own, so the run outlives this device call
+  # setsid: detached from the calling shell, so the run outlives this device call
   CUDA_VISIBLE_DEVICES=$gpu nohup setsid python train.py "$@" --log_dir "$RUNS" --experiment "$name" \
     > "$RUNS/$name.log" 2>&1 < /dev/null &
   echo "started $name on GPU $gpu: python train.py $*"

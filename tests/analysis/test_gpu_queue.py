@@ -55,9 +55,9 @@ def test_methods_queue_then_evaluations(tmp_path):
 
 
 @pytest.mark.skipif(not all(shutil.which(t) for t in ("setsid", "pgrep", "ps")), reason="needs setsid, pgrep and ps")
-def test_train_runs_in_a_session_of_its_own(tmp_path):
-    """``gpu.sh train`` starts the run in a process session of its own: the device tool ends a call's session when
-    the call returns, and the run must outlive it."""
+def test_train_runs_detached_from_the_call(tmp_path):
+    """``gpu.sh train`` starts the run detached (setsid): the device tool ends the processes of a
+    call when it returns, and the run must outlive it."""
     bin_dir = tmp_path / "bin"
     bin_dir.mkdir()
     _tool(bin_dir, "python", FAKE_PYTHON)
