@@ -363,6 +363,10 @@ class RewardConfig:
     # ours: paid once on leaving the course (§2.4.4 (2)); without it PPO walks off the course when stuck at a
     # step (docs/internals.md). 0 restores the paper's reward.
     off_course_penalty: float = 100.0
+    # ours: paid once on falling (§2.4.4 (1)), beside r_s's -100 on that step; 0 (off) in every task but where set
+    # (docs/training.md). A fall ends the episode and with it the stability shaping's per-step costs, so under heavy
+    # shaping the lost future alone may not make a fall dear.
+    fall_penalty: float = 0.0
     # ours: gait-quality terms (docs/internals.md, "Stability shaping"), each per 20 ms step and 0 = off (Table 1
     # has only the -100 fine beyond pi/6). Body tilt: -w_tilt (roll^2 + pitch^2) [rad^2]; body roll and pitch rate:
     # -w_ang_vel (w_x^2 + w_y^2) [(rad/s)^2, body frame]; action rate: -w_action_rate sum_k (a_k - a_k,prev)^2 over
@@ -373,8 +377,8 @@ class RewardConfig:
     w_action_rate: float = 0.0
     # the terms this task pays, rows of mdp/terms/rewards.py's REWARD_TERMS (logged as Reward/<name>, summed in table
     # order)
-    terms: tuple[str, ...] = ("height", "direction", "distance", "stability", "forward", "goal", "off_course", "tilt",
-                              "ang_vel", "action_rate")
+    terms: tuple[str, ...] = ("height", "direction", "distance", "stability", "forward", "goal", "off_course", "fall",
+                              "tilt", "ang_vel", "action_rate")
 
     def paper_reward(self) -> "RewardConfig":
         """Table 1 as written: its five terms alone (no goal bonus, no off-course penalty, no gait-quality terms, their
@@ -383,7 +387,7 @@ class RewardConfig:
         from dataclasses import replace
 
         return replace(self, direction_deadband=math.pi / 6, direction_to_goal=False, goal_bonus=0.0,
-                       off_course_penalty=0.0, stability_tilt=math.pi / 6, w_tilt=0.0, w_ang_vel=0.0,
+                       off_course_penalty=0.0, fall_penalty=0.0, stability_tilt=math.pi / 6, w_tilt=0.0, w_ang_vel=0.0,
                        w_action_rate=0.0, terms=PAPER_REWARD_TERMS)  # fmt: skip
 
 

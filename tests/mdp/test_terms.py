@@ -143,6 +143,8 @@ def test_reward_terms_on_hand_made_states():
     np.testing.assert_allclose(t["forward"], [0, -0.3, 0, 0, -0.3])
     np.testing.assert_allclose(t["goal"], [0, 0, 300, 0, 0])  # ours: more than lingering by the goal is worth
     np.testing.assert_allclose(t["off_course"], [0, 0, 0, 0, -100])  # ours: leaving the course costs a fall
+    np.testing.assert_allclose(t["fall"], [0, 0, 0, 0, 0])  # ours, off by default
+    np.testing.assert_allclose(terms(dataclasses.replace(REW, fall_penalty=200.0))["fall"], [0, -200, 0, 0, 0])
     np.testing.assert_allclose(t["direction"], [0, 0, 0, -2.0, 0], atol=1e-6)  # default dead band 0
     # pitched 35 deg nose-up (an 8 cm staircase): fined under Table 1's pi/6, free under --env.reward.stability_tilt 0.8
     rpy[0, 1] = -math.radians(35)
@@ -196,7 +198,8 @@ def test_shaping_terms_on_hand_made_states():
     t, _, _ = run([0, 0, 0])
     assert t["action_rate"][2] == 0.0
     paper = REW.paper_reward()
-    assert (paper.w_tilt, paper.w_ang_vel, paper.w_action_rate, paper.goal_bonus, paper.off_course_penalty) == (0,) * 5
+    assert (paper.w_tilt, paper.w_ang_vel, paper.w_action_rate, paper.goal_bonus, paper.off_course_penalty,
+            paper.fall_penalty) == (0,) * 6
     assert paper.direction_deadband == pytest.approx(math.pi / 6) and not paper.direction_to_goal
 
 

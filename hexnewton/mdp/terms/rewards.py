@@ -12,6 +12,7 @@ order (each function's docstring gives its value):
 - ``forward``: r_f, -0.3 per step below ``FORWARD_MIN_SPEED`` along +x;
 - ``goal``: r_goal, +300 once on reaching the goal (ours);
 - ``off_course``: r_off, -100 once on leaving the course (ours);
+- ``fall``: r_fall, -``fall_penalty`` once on falling (ours; 0: off);
 - ``tilt``, ``ang_vel``, ``action_rate``: the stability shaping's costs (ours; weight 0: off).
 
 ``docs/internals.md`` ("The MDP") gives the paper's wording, our reading of it, the weights and how to add a term."""
@@ -204,6 +205,19 @@ def off_course_np(inputs, frame):
 
 
 @wp.func
+def fall(inputs: RewardInputs, frame: RewardFrame) -> float:
+    """-1 on falling (ours: r_fall = fall_penalty x this)."""
+    r = float(0.0)
+    if inputs.status[frame.env] == FELL:
+        r = -1.0
+    return r
+
+
+def fall_np(inputs, frame):
+    return np.where(np.asarray(inputs.status) == FELL, -1.0, 0.0)
+
+
+@wp.func
 def tilt(inputs: RewardInputs, frame: RewardFrame) -> float:
     """roll² + pitch² [rad²], a cost: r_tilt = -w_tilt x this."""
     return inputs.rpy[frame.env, 0] * inputs.rpy[frame.env, 0] + inputs.rpy[frame.env, 1] * inputs.rpy[frame.env, 1]
@@ -293,9 +307,10 @@ REWARD_TERMS = (
     RewardTerm("distance", "w_distance", distance, distance_np),
     RewardTerm("stability", "stability_penalty", stability, stability_np),  # -1 while fallen or tilted: -100
     RewardTerm("forward", "forward_penalty", forward, forward_np),  # -1 below FORWARD_MIN_SPEED: -0.3
-    # ours: the success bonus and the off-course fine, paid once
+    # ours: the success bonus, the off-course and fall fines, paid once
     RewardTerm("goal", "goal_bonus", goal, goal_np, per_step=False),
     RewardTerm("off_course", "off_course_penalty", off_course, off_course_np, per_step=False),
+    RewardTerm("fall", "fall_penalty", fall, fall_np, per_step=False),
     # ours: the stability shaping
     RewardTerm("tilt", "w_tilt", tilt, tilt_np, cost=True),
     RewardTerm("ang_vel", "w_ang_vel", ang_vel, ang_vel_np, cost=True),
