@@ -5,6 +5,12 @@
 #   bash scripts/device/time_to_skill.sh startup [ARGS...]   # `train.py --task complex ARGS` to its first
 #                                                      # iterations, twice: a cold Warp kernel cache, then the warm one;
 #                                                      # phase tables (ARGS given: in $OUT/startup_<ARGS>/)
+#   bash scripts/device/time_to_skill.sh caches        # which cache a fresh start lacks: `train.py --task complex` to
+#                                                      # its first iterations three times, each with its own Warp kernel
+#                                                      # cache (WARP_CACHE_PATH) and CUDA driver JIT cache
+#                                                      # (CUDA_CACHE_PATH): both empty; Warp's empty, the driver's from
+#                                                      # the first; Warp's from the first, the driver's empty
+#                                                      # -> $OUT/caches/
 #   bash scripts/device/time_to_skill.sh contact       # sim-only complex and stepped at 16384 envs under each terrain
 #                                                      # contact setting, the task's physics (20 ms frame, 4 substeps)
 #   bash scripts/device/time_to_skill.sh train NAME SEED [ARGS...]   # `python train.py --task complex --seed SEED
@@ -38,6 +44,22 @@ startup)
     cp "$(ls -d "$RUNS/$what/$cache"/*/ | tail -1)/timing.json" "$OUT/$what/timing_$cache.json"
   done
   tar czf /root/warpcache.tgz -C /root/.cache warp && ls -la /root/warpcache.tgz
+  ;;
+caches)
+  mkdir -p "$OUT/caches"
+  gpu_name > "$OUT/caches/gpu.txt"
+  c=/root/caches; rm -rf "$c"
+  for run in "both_empty w1 n1" "warp_empty w2 n1" "driver_empty w1 n3"; do
+    set -- $run
+    t0=$(date +%s.%N)
+    WARP_CACHE_PATH=$c/$2 CUDA_CACHE_PATH=$c/$3 python train.py --task complex --max_iterations 3 \
+      --log_dir "$RUNS/caches" --experiment "$1" > "$OUT/caches/$1.log" 2>&1
+    echo "exit $? after $(awk "BEGIN {print $(date +%s.%N) - $t0}") s (shell)" >> "$OUT/caches/$1.log"
+    echo "== $1: Warp cache $2 ($(du -sh $c/$2 | cut -f1)), driver cache $3 ($(du -sh $c/$3 | cut -f1))" \
+      | tee -a "$OUT/caches/$1.log"
+    grep -E "^start-up|^exit" "$OUT/caches/$1.log"
+    cp "$(ls -d "$RUNS/caches/$1"/*/ | tail -1)/timing.json" "$OUT/caches/timing_$1.json"
+  done
   ;;
 contact)
   mkdir -p "$OUT/contact"
