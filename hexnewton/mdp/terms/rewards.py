@@ -179,42 +179,46 @@ def forward_np(inputs, frame):
 
 
 @wp.func
-def goal(inputs: RewardInputs, frame: RewardFrame) -> float:
-    """1 on reaching the goal (ours: r_goal = goal_bonus x this)."""
+def ended_as(inputs: RewardInputs, frame: RewardFrame, code: int) -> float:
+    """1 on the step that ends the episode with status ``code``, else 0."""
     r = float(0.0)
-    if inputs.status[frame.env] == SUCCESS:
+    if inputs.status[frame.env] == code:
         r = 1.0
     return r
 
 
+def ended_as_np(inputs, code):
+    return np.where(np.asarray(inputs.status) == code, 1.0, 0.0)
+
+
+@wp.func
+def goal(inputs: RewardInputs, frame: RewardFrame) -> float:
+    """1 on reaching the goal (ours: r_goal = goal_bonus x this)."""
+    return ended_as(inputs, frame, SUCCESS)
+
+
 def goal_np(inputs, frame):
-    return np.where(np.asarray(inputs.status) == SUCCESS, 1.0, 0.0)
+    return ended_as_np(inputs, SUCCESS)
 
 
 @wp.func
 def off_course(inputs: RewardInputs, frame: RewardFrame) -> float:
     """-1 on leaving the course (ours: r_off = off_course_penalty x this)."""
-    r = float(0.0)
-    if inputs.status[frame.env] == OFF_COURSE:
-        r = -1.0
-    return r
+    return -ended_as(inputs, frame, OFF_COURSE)
 
 
 def off_course_np(inputs, frame):
-    return np.where(np.asarray(inputs.status) == OFF_COURSE, -1.0, 0.0)
+    return -ended_as_np(inputs, OFF_COURSE)
 
 
 @wp.func
 def fall(inputs: RewardInputs, frame: RewardFrame) -> float:
     """-1 on falling (ours: r_fall = fall_penalty x this)."""
-    r = float(0.0)
-    if inputs.status[frame.env] == FELL:
-        r = -1.0
-    return r
+    return -ended_as(inputs, frame, FELL)
 
 
 def fall_np(inputs, frame):
-    return np.where(np.asarray(inputs.status) == FELL, -1.0, 0.0)
+    return -ended_as_np(inputs, FELL)
 
 
 @wp.func
