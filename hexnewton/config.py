@@ -363,9 +363,8 @@ class RewardConfig:
     # ours: paid once on leaving the course (§2.4.4 (2)); without it PPO walks off the course when stuck at a
     # step (docs/internals.md). 0 restores the paper's reward.
     off_course_penalty: float = 100.0
-    # ours: paid once on falling (§2.4.4 (1)), beside r_s's -100 on that step; 0 (off) in every task but where set
-    # (docs/training.md). A fall ends the episode and with it the stability shaping's per-step costs, so under heavy
-    # shaping the lost future alone may not make a fall dear.
+    # ours: paid once on falling (§2.4.4 (1)), beside r_s's -100 on that step; 0 (off) in every task (docs/training.md:
+    # 300 and 1000 did not lower the complex recipe's rugged falls)
     fall_penalty: float = 0.0
     # ours: gait-quality terms (docs/internals.md, "Stability shaping"), each per 20 ms step and 0 = off (Table 1
     # has only the -100 fine beyond pi/6). Body tilt: -w_tilt (roll^2 + pitch^2) [rad^2]; body roll and pitch rate:
