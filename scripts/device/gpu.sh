@@ -5,7 +5,8 @@
 #                                                            # Warp kernel cache (/root/wc.tgz) into ~/.cache
 #   bash scripts/device/gpu.sh train NAME [GPU] -- ARGS...   # `python train.py ARGS` in the background (setsid:
 #                                                            # it outlives the call), log in $RUNS/NAME.log,
-#                                                            # run directory $RUNS/NAME/
+#                                                            # run directory $RUNS/NAME/; returns once the run is
+#                                                            # past its imports; refuses a NAME that is running
 #   bash scripts/device/gpu.sh wait SECONDS NAME...          # until those runs end (at most SECONDS), their progress
 #   bash scripts/device/gpu.sh pack NAME...                  # config, events, log, best and last checkpoint ->
 #                                                            # $OUT/run_NAME.tgz; the shipped checkpoint -> $KEEP/NAME.pt
@@ -62,9 +63,18 @@ train)
   name=$1; shift; gpu=${CUDA_VISIBLE_DEVICES:-0}
   [ "${1:-}" != "--" ] && { gpu=$1; shift; }
   shift   # --
+  if pgrep -f -- "--experiment $name\b" > /dev/null; then
+    echo "gpu.sh train: a run named $name is running already (a second one would overwrite its log)" >&2; exit 1
+  fi
   # setsid: detached from the calling shell, so the run outlives this device call
   CUDA_VISIBLE_DEVICES=$gpu nohup setsid python train.py "$@" --log_dir "$RUNS" --experiment "$name" \
     > "$RUNS/$name.log" 2>&1 < /dev/null &
+  # the next device call replaces the working tree: the run passes its imports (train.py's first line) in this one
+  for _ in $(seq 90); do
+    grep -q "^training " "$RUNS/$name.log" 2>/dev/null && break
+    pgrep -f -- "--experiment $name\b" > /dev/null || break
+    sleep 1
+  done
   echo "started $name on GPU $gpu: python train.py $*"
   ;;
 wait)

@@ -17,7 +17,7 @@ FAKE_PYTHON = """#!/bin/bash
 out= ld= ex=
 while [ $# -gt 0 ]; do case $1 in --out) out=$2; shift;; --log_dir) ld=$2; shift;; --experiment) ex=$2; shift;; esac; shift; done
 if [ -n "$out" ]; then echo "$out" >> "$(dirname "$out")/../evaluated"; mkdir -p "$out"; echo '{}' > "$out/results.json"; exit 0; fi
-sleep $(( ${#ex} % 4 + 1 )); mkdir -p "$ld/$ex/run"; touch "$ld/$ex/run/model_10.pt"
+echo "training $ex"; sleep $(( ${#ex} % 4 + 1 )); mkdir -p "$ld/$ex/run"; touch "$ld/$ex/run/model_10.pt"
 """
 
 
@@ -57,7 +57,8 @@ def test_methods_queue_then_evaluations(tmp_path):
 @pytest.mark.skipif(not all(shutil.which(t) for t in ("setsid", "pgrep", "ps")), reason="needs setsid, pgrep and ps")
 def test_train_runs_detached_from_the_call(tmp_path):
     """``gpu.sh train`` starts the run detached (setsid): the device tool ends the processes of a
-    call when it returns, and the run must outlive it."""
+    call when it returns, and the run must outlive it; it returns once the run is past its imports (the next call
+    replaces the working tree) and refuses a second run of the same name."""
     bin_dir = tmp_path / "bin"
     bin_dir.mkdir()
     _tool(bin_dir, "python", FAKE_PYTHON)
@@ -70,6 +71,10 @@ def test_train_runs_detached_from_the_call(tmp_path):
     assert run, call.stdout
     assert all(int(subprocess.run(["ps", "-o", "sid=", "-p", pid], capture_output=True, text=True).stdout or -1)
                != call_session for pid in run)
+    assert (runs / "r1.log").read_text().startswith("training r1")  # started past its imports
+    again = subprocess.run(["bash", "scripts/device/gpu.sh", "train", "r1", "0", "--", "--task", "complex"], cwd=ROOT,
+                           env=env, capture_output=True, text=True)
+    assert again.returncode == 1 and "running already" in again.stderr  # a second r1 would overwrite the first's log
     deadline = time.time() + 30
     while time.time() < deadline and not (runs / "r1" / "run" / "model_10.pt").exists():
         time.sleep(0.5)
