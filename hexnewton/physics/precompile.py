@@ -67,7 +67,8 @@ def _live_kernels() -> list[wp.Kernel]:
 
 def compiles_generated(setting: str, is_cuda: bool) -> bool:
     """``SimConfig.precompile``: whether a World also compiles the kernels mujoco_warp generates for its model
-    (``"auto"``: on a CUDA device, where they cost a fresh machine ~150 s of serial compilation at the first step)."""
+    (``"auto"``: on a CUDA device, where the first step would otherwise compile them one by one; on the CPU a cold
+    2-core build is faster without)."""
     return setting == "generated" or (setting == "auto" and is_cuda)
 
 

@@ -7,6 +7,7 @@
 #                                                            # it outlives the call), log in $RUNS/NAME.log,
 #                                                            # run directory $RUNS/NAME/; returns once the run is
 #                                                            # past its imports; refuses a NAME that is running
+#                                                            # (start_run below; `baseline` alike)
 #   bash scripts/device/gpu.sh wait SECONDS NAME...          # until those runs end (at most SECONDS), their progress
 #   bash scripts/device/gpu.sh pack NAME...                  # config, events, log, best and last checkpoint ->
 #                                                            # $OUT/run_NAME.tgz; the shipped checkpoint -> $KEEP/NAME.pt
@@ -53,6 +54,24 @@ KEEP=${KEEP:-/root/keep}
 mkdir -p "$OUT" "$RUNS" "$KEEP"
 cmd=${1:-}; shift || true
 run_dir() { ls -d "$RUNS/$1"/*/ 2>/dev/null | tail -1; }
+# start_run NAME GPU COMMAND...: COMMAND --log_dir $RUNS --experiment NAME on GPU, log in $RUNS/NAME.log, detached
+# (setsid: it outlives this device call); refuses a NAME that is running (a second run would overwrite its log) and
+# returns once the run has printed its first line ("training ..."), past its imports: the next device call replaces
+# the working tree
+start_run() {
+  local name=$1 gpu=$2; shift 2
+  if pgrep -f -- "--experiment $name\b" > /dev/null; then
+    echo "gpu.sh: a run named $name is running already (a second one would overwrite its log)" >&2; exit 1
+  fi
+  CUDA_VISIBLE_DEVICES=$gpu nohup setsid "$@" --log_dir "$RUNS" --experiment "$name" > "$RUNS/$name.log" 2>&1 \
+    < /dev/null &
+  for _ in $(seq 90); do
+    grep -q "^training " "$RUNS/$name.log" 2>/dev/null && break
+    pgrep -f -- "--experiment $name\b" > /dev/null || break
+    sleep 1
+  done
+  echo "started $name on GPU $gpu: $*"
+}
 case "$cmd" in
 install)
   bash "$(ls .dw*/install.sh | tail -1)"
@@ -63,19 +82,7 @@ train)
   name=$1; shift; gpu=${CUDA_VISIBLE_DEVICES:-0}
   [ "${1:-}" != "--" ] && { gpu=$1; shift; }
   shift   # --
-  if pgrep -f -- "--experiment $name\b" > /dev/null; then
-    echo "gpu.sh train: a run named $name is running already (a second one would overwrite its log)" >&2; exit 1
-  fi
-  # setsid: detached from the calling shell, so the run outlives this device call
-  CUDA_VISIBLE_DEVICES=$gpu nohup setsid python train.py "$@" --log_dir "$RUNS" --experiment "$name" \
-    > "$RUNS/$name.log" 2>&1 < /dev/null &
-  # the next device call replaces the working tree: the run passes its imports (train.py's first line) in this one
-  for _ in $(seq 90); do
-    grep -q "^training " "$RUNS/$name.log" 2>/dev/null && break
-    pgrep -f -- "--experiment $name\b" > /dev/null || break
-    sleep 1
-  done
-  echo "started $name on GPU $gpu: python train.py $*"
+  start_run "$name" "$gpu" python train.py "$@"
   ;;
 wait)
   limit=$1; shift
@@ -130,9 +137,7 @@ baseline)
   name=$1; shift; gpu=${CUDA_VISIBLE_DEVICES:-0}
   [ "${1:-}" != "--" ] && { gpu=$1; shift; }
   shift   # --
-  CUDA_VISIBLE_DEVICES=$gpu nohup setsid python -m hexnewton.apps.baselines "$@" --log_dir "$RUNS" --experiment "$name" \
-    > "$RUNS/$name.log" 2>&1 < /dev/null &
-  echo "started $name on GPU $gpu: python -m hexnewton.apps.baselines $*"
+  start_run "$name" "$gpu" python -m hexnewton.apps.baselines "$@"
   ;;
 methods)
   [ $# -eq 6 ] || { echo "usage: gpu.sh methods TASK MINUTES ENV_STEPS NUM_ENVS \"SEEDS\" \"GPUS\""; exit 2; }
