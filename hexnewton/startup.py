@@ -4,10 +4,12 @@ process's own start (``/proc/self/stat``), so that imports and the interpreter c
     from hexnewton import startup
     startup.mark("terrain")          # the time since the last mark (or since the process started) is "terrain"
     print(startup.summary())          # "start-up 21.4 s: python and imports 4.1, terrain 0.3, ..."
+    startup.note("first_step_loaded_modules", [...])   # a detail kept beside the phases (timing.json)
 
 The physics world marks its build phases (terrain, scene, finalize, solver, collision pipeline, kernels), the env
 its graph capture (the first step: lazy kernel loads and solver allocations), the runner the first iteration;
-``train.py`` prints the summary after the first iteration and writes every phase into the run's ``timing.json``.
+``train.py`` prints the summary after the first iteration and writes every phase into the run's ``timing.json``, with
+the notes (the Warp modules the first step loaded: those the parallel precompile left to it).
 Plain Python: no Warp, no torch.
 """
 
@@ -33,6 +35,7 @@ def process_start() -> float:
 _IMPORTED = time.time()
 START = process_start()
 _phases: dict[str, float] = {}
+_notes: dict[str, object] = {}
 _last = START
 
 
@@ -44,6 +47,16 @@ def mark(name: str) -> float:
     _phases[name] = _phases.get(name, 0.0) + seconds
     _last = now
     return seconds
+
+
+def note(name: str, value) -> None:
+    """Keep a detail of the start-up (JSON-serialisable) beside the phases, e.g. what the first step compiled."""
+    _notes[name] = value
+
+
+def notes() -> dict[str, object]:
+    """The details kept with :func:`note`."""
+    return dict(_notes)
 
 
 def phases() -> dict[str, float]:
@@ -59,5 +72,10 @@ def since_start() -> float:
 def summary() -> str:
     """One line: the seconds since the process started and each phase's."""
     parts = ", ".join(f"{k} {v:.1f}" for k, v in _phases.items())
-    return f"start-up {since_start():.1f} s from process start: {parts}"
+    line = f"start-up {since_start():.1f} s from process start: {parts}"
+    for name, value in _notes.items():
+        if isinstance(value, list):
+            shown = ", ".join(map(str, value[:8])) + (f", ... ({len(value) - 8} more)" if len(value) > 8 else "")
+            line += f"\n{name.replace('_', ' ')}: {len(value)}" + (f" ({shown})" if value else "")
+    return line
 

@@ -299,7 +299,8 @@ def finish(args, runner, cfg, agent, rank, run_dir: str, views, train_s: float, 
 
     num_envs = cfg.sim.num_envs
     iterations = runner.current_learning_iteration + 1 - first_it  # this run's (a resumed one starts later)
-    timing = {"startup_phases_s": startup.phases(), "first_iteration_s": runner.first_iteration_s,
+    timing = {"startup_phases_s": startup.phases(), "startup_notes": startup.notes(),
+              "first_iteration_s": runner.first_iteration_s,
               "train_s": train_s, "iterations": iterations,
               "env_steps": iterations * num_envs * agent.num_steps_per_env * rank.world_size,
               "world_size": rank.world_size, "num_envs_per_rank": num_envs, "device_name": device_label(cfg.sim.device),

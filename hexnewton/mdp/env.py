@@ -81,6 +81,7 @@ from hexnewton.mdp.terms import (
 )
 from hexnewton.physics.cpg import CPGController, joint_actions_kernel
 from hexnewton.physics.graphs import capture_graph
+from hexnewton.physics.precompile import loaded_variants, variant_names
 from hexnewton.physics.robot import BASE_Q
 from hexnewton.physics.world import World
 
@@ -284,9 +285,12 @@ class HexapodEnv(VecEnv):
             return
         if self.graph is None:
             first = self.common_step_counter == 0
+            before = loaded_variants(self.device) if first else None
             self._capture()
             if first:
                 startup.mark("first step and graph capture")
+                # what the precompile left to the first step (loaded from Warp's cache or compiled there)
+                startup.note("first_step_loaded_modules", variant_names(loaded_variants(self.device) - before))
         wp.capture_launch(self.graph)
 
     def _capture(self) -> None:

@@ -135,6 +135,23 @@ def generated_modules(device: str, since: set[int]) -> list[wp.Module]:
     return list(found.values())
 
 
+def loaded_variants(device: str) -> set[tuple[str, int | None, int]]:
+    """(module name, block size, module id) of every Warp module variant loaded on ``device`` now, the import-time
+    modules and the generated kernels' own: taken before and after a step, the difference is what that step compiled
+    (or took from Warp's cache)."""
+    from warp._src.context import user_modules
+
+    context = wp.get_device(device).context
+    modules = {id(m): m for m in list(user_modules.values())}
+    modules.update({id(k.module): k.module for k in _live_kernels()})
+    return {(m.name, block_dim, id(m)) for m in modules.values() for ctx, block_dim in list(m.execs) if ctx == context}
+
+
+def variant_names(variants) -> list[str]:
+    """Sorted readable names of :func:`loaded_variants` entries (``name`` or ``name@block_dim``)."""
+    return sorted(name if block_dim is None else f"{name}@{block_dim}" for name, block_dim, _ in variants)
+
+
 def precompile(device: str, solver=None, since: set[int] | None = None, max_workers: int | None = None) -> list[str]:
     """Compile :func:`imported_modules` on parallel threads (default: one per CPU core); given ``solver``, first create
     mujoco_warp's generated step kernels (:func:`create_step_kernels`) and compile them and every other kernel created
