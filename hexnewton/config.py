@@ -186,9 +186,9 @@ class SimConfig:
     # "imported" those defined at import time, "generated" also the kernels mujoco_warp generates for the model
     # (created by a dry step), "auto" generated on a CUDA device and imported on the CPU. On one H100 with Warp's
     # kernel cache empty (the CUDA driver's JIT cache warm) train.py --task complex reached its first iteration 88 s
-    # from process start with "auto", the first step 8.5 s; on a fresh machine the driver's own compiling dominates
-    # (272-308 s with "auto", 260 s with "imported"); on the 2-core CPU a cold build took 149 s against 60 s
-    # (results/time_to_skill/report.md)
+    # from process start with "auto", the first step 8.5 s; on a fresh machine 272-308 s with "auto" (260 s with
+    # "imported"), the first step compiling the module variants the precompile leaves to it (timing.json lists
+    # them); on the 2-core CPU a cold build took 149 s against 60 s (results/time_to_skill/report.md)
     precompile: str = field(default="auto", metadata={"choices": ("auto", "imported", "generated")})
     # ours: env i starts at (0, y_i), y_i evenly spread over [-spread, spread] [m], so robots meet different
     # rugged blocks; goal and off-course limit (TaskConfig) are relative to each env's start

@@ -81,7 +81,7 @@ from hexnewton.mdp.terms import (
 )
 from hexnewton.physics.cpg import CPGController, joint_actions_kernel
 from hexnewton.physics.graphs import capture_graph
-from hexnewton.physics.precompile import loaded_variants, variant_names
+from hexnewton.physics.precompile import compile_modules, loaded_variants, variant_names
 from hexnewton.physics.robot import BASE_Q
 from hexnewton.physics.world import World
 
@@ -190,6 +190,8 @@ class HexapodEnv(VecEnv):
         self.status_kernel = make_status_kernel(task.terminations)
         self.reward_terms = reward_table(cfg.reward)
         self.rewards_kernel = make_rewards_kernel(self.reward_terms)
+        # both are generated for this task after the World's precompile: compiled now, in parallel, not by the first step
+        compile_modules(dev, [(self.status_kernel.module, None), (self.rewards_kernel.module, None)])
         self.reward, self.terms, self.prev_x = z(n), z(n, len(self.reward_terms)), z(n)
         self.obs = z(n, self.num_obs)
         # the state at the end of the last step, before finished envs were reset (play.py records these)

@@ -6,7 +6,8 @@ A physics step launches two kinds of Warp modules: those defined when their Pyth
 on parallel threads, on CUDA (NVRTC) and on the CPU (LLVM) alike:
 
 ``precompile(device)`` compiles the import-time modules; ``precompile(device, solver, since)``
-(``SimConfig.precompile`` "generated") also the generated kernels. It runs once the solver and the collision pipeline exist (building the solver
+(``SimConfig.precompile`` "generated") also the generated kernels; on CUDA, given the collision pipeline, Newton's
+narrow-phase modules at each block size it launches them with (each size is a variant of its own). It runs once the solver and the collision pipeline exist (building the solver
 sets module options on mujoco_warp's modules, which would make a module compiled before it compile again). First
 mujoco_warp's ``step`` runs on a scratch ``Data`` of the solver's sizes whose world count reads 0, inside a graph
 capture that is thrown away: every launch has an empty grid, which Warp returns from before loading the module, so
@@ -36,8 +37,14 @@ STEP_MODULES = (
     "newton._src.sim.articulation", "newton._src.sim.collide", "newton._src.solvers.mujoco.kernels",
     "mujoco_warp._src.constraint", "mujoco_warp._src.derivative", "mujoco_warp._src.forward",
     "mujoco_warp._src.passive", "mujoco_warp._src.set_const", "mujoco_warp._src.smooth",
-    "mujoco_warp._src.solver", "mujoco_warp._src.support",
+    "mujoco_warp._src.solver", "mujoco_warp._src.support", "newton._src.geometry.contact_reduction_global",
 )  # fmt: skip
+
+# Newton's collision modules whose kernels (import-time and generated ones alike) its narrow phase launches with its
+# own block sizes on CUDA (NarrowPhase's block_dim, split_convex_block_dim, mesh_triangle_block_dim and the contact
+# reducer's export size) as well as Warp's default: on a fresh H100 the first step compiled those variants one
+# after another (146.8 s, results/time_to_skill/report.md, "What a fresh machine compiles")
+NARROW_PHASE_SOURCES = ("newton._src.geometry.narrow_phase", "newton._src.geometry.contact_reduction_global")
 
 # Generated kernels that mujoco_warp launches with a block size of its model's ``block_dim`` settings (the field
 # named here) rather than Warp's default; on CUDA each block size is a variant compiled of its own. Keyed by the
@@ -107,15 +114,33 @@ def create_step_kernels(device: str, solver) -> bool:
     return True
 
 
-def _block_dim(module: wp.Module, device: str, block_dims) -> int | None:
-    """The block size ``module``'s launch asks for on ``device`` (None: Warp's default)."""
-    if block_dims is None or not wp.get_device(device).is_cuda:
-        return None
-    for kernel in module.kernels.values():
-        builder = kernel.func.__qualname__.split(".<locals>")[0]
-        if builder in TILED_BLOCK_DIMS:
-            return getattr(block_dims, TILED_BLOCK_DIMS[builder], None)
-    return None
+def narrow_phase_block_dims(pipeline, device: str) -> tuple[int, ...]:
+    """The block sizes ``pipeline``'s (a ``newton.CollisionPipeline``) narrow phase launches with on ``device`` besides
+    Warp's default: none on the CPU, where a launch runs one thread per block."""
+    narrow = getattr(pipeline, "narrow_phase", None)
+    if narrow is None or not wp.get_device(device).is_cuda:
+        return ()
+    from newton._src.geometry.contact_reduction_global import EXPORT_REDUCED_CONTACTS_BLOCK_DIM
+
+    sizes = {getattr(narrow, name, None) for name in ("block_dim", "split_convex_block_dim", "mesh_triangle_block_dim")}
+    return tuple(sorted(b for b in sizes | {EXPORT_REDUCED_CONTACTS_BLOCK_DIM} if b))
+
+
+def _block_dims(module: wp.Module, device: str, block_dims, narrow_dims: tuple[int, ...]) -> list[int | None]:
+    """The block sizes ``module``'s launches ask for on ``device`` (None: Warp's default): a mujoco_warp tiled kernel
+    its model's ``block_dim`` field; Newton's narrow-phase modules the default and each of ``narrow_dims``."""
+    if not wp.get_device(device).is_cuda:
+        return [None]
+    kernels = list(module.kernels.values())
+    if narrow_dims and (module.name in NARROW_PHASE_SOURCES or any(k.func.__module__ in NARROW_PHASE_SOURCES
+                                                                   for k in kernels)):  # fmt: skip
+        return [None, *narrow_dims]
+    if block_dims is not None:
+        for kernel in kernels:
+            builder = kernel.func.__qualname__.split(".<locals>")[0]
+            if builder in TILED_BLOCK_DIMS:
+                return [getattr(block_dims, TILED_BLOCK_DIMS[builder], None)]
+    return [None]
 
 
 def generated_modules(device: str, since: set[int]) -> list[wp.Module]:
@@ -152,19 +177,28 @@ def variant_names(variants) -> list[str]:
     return sorted(name if block_dim is None else f"{name}@{block_dim}" for name, block_dim, _ in variants)
 
 
-def precompile(device: str, solver=None, since: set[int] | None = None, max_workers: int | None = None) -> list[str]:
+def compile_modules(device: str, jobs: list[tuple[wp.Module, int | None]], max_workers: int | None = None) -> None:
+    """Compile and load each (module, block size) of ``jobs`` on ``device``, one thread each (default: one per CPU
+    core); what Warp's cache holds is loaded from it."""
+    with ThreadPoolExecutor(max_workers=_workers(max_workers)) as pool:
+        futures = [pool.submit(wp.force_load, device=device, modules=[m], block_dim=b, max_workers=0) for m, b in jobs]
+        for future in futures:
+            future.result()
+
+
+def precompile(device: str, solver=None, since: set[int] | None = None, max_workers: int | None = None,
+               pipeline=None) -> list[str]:
     """Compile :func:`imported_modules` on parallel threads (default: one per CPU core); given ``solver``, first create
     mujoco_warp's generated step kernels (:func:`create_step_kernels`) and compile them and every other kernel created
-    after ``since`` that is not loaded yet with them (``SimConfig.precompile`` "generated"); returns the module
-    names."""
+    after ``since`` that is not loaded yet with them (``SimConfig.precompile`` "generated"); given ``pipeline`` (the
+    collision pipeline), Newton's narrow-phase modules also at the block sizes it launches them with. Returns the
+    module names."""
     modules = imported_modules()
     if solver is not None:
         create_step_kernels(device, solver)
         modules += generated_modules(device, since or set())
     block_dims = getattr(solver.mjw_model, "block_dim", None) if solver is not None else None
-    jobs = [(m, _block_dim(m, device, block_dims)) for m in modules]
-    with ThreadPoolExecutor(max_workers=_workers(max_workers)) as pool:
-        futures = [pool.submit(wp.force_load, device=device, modules=[m], block_dim=b, max_workers=0) for m, b in jobs]
-        for future in futures:
-            future.result()
+    narrow_dims = narrow_phase_block_dims(pipeline, device) if pipeline is not None else ()
+    compile_modules(device, [(m, b) for m in modules for b in _block_dims(m, device, block_dims, narrow_dims)],
+                    max_workers)
     return [m.name for m in modules]

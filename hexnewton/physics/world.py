@@ -283,7 +283,7 @@ class World:
         self._collide_dt = sim.frame_dt if sim.speculative_gap is not None else None
         self.contacts = self.pipeline.contacts()
         startup.mark("collision pipeline")
-        precompile(self.device, self.solver if since is not None else None, since)
+        precompile(self.device, self.solver if since is not None else None, since, pipeline=self.pipeline)
         startup.mark("kernels")
         self.apply_effort_clamp()
 

@@ -276,3 +276,12 @@ def test_gymnasium_makes_a_task_by_its_id():
     obs, _ = env.reset()
     assert obs.shape == (3, 59) and (env.unwrapped.vec_env.episode_length_buf == 0).all()
     env.close()
+
+
+def test_env_compiles_its_generated_kernels_before_the_first_step():
+    """The episode-status and reward kernels an env generates for its task are loaded when the env is built (compiled
+    in parallel there, not one by one by the first step: hexnewton.physics.precompile)."""
+    e = make_env(_cfg("flat", 2, terminations=("nonfinite", "timeout")))
+    context = wp.get_device(DEV).context
+    for kernel in (e.status_kernel, e.rewards_kernel):
+        assert any(ctx == context for ctx, _ in kernel.module.execs)

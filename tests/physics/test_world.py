@@ -205,10 +205,42 @@ def test_precompile_finds_every_step_module():
     """The CUDA cold-start list names modules that exist once a World is built (guards against renames)."""
     from hexnewton.physics.precompile import STEP_MODULES, imported_modules
 
-    _world("flat").step(1)
+    world = _world("flat")
+    world.step(1)
     names = [m.name for m in imported_modules()]
     assert set(STEP_MODULES) <= set(names)
     assert any(n.startswith("hexnewton.") for n in names)
+
+
+def test_precompile_reads_the_narrow_phase_block_sizes():
+    """The block sizes Newton's narrow phase launches with on CUDA are read from its own fields (guards against
+    renames); the CPU runs one thread per block whatever is asked, so it compiles no extra variants."""
+    from hexnewton.physics.precompile import NARROW_PHASE_SOURCES, imported_modules, narrow_phase_block_dims
+
+    world = _world("rugged")
+    narrow = world.pipeline.narrow_phase
+    for name in ("block_dim", "split_convex_block_dim", "mesh_triangle_block_dim"):
+        assert isinstance(getattr(narrow, name), int)
+    assert narrow_phase_block_dims(world.pipeline, world.device) == ()
+    modules = {m.name: m for m in imported_modules()}
+    assert set(NARROW_PHASE_SOURCES) <= set(modules)
+
+
+def test_precompile_asks_cuda_for_the_launched_block_sizes(monkeypatch):
+    """On CUDA Newton's narrow-phase modules compile at Warp's default and at each size the narrow phase launches with;
+    other modules once at the default (the device is faked: the choice is plain Python)."""
+    from types import SimpleNamespace
+
+    from hexnewton.physics import precompile as pc
+
+    world = _world("rugged")
+    modules = {m.name: m for m in pc.imported_modules()}
+    monkeypatch.setattr(pc.wp, "get_device", lambda device=None: SimpleNamespace(is_cuda=True))
+    narrow = world.pipeline.narrow_phase
+    dims = pc.narrow_phase_block_dims(world.pipeline, "cuda:0")
+    assert dims == tuple(sorted({narrow.block_dim, narrow.split_convex_block_dim, narrow.mesh_triangle_block_dim, 32}))
+    assert pc._block_dims(modules["newton._src.geometry.contact_reduction_global"], "cuda:0", None, dims) == [None, *dims]
+    assert pc._block_dims(modules["mujoco_warp._src.smooth"], "cuda:0", None, dims) == [None]
 
 
 def test_precompile_auto_compiles_generated_kernels_on_cuda_only():
