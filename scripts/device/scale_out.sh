@@ -4,6 +4,7 @@
 # (scripts/device/README.md, "Scale-out"):
 #
 #   bash scripts/device/scale_out.sh all                   # in the background: bench, then train, then eval
+#                                                          # ($STAGES: those named, e.g. "train eval")
 #   bash scripts/device/scale_out.sh wait SECONDS          # until the background queue ends (at most SECONDS)
 #   bash scripts/device/scale_out.sh pack                  # bench JSONs, runs, evaluations, commands -> $OUT
 #
@@ -40,9 +41,10 @@ log_cmd() { echo "$*" >> "$RUNS/commands.txt"; echo "$(date +%T) $*"; }
 ngpu() { echo $(( $(echo "$1" | tr -cd , | wc -c) + 1 )); }
 case "$cmd" in
 all)
-  nohup setsid bash -c "bash $0 bench; bash $0 train; bash $0 eval; echo queue ended" >> "$RUNS/queue.log" 2>&1 \
+  stages=${STAGES:-bench train eval}
+  nohup setsid bash -c "for s in $stages; do bash $0 \$s; done; echo queue ended" >> "$RUNS/queue.log" 2>&1 \
     < /dev/null &
-  echo "started: bench, train, eval (log $RUNS/queue.log)"
+  echo "started: $stages (log $RUNS/queue.log)"
   ;;
 bench)
   for k in $GPU_COUNTS; do
