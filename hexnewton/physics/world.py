@@ -33,7 +33,7 @@ from hexnewton.config import HexConfig, SimConfig
 from hexnewton.errors import HexnewtonError
 from hexnewton.physics.device import resolve_device
 from hexnewton.physics.graphs import capture_graph
-from hexnewton.physics.precompile import compiles_generated, live_kernel_ids, precompile
+from hexnewton.physics.precompile import compiles_generated, live_kernel_ids, precompile, precompile_solver
 from hexnewton.physics.robot import BASE_Q, BASE_QD, NUM_JOINTS, build_hexapod, leg_bounds, stand_height
 from hexnewton.physics.terrain import Terrain, make_terrain, max_terrain_height_np
 from hexnewton.physics.terrain.box_pairs import TerrainBoxPairs
@@ -257,6 +257,8 @@ class World:
         step's Warp modules, with the kernels generated for this model since ``since``, compiled in parallel
         (``hexnewton.physics.precompile``)."""
         sim = self.cfg.sim
+        precompile_solver(self.device)
+        startup.mark("solver kernels")
         self.solver = SolverMuJoCo(
             self.model,
             use_mujoco_contacts=False,

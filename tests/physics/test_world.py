@@ -310,3 +310,21 @@ def test_bench_largest_that_fits(monkeypatch):
     monkeypatch.setattr(bench, "bench_one", broken)
     with pytest.raises(RuntimeError, match="kernel launch failed"):
         bench.largest_that_fits("flat", 4, "cuda:0", 5, SimConfig())
+
+
+def test_solver_modules_compiled_before_the_solver_stay_current():
+    """The modules the MuJoCo solver's set-up launches are compiled in parallel before it is built; building it (and
+    the World's later precompile) must keep those compiled variants, or they would compile again."""
+    from warp._src.context import user_modules
+
+    from hexnewton.physics.precompile import SOLVER_MODULES, precompile_solver
+
+    assert precompile_solver("cpu") == list(SOLVER_MODULES)
+
+    def variants() -> dict:
+        return {name: {key: id(e) for key, e in list(user_modules[name].execs.items())} for name in SOLVER_MODULES}
+
+    before = variants()
+    assert all(before[name] for name in SOLVER_MODULES if user_modules[name].kernels)
+    _world("flat").step(1)
+    assert variants() == before
