@@ -74,8 +74,7 @@ def summary() -> str:
     parts = ", ".join(f"{k} {v:.1f}" for k, v in _phases.items())
     line = f"start-up {since_start():.1f} s from process start: {parts}"
     for name, value in _notes.items():
-        if isinstance(value, list):
-            shown = ", ".join(map(str, value[:8])) + (f", ... ({len(value) - 8} more)" if len(value) > 8 else "")
-            line += f"\n{name.replace('_', ' ')}: {len(value)}" + (f" ({shown})" if value else "")
+        if isinstance(value, list):  # the count here, the items in timing.json
+            line += f"; {name.replace('_', ' ')}: {len(value)}"
     return line
 
