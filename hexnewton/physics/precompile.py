@@ -6,10 +6,11 @@ A physics step launches two kinds of Warp modules: those defined when their Pyth
 on parallel threads, on CUDA (NVRTC) and on the CPU (LLVM) alike:
 
 ``precompile_solver(device)`` compiles, before the MuJoCo solver is built, the import-time modules its set-up
-launches; ``precompile(device)`` compiles the import-time modules; ``precompile(device, solver, since)``
-(``SimConfig.precompile`` "generated") also the generated kernels; on CUDA, given the collision pipeline, Newton's
-narrow-phase modules at each block size it launches them with (each size is a variant of its own). It runs once the solver and the collision pipeline exist (building the solver
-sets module options on mujoco_warp's modules, which would make a module compiled before it compile again). First
+launches (building the solver keeps those compiled variants: tests/physics/test_world.py); ``precompile(device)``
+compiles the import-time modules; ``precompile(device, solver, since)`` (``SimConfig.precompile`` "generated") also
+the generated kernels; on CUDA, given the collision pipeline, Newton's narrow-phase modules at each block size it
+launches them with (each size is a variant of its own). ``precompile`` runs once the solver and the collision
+pipeline exist (both create kernels for this model). First
 mujoco_warp's ``step`` runs on a scratch ``Data`` of the solver's sizes whose world count reads 0, inside a graph
 capture that is thrown away: every launch has an empty grid, which Warp returns from before loading the module, so
 the generated kernels are created without being compiled (the same objects the real step takes from mujoco_warp's

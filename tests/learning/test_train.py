@@ -263,7 +263,7 @@ def test_training_reports_its_start_up_and_writes_timing(trained):
     assert timing["iterations"] == 2 and timing["env_steps"] == 2 * 16 * 24
     assert 0 < timing["first_iteration_s"] < timing["wall_s_to_result"]
     assert sum(timing["startup_phases_s"].values()) == pytest.approx(timing["first_iteration_s"], abs=0.5)
-    # the Warp modules the first step loaded (those the precompile left to it), listed on the console too
+    # the Warp modules the first step loaded (those the precompile left to it), counted on the console too
     loads = timing["startup_notes"]["first_step_loaded_modules"]
     assert isinstance(loads, list) and all(isinstance(n, str) for n in loads)
     assert f"first step loaded modules: {len(loads)}" in out

@@ -205,8 +205,7 @@ def test_precompile_finds_every_step_module():
     """The CUDA cold-start list names modules that exist once a World is built (guards against renames)."""
     from hexnewton.physics.precompile import STEP_MODULES, imported_modules
 
-    world = _world("flat")
-    world.step(1)
+    _world("flat").step(1)
     names = [m.name for m in imported_modules()]
     assert set(STEP_MODULES) <= set(names)
     assert any(n.startswith("hexnewton.") for n in names)
