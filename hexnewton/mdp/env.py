@@ -190,7 +190,8 @@ class HexapodEnv(VecEnv):
         self.status_kernel = make_status_kernel(task.terminations)
         self.reward_terms = reward_table(cfg.reward)
         self.rewards_kernel = make_rewards_kernel(self.reward_terms)
-        # both are generated for this task after the World's precompile: compiled now, in parallel, not by the first step
+        # both are generated for this task after the World's precompile: compiled now, in parallel, not by the
+        # first step
         compile_modules(dev, [(self.status_kernel.module, None), (self.rewards_kernel.module, None)])
         self.reward, self.terms, self.prev_x = z(n), z(n, len(self.reward_terms)), z(n)
         self.obs = z(n, self.num_obs)

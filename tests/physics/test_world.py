@@ -238,7 +238,8 @@ def test_precompile_asks_cuda_for_the_launched_block_sizes(monkeypatch):
     narrow = world.pipeline.narrow_phase
     dims = pc.narrow_phase_block_dims(world.pipeline, "cuda:0")
     assert dims == tuple(sorted({narrow.block_dim, narrow.split_convex_block_dim, narrow.mesh_triangle_block_dim, 32}))
-    assert pc._block_dims(modules["newton._src.geometry.contact_reduction_global"], "cuda:0", None, dims) == [None, *dims]
+    reduction = modules["newton._src.geometry.contact_reduction_global"]
+    assert pc._block_dims(reduction, "cuda:0", None, dims) == [None, *dims]
     assert pc._block_dims(modules["mujoco_warp._src.smooth"], "cuda:0", None, dims) == [None]
 
 
@@ -257,7 +258,8 @@ def test_precompile_leaves_the_first_step_nothing_to_compile():
 
     world = _world("flat", precompile="generated")
     before = loaded_variants(world.device)
-    assert any("__locals__" in name for name in variant_names(before))  # a generated kernel's module, compiled by the build
+    # a generated kernel's module, compiled by the build
+    assert any("__locals__" in name for name in variant_names(before))
     assert any(name.startswith("hexnewton.") for name in variant_names(before))
     world.step(2)
     assert variant_names(loaded_variants(world.device) - before) == []
