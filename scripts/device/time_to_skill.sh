@@ -32,7 +32,9 @@
 #                                                      # rounds per terrain on its GPU; on GPU 3 `jit`, then the shipped
 #                                                      # policy on the same rounds and the fixed CPG on rugged ground;
 #                                                      # $BENCH=1: then the scale-out bench (scale_out.sh bench);
-#                                                      # $JIT=0: no `jit`; $EVAL_ARGS: more evaluate flags
+#                                                      # $JIT=0: no `jit`; $EVAL_ARGS: more evaluate flags;
+#                                                      # $GPU3_AFTER: commands for GPU 3 after its evaluations
+#                                                      # (outputs under $RUNS/extra/, packed by gate_wait)
 #   bash scripts/device/time_to_skill.sh gate_wait SECONDS   # until the gate's queue ends (at most SECONDS), its log;
 #                                                      # everything finished so far -> $OUT/gate.tgz (checkpoints in
 #                                                      # $OUT/gate_ckpt.tgz.NN, 9 MB parts)
@@ -219,7 +221,13 @@ _gate)   # the queue behind `gate`
     done
     evaluate_job cpg_rugged --controllers cpg --terrains rugged --rounds "$rounds" --env.sim.frame_dt 0.02 \
       --env.sim.substeps 4 &
-    wait; echo "$(date +%T) shipped and fixed CPG evaluated" ) &
+    wait; echo "$(date +%T) shipped and fixed CPG evaluated"
+    # $GPU3_AFTER: more work for GPU 3 while the seeds train (e.g. capability curves, one evaluate per curve, each
+    # with --out "$RUNS"/extra/NAME); its log in $RUNS/extra.log
+    if [ -n "${GPU3_AFTER:-}" ]; then
+      mkdir -p "$RUNS/extra"; RUNS=$RUNS bash -c "$GPU3_AFTER" > "$RUNS/extra.log" 2>&1
+      echo "$(date +%T) GPU 3's further work ended: exit $?"
+    fi ) &
   i=0
   for seed in ${SEEDS:-1 2 3}; do
     name=seed$seed
@@ -252,7 +260,8 @@ gate_wait)
   done
   for log in "$RUNS"/eval_*.log; do echo "-- $(basename "$log" .log): $(tail -1 "$log")"; done
   # everything finished so far (no checkpoints of the intermediate iterations)
-  (cd "$RUNS" && tar czf "$OUT/gate.tgz" gate.log jit.log jit $(ls seed*.log seed*.sh eval_*.log 2>/dev/null) \
+  (cd "$RUNS" && tar czf "$OUT/gate.tgz" gate.log jit.log jit $(ls seed*.log seed*.sh eval_*.log extra.log 2>/dev/null) \
+    $(for d in extra/*/; do [ -f "$d/results.json" ] && echo "$d"; done) \
     $(for d in eval_*/; do [ -f "$d/results.json" ] && echo "$d"; done) \
     $(for s in seed*/; do r=$(ls -d "$s"*/ 2>/dev/null | tail -1); [ -n "$r" ] && ls "$r"{config.json,timing.json,events.*,policy.onnx} 2>/dev/null; done) \
     $(ls -d /root/scale_out 2>/dev/null | sed 's|.*|../scale_out|') 2>/dev/null)
