@@ -44,6 +44,7 @@ set -u
 export PYTHONPATH=/opt/site${PYTHONPATH:+:$PYTHONPATH} PYTHONUNBUFFERED=1
 OUT=${OUT:-out}
 RUNS=${RUNS:-/root/tts}
+KEEP=${KEEP:-/root/keep}   # the gate's result checkpoints
 mkdir -p "$OUT" "$RUNS"
 cmd=${1:-}; shift || true
 gpu_name() { nvidia-smi --query-gpu=name --format=csv,noheader | head -1; }
@@ -237,7 +238,7 @@ _gate)   # the queue behind `gate`
       bash "$RUNS/$name.sh"; echo "$(date +%T) $name: $(tail -1 "$RUNS/$name.log")"
       ckpt=$(result_of "$name")
       [ -z "$ckpt" ] && { echo "$name: no result"; exit 0; }
-      mkdir -p /root/keep && cp "$ckpt" "/root/keep/$name.pt"
+      mkdir -p "$KEEP" && cp "$ckpt" "$KEEP/$name.pt"
       for t in rugged stepped complex; do
         evaluate_job "${name}_$t" --controllers cpg_rl --checkpoint "cpg_rl=$ckpt" --terrains "$t" --rounds "$rounds" &
       done
@@ -265,7 +266,7 @@ gate_wait)
     $(for d in eval_*/; do [ -f "$d/results.json" ] && echo "$d"; done) \
     $(for s in seed*/; do r=$(ls -d "$s"*/ 2>/dev/null | tail -1); [ -n "$r" ] && ls "$r"{config.json,timing.json,events.*,policy.onnx} 2>/dev/null; done) \
     $(ls -d /root/scale_out 2>/dev/null | sed 's|.*|../scale_out|') 2>/dev/null)
-  [ -d /root/keep ] && tar czf - -C /root/keep . 2>/dev/null | split -b 9M -d - "$OUT/gate_ckpt.tgz."
+  [ -d "$KEEP" ] && tar czf - -C "$KEEP" . 2>/dev/null | split -b 9M -d - "$OUT/gate_ckpt.tgz."
   ls -la "$OUT"
   ;;
 *) echo "usage: see the header of $0"; exit 2 ;;

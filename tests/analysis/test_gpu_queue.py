@@ -79,3 +79,41 @@ def test_train_runs_detached_from_the_call(tmp_path):
     while time.time() < deadline and not (runs / "r1" / "run" / "model_10.pt").exists():
         time.sleep(0.5)
     assert (runs / "r1" / "run" / "model_10.pt").exists()
+
+
+FAKE_TRAIN_EVAL = """#!/bin/bash
+# train.py: a run folder with its result and the line gate reads it from; evaluate: results.json; anything else: ok
+out= ld= ex=
+while [ $# -gt 0 ]; do case $1 in --out) out=$2; shift;; --log_dir) ld=$2; shift;; --experiment) ex=$2; shift;; esac; shift; done
+if [ -n "$out" ]; then mkdir -p "$out"; echo '{}' > "$out/results.json"; echo "report in $out"; exit 0; fi
+[ -z "$ex" ] && exit 0
+mkdir -p "$ld/$ex/run"; touch "$ld/$ex/run/model_result.pt"; echo '{}' > "$ld/$ex/run/timing.json"
+echo "training $ex"; echo "  python play.py --checkpoint $ld/$ex/run/model_result.pt"
+"""
+
+
+def test_gate_queue_trains_evaluates_and_packs(tmp_path):
+    """``time_to_skill.sh gate`` (the one-command gate on a 4-GPU machine): each seed's run, then its result on every
+    terrain; the shipped policy and the fixed CPG; GPU 3's further work; ``gate_wait`` packs what finished."""
+    import tarfile
+
+    bin_dir = tmp_path / "bin"
+    bin_dir.mkdir()
+    _tool(bin_dir, "python", FAKE_TRAIN_EVAL)
+    runs, out = tmp_path / "runs", tmp_path / "out"
+    env = dict(os.environ, PATH=f"{bin_dir}:{os.environ['PATH']}", RUNS=str(runs), OUT=str(out),
+               KEEP=str(tmp_path / "keep"), SEEDS="1 2", JIT="0",
+               GPU3_AFTER='python -m hexnewton.apps.evaluate --out "$RUNS"/extra/curve')
+    subprocess.run(["bash", "scripts/device/time_to_skill.sh", "gate", "--max_iterations", "5"], cwd=ROOT, env=env,
+                   check=True, capture_output=True)
+    waited = subprocess.run(["bash", "scripts/device/time_to_skill.sh", "gate_wait", "60"], cwd=ROOT, env=env,
+                            check=True, capture_output=True, text=True)
+    assert "gate ended" in waited.stdout, waited.stdout
+    assert "--seed 1 --max_iterations 5" in (runs / "seed1.sh").read_text()
+    with tarfile.open(out / "gate.tgz") as tar:
+        names = set(tar.getnames())
+    for job in ("seed1_rugged", "seed2_complex", "shipped_stepped", "cpg_rugged"):
+        assert f"eval_{job}/results.json" in names
+    assert "extra/curve/results.json" in names and "seed2.log" in names
+    assert sorted(os.listdir(tmp_path / "keep")) == ["seed1.pt", "seed2.pt"]
+    assert list(out.glob("gate_ckpt.tgz.*"))
