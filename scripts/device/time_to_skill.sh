@@ -29,10 +29,11 @@
 #   bash scripts/device/time_to_skill.sh gate [ARGS...]  # in the background, on one host of 4 GPUs: seeds $SEEDS
 #                                                      # (default "1 2 3") of `train.py --task complex --seed S ARGS`,
 #                                                      # seed i alone on GPU i-1, each result then on $ROUNDS (1000) test
-#                                                      # rounds per terrain on its GPU; on GPU 3 `jit`, then the shipped
-#                                                      # policy on the same rounds and the fixed CPG on rugged ground;
+#                                                      # rounds per terrain on its GPU; on GPU 3 the shipped policy on
+#                                                      # the same rounds and the fixed CPG on rugged ground ($JIT=1:
+#                                                      # `jit` first);
 #                                                      # $BENCH=1: then the scale-out bench (scale_out.sh bench);
-#                                                      # $JIT=0: no `jit`; $EVAL_ARGS: more evaluate flags;
+#                                                      # $EVAL_ARGS: more evaluate flags;
 #                                                      # $GPU3_AFTER: commands for GPU 3 after its evaluations
 #                                                      # (outputs under $RUNS/extra/, packed by gate_wait)
 #   bash scripts/device/time_to_skill.sh gate_wait SECONDS   # until the gate's queue ends (at most SECONDS), its log;
@@ -215,7 +216,7 @@ _gate)   # the queue behind `gate`
   rounds=${ROUNDS:-1000}
   echo "$(date +%T) gate: seeds ${SEEDS:-1 2 3}: python train.py --task complex --seed S $*; $rounds test rounds per terrain"
   ( export CUDA_VISIBLE_DEVICES=3
-    [ "${JIT:-1}" = 1 ] && { bash "$0" jit > "$RUNS/jit.log" 2>&1; echo "$(date +%T) jit ended"; }
+    [ "${JIT:-0}" = 1 ] && { bash "$0" jit > "$RUNS/jit.log" 2>&1; echo "$(date +%T) jit ended"; }
     for t in rugged stepped complex; do
       evaluate_job "shipped_$t" --controllers cpg_rl --checkpoint cpg_rl=results/policies/cpg_rl_complex.pt \
         --terrains "$t" --rounds "$rounds" &

@@ -102,7 +102,7 @@ def test_gate_queue_trains_evaluates_and_packs(tmp_path):
     _tool(bin_dir, "python", FAKE_TRAIN_EVAL)
     runs, out = tmp_path / "runs", tmp_path / "out"
     env = dict(os.environ, PATH=f"{bin_dir}:{os.environ['PATH']}", RUNS=str(runs), OUT=str(out),
-               KEEP=str(tmp_path / "keep"), SEEDS="1 2", JIT="0",
+               KEEP=str(tmp_path / "keep"), SEEDS="1 2",
                GPU3_AFTER='python -m hexnewton.apps.evaluate --out "$RUNS"/extra/curve')
     subprocess.run(["bash", "scripts/device/time_to_skill.sh", "gate", "--max_iterations", "5"], cwd=ROOT, env=env,
                    check=True, capture_output=True)
