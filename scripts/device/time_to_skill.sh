@@ -11,6 +11,11 @@
 #                                                      # (CUDA_CACHE_PATH): both empty; Warp's empty, the driver's from
 #                                                      # the first; Warp's from the first, the driver's empty
 #                                                      # -> $OUT/caches/
+#   bash scripts/device/time_to_skill.sh fresh         # a fresh machine's start-up, the first CUDA program run:
+#                                                      # `train.py --task complex --max_iterations 1` with empty Warp and
+#                                                      # driver caches of its own, then again with both as it left them;
+#                                                      # logs and timing.json (startup_notes: the modules the first step
+#                                                      # loaded) -> $OUT/fresh/
 #   bash scripts/device/time_to_skill.sh contact       # sim-only complex and stepped at 16384 envs under each terrain
 #                                                      # contact setting, the task's physics (20 ms frame, 4 substeps)
 #   bash scripts/device/time_to_skill.sh train NAME SEED [ARGS...]   # `python train.py --task complex --seed SEED
@@ -99,6 +104,20 @@ caches)
       | tee -a "$OUT/caches/$1.log"
     grep -E "^start-up|^exit" "$OUT/caches/$1.log"
     cp "$(ls -d "$RUNS/caches/$1"/*/ | tail -1)/timing.json" "$OUT/caches/timing_$1.json"
+  done
+  ;;
+fresh)
+  mkdir -p "$OUT/fresh"
+  gpu_name > "$OUT/fresh/gpu.txt"
+  c=/root/fresh_caches; rm -rf "$c"
+  for run in cold warm; do
+    t0=$(date +%s.%N)
+    WARP_CACHE_PATH=$c/warp CUDA_CACHE_PATH=$c/driver python train.py --task complex --max_iterations 1 \
+      --agent.validation_rounds 0 --log_dir "$RUNS/fresh" --experiment "$run" > "$OUT/fresh/$run.log" 2>&1
+    echo "$run: exit $? after $(awk "BEGIN {print $(date +%s.%N) - $t0}") s (shell), Warp cache $(du -sh "$c/warp" | cut -f1), driver cache $(du -sh "$c/driver" | cut -f1)" \
+      | tee -a "$OUT/fresh/summary.txt"
+    grep -E "^start-up" "$OUT/fresh/$run.log"
+    cp "$(ls -d "$RUNS/fresh/$run"/*/ | tail -1)/timing.json" "$OUT/fresh/timing_$run.json"
   done
   ;;
 contact)
