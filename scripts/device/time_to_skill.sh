@@ -73,7 +73,26 @@ evaluate_job() {
     > "$RUNS/eval_$name.log" 2>&1
   echo "exit $?" >> "$RUNS/eval_$name.log"
 }
+# fixed_cpg_job NAME ROUNDS: the fixed CPG on ROUNDS rugged test rounds under the policy's physics (20 ms frame,
+# 4 substeps), as evaluate_job
+fixed_cpg_job() {
+  evaluate_job "$1" --controllers cpg --terrains rugged --rounds "$2" --env.sim.frame_dt 0.02 --env.sim.substeps 4
+}
 result_of() { sed -n 's/^  python play.py --checkpoint //p' "$RUNS/$1.log" 2>/dev/null | tail -1; }
+# cache_run WHAT NAME WARP_CACHE DRIVER_CACHE ARGS...: `train.py --task complex ARGS` with its own Warp kernel cache
+# (WARP_CACHE_PATH) and CUDA driver cache (CUDA_CACHE_PATH) -> $OUT/WHAT/NAME.log (its exit, time and both caches'
+# sizes appended) and $OUT/WHAT/timing_NAME.json; prints its start-up and exit lines
+cache_run() {
+  local what=$1 name=$2 warp=$3 driver=$4 t0; shift 4
+  t0=$(date +%s.%N)
+  WARP_CACHE_PATH=$warp CUDA_CACHE_PATH=$driver python train.py --task complex "$@" --log_dir "$RUNS/$what" \
+    --experiment "$name" > "$OUT/$what/$name.log" 2>&1
+  echo "exit $? after $(awk "BEGIN {print $(date +%s.%N) - $t0}") s (shell)" >> "$OUT/$what/$name.log"
+  echo "== $name: Warp cache $(basename "$warp") ($(du -sh "$warp" 2>/dev/null | cut -f1)), driver cache" \
+    "$(basename "$driver") ($(du -sh "$driver" 2>/dev/null | cut -f1))" | tee -a "$OUT/$what/$name.log"
+  grep -E "^start-up|^exit" "$OUT/$what/$name.log"
+  cp "$(ls -d "$RUNS/$what/$name"/*/ | tail -1)/timing.json" "$OUT/$what/timing_$name.json"
+}
 case "$cmd" in
 startup)
   what=startup; [ $# -gt 0 ] && what="startup_$(echo "$*" | tr -c 'A-Za-z0-9.\n' _ | sed 's/^_*//')"
@@ -96,14 +115,7 @@ caches)
   c=/root/caches; rm -rf "$c"
   for run in "both_empty w1 n1" "warp_empty w2 n1" "driver_empty w1 n3"; do
     set -- $run
-    t0=$(date +%s.%N)
-    WARP_CACHE_PATH=$c/$2 CUDA_CACHE_PATH=$c/$3 python train.py --task complex --max_iterations 3 \
-      --log_dir "$RUNS/caches" --experiment "$1" > "$OUT/caches/$1.log" 2>&1
-    echo "exit $? after $(awk "BEGIN {print $(date +%s.%N) - $t0}") s (shell)" >> "$OUT/caches/$1.log"
-    echo "== $1: Warp cache $2 ($(du -sh $c/$2 | cut -f1)), driver cache $3 ($(du -sh $c/$3 | cut -f1))" \
-      | tee -a "$OUT/caches/$1.log"
-    grep -E "^start-up|^exit" "$OUT/caches/$1.log"
-    cp "$(ls -d "$RUNS/caches/$1"/*/ | tail -1)/timing.json" "$OUT/caches/timing_$1.json"
+    cache_run caches "$1" "$c/$2" "$c/$3" --max_iterations 3
   done
   ;;
 fresh)
@@ -111,13 +123,7 @@ fresh)
   gpu_name > "$OUT/fresh/gpu.txt"
   c=/root/fresh_caches; rm -rf "$c"
   for run in cold warm; do
-    t0=$(date +%s.%N)
-    WARP_CACHE_PATH=$c/warp CUDA_CACHE_PATH=$c/driver python train.py --task complex --max_iterations 1 \
-      --agent.validation_rounds 0 --log_dir "$RUNS/fresh" --experiment "$run" > "$OUT/fresh/$run.log" 2>&1
-    echo "$run: exit $? after $(awk "BEGIN {print $(date +%s.%N) - $t0}") s (shell), Warp cache $(du -sh "$c/warp" | cut -f1), driver cache $(du -sh "$c/driver" | cut -f1)" \
-      | tee -a "$OUT/fresh/summary.txt"
-    grep -E "^start-up" "$OUT/fresh/$run.log"
-    cp "$(ls -d "$RUNS/fresh/$run"/*/ | tail -1)/timing.json" "$OUT/fresh/timing_$run.json"
+    cache_run fresh "$run" "$c/warp" "$c/driver" --max_iterations 1 --agent.validation_rounds 0
   done
   ;;
 contact)
@@ -157,17 +163,12 @@ eval)
   # 4 substeps), each an evaluate job of ROUNDS test rounds per terrain, all at once
   limit=$1 rounds=$2; shift 2
   for name in "$@"; do
-    ckpt=$(sed -n 's/^  python play.py --checkpoint //p' "$RUNS/$name.log" | tail -1)
+    ckpt=$(result_of "$name")
     [ -z "$ckpt" ] && { echo "$name: no result"; continue; }
-    ( timeout -k 10 "$limit" python -m hexnewton.apps.evaluate --controllers cpg_rl --checkpoint "cpg_rl=$ckpt" \
-        --terrains rugged stepped complex --rounds "$rounds" --out "$RUNS/eval_$name" --no-progress \
-        > "$RUNS/eval_$name.log" 2>&1; echo "exit $?" >> "$RUNS/eval_$name.log" ) &
+    EVAL_TIMEOUT=$limit evaluate_job "$name" --controllers cpg_rl --checkpoint "cpg_rl=$ckpt" \
+      --terrains rugged stepped complex --rounds "$rounds" &
   done
-  if [ ! -d "$RUNS/eval_cpg" ]; then
-    ( timeout -k 10 "$limit" python -m hexnewton.apps.evaluate --controllers cpg --terrains rugged --rounds "$rounds" \
-        --env.sim.frame_dt 0.02 --env.sim.substeps 4 --out "$RUNS/eval_cpg" --no-progress > "$RUNS/eval_cpg.log" 2>&1
-      echo "exit $?" >> "$RUNS/eval_cpg.log" ) &
-  fi
+  [ ! -d "$RUNS/eval_cpg" ] && EVAL_TIMEOUT=$limit fixed_cpg_job cpg "$rounds" &
   wait
   for name in "$@" cpg; do echo "== $name"; tail -1 "$RUNS/eval_$name.log"; grep -E "^\| " "$RUNS/eval_$name/report.md" 2>/dev/null | head -10; done
   ;;
@@ -175,7 +176,7 @@ pack)
   mkdir -p "$OUT/runs"
   for name in "$@"; do
     run=$(ls -d "$RUNS/$name"/*/ 2>/dev/null | tail -1)
-    ckpt=$(sed -n 's/^  python play.py --checkpoint //p' "$RUNS/$name.log" | tail -1)
+    ckpt=$(result_of "$name")
     tar czf "$OUT/runs/$name.tgz" -C "$RUNS" "$name.log" $( [ -d "$RUNS/eval_$name" ] && echo "eval_$name" ) \
       -C "$run" config.json timing.json $(cd "$run" && ls events.* policy.onnx 2>/dev/null) \
       $( [ -n "$ckpt" ] && echo "$(basename "$ckpt")" )
@@ -240,8 +241,7 @@ _gate)   # the queue behind `gate`
       evaluate_job "shipped_$t" --controllers cpg_rl --checkpoint cpg_rl=results/policies/cpg_rl_complex.pt \
         --terrains "$t" --rounds "$rounds" &
     done
-    evaluate_job cpg_rugged --controllers cpg --terrains rugged --rounds "$rounds" --env.sim.frame_dt 0.02 \
-      --env.sim.substeps 4 &
+    fixed_cpg_job cpg_rugged "$rounds" &
     wait; echo "$(date +%T) shipped and fixed CPG evaluated"
     # $GPU3_AFTER: more work for GPU 3 while the seeds train (e.g. capability curves, one evaluate per curve, each
     # with --out "$RUNS"/extra/NAME); its log in $RUNS/extra.log
