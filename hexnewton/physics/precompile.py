@@ -49,11 +49,13 @@ STEP_MODULES = (
 SOLVER_MODULES = ("mujoco_warp._src.smooth", "mujoco_warp._src.set_const", "newton._src.solvers.mujoco.kernels",
                   "warp._src.coloring")  # fmt: skip
 
-# Newton's collision modules whose kernels (import-time and generated ones alike) its narrow phase launches with its
-# own block sizes on CUDA (NarrowPhase's block_dim, split_convex_block_dim, mesh_triangle_block_dim and the contact
-# reducer's export size) as well as Warp's default: on a fresh H100 the first step compiled those variants one
+# Newton's collision modules whose generated kernels its narrow phase launches with its own block sizes on CUDA
+# (NarrowPhase's block_dim, split_convex_block_dim, mesh_triangle_block_dim and the contact reducer's export size),
+# and of the import-time modules the contact reduction (at the narrow phase's block size and Warp's default; the
+# import-time narrow phase itself only at the default): on a fresh H100 the first step compiled those variants one
 # after another (146.8 s, results/time_to_skill/report.md, "What a fresh machine compiles")
 NARROW_PHASE_SOURCES = ("newton._src.geometry.narrow_phase", "newton._src.geometry.contact_reduction_global")
+CONTACT_REDUCTION = "newton._src.geometry.contact_reduction_global"
 
 # Generated kernels that mujoco_warp launches with a block size of its model's ``block_dim`` settings (the field
 # named here) rather than Warp's default; on CUDA each block size is a variant compiled of its own. Keyed by the
@@ -137,12 +139,14 @@ def narrow_phase_block_dims(pipeline, device: str) -> tuple[int, ...]:
 
 def _block_dims(module: wp.Module, device: str, block_dims, narrow_dims: tuple[int, ...]) -> list[int | None]:
     """The block sizes ``module``'s launches ask for on ``device`` (None: Warp's default): a mujoco_warp tiled kernel
-    its model's ``block_dim`` field; Newton's narrow-phase modules the default and each of ``narrow_dims``."""
+    its model's ``block_dim`` field; Newton's generated narrow-phase kernels and its contact reduction the default and
+    each of ``narrow_dims``."""
     if not wp.get_device(device).is_cuda:
         return [None]
     kernels = list(module.kernels.values())
-    if narrow_dims and (module.name in NARROW_PHASE_SOURCES or any(k.func.__module__ in NARROW_PHASE_SOURCES
-                                                                   for k in kernels)):  # fmt: skip
+    generated_narrow = module.name not in NARROW_PHASE_SOURCES and any(k.func.__module__ in NARROW_PHASE_SOURCES
+                                                                       for k in kernels)  # fmt: skip
+    if narrow_dims and (module.name == CONTACT_REDUCTION or generated_narrow):
         return [None, *narrow_dims]
     if block_dims is not None:
         for kernel in kernels:

@@ -241,6 +241,11 @@ def test_precompile_asks_cuda_for_the_launched_block_sizes(monkeypatch):
     reduction = modules["newton._src.geometry.contact_reduction_global"]
     assert pc._block_dims(reduction, "cuda:0", None, dims) == [None, *dims]
     assert pc._block_dims(modules["mujoco_warp._src.smooth"], "cuda:0", None, dims) == [None]
+    # the import-time narrow phase launched no other size on the H100; its generated kernels did
+    assert pc._block_dims(modules["newton._src.geometry.narrow_phase"], "cuda:0", None, dims) == [None]
+    generated = next(k.module for k in pc._live_kernels() if k.func.__module__ == "newton._src.geometry.narrow_phase"
+                     and k.module.name not in pc.NARROW_PHASE_SOURCES)  # fmt: skip
+    assert pc._block_dims(generated, "cuda:0", None, dims) == [None, *dims]
 
 
 def test_precompile_auto_compiles_generated_kernels_on_cuda_only():
