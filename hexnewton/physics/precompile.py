@@ -8,9 +8,9 @@ on parallel threads, on CUDA (NVRTC) and on the CPU (LLVM) alike:
 ``precompile_solver(device)`` compiles, before the MuJoCo solver is built, the import-time modules its set-up
 launches (building the solver keeps those compiled variants: tests/physics/test_world.py); ``precompile(device)``
 compiles the import-time modules; ``precompile(device, solver, since)`` (``SimConfig.precompile`` "generated") also
-the generated kernels; on CUDA, given the collision pipeline, Newton's narrow-phase modules at each block size it
-launches them with (each size is a variant of its own). ``precompile`` runs once the solver and the collision
-pipeline exist (both create kernels for this model). First
+the generated kernels; on CUDA, given the collision pipeline, Newton's generated narrow-phase kernels and contact
+reduction at each block size it launches them with (each size is a variant of its own). ``precompile`` runs once the
+solver and the collision pipeline exist (both create kernels for this model). First
 mujoco_warp's ``step`` runs on a scratch ``Data`` of the solver's sizes whose world count reads 0, inside a graph
 capture that is thrown away: every launch has an empty grid, which Warp returns from before loading the module, so
 the generated kernels are created without being compiled (the same objects the real step takes from mujoco_warp's
@@ -218,8 +218,8 @@ def precompile(device: str, solver=None, since: set[int] | None = None, max_work
     """Compile :func:`imported_modules` on parallel threads (default: one per CPU core); given ``solver``, first create
     mujoco_warp's generated step kernels (:func:`create_step_kernels`) and compile them and every other kernel created
     after ``since`` that is not loaded yet with them (``SimConfig.precompile`` "generated"); given ``pipeline`` (the
-    collision pipeline), Newton's narrow-phase modules also at the block sizes it launches them with. Returns the
-    module names."""
+    collision pipeline), Newton's generated narrow-phase kernels and contact reduction also at the block sizes it
+    launches them with. Returns the module names."""
     modules = imported_modules()
     if solver is not None:
         create_step_kernels(device, solver)
