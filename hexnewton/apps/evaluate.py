@@ -6,6 +6,7 @@
     python -m hexnewton.apps.evaluate ... --runs cpg_rl=logs/.../run joint=logs/.../run       # adds Fig. 5a
     python -m hexnewton.apps.evaluate ... --sweep terrain.step_rise 0.06 0.08 0.10          # a capability curve
     python -m hexnewton.apps.evaluate ... --sweep default                                   # the default set of curves
+    python -m hexnewton.apps.evaluate ... --sweep step_rise --no-nominal                    # one of them, alone
 
 Protocol. A round is one robot walking toward the target 3.5 m ahead, from its own start pose, until its
 first episode ends (goal, fall, off course) or the episode limit (``TaskConfig.max_episode_steps``,
@@ -98,17 +99,23 @@ def checkpoint_for(checkpoints: dict[str, str], controller: str, terrain: str) -
 
 
 def sweep_specs(sweeps: list[list[str]] | None, terrains: list[str]) -> list[tuple[str, str, str, tuple[float, ...]]]:
-    """``--sweep`` flags as (name, field, terrain, values): ``default`` is :data:`DEFAULT_SWEEPS`; ``FIELD V1 V2 ...``
-    runs on each of ``terrains`` (named ``FIELD`` with one terrain, ``FIELD@TERRAIN`` with several). Every point is
-    checked against the config tree before anything runs; ValueError (one line) otherwise."""
+    """``--sweep`` flags as (name, field, terrain, values): ``default`` is :data:`DEFAULT_SWEEPS`, a name of that set
+    alone (``step_rise``) its curve; ``FIELD V1 V2 ...`` runs on each of ``terrains`` (named ``FIELD`` with one
+    terrain, ``FIELD@TERRAIN`` with several). Every point is checked against the config tree before anything runs;
+    ValueError (one line) otherwise."""
     out = []
+    by_name = {s[0]: s for s in DEFAULT_SWEEPS}
     for spec in sweeps or []:
         if spec == ["default"]:
             out += list(DEFAULT_SWEEPS)
             continue
+        if len(spec) == 1 and spec[0] in by_name:
+            out.append(by_name[spec[0]])
+            continue
         field, raw = spec[0], spec[1:]
         if not raw:
-            raise ValueError(f"--sweep {field}: give the values to sweep (--sweep FIELD V1 V2 ...), or --sweep default")
+            raise ValueError(f"--sweep {field}: give the values to sweep (--sweep FIELD V1 V2 ...), --sweep default or "
+                             f"one of its curves ({', '.join(by_name)})")
         try:
             values = tuple(float(v) for v in raw)
         except ValueError:
@@ -160,7 +167,11 @@ def parser() -> ArgumentParser:
                    help="capability curve: every controller on --terrains at each value of FIELD (a config field, "
                         "e.g. terrain.step_rise 0.06 0.08 0.10; randomization.* fields apply to every robot; "
                         "motor_strength scales gains and effort); 'default': the set in rollout.DEFAULT_SWEEPS, each "
-                        "on its own course. Repeat for several curves")  # fmt: skip
+                        "on its own course; a name of that set (step_rise, tread_depth, block_height, friction, "
+                        "payload, motor_strength, push, action_delay): that curve. Repeat for several curves")
+    p.add_argument("--no-nominal", action="store_true",
+                   help="with --sweep or --perturbations: only the swept points and perturbed cases, not the courses "
+                        "as given (Table 3)")  # fmt: skip
     p.add_argument("--perturbations", nargs="+", default=[], metavar="NAME",
                    help="also run every controller under these named perturbations beyond the training ranges, one "
                         f"robustness table per controller: {', '.join(PERTURBATIONS)}")
@@ -313,6 +324,8 @@ def main(argv: list[str] | None = None) -> int:
     for name in args.perturbations:
         perturbation(name)
     sweeps = sweep_specs(args.sweep, args.terrains)
+    if args.no_nominal and not (sweeps or args.perturbations):
+        raise ValueError("--no-nominal leaves nothing to run: give --sweep or --perturbations")
     physics = {k: v for k, v in env_overrides.items() if k.startswith("sim.")}
     # the fixed gaits walk under the first learnt policy's physics (the same run, the same simulator) unless told
     fixed_physics = fixed_gait_physics(physics, checkpoints, args.controllers, args.terrains[0], read)
@@ -325,7 +338,7 @@ def main(argv: list[str] | None = None) -> int:
     os.makedirs(out)
     t0 = time.perf_counter()
     evaluate_one = evaluator(args, checkpoints, env_overrides, fixed_physics, device, distances)
-    results = evaluate_terrains(args, evaluate_one, distances, out)
+    results = {} if args.no_nominal else evaluate_terrains(args, evaluate_one, distances, out)
     robustness = evaluate_perturbations(args, evaluate_one, distances)
     swept = run_sweeps(sweeps, args.controllers, evaluate_one, distances[-1], out) if sweeps else {}
     wall = time.perf_counter() - t0

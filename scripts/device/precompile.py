@@ -30,7 +30,7 @@ def exercise(workdir: pathlib.Path) -> None:
     log = workdir / "logs"
     for extra in (["--task", "complex", "--env.terrain.levels", "3"], ["--task", "complex-joint"]):
         train.main(["--num_envs", "4", "--max_iterations", "1", "--log_dir", str(log), "--experiment", "pre",
-                    "--device", "cpu", *extra])
+                    "--device", "cpu", "--agent.validation_rounds", "2", "--agent.validation_steps", "5", *extra])
     play.main(["--controller", "cpg", "--num_envs", "2", "--steps", "3", "--terrain", "rugged", "--device", "cpu",
                "--no-progress"])
     bench.main(["--device", "cpu", "--num_envs", "2", "--terrain", "flat", "--frames", "2", "--env_steps", "2",
@@ -64,13 +64,14 @@ def main() -> int:
             ident = module.get_module_identifier(block_dim=module.options["block_dim"])
             if (cache / ident).exists():
                 continue
+            t1 = time.time()
             try:
                 wp.compile_aot_module(module, arch=args.arch, module_dir=cache / ident)
             except RuntimeError as exc:  # a module of generic kernels only: nothing of its own to compile
                 print(f"skipped {ident}: {exc}", flush=True)
                 continue
             done += 1
-            print(f"compiled {ident} for sm_{args.arch}", flush=True)
+            print(f"compiled {ident} for sm_{args.arch} in {time.time() - t1:.1f} s", flush=True)
         print(f"{done} modules compiled in {time.time() - t0:.0f} s")
         shutil.rmtree(tmp / "work")
         with tarfile.open(args.cache, "w:gz") as tar:

@@ -32,7 +32,8 @@
 #                                                      # first with CUDA_DISABLE_PTX_JIT=1 (what needs the JIT fails and
 #                                                      # names itself), then timed with it -> $RUNS/jit/
 #   bash scripts/device/time_to_skill.sh gate [ARGS...]  # in the background, on one host of 4 GPUs: seeds $SEEDS
-#                                                      # (default "1 2 3") of `train.py --task complex --seed S ARGS`,
+#                                                      # (default "1 2 3") of `train.py --task $TASK --seed S ARGS`
+#                                                      # ($TASK: default complex),
 #                                                      # seed i alone on GPU i-1, each result then on $ROUNDS (1000) test
 #                                                      # rounds per terrain on its GPU; on GPU 3 the shipped policy on
 #                                                      # the same rounds and the fixed CPG on rugged ground ($JIT=1:
@@ -40,7 +41,10 @@
 #                                                      # $BENCH=1: then the scale-out bench (scale_out.sh bench);
 #                                                      # $EVAL_ARGS: more evaluate flags;
 #                                                      # $GPU3_AFTER: commands for GPU 3 after its evaluations
-#                                                      # (outputs under $RUNS/extra/, packed by gate_wait)
+#                                                      # (outputs under $RUNS/extra/, packed by gate_wait);
+#                                                      # $SEED_AFTER: commands for each seed's GPU beside its
+#                                                      # evaluations ($NAME seedS, $CKPT its result; e.g.
+#                                                      # scripts/device/capability.sh's curves)
 #   bash scripts/device/time_to_skill.sh gate_wait SECONDS   # until the gate's queue ends (at most SECONDS), its log;
 #                                                      # everything finished so far -> $OUT/gate.tgz (checkpoints in
 #                                                      # $OUT/gate_ckpt.tgz.NN, 9 MB parts)
@@ -60,7 +64,7 @@ run_script() {
   local name=$1 seed=$2; shift 2
   mkdir -p "$RUNS/$name"
   { echo 't0=$(date +%s.%N)'
-    task="--task complex"; [ "${1:-}" = "--resume" ] && task=""
+    task="--task ${TASK:-complex}"; [ "${1:-}" = "--resume" ] && task=""
     printf 'python train.py %s --seed %q' "$task" "$seed"; [ $# -gt 0 ] && printf ' %q' "$@"
     printf ' --log_dir %q --experiment %q > %q 2>&1\n' "$RUNS" "$name" "$RUNS/$name.log"
     printf 'echo "exit $? wall $(awk "BEGIN {print $(date +%%s.%%N) - $t0}") s" >> %q\n' "$RUNS/$name.log"
@@ -230,11 +234,11 @@ gate)
   code=$RUNS/code; rm -rf "$code"; mkdir -p "$code"
   tar --exclude='./.dw*' --exclude=./runs --exclude=./.git -cf - . | tar -xf - -C "$code"
   (cd "$code" && nohup setsid bash scripts/device/time_to_skill.sh _gate "$@" >> "$RUNS/gate.log" 2>&1 < /dev/null &)
-  echo "started the gate queue: seeds ${SEEDS:-1 2 3}, train.py --task complex $* (log $RUNS/gate.log)"
+  echo "started the gate queue: seeds ${SEEDS:-1 2 3}, train.py --task ${TASK:-complex} $* (log $RUNS/gate.log)"
   ;;
 _gate)   # the queue behind `gate`
   rounds=${ROUNDS:-1000}
-  echo "$(date +%T) gate: seeds ${SEEDS:-1 2 3}: python train.py --task complex --seed S $*; $rounds test rounds per terrain"
+  echo "$(date +%T) gate: seeds ${SEEDS:-1 2 3}: python train.py --task ${TASK:-complex} --seed S $*; $rounds test rounds per terrain"
   ( export CUDA_VISIBLE_DEVICES=3
     [ "${JIT:-0}" = 1 ] && { bash "$0" jit > "$RUNS/jit.log" 2>&1; echo "$(date +%T) jit ended"; }
     for t in rugged stepped complex; do
@@ -262,6 +266,10 @@ _gate)   # the queue behind `gate`
       for t in rugged stepped complex; do
         evaluate_job "${name}_$t" --controllers cpg_rl --checkpoint "cpg_rl=$ckpt" --terrains "$t" --rounds "$rounds" &
       done
+      if [ -n "${SEED_AFTER:-}" ]; then
+        NAME=$name CKPT=$ckpt RUNS=$RUNS bash -c "$SEED_AFTER" > "$RUNS/extra_$name.log" 2>&1
+        echo "$(date +%T) $name's further work ended: exit $?"
+      fi
       wait; echo "$(date +%T) $name evaluated" ) &
     i=$((i + 1))
   done
@@ -281,8 +289,8 @@ gate_wait)
   done
   for log in "$RUNS"/eval_*.log; do echo "-- $(basename "$log" .log): $(tail -1 "$log")"; done
   # everything finished so far (no checkpoints of the intermediate iterations)
-  (cd "$RUNS" && tar czf "$OUT/gate.tgz" gate.log jit.log jit $(ls seed*.log seed*.sh eval_*.log extra.log 2>/dev/null) \
-    $(for d in extra/*/; do [ -f "$d/results.json" ] && echo "$d"; done) \
+  (cd "$RUNS" && tar czf "$OUT/gate.tgz" gate.log jit.log jit $(ls seed*.log seed*.sh eval_*.log extra*.log commands.txt 2>/dev/null) \
+    $(for d in extra/*/; do [ -f "$d/results.json" ] && echo "$d"; done) $(ls extra/*.log 2>/dev/null) \
     $(for d in eval_*/; do [ -f "$d/results.json" ] && echo "$d"; done) \
     $(for s in seed*/; do r=$(ls -d "$s"*/ 2>/dev/null | tail -1); [ -n "$r" ] && ls "$r"{config.json,timing.json,events.*,policy.onnx} 2>/dev/null; done) \
     $(ls -d /root/scale_out 2>/dev/null | sed 's|.*|../scale_out|') 2>/dev/null)

@@ -304,6 +304,7 @@ def test_sweep_points_change_one_thing():
                           ("terrain.step_depth@complex", "terrain.step_depth", "complex", (0.2, 0.3))]
     assert {s[0] for s in DEFAULT_SWEEPS} >= {"step_rise", "tread_depth", "block_height", "friction", "payload",
                                                "motor_strength", "push", "action_delay"}  # fmt: skip
+    assert sweep_specs([["step_rise"], ["friction"]], ["rugged"]) == [DEFAULT_SWEEPS[0], DEFAULT_SWEEPS[3]]
     for args, message in (([["terrain.nope", "1"]], "terrain.nope"), ([["terrain.step_rise"]], "give the values"),
                           ([["terrain.step_rise", "high"]], "must be numbers"),
                           ([["default"], ["terrain.step_rise", "0.1"]], None)):  # fmt: skip
@@ -333,8 +334,24 @@ def test_capability_sweep_on_a_tiny_run(tmp_path):
     assert len(res["sweeps"]["motor_strength"]["curves"]["cpg"]) == 1
     assert (out / "fig_sweep_terrain.step_rise.png").stat().st_size > 2000
     assert "## Capability curve: terrain.step_rise" in (out / "report.md").read_text()
+    assert set(res["results"]) == {"stepped"}  # the course as given, then the sweep points
+    # a default curve by name, its points alone (--no-nominal): nothing of the course as given
+    alone = tmp_path / "alone"
+    proc = subprocess.run([sys.executable, "-m", "hexnewton.apps.evaluate", "--controllers", "cpg_rl", "--checkpoint",
+                           f"cpg_rl={policy}", "--rounds", "1", "--max_steps", "5", "--device", "cpu", "--sweep",
+                           "tread_depth", "--no-nominal", "--out", str(alone)], capture_output=True, text=True,
+                          timeout=900, cwd=ROOT)  # fmt: skip
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    res = json.loads((alone / "results.json").read_text())
+    tread = res["sweeps"]["tread_depth"]
+    assert res["results"] == {} and list(res["sweeps"]) == ["tread_depth"] and tread["terrain"] == "stepped"
+    assert [p["value"] for p in tread["curves"]["cpg_rl"]] == [0.15, 0.18, 0.20, 0.22, 0.25]
     p = subprocess.run([sys.executable, "-m", "hexnewton.apps.evaluate", "--controllers", "cpg", "--sweep", "terrain.nope",
                         "1", "--device", "cpu", "--out", str(tmp_path / "x")], capture_output=True, text=True,
                        timeout=300, cwd=ROOT)  # fmt: skip
     err = [line for line in p.stderr.splitlines() if line.strip() and "Warp CUDA" not in line]
     assert p.returncode == 2 and len(err) == 1 and "terrain.nope" in err[0] and not (tmp_path / "x").exists()
+    p = subprocess.run([sys.executable, "-m", "hexnewton.apps.evaluate", "--controllers", "cpg", "--no-nominal",
+                        "--device", "cpu", "--out", str(tmp_path / "y")], capture_output=True, text=True,
+                       timeout=300, cwd=ROOT)  # fmt: skip
+    assert p.returncode == 2 and "leaves nothing to run" in p.stderr and not (tmp_path / "y").exists()

@@ -93,8 +93,9 @@ echo "training $ex"; echo "  python play.py --checkpoint $ld/$ex/run/model_resul
 
 
 def test_gate_queue_trains_evaluates_and_packs(tmp_path):
-    """``time_to_skill.sh gate`` (the one-command gate on a 4-GPU machine): each seed's run, then its result on every
-    terrain; the shipped policy and the fixed CPG; GPU 3's further work; ``gate_wait`` packs what finished."""
+    """``time_to_skill.sh gate`` (the one-command gate on a 4-GPU machine): each seed's run of ``$TASK``, then its
+    result on every terrain beside ``SEED_AFTER`` (here scripts/device/capability.sh's curves and named points, one
+    evaluate each); the shipped policy and the fixed CPG; GPU 3's further work; ``gate_wait`` packs what finished."""
     import tarfile
 
     bin_dir = tmp_path / "bin"
@@ -102,18 +103,54 @@ def test_gate_queue_trains_evaluates_and_packs(tmp_path):
     _tool(bin_dir, "python", FAKE_TRAIN_EVAL)
     runs, out = tmp_path / "runs", tmp_path / "out"
     env = dict(os.environ, PATH=f"{bin_dir}:{os.environ['PATH']}", RUNS=str(runs), OUT=str(out),
-               KEEP=str(tmp_path / "keep"), SEEDS="1 2",
-               GPU3_AFTER='python -m hexnewton.apps.evaluate --out "$RUNS"/extra/curve')
+               KEEP=str(tmp_path / "keep"), SEEDS="1 2", TASK="complex-margin", CURVES="step_rise payload",
+               GPU3_AFTER='python -m hexnewton.apps.evaluate --out "$RUNS"/extra/curve',
+               SEED_AFTER='C=scripts/device/capability.sh; FOREGROUND=1 bash $C curves $NAME $CKPT &'
+                          ' FOREGROUND=1 bash $C points $NAME $CKPT; wait')  # fmt: skip
     subprocess.run(["bash", "scripts/device/time_to_skill.sh", "gate", "--max_iterations", "5"], cwd=ROOT, env=env,
                    check=True, capture_output=True)
     waited = subprocess.run(["bash", "scripts/device/time_to_skill.sh", "gate_wait", "60"], cwd=ROOT, env=env,
                             check=True, capture_output=True, text=True)
     assert "gate ended" in waited.stdout, waited.stdout
-    assert "--seed 1 --max_iterations 5" in (runs / "seed1.sh").read_text()
+    assert "--task complex-margin --seed 1 --max_iterations 5" in (runs / "seed1.sh").read_text()
     with tarfile.open(out / "gate.tgz") as tar:
         names = set(tar.getnames())
     for job in ("seed1_rugged", "seed2_complex", "shipped_stepped", "cpg_rugged"):
         assert f"eval_{job}/results.json" in names
     assert "extra/curve/results.json" in names and "seed2.log" in names
+    points = ("rise8", "tread20", "blocks8", "friction03", "motors50", "payload1")
+    for seed in ("seed1", "seed2"):
+        for job in ("step_rise", "payload", *(f"at_{p}" for p in points)):
+            assert f"extra/{seed}_{job}/results.json" in names and f"extra/{seed}_{job}.log" in names
+    commands = (runs / "commands.txt").read_text()
+    assert "--sweep payload --no-nominal" in commands and "--sweep randomization.payload 1.0" in commands
     assert sorted(os.listdir(tmp_path / "keep")) == ["seed1.pt", "seed2.pt"]
     assert list(out.glob("gate_ckpt.tgz.*"))
+
+
+def test_capability_margin_lease(tmp_path):
+    """``capability.sh margin``: the gate of ``complex-margin`` with each seed's curves and named points, the shipped
+    policy's curves with the fixed CPG, the README command's run and its result's curves; all packed by gate_wait."""
+    import tarfile
+
+    bin_dir = tmp_path / "bin"
+    bin_dir.mkdir()
+    _tool(bin_dir, "python", FAKE_TRAIN_EVAL)
+    runs, out = tmp_path / "runs", tmp_path / "out"
+    env = dict(os.environ, PATH=f"{bin_dir}:{os.environ['PATH']}", RUNS=str(runs), OUT=str(out),
+               KEEP=str(tmp_path / "keep"), SEEDS="1", CURVES="friction")
+    subprocess.run(["bash", "scripts/device/capability.sh", "margin"], cwd=ROOT, env=env, check=True,
+                   capture_output=True)
+    waited = subprocess.run(["bash", "scripts/device/time_to_skill.sh", "gate_wait", "60"], cwd=ROOT, env=env,
+                            check=True, capture_output=True, text=True)
+    assert "gate ended" in waited.stdout, waited.stdout
+    assert "--task complex-margin --seed 1" in (runs / "seed1.sh").read_text()
+    with tarfile.open(out / "gate.tgz") as tar:
+        names = set(tar.getnames())
+    for job in ("seed1_friction", "seed1_at_blocks8", "shipped_friction", "readme_friction"):
+        assert f"extra/{job}/results.json" in names, sorted(names)
+    assert "extra/readme_train.log" in names
+    commands = (runs / "commands.txt").read_text()
+    shipped = [c for c in commands.splitlines() if "extra/shipped_friction" in c]
+    assert len(shipped) == 1 and "--controllers cpg cpg_rl" in shipped[0] and "CUDA_VISIBLE_DEVICES=3" in shipped[0]
+    assert sorted(os.listdir(tmp_path / "keep")) == ["readme.pt", "seed1.pt"]
