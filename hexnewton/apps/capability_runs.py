@@ -84,7 +84,8 @@ def gather(folder: str, policies: dict[str, list[str]]) -> dict:
             for prefix in prefixes:
                 sweeps, status = read_job(folder, f"{prefix}_{name}")
                 by_ctrl = sweeps.get(name, {}).get("curves", {})
-                entry["policies"].setdefault(label, {})[prefix] = {"status": status, "points": by_ctrl.get("cpg_rl", [])}
+                job = {"status": status, "points": by_ctrl.get("cpg_rl", [])}
+                entry["policies"].setdefault(label, {})[prefix] = job
                 if by_ctrl.get("cpg") and (entry["cpg"] is None or status == "complete"):
                     entry["cpg"] = {"status": status, "from": prefix, "points": by_ctrl["cpg"]}
         curves[name] = entry
@@ -115,8 +116,8 @@ def report(res: dict) -> str:
     meta = res["meta"]
     lines = ["# Capability: curves and named points", "", "```bash", meta["command"], "```", "",
              f"Evaluations in `{meta['folder']}`; deterministic action, success at 3 m and rounds that fell (%).",
-             "Curves: `evaluate --sweep CURVE --no-nominal` at 200 rounds a point; a curve marked *partial* was cut off "
-             "and shows the points its console printed (whole percentages). Named points: 1000 rounds each.", "",
+             "Curves: `evaluate --sweep CURVE --no-nominal` at 200 rounds a point; a curve marked *partial* was cut "
+             "off and shows the points its console printed (whole percentages). Named points: 1000 rounds each.", "",
              f"## Named points (target: median of the seeds >= {100 * TARGET:.0f} % at 3 m)", "",
              "| point | policy | per seed: success / falls | median success | median falls | target |",
              "|---|---|---|---:|---:|---|"]  # fmt: skip
@@ -146,33 +147,15 @@ def report(res: dict) -> str:
 
 
 def plot(path: str, name: str, c: dict) -> None:
-    """Success at 3 m and falls against the swept value: one line per policy seed, the fixed CPG dashed."""
-    import matplotlib
+    """Success at 3 m and falls against the swept value (``report.plot_sweep``): one line per policy seed and the fixed
+    CPG, a curve cut off marked partial."""
+    from hexnewton.analysis.report import plot_sweep
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    fig, axes = plt.subplots(1, 2, figsize=(10, 3.6))
-    jobs = [(f"{label} ({prefix})", job, "o-") for label, by in c["policies"].items() for prefix, job in by.items()]
-    if c["cpg"]:
-        jobs.append(("fixed CPG", c["cpg"], "s--"))
-    for text, job, style in jobs:
-        pts = sorted(job["points"], key=lambda p: p["value"])
-        if not pts:
-            continue
-        xs = [p["value"] for p in pts]
-        text += ", partial" if job["status"] == "partial" else ""
-        axes[0].plot(xs, [100 * p["success_3m"] for p in pts], style, label=text)
-        axes[1].plot(xs, [100 * p["fall_rate"] for p in pts], style, label=text)
-    axes[0].set(ylabel="reached 3 m [%]", ylim=(-3, 103))
-    axes[1].set(ylabel="fell [%]")
-    for ax in axes:
-        ax.set(xlabel=f"{c['field']} ({c['terrain']})", title=name)
-        ax.grid(alpha=0.3)
-    axes[0].legend(fontsize=7)
-    fig.tight_layout()
-    fig.savefig(path, dpi=90)
-    plt.close(fig)
+    jobs = [(f"{label} ({prefix})", job) for label, by in c["policies"].items() for prefix, job in by.items()]
+    jobs += [("fixed CPG", c["cpg"])] if c["cpg"] else []
+    curves = {text + (", partial" if job["status"] == "partial" else ""):
+              sorted(job["points"], key=lambda p: p["value"]) for text, job in jobs if job["points"]}  # fmt: skip
+    plot_sweep(path, name, {"field": c["field"], "terrain": c["terrain"], "curves": curves}, 3.0)
 
 
 def _policies(specs: list[str] | None) -> dict[str, list[str]]:

@@ -20,13 +20,25 @@ iteration loop record its body once. Then the import-time modules and mujoco_war
 
 A module missing here only costs its compile time at the first step, never correctness: the first step compiles
 whatever is not loaded.
+
+Ahead of time: ``hexnewton/physics/aot/warp-<version>-sm<arch>.tar.xz`` holds the step's modules compiled for one GPU
+architecture (sm_90: H100, H200), each a module folder of Warp's kernel cache (its ``.meta`` and cubin), built with
+``scripts/device/precompile.py`` (its ship mode) from Warp's NVRTC without a GPU and from a GPU machine's cache.
+:func:`install_shipped_modules` (each World, before any module loads) copies the folders Warp's cache lacks into it,
+so that a fresh machine of that architecture compiles only what changed since (a module's folder name holds the hash
+of its source and options: a stale one is never loaded, the module compiles as without the archive).
 """
 
 from __future__ import annotations
 
 import gc
+import hashlib
 import logging
 import os
+import pathlib
+import shutil
+import tarfile
+import tempfile
 from concurrent.futures import ThreadPoolExecutor
 
 import warp as wp
@@ -73,6 +85,63 @@ TILED_BLOCK_DIMS = {
     "_cholesky_factorize_solve_blocked": "update_gradient_cholesky_blocked",
     "_update_gradient_grad": "update_gradient_grad", "_linesearch_iterative_kernel": "linesearch_iterative",
 }  # fmt: skip
+
+
+#: the archives of modules compiled ahead of time, one per Warp version and GPU architecture
+SHIPPED_DIR = pathlib.Path(__file__).with_name("aot")
+
+
+def shipped_archive_name(arch: int, version: str | None = None) -> str:
+    """``warp-<version>-sm<arch>.tar.xz``: the archive of Warp ``version`` (default the running one) for ``arch``."""
+    return f"warp-{version or wp.__version__}-sm{arch}.tar.xz"
+
+
+def shipped_archive(device: str) -> pathlib.Path | None:
+    """The shipped archive for ``device``: a CUDA device whose architecture has one for the running Warp and that loads
+    cubins (Warp's default where the driver is older than its compiler; where it would emit PTX, cubin is chosen
+    unless ``wp.config.cuda_output`` says otherwise, so that the archive applies); else None."""
+    d = wp.get_device(device)
+    if not d.is_cuda or not d.is_cubin_supported:
+        return None
+    path = SHIPPED_DIR / shipped_archive_name(d.arch)
+    if not path.is_file():
+        return None
+    if d.get_cuda_output_format() != "cubin":
+        if wp.config.cuda_output is not None:
+            return None
+        wp.config.cuda_output = "cubin"
+    return path
+
+
+def install_shipped_modules(device: str, archive: pathlib.Path | None = None, cache_dir: str | None = None) -> int:
+    """Copy the module folders of ``archive`` (default :func:`shipped_archive` of ``device``) that ``cache_dir``
+    (default Warp's kernel cache) lacks into it; returns how many. Once an archive's content is installed a marker file
+    (``.hexnewton-<archive sha256>``) skips it on later starts. Each folder is unpacked beside the cache and renamed
+    into place, as Warp writes its own, so that processes starting together never see half a module."""
+    archive = archive or shipped_archive(device)
+    if archive is None:
+        return 0
+    cache = pathlib.Path(cache_dir or wp.config.kernel_cache_dir)
+    digest = hashlib.sha256(archive.read_bytes()).hexdigest()[:16]
+    marker = cache / f".hexnewton-{digest}"
+    if marker.exists():
+        return 0
+    cache.mkdir(parents=True, exist_ok=True)
+    installed = 0
+    with tempfile.TemporaryDirectory(dir=cache, prefix=".hexnewton-") as tmp, tarfile.open(archive) as tar:
+        members = tar.getmembers()
+        names = {m.name.split("/", 1)[0] for m in members}
+        missing = {n for n in names if not (cache / n).exists()}
+        tar.extractall(tmp, members=[m for m in members if m.name.split("/", 1)[0] in missing], filter="data")
+        for name in sorted(missing):
+            try:
+                os.rename(os.path.join(tmp, name), cache / name)
+                installed += 1
+            except OSError:  # another process put it in place first
+                shutil.rmtree(os.path.join(tmp, name), ignore_errors=True)
+    marker.touch()
+    log.info("installed %d of %d modules compiled ahead of time (%s)", installed, len(names), archive.name)
+    return installed
 
 
 def _workers(max_workers: int | None) -> int:

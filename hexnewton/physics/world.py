@@ -33,7 +33,13 @@ from hexnewton.config import HexConfig, SimConfig
 from hexnewton.errors import HexnewtonError
 from hexnewton.physics.device import resolve_device
 from hexnewton.physics.graphs import capture_graph
-from hexnewton.physics.precompile import compiles_generated, live_kernel_ids, precompile, precompile_solver
+from hexnewton.physics.precompile import (
+    compiles_generated,
+    install_shipped_modules,
+    live_kernel_ids,
+    precompile,
+    precompile_solver,
+)
 from hexnewton.physics.robot import BASE_Q, BASE_QD, NUM_JOINTS, build_hexapod, leg_bounds, stand_height
 from hexnewton.physics.terrain import Terrain, make_terrain, max_terrain_height_np
 from hexnewton.physics.terrain.box_pairs import TerrainBoxPairs
@@ -193,6 +199,11 @@ class World:
         self.sim_dt = sim.frame_dt / sim.substeps
         self.substeps = sim.substeps
         startup.mark("python and imports")
+        # the modules compiled ahead of time for this GPU (hexnewton/physics/aot/) into Warp's cache, before any loads
+        shipped = install_shipped_modules(self.device)
+        if shipped or "shipped_modules_installed" not in startup.notes():
+            startup.note("shipped_modules_installed", shipped)
+        startup.mark("shipped kernels")
         # SimConfig.precompile "generated": the kernels mujoco_warp and Newton generate for this model come after these
         since = live_kernel_ids() if compiles_generated(sim.precompile, wp.get_device(self.device).is_cuda) else None
 

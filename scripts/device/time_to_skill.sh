@@ -238,7 +238,8 @@ gate)
   ;;
 _gate)   # the queue behind `gate`
   rounds=${ROUNDS:-1000}
-  echo "$(date +%T) gate: seeds ${SEEDS:-1 2 3}: python train.py --task ${TASK:-complex} --seed S $*; $rounds test rounds per terrain"
+  echo "$(date +%T) gate: seeds ${SEEDS:-1 2 3}: python train.py --task ${TASK:-complex} --seed S $*;" \
+    "$rounds test rounds per terrain"
   ( export CUDA_VISIBLE_DEVICES=3
     [ "${JIT:-0}" = 1 ] && { bash "$0" jit > "$RUNS/jit.log" 2>&1; echo "$(date +%T) jit ended"; }
     for t in rugged stepped complex; do
@@ -289,7 +290,8 @@ gate_wait)
   done
   for log in "$RUNS"/eval_*.log; do echo "-- $(basename "$log" .log): $(tail -1 "$log")"; done
   # everything finished so far (no checkpoints of the intermediate iterations)
-  (cd "$RUNS" && tar czf "$OUT/gate.tgz" gate.log jit.log jit $(ls seed*.log seed*.sh eval_*.log extra*.log commands.txt 2>/dev/null) \
+  (cd "$RUNS" && tar czf "$OUT/gate.tgz" gate.log jit.log jit \
+    $(ls seed*.log seed*.sh eval_*.log extra*.log commands.txt 2>/dev/null) \
     $(for d in extra/*/; do [ -f "$d/results.json" ] && echo "$d"; done) $(ls extra/*.log 2>/dev/null) \
     $(for d in eval_*/; do [ -f "$d/results.json" ] && echo "$d"; done) \
     $(for s in seed*/; do r=$(ls -d "$s"*/ 2>/dev/null | tail -1); [ -n "$r" ] && ls "$r"{config.json,timing.json,events.*,policy.onnx} 2>/dev/null; done) \
