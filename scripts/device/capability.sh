@@ -17,8 +17,10 @@
 #        # CPG beside, the README command (`train.py --task complex`) and its result's curves; poll and bring back
 #        # with `time_to_skill.sh gate_wait SECONDS`
 #
-# Both return once their jobs have started unless $FOREGROUND=1 (then they wait for them). $EVAL_ARGS: more flags for
-# every evaluate (a CPU smoke test: "--device cpu --max_steps 20"). Every command is appended to $RUNS/commands.txt.
+# Both return once their jobs have started unless $FOREGROUND=1 (then they wait for them); at most $MAX_JOBS (default
+# 6) of one call's jobs run at once, the next starting as one ends (17 evaluations on one H100 at once left most curves
+# at 1-3 points after 15 minutes). $EVAL_ARGS: more flags for every evaluate (a CPU smoke test: "--device cpu
+# --max_steps 20"). Every command is appended to $RUNS/commands.txt.
 set -u
 export PYTHONPATH=/opt/site${PYTHONPATH:+:$PYTHONPATH} PYTHONUNBUFFERED=1
 RUNS=${RUNS:-/root/tts}
@@ -29,6 +31,7 @@ cmd=${1:-}; shift || true
 job() {
   local name=$1; shift
   [ -f "$RUNS/extra/$name/results.json" ] && return 0
+  while [ "$(jobs -rp | wc -l)" -ge "${MAX_JOBS:-6}" ]; do sleep 2; done
   rm -rf "$RUNS/extra/$name"
   echo "CUDA_VISIBLE_DEVICES=${CUDA_VISIBLE_DEVICES:-} python -m hexnewton.apps.evaluate $* ${EVAL_ARGS:-}" \
     "--out $RUNS/extra/$name" >> "$RUNS/commands.txt"

@@ -154,3 +154,30 @@ def test_capability_margin_lease(tmp_path):
     shipped = [c for c in commands.splitlines() if "extra/shipped_friction" in c]
     assert len(shipped) == 1 and "--controllers cpg cpg_rl" in shipped[0] and "CUDA_VISIBLE_DEVICES=3" in shipped[0]
     assert sorted(os.listdir(tmp_path / "keep")) == ["readme.pt", "seed1.pt"]
+
+
+FAKE_SLOW_EVAL = """#!/bin/bash
+# evaluate: counts the evaluations running beside it (marker files), then results.json
+out=
+while [ $# -gt 0 ]; do case $1 in --out) out=$2; shift;; esac; shift; done
+d=$(dirname "$out"); touch "$out.running"; ls "$d"/*.running | wc -l >> "$d/../concurrency"; sleep 1
+mkdir -p "$out"; echo '{}' > "$out/results.json"; rm "$out.running"
+"""
+
+
+def test_capability_jobs_at_most_max_jobs_at_once(tmp_path):
+    """``capability.sh curves`` runs one evaluation per curve, at most ``MAX_JOBS`` at once, and skips finished ones."""
+    bin_dir = tmp_path / "bin"
+    bin_dir.mkdir()
+    _tool(bin_dir, "python", FAKE_SLOW_EVAL)
+    runs = tmp_path / "runs"
+    env = dict(os.environ, PATH=f"{bin_dir}:{os.environ['PATH']}", RUNS=str(runs), MAX_JOBS="2", FOREGROUND="1")
+    subprocess.run(["bash", "scripts/device/capability.sh", "curves", "p", "ck.pt"], cwd=ROOT, env=env, check=True,
+                   capture_output=True, timeout=120)  # fmt: skip
+    done = sorted(d.name for d in (runs / "extra").iterdir() if (d / "results.json").exists())
+    assert len(done) == 8 and done[0] == "p_action_delay"
+    assert max(int(n) for n in (runs / "concurrency").read_text().split()) <= 2
+    (runs / "concurrency").unlink()
+    subprocess.run(["bash", "scripts/device/capability.sh", "curves", "p", "ck.pt"], cwd=ROOT, env=env, check=True,
+                   capture_output=True, timeout=120)  # fmt: skip
+    assert not (runs / "concurrency").exists()  # every curve finished: nothing runs again
