@@ -27,14 +27,31 @@ def _tool(folder, name, text):
     path.chmod(path.stat().st_mode | stat.S_IEXEC)
 
 
-def test_methods_queue_then_evaluations(tmp_path):
+def _env(tmp_path, python: str, **extra) -> dict:
+    """The environment of a queue under test: ``python`` (a stand-in's script) first on PATH, then ``extra``."""
     bin_dir = tmp_path / "bin"
     bin_dir.mkdir()
-    _tool(bin_dir, "python", FAKE_PYTHON)
-    _tool(bin_dir, "nvidia-smi", "#!/bin/bash\necho FakeGPU\n")
+    _tool(bin_dir, "python", python)
+    return dict(os.environ, PATH=f"{bin_dir}:{os.environ['PATH']}", **extra)
+
+
+def _gate_names(cmd: list[str], env: dict, out) -> set[str]:
+    """Start a gate queue with ``cmd``, wait for it with ``gate_wait`` and return the names in its ``gate.tgz``."""
+    import tarfile
+
+    subprocess.run(cmd, cwd=ROOT, env=env, check=True, capture_output=True)
+    waited = subprocess.run(["bash", "scripts/device/time_to_skill.sh", "gate_wait", "60"], cwd=ROOT, env=env,
+                            check=True, capture_output=True, text=True)
+    assert "gate ended" in waited.stdout, waited.stdout
+    with tarfile.open(out / "gate.tgz") as tar:
+        return set(tar.getnames())
+
+
+def test_methods_queue_then_evaluations(tmp_path):
     runs = tmp_path / "runs"
-    env = dict(os.environ, PATH=f"{bin_dir}:{os.environ['PATH']}", RUNS=str(runs), OUT=str(tmp_path / "out"),
+    env = _env(tmp_path, FAKE_PYTHON, RUNS=str(runs), OUT=str(tmp_path / "out"),
                JOBS="paper:1 td3_cpg:1 joint:2 sac_cpg:1", PER_GPU="2", EVALS_AFTER="10 rugged stepped")
+    _tool(tmp_path / "bin", "nvidia-smi", "#!/bin/bash\necho FakeGPU\n")
     subprocess.run(["bash", "scripts/device/gpu.sh", "methods", "complex", "20", "600", "16", "", "0 1"], cwd=ROOT,
                    env=env, check=True, capture_output=True)
     deadline = time.time() + 120
@@ -59,11 +76,8 @@ def test_train_runs_detached_from_the_call(tmp_path):
     """``gpu.sh train`` starts the run detached (setsid): the device tool ends the processes of a
     call when it returns, and the run must outlive it; it returns once the run is past its imports (the next call
     replaces the working tree) and refuses a second run of the same name."""
-    bin_dir = tmp_path / "bin"
-    bin_dir.mkdir()
-    _tool(bin_dir, "python", FAKE_PYTHON)
     runs = tmp_path / "runs"
-    env = dict(os.environ, PATH=f"{bin_dir}:{os.environ['PATH']}", RUNS=str(runs), OUT=str(tmp_path / "out"))
+    env = _env(tmp_path, FAKE_PYTHON, RUNS=str(runs), OUT=str(tmp_path / "out"))
     script = "bash scripts/device/gpu.sh train r1 0 -- --task complex; ps -o sid= -p $$"
     call = subprocess.run(["setsid", "bash", "-c", script], cwd=ROOT, env=env, check=True, capture_output=True, text=True)
     call_session = int(call.stdout.split()[-1])
@@ -96,25 +110,14 @@ def test_gate_queue_trains_evaluates_and_packs(tmp_path):
     """``time_to_skill.sh gate`` (the one-command gate on a 4-GPU machine): each seed's run of ``$TASK``, then its
     result on every terrain beside ``SEED_AFTER`` (here scripts/device/capability.sh's curves and named points, one
     evaluate each); the shipped policy and the fixed CPG; GPU 3's further work; ``gate_wait`` packs what finished."""
-    import tarfile
-
-    bin_dir = tmp_path / "bin"
-    bin_dir.mkdir()
-    _tool(bin_dir, "python", FAKE_TRAIN_EVAL)
     runs, out = tmp_path / "runs", tmp_path / "out"
-    env = dict(os.environ, PATH=f"{bin_dir}:{os.environ['PATH']}", RUNS=str(runs), OUT=str(out),
+    env = _env(tmp_path, FAKE_TRAIN_EVAL, RUNS=str(runs), OUT=str(out),
                KEEP=str(tmp_path / "keep"), SEEDS="1 2", TASK="complex-margin", CURVES="step_rise payload",
                GPU3_AFTER='python -m hexnewton.apps.evaluate --out "$RUNS"/extra/curve',
                SEED_AFTER='C=scripts/device/capability.sh; FOREGROUND=1 bash $C curves $NAME $CKPT &'
                           ' FOREGROUND=1 bash $C points $NAME $CKPT; wait')  # fmt: skip
-    subprocess.run(["bash", "scripts/device/time_to_skill.sh", "gate", "--max_iterations", "5"], cwd=ROOT, env=env,
-                   check=True, capture_output=True)
-    waited = subprocess.run(["bash", "scripts/device/time_to_skill.sh", "gate_wait", "60"], cwd=ROOT, env=env,
-                            check=True, capture_output=True, text=True)
-    assert "gate ended" in waited.stdout, waited.stdout
+    names = _gate_names(["bash", "scripts/device/time_to_skill.sh", "gate", "--max_iterations", "5"], env, out)
     assert "--task complex-margin --seed 1 --max_iterations 5" in (runs / "seed1.sh").read_text()
-    with tarfile.open(out / "gate.tgz") as tar:
-        names = set(tar.getnames())
     for job in ("seed1_rugged", "seed2_complex", "shipped_stepped", "cpg_rugged"):
         assert f"eval_{job}/results.json" in names
     assert "extra/curve/results.json" in names and "seed2.log" in names
@@ -131,22 +134,11 @@ def test_gate_queue_trains_evaluates_and_packs(tmp_path):
 def test_capability_margin_lease(tmp_path):
     """``capability.sh margin``: the gate of ``complex-margin`` with each seed's curves and named points, the shipped
     policy's curves with the fixed CPG, the README command's run and its result's curves; all packed by gate_wait."""
-    import tarfile
-
-    bin_dir = tmp_path / "bin"
-    bin_dir.mkdir()
-    _tool(bin_dir, "python", FAKE_TRAIN_EVAL)
     runs, out = tmp_path / "runs", tmp_path / "out"
-    env = dict(os.environ, PATH=f"{bin_dir}:{os.environ['PATH']}", RUNS=str(runs), OUT=str(out),
-               KEEP=str(tmp_path / "keep"), SEEDS="1", CURVES="friction")
-    subprocess.run(["bash", "scripts/device/capability.sh", "margin"], cwd=ROOT, env=env, check=True,
-                   capture_output=True)
-    waited = subprocess.run(["bash", "scripts/device/time_to_skill.sh", "gate_wait", "60"], cwd=ROOT, env=env,
-                            check=True, capture_output=True, text=True)
-    assert "gate ended" in waited.stdout, waited.stdout
+    env = _env(tmp_path, FAKE_TRAIN_EVAL, RUNS=str(runs), OUT=str(out), KEEP=str(tmp_path / "keep"), SEEDS="1",
+               CURVES="friction")
+    names = _gate_names(["bash", "scripts/device/capability.sh", "margin"], env, out)
     assert "--task complex-margin --seed 1" in (runs / "seed1.sh").read_text()
-    with tarfile.open(out / "gate.tgz") as tar:
-        names = set(tar.getnames())
     for job in ("seed1_friction", "seed1_at_blocks8", "shipped_friction", "readme_friction"):
         assert f"extra/{job}/results.json" in names, sorted(names)
     assert "extra/readme_train.log" in names
@@ -167,11 +159,8 @@ mkdir -p "$out"; echo '{}' > "$out/results.json"; rm "$out.running"
 
 def test_capability_jobs_at_most_max_jobs_at_once(tmp_path):
     """``capability.sh curves`` runs one evaluation per curve, at most ``MAX_JOBS`` at once, and skips finished ones."""
-    bin_dir = tmp_path / "bin"
-    bin_dir.mkdir()
-    _tool(bin_dir, "python", FAKE_SLOW_EVAL)
     runs = tmp_path / "runs"
-    env = dict(os.environ, PATH=f"{bin_dir}:{os.environ['PATH']}", RUNS=str(runs), MAX_JOBS="2", FOREGROUND="1")
+    env = _env(tmp_path, FAKE_SLOW_EVAL, RUNS=str(runs), MAX_JOBS="2", FOREGROUND="1")
     subprocess.run(["bash", "scripts/device/capability.sh", "curves", "p", "ck.pt"], cwd=ROOT, env=env, check=True,
                    capture_output=True, timeout=120)  # fmt: skip
     done = sorted(d.name for d in (runs / "extra").iterdir() if (d / "results.json").exists())
