@@ -11,6 +11,11 @@
 #        # 8 cm rises and 20 cm treads (stepped), 8 cm blocks (rugged), friction 0.3, 50 % motor strength and a 1 kg
 #        # payload (complex), one job per point, all at once
 #   bash scripts/device/capability.sh wait SECONDS NAME...   # until those jobs end (at most SECONDS), their last lines
+#   bash scripts/device/capability.sh curves4        # on one host of 4 GPUs, detached from the call and run from a
+#        # copy of the tree ($RUNS/code): GPU 0 the shipped policy's curves with the fixed CPG beside; GPU 1 the README
+#        # command (`train.py --task complex`), then its result's curves (NAME readme); GPU 2 the margin seeds 1 and 3
+#        # (results/capability/policies), GPU 3 seed 2, one after another; poll with `wait SECONDS shipped readme
+#        # seed1 seed2 seed3`; $SKIP: job names not to run (curves already complete)
 #   bash scripts/device/capability.sh margin         # on one host of 4 GPUs, in the background: the one-command gate
 #        # (time_to_skill.sh gate) of $TASK (complex-margin): seeds 1-3 on GPUs 0-2, each result's curves and named
 #        # points beside its test rounds; on GPU 3 the shipped policy's test rounds, then its curves with the fixed
@@ -31,6 +36,7 @@ cmd=${1:-}; shift || true
 job() {
   local name=$1; shift
   [ -f "$RUNS/extra/$name/results.json" ] && return 0
+  case " ${SKIP:-} " in *" $name "*) return 0 ;; esac
   while [ "$(jobs -rp | wc -l)" -ge "${MAX_JOBS:-6}" ]; do sleep 2; done
   rm -rf "$RUNS/extra/$name"
   echo "CUDA_VISIBLE_DEVICES=${CUDA_VISIBLE_DEVICES:-} python -m hexnewton.apps.evaluate $* ${EVAL_ARGS:-}" \
@@ -70,6 +76,24 @@ wait)
   done
   for name in "$@"; do
     for log in "$RUNS/extra/$name"_*.log; do [ -f "$log" ] && echo "== $(basename "$log" .log): $(tail -1 "$log")"; done
+  done
+  ;;
+curves4)
+  code=$RUNS/code; rm -rf "$code"; mkdir -p "$code"
+  tar --exclude='./.dw*' --exclude=./runs --exclude=./.git -cf - . | tar -xf - -C "$code"
+  here=scripts/device/capability.sh P=results/capability/policies
+  readme="python train.py --task complex --log_dir $RUNS/readme --experiment complex > $RUNS/extra/readme_train.log 2>&1
+    echo \"exit \$?\" >> $RUNS/extra/readme_train.log
+    R=\$(sed -n 's/^  python play.py --checkpoint //p' $RUNS/extra/readme_train.log | tail -1)
+    [ -n \"\$R\" ] && mkdir -p ${KEEP:-/root/keep} && cp \"\$R\" ${KEEP:-/root/keep}/readme.pt && \
+      bash $here curves readme \"\$R\""
+  queues=("bash $here curves shipped results/policies/cpg_rl_complex.pt cpg cpg_rl" "$readme"
+          "bash $here curves seed1 $P/complex_margin_seed1.pt; bash $here curves seed3 $P/complex_margin_seed3.pt"
+          "bash $here curves seed2 $P/complex_margin_seed2.pt")
+  for gpu in 0 1 2 3; do
+    (cd "$code" && CUDA_VISIBLE_DEVICES=$gpu FOREGROUND=1 nohup setsid bash -c "${queues[$gpu]}" \
+      > "$RUNS/extra/queue$gpu.log" 2>&1 < /dev/null &)
+    echo "GPU $gpu: ${queues[$gpu]}" | head -1
   done
   ;;
 margin)
