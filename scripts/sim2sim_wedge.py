@@ -14,8 +14,9 @@ terrain as one triangle mesh, ``terrain.collision mesh``), ``newton_boxes`` (eve
 boxes``, otherwise ``newton_frame``), ``newton_actuator_clamp`` (``newton_frame`` with the bundle's effort clamp: on
 the actuators' force instead of the joints', ``SimConfig.effort_clamp`` "actuator"), ``newton_boxes_actuator_clamp`` (``newton_boxes``
 with that clamp), ``mujoco`` (the bundle closed loop, every block a
-box), and ``mujoco_*``: the bundle closed loop with one option of its compiled model moved to Newton's training
-physics (``MUJOCO``).
+box), ``mujoco_*``: the bundle closed loop with one option of its compiled model moved to Newton's training
+physics (``MUJOCO``), and ``mujoco_stall_reflex`` / ``mujoco_stuck_lift`` / ``mujoco_stuck_back``: the bundle as
+shipped with a way out for a caught foot in its runtime (``STALL``, ``STUCK``).
 
 Per round (each robot's first episode, up to ``--steps`` control steps): its end (success at 3 m, fell, off course,
 still walking), x progress, stuck (still walking, less than 5 cm in the last 10 s) and wedged: stuck with a foot that
@@ -63,7 +64,19 @@ MUJOCO = {
     "mujoco_limits": "joint-limit solref from RobotConfig limit_ke / limit_kd as Newton's SolverMuJoCo converts them",
     "mujoco_actfrc": "effort limit as the joint's actuator-force range (Newton's) instead of the actuator's forcerange",
     "mujoco_newton": "mujoco_solver, mujoco_limits and mujoco_actfrc together",
+    "mujoco_stall_reflex": "the bundle's MJCF as shipped; the runtime's targets with a stalled-swing reflex (STALL)",
+    "mujoco_stuck_lift": "the bundle's MJCF as shipped; a robot that stops gaining ground lifts its knees (STUCK)",
+    "mujoco_stuck_back": "the bundle's MJCF as shipped; a robot that stops gaining ground swings its hips back (STUCK)",
 }
+#: ``mujoco_stuck_*``: a robot whose goal distance (odometry, as the policy observes it) fell by less than ``progress``
+#: m over the last ``window`` control steps is stuck; for the next ``hold`` control steps its CPG parameters change:
+#: ``lift`` rad more knee amplitude A2 on every leg (``mujoco_stuck_lift``), or the hip amplitudes A1 negated, so the
+#: feet swing backward (``mujoco_stuck_back``); then it walks on as the policy says
+STUCK = {"window": 100, "progress": 0.02, "hold": 50, "lift": 0.3}
+#: ``mujoco_stall_reflex``: a leg in swing (its oscillator's dy >= 0) whose knee lags its target by more than ``lag``
+#: rad at a substep is stalled: its hip target holds the hip's measured angle (no forward swing) and its knee target
+#: rises by ``lift`` rad (clipped to the joint limit), so a caught foot is lifted before it swings on
+STALL = {"lag": 0.3, "lift": 0.4}
 #: mujoco_warp's solver settings in Newton (SimConfig iterations / ls_iterations; mujoco_warp's tolerance)
 NEWTON_SOLVER = {"iterations": 10, "ls_iterations": 10, "tolerance": 1e-6}
 
@@ -195,6 +208,72 @@ def mujoco_variant(m, name: str, robot: RobotConfig | None = None) -> None:
         m.jnt_actfrcrange[hinge] = (-robot.effort_limit, robot.effort_limit)
 
 
+def stall_reflex(r, lag: float, lift: float) -> dict:
+    """Replace ``Rounds.control_step`` of ``r`` by one whose joint targets carry the stalled-swing reflex (``STALL``);
+    returns its counters (substeps x legs stalled, of them in swing)."""
+    counts = {"stalled_leg_substeps": 0, "swing_leg_substeps": 0}
+    osc = np.arange(6) % 2
+    knee_upper = float(np.asarray(r.ctrl.joint_upper, np.float64).reshape(-1, 3)[0, 1])
+
+    def control_step() -> None:
+        for k in range(r.substeps):
+            r.mj.mj_step1(r.m, r.d)
+            s = r.sensors()
+            if k == 0 and r.policy:
+                o = r.observation_inputs(s)
+                obs = r.ctrl.observe(s["joint_pos"], s["joint_vel"], s["quat"], o["target"], o["max_height"])
+                r.ctrl.set_actions(r.ctrl.act(obs))
+            t = r.ctrl.substep(s["quat"]).reshape(r.n, 6, 3)
+            q = s["joint_pos"].reshape(r.n, 6, 3)
+            swing = r.ctrl.dy[:, osc] >= 0.0
+            stalled = swing & (t[..., 1] - q[..., 1] > lag)
+            t[..., 0] = np.where(stalled, q[..., 0], t[..., 0])
+            t[..., 1] = np.where(stalled, np.minimum(t[..., 1] + lift, knee_upper), t[..., 1])
+            counts["stalled_leg_substeps"] += int(stalled[r.alive].sum())
+            counts["swing_leg_substeps"] += int(swing[r.alive].sum())
+            r.d.ctrl[:] = t.ravel()
+            r.mj.mj_step2(r.m, r.d)
+        r.steps += 1
+
+    r.control_step = control_step
+    return counts
+
+
+def stuck_response(r, mode: str, window: int, progress: float, hold: int, lift: float) -> dict:
+    """Replace ``Rounds.control_step`` of ``r`` by one that changes a stuck robot's CPG parameters (``STUCK``);
+    returns its counters (control steps x robots held in the response, responses started)."""
+    counts = {"responding_robot_steps": 0, "responses": 0}
+    history: list[np.ndarray] = []
+    left = np.zeros(r.n, int)
+
+    def control_step() -> None:
+        for k in range(r.substeps):
+            r.mj.mj_step1(r.m, r.d)
+            s = r.sensors()
+            if k == 0 and r.policy:
+                o = r.observation_inputs(s)
+                obs = r.ctrl.observe(s["joint_pos"], s["joint_vel"], s["quat"], o["target"], o["max_height"])
+                r.ctrl.set_actions(r.ctrl.act(obs))
+                history.append(np.hypot(o["target"][:, 0], o["target"][:, 1]))
+                if len(history) > window:
+                    start = (left == 0) & r.alive & (history[-1 - window] - history[-1] < progress)
+                    left[start] = hold
+                    counts["responses"] += int(start.sum())
+                on = left > 0
+                if mode == "lift":
+                    r.ctrl.target[on, 3:9] += lift
+                else:
+                    r.ctrl.target[on, 1:3] *= -1.0
+                counts["responding_robot_steps"] += int(on.sum())
+                left[on] -= 1
+            r.d.ctrl[:] = r.ctrl.substep(s["quat"]).ravel()
+            r.mj.mj_step2(r.m, r.d)
+        r.steps += 1
+
+    r.control_step = control_step
+    return counts
+
+
 def mujoco_setting(name: str, robots: int, steps: int, seed: int) -> dict:
     import mujoco
 
@@ -206,6 +285,9 @@ def mujoco_setting(name: str, robots: int, steps: int, seed: int) -> dict:
 
     t0 = time.perf_counter()
     r = Rounds(BUNDLE, TERRAIN, robots, seed)
+    stall = stall_reflex(r, **STALL) if name == "mujoco_stall_reflex" else None
+    if name.startswith("mujoco_stuck_"):
+        stall = stuck_response(r, name.rsplit("_", 1)[1], **STUCK)
     mujoco_variant(r.m, name)
     names = [mujoco.mj_id2name(r.m, mujoco.mjtObj.mjOBJ_GEOM, g) or "" for g in range(r.m.ngeom)]
     feet_idx = [[g for g, s in enumerate(names) if s.startswith(f"r{k}_") and s.endswith("_foot")]
@@ -219,6 +301,8 @@ def mujoco_setting(name: str, robots: int, steps: int, seed: int) -> dict:
     LOGS[name] = {"base_x": base_x[-WINDOW - 1:], "feet": feet[-WINDOW - 1:], "running": running}
     out = summarize_rounds(ends, x_end, wedge, len(fs), time.perf_counter() - t0)
     out["contact_wedged_of_stuck"] = wedged_feet(r, wedge["stuck"])
+    if stall is not None:
+        out["response"] = {**(STALL if name == "mujoco_stall_reflex" else STUCK), **stall}
     out["physics"] = {"change": MUJOCO[name], "iterations": int(r.m.opt.iterations),
                       "ls_iterations": int(r.m.opt.ls_iterations), "tolerance": float(r.m.opt.tolerance),
                       "hinge_limit_solref_first_leg": r.m.jnt_solref[1:4].round(5).tolist(),
@@ -257,8 +341,19 @@ def main() -> None:
     p.add_argument("--combine", nargs="+", metavar="JSON", help="sum the counts of these runs' files into --out")
     p.add_argument("--policy", default=POLICY, help="the policy checkpoint for the Newton settings")
     p.add_argument("--bundle", default=BUNDLE, help="its controller bundle for the C MuJoCo settings")
+    p.add_argument("--stall_lag", type=float, default=STALL["lag"], help="mujoco_stall_reflex: knee lag [rad]")
+    p.add_argument("--stall_lift", type=float, default=STALL["lift"], help="mujoco_stall_reflex: extra knee lift [rad]")
+    p.add_argument("--stuck_lift", type=float, default=STUCK["lift"],
+                   help="mujoco_stuck_lift: extra knee amplitude [rad]")
+    p.add_argument("--stuck_hold", type=int, default=STUCK["hold"],
+                   help="mujoco_stuck_*: control steps of the response")
+    p.add_argument("--stuck_window", type=int, default=STUCK["window"], help="mujoco_stuck_*: control steps watched")
+    p.add_argument("--stuck_progress", type=float, default=STUCK["progress"],
+                   help="mujoco_stuck_*: goal distance gained over the window below which a robot is stuck [m]")
     p.add_argument("--out", required=True)
     a = p.parse_args()
+    STALL.update(lag=a.stall_lag, lift=a.stall_lift)
+    STUCK.update(lift=a.stuck_lift, hold=a.stuck_hold, window=a.stuck_window, progress=a.stuck_progress)
     POLICY, BUNDLE = a.policy, a.bundle  # read by newton_setting and mujoco_setting
     if a.combine:
         missing = [f for f in a.combine if not os.path.isfile(f)]

@@ -144,3 +144,92 @@ def test_effort_clamp_on_the_actuators():
     assert np.ptp(mw.actuator_forcerange.numpy()[:, 0, 1]) > 0  # the limits differ between worlds
     world.step(5)
     assert np.isfinite(world.state_0.body_q.numpy()).all()
+
+
+class _Mj:
+    """MuJoCo's two half steps, doing nothing (the responses only read sensors and write targets)."""
+
+    def mj_step1(self, m, d):
+        pass
+
+    mj_step2 = mj_step1
+
+
+class _Ctrl:
+    """The runtime's controller as the responses use it: fixed targets; oscillator 0 in swing, 1 in stance."""
+
+    def __init__(self, n):
+        self.joint_upper = np.array([0.5, 1.5, 0.0])
+        self.dy = np.tile([1.0, -1.0], (n, 1))
+        self.target = np.zeros((n, 18))
+        self.set = 0
+
+    def observe(self, *a):
+        return None
+
+    def act(self, obs):
+        return None
+
+    def set_actions(self, actions):
+        self.set += 1
+        self.target[:] = 0.5  # what the policy asks: every parameter 0.5
+
+    def substep(self, quat):
+        t = np.zeros((len(self.dy), 6, 3))
+        t[..., 1] = 1.3  # every knee target 1.3 rad
+        return t.reshape(len(t), 18)
+
+
+class _Rounds:
+    def __init__(self, n, substeps=1, policy=True):
+        self.n, self.substeps, self.policy, self.steps = n, substeps, policy, 0
+        self.alive = np.ones(n, bool)
+        self.mj, self.m = _Mj(), None
+        self.d = type("D", (), {"ctrl": np.zeros(18 * n)})()
+        self.ctrl = _Ctrl(n)
+        self.knee = np.full((n, 6), 1.2)
+        self.goal = np.full(n, 3.0)
+
+    def sensors(self):
+        q = np.zeros((self.n, 6, 3))
+        q[..., 0], q[..., 1] = 0.2, self.knee
+        return {"quat": np.tile([0.0, 0.0, 0.0, 1.0], (self.n, 1)), "joint_pos": q.reshape(self.n, 18),
+                "joint_vel": np.zeros((self.n, 18))}
+
+    def observation_inputs(self, r):
+        return {"target": np.c_[self.goal, np.zeros((self.n, 2))], "max_height": np.zeros(self.n)}
+
+
+def test_stall_reflex_lifts_a_lagging_swing_knee():
+    w = _script()
+    r = _Rounds(2)
+    r.knee[0, 0] = 0.8  # robot 0, leg R1 (oscillator 0, swing): knee 0.5 rad behind its 1.3 rad target
+    r.knee[0, 1] = 0.8  # leg R2 lags as much, but oscillator 1 is in stance
+    counts = w.stall_reflex(r, lag=0.3, lift=0.4)
+    r.control_step()
+    t = r.d.ctrl.reshape(2, 6, 3)
+    assert t[0, 0, 0] == 0.2 and t[0, 0, 1] == 1.5  # hip held at its measured angle, knee 1.3 + 0.4 clipped to 1.5
+    assert t[0, 1, 0] == 0.0 and t[0, 1, 1] == 1.3 and np.all(t[1, :, 1] == 1.3)  # stance leg and robot 1 unchanged
+    assert counts == {"stalled_leg_substeps": 1, "swing_leg_substeps": 6} and r.steps == 1
+
+
+def test_stuck_response_acts_after_the_window_for_hold_steps():
+    w = _script()
+    for mode in ("lift", "back"):
+        r = _Rounds(2)
+        counts = w.stuck_response(r, mode, window=3, progress=0.02, hold=2, lift=0.3)
+        seen = []
+        for _ in range(6):
+            r.goal[1] -= 0.1  # robot 1 walks 10 cm a step toward the goal; robot 0 stays
+            r.control_step()
+            seen.append(r.ctrl.target[:, 1:9].copy())
+        seen = np.array(seen)  # (steps, robots, A1 A1 A2 x 6)
+        changed = np.any(seen != 0.5, axis=-1)
+        assert changed[:, 1].sum() == 0  # the walking robot is never touched
+        # from step 4 (the window full), for 2 steps, then again: the robot still gains no ground
+        assert changed[:, 0].tolist() == [False, False, False, True, True, True]
+        if mode == "lift":
+            assert np.allclose(seen[3, 0, 2:], 0.8) and np.allclose(seen[3, 0, :2], 0.5)
+        else:
+            assert np.allclose(seen[3, 0, :2], -0.5) and np.allclose(seen[3, 0, 2:], 0.5)
+        assert counts == {"responding_robot_steps": 3, "responses": 2}
