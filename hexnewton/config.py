@@ -252,6 +252,14 @@ class CPGConfig:
     # ours: levelling reflex gain [rad of knee per rad of body tilt] on the posture's tilt terms, at every substep
     # (physics/cpg.py); 0 = off. Only with ``posture``.
     posture_reflex: float = 0.0
+    # ours: a way out for a caught foot (physics/cpg.py, "Stuck response"; results/sim2sim/wedge/report.md): a robot
+    # whose goal distance, read from the policy's own target observation, fell by less than stuck_progress [m] over
+    # the last stuck_window control steps walks the next stuck_hold control steps with stuck_lift [rad] more knee
+    # amplitude A2 on every leg; then, and while it still gains no ground, again. 0 = off.
+    stuck_lift: float = 0.0
+    stuck_window: int = 100  # control steps: 2 s at the tasks' 20 ms
+    stuck_progress: float = 0.02
+    stuck_hold: int = 50  # control steps: 1 s
     # ours: the fixed-parameter "CPG" baseline (§3.3), tuned to walk straight on flat ground
     fixed_omega: float = 3.0 * math.pi  # 1.5 Hz
     fixed_a1: float = 0.3

@@ -15,8 +15,8 @@ boxes``, otherwise ``newton_frame``), ``newton_actuator_clamp`` (``newton_frame`
 the actuators' force instead of the joints', ``SimConfig.effort_clamp`` "actuator"), ``newton_boxes_actuator_clamp`` (``newton_boxes``
 with that clamp), ``mujoco`` (the bundle closed loop, every block a
 box), ``mujoco_*``: the bundle closed loop with one option of its compiled model moved to Newton's training
-physics (``MUJOCO``), and ``mujoco_stall_reflex`` / ``mujoco_stuck_lift`` / ``mujoco_stuck_back``: the bundle as
-shipped with a way out for a caught foot in its runtime (``STALL``, ``STUCK``).
+physics (``MUJOCO``), and ``mujoco_stall_reflex`` / ``mujoco_stuck_lift``: the bundle as shipped with a way out for a
+caught foot in its runtime (``STALL``; ``STUCK``, the runtime's stuck response).
 
 Per round (each robot's first episode, up to ``--steps`` control steps): its end (success at 3 m, fell, off course,
 still walking), x progress, stuck (still walking, less than 5 cm in the last 10 s) and wedged: stuck with a foot that
@@ -38,6 +38,7 @@ import time
 import numpy as np
 
 from hexnewton.config import RobotConfig
+from hexnewton.physics.reference import scale_actions_reference
 
 POLICY = "results/policies/cpg_rl_complex.pt"
 BUNDLE = "results/controllers/cpg_rl_complex"
@@ -66,12 +67,10 @@ MUJOCO = {
     "mujoco_newton": "mujoco_solver, mujoco_limits and mujoco_actfrc together",
     "mujoco_stall_reflex": "the bundle's MJCF as shipped; the runtime's targets with a stalled-swing reflex (STALL)",
     "mujoco_stuck_lift": "the bundle's MJCF as shipped; a robot that stops gaining ground lifts its knees (STUCK)",
-    "mujoco_stuck_back": "the bundle's MJCF as shipped; a robot that stops gaining ground swings its hips back (STUCK)",
 }
-#: ``mujoco_stuck_*``: a robot whose goal distance (odometry, as the policy observes it) fell by less than ``progress``
-#: m over the last ``window`` control steps is stuck; for the next ``hold`` control steps its CPG parameters change:
-#: ``lift`` rad more knee amplitude A2 on every leg (``mujoco_stuck_lift``), or the hip amplitudes A1 negated, so the
-#: feet swing backward (``mujoco_stuck_back``); then it walks on as the policy says
+#: ``mujoco_stuck_lift``: the runtime's stuck response (``CPGConfig.stuck_*``): a robot whose goal distance (odometry,
+#: as the policy observes it) fell by less than ``progress`` m over the last ``window`` control steps walks the next
+#: ``hold`` control steps with ``lift`` rad more knee amplitude A2 on every leg
 STUCK = {"window": 100, "progress": 0.02, "hold": 50, "lift": 0.3}
 #: ``mujoco_stall_reflex``: a leg in swing (its oscillator's dy >= 0) whose knee lags its target by more than ``lag``
 #: rad at a substep is stalled: its hip target holds the hip's measured angle (no forward swing) and its knee target
@@ -239,38 +238,24 @@ def stall_reflex(r, lag: float, lift: float) -> dict:
     return counts
 
 
-def stuck_response(r, mode: str, window: int, progress: float, hold: int, lift: float) -> dict:
-    """Replace ``Rounds.control_step`` of ``r`` by one that changes a stuck robot's CPG parameters (``STUCK``);
-    returns its counters (control steps x robots held in the response, responses started)."""
+def stuck_response(r, window: int, progress: float, hold: int, lift: float) -> dict:
+    """Turn on the runtime's stuck response (``CPGConfig.stuck_*``, ``hexnewton.deploy.runtime``) in the controller of
+    ``r`` with ``STUCK``'s settings, as a bundle exported with them would have it; returns its counters (control steps
+    x robots in the response, responses started), counted as ``Rounds.control_step`` calls ``set_actions``."""
     counts = {"responding_robot_steps": 0, "responses": 0}
-    history: list[np.ndarray] = []
-    left = np.zeros(r.n, int)
+    c = r.ctrl
+    c.stuck = {"lift": lift, "window": window, "progress": progress, "hold": hold}
+    c.stuck_history = np.zeros((r.n, window))
+    set_actions = c.set_actions
 
-    def control_step() -> None:
-        for k in range(r.substeps):
-            r.mj.mj_step1(r.m, r.d)
-            s = r.sensors()
-            if k == 0 and r.policy:
-                o = r.observation_inputs(s)
-                obs = r.ctrl.observe(s["joint_pos"], s["joint_vel"], s["quat"], o["target"], o["max_height"])
-                r.ctrl.set_actions(r.ctrl.act(obs))
-                history.append(np.hypot(o["target"][:, 0], o["target"][:, 1]))
-                if len(history) > window:
-                    start = (left == 0) & r.alive & (history[-1 - window] - history[-1] < progress)
-                    left[start] = hold
-                    counts["responses"] += int(start.sum())
-                on = left > 0
-                if mode == "lift":
-                    r.ctrl.target[on, 3:9] += lift
-                else:
-                    r.ctrl.target[on, 1:3] *= -1.0
-                counts["responding_robot_steps"] += int(on.sum())
-                left[on] -= 1
-            r.d.ctrl[:] = r.ctrl.substep(s["quat"]).ravel()
-            r.mj.mj_step2(r.m, r.d)
-        r.steps += 1
+    def counted(actions, target=None) -> None:
+        before = c.stuck_left.copy()
+        set_actions(actions, target)
+        on = r.alive & np.any(c.target != scale_actions_reference(actions, c.lower, c.upper), axis=1)
+        counts["responding_robot_steps"] += int(on.sum())
+        counts["responses"] += int((on & (before == 0)).sum())
 
-    r.control_step = control_step
+    c.set_actions = counted
     return counts
 
 
@@ -286,8 +271,8 @@ def mujoco_setting(name: str, robots: int, steps: int, seed: int) -> dict:
     t0 = time.perf_counter()
     r = Rounds(BUNDLE, TERRAIN, robots, seed)
     stall = stall_reflex(r, **STALL) if name == "mujoco_stall_reflex" else None
-    if name.startswith("mujoco_stuck_"):
-        stall = stuck_response(r, name.rsplit("_", 1)[1], **STUCK)
+    if name == "mujoco_stuck_lift":
+        stall = stuck_response(r, **STUCK)
     mujoco_variant(r.m, name)
     names = [mujoco.mj_id2name(r.m, mujoco.mjtObj.mjOBJ_GEOM, g) or "" for g in range(r.m.ngeom)]
     feet_idx = [[g for g, s in enumerate(names) if s.startswith(f"r{k}_") and s.endswith("_foot")]
@@ -346,10 +331,10 @@ def main() -> None:
     p.add_argument("--stuck_lift", type=float, default=STUCK["lift"],
                    help="mujoco_stuck_lift: extra knee amplitude [rad]")
     p.add_argument("--stuck_hold", type=int, default=STUCK["hold"],
-                   help="mujoco_stuck_*: control steps of the response")
-    p.add_argument("--stuck_window", type=int, default=STUCK["window"], help="mujoco_stuck_*: control steps watched")
+                   help="mujoco_stuck_lift: control steps of the response")
+    p.add_argument("--stuck_window", type=int, default=STUCK["window"], help="mujoco_stuck_lift: control steps watched")
     p.add_argument("--stuck_progress", type=float, default=STUCK["progress"],
-                   help="mujoco_stuck_*: goal distance gained over the window below which a robot is stuck [m]")
+                   help="mujoco_stuck_lift: goal distance gained over the window below which a robot is stuck [m]")
     p.add_argument("--out", required=True)
     a = p.parse_args()
     STALL.update(lag=a.stall_lag, lift=a.stall_lift)

@@ -200,7 +200,7 @@ class Rounds:
             if k == 0 and self.policy:
                 o = self.observation_inputs(r)
                 obs = self.ctrl.observe(r["joint_pos"], r["joint_vel"], r["quat"], o["target"], o["max_height"])
-                self.ctrl.set_actions(self.ctrl.act(obs))
+                self.ctrl.set_actions(self.ctrl.act(obs), o["target"])
             self.d.ctrl[:] = self.ctrl.substep(r["quat"]).ravel()
             self.mj.mj_step2(self.m, self.d)
         self.steps += 1

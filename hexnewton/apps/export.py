@@ -59,6 +59,8 @@ def controller_spec(env, checkpoint: str, action_std: list[float] | None) -> dic
         # ours: the levelling reflex (CPGConfig.posture_reflex; 0 = none), its knee offsets clamped to +-tilt_max
         "posture_reflex": cfg.cpg.posture_reflex if cfg.cpg.posture else 0.0,
         "posture_tilt_max": cfg.cpg.posture_tilt_range[1],
+        # ours: the stuck response (CPGConfig.stuck_*; stuck_lift 0 = none)
+        **{f"stuck_{k}": getattr(cfg.cpg, f"stuck_{k}") for k in ("lift", "window", "progress", "hold")},
         "param_lower": list(lo),
         "param_upper": list(hi),
         "initial_params": list(cfg.cpg.fixed_params()),

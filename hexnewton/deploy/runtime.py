@@ -26,6 +26,9 @@ A controller trained with the levelling reflex (``posture_reflex`` in controller
 body's measured pitch and roll at every substep. On the robot, run the two rates apart: :meth:`Controller.set_actions`
 once per control step (``act(observe(...))``), then :meth:`Controller.substep` with the IMU's latest quaternion every
 ``substep_dt``; :meth:`Controller.step` holds the control step's quaternion for all its substeps.
+A controller with the stuck response (``stuck_lift`` in controller.json, ``CPGConfig.stuck_*``) lifts every knee higher
+while the robot stops gaining ground: :meth:`Controller.set_actions` then takes the observed goal as well (``step``
+passes it).
 The maths is the float64 reference of the simulator's kernels (``hexnewton.physics.reference``).
 """
 
@@ -43,6 +46,7 @@ from hexnewton.physics.reference import (
     mapping_reference,
     quat_to_rpy_np,
     scale_actions_reference,
+    stuck_response_reference,
 )
 
 FORMAT = "hexnewton-controller/1"
@@ -122,6 +126,9 @@ class Controller:
                                                                                          "joint_upper"))  # fmt: skip
         self.reflex = float(spec.get("posture_reflex", 0.0))  # levelling reflex gain (0: none; older bundles)
         self.tilt_max = float(spec.get("posture_tilt_max", 0.0))
+        # the stuck response (CPGConfig.stuck_*; 0: none, older bundles)
+        self.stuck = {k: spec.get(f"stuck_{k}", d) for k, d in (("lift", 0.0), ("window", 1), ("progress", 0.0),
+                                                                 ("hold", 1))}  # fmt: skip
         self.reset()
 
     def reset(self, mask=None) -> None:
@@ -133,9 +140,13 @@ class Controller:
             self.state = np.zeros((self.n, 4))
             self.dy = np.zeros((self.n, 2))
             self.last_substep_targets = np.zeros((self.substeps, self.n, 18))
+            self.stuck_history = np.zeros((self.n, int(self.stuck["window"])))
+            self.stuck_count = np.zeros(self.n, np.int64)
+            self.stuck_left = np.zeros(self.n, np.int64)
         self.params[m] = self.target[m] = self.spec["initial_params"]
         self.state[m] = initial_cpg_state(self.cpg[1], self.cpg[3])
         self.dy[m] = 0.0
+        self.stuck_count[m] = self.stuck_left[m] = 0
 
     def observe(self, joint_pos, joint_vel, base_quat, target, max_height=0.0) -> np.ndarray:
         """The policy's observation (N, num_obs), laid out as in training (``controller.json``)."""
@@ -169,9 +180,18 @@ class Controller:
             return mean
         return mean + self.action_std * self.rng.standard_normal(mean.shape)
 
-    def set_actions(self, actions: np.ndarray) -> None:
-        """The policy's actions (N, num_actions) in [-1, 1] as the parameters the CPG follows from now on."""
+    def set_actions(self, actions: np.ndarray, target=None) -> None:
+        """The policy's actions (N, num_actions) in [-1, 1] as the parameters the CPG follows from now on. ``target``
+        (N, 3): the goal relative to the robot that the policy observed, required by a controller with the stuck
+        response (``stuck_lift`` in controller.json), which lifts the knees of a robot that stops gaining ground."""
         self.target = scale_actions_reference(actions, self.lower, self.upper)
+        if self.stuck["lift"] > 0:
+            if target is None:
+                raise ValueError("this controller has the stuck response: pass the observed target to set_actions()")
+            t = np.asarray(target, np.float64).reshape(self.n, -1)
+            self.stuck_history, self.stuck_count, self.stuck_left, self.target = stuck_response_reference(
+                t, self.stuck_history, self.stuck_count, self.stuck_left, self.target, self.stuck["lift"],
+                self.stuck["progress"], int(self.stuck["hold"]))
 
     def substep(self, base_quat=None) -> np.ndarray:
         """One CPG + mapping substep (``substep_dt``); returns the joint targets (N, 18). ``base_quat`` (N, 4) or
@@ -186,11 +206,11 @@ class Controller:
         return mapping_reference(self.state, self.dy, self.params, self.cpg[1], self.stand, self.joint_lower,
                                  self.joint_upper, rpy, self.reflex, self.tilt_max)  # fmt: skip
 
-    def advance(self, actions: np.ndarray, base_quat=None) -> np.ndarray:
+    def advance(self, actions: np.ndarray, base_quat=None, target=None) -> np.ndarray:
         """Scale actions to the CPG parameters, then run ``substeps_per_control`` substeps; returns the last
         substep's joint targets (N, 18). ``base_quat``: the attitude for the reflex, (N, 4) held over the step or
-        (substeps, N, 4), one per substep."""
-        self.set_actions(actions)
+        (substeps, N, 4), one per substep; ``target``: the observed goal for the stuck response (``set_actions``)."""
+        self.set_actions(actions, target)
         q = None if base_quat is None else np.asarray(base_quat, np.float64)
         for k in range(self.substeps):
             self.last_substep_targets[k] = self.substep(q[k] if q is not None and q.ndim == 3 else q)
@@ -198,7 +218,8 @@ class Controller:
 
     def step(self, joint_pos, joint_vel, base_quat, target, max_height=0.0) -> np.ndarray:
         """One control step: readings in, 18 joint position targets out (N, 18)."""
-        return self.advance(self.act(self.observe(joint_pos, joint_vel, base_quat, target, max_height)), base_quat)
+        return self.advance(self.act(self.observe(joint_pos, joint_vel, base_quat, target, max_height)), base_quat,
+                            target)
 
 
 def replay(bundle: str) -> dict:
@@ -215,6 +236,6 @@ def replay(bundle: str) -> dict:
         o = obs[k]
         mine = ctrl.observe(sl(o, "joint_pos"), sl(o, "joint_vel"), sl(o, "quat"), sl(o, "target"), sl(o, "max_height"))
         err_obs = max(err_obs, float(np.abs(mine - o).max()))  # the CPG parameters were integrated here
-        q = ctrl.advance(ctrl.act(mine), None if quats is None else quats[k])
+        q = ctrl.advance(ctrl.act(mine), None if quats is None else quats[k], sl(o, "target"))
         err_q = max(err_q, float(np.abs(q - sim_targets[k]).max()))
     return {"steps": len(obs), "robots": obs.shape[1], "max_obs_diff": err_obs, "max_target_diff_rad": err_q}

@@ -66,6 +66,7 @@ from hexnewton.mdp.status import NONFINITE, SUCCESS, TIMEOUT
 from hexnewton.mdp.terms import (
     LAYOUTS,
     OBS_DIM,
+    OBS_LAYOUT,
     TERMINATIONS,
     EndInputs,
     ObsInputs,
@@ -152,6 +153,7 @@ class HexapodEnv(VecEnv):
         self.obs_layout = "cpg_posture" if posture else action_mode
         self.num_actions = cfg.cpg.num_params if action_mode == "cpg" else 18
         self.num_obs = OBS_DIM[self.obs_layout]
+        self._target_col = next(a for name, a, _ in OBS_LAYOUT[self.obs_layout] if name == "target")
         self.max_episode_length = task.max_episode_steps
         self.device = world.device
 
@@ -361,6 +363,7 @@ class HexapodEnv(VecEnv):
         """The actions to the CPG's parameters (``cpg``) or to the joint targets (``joint``)."""
         if self.cpg is not None:
             self.cpg.set_actions(actions)
+            self.cpg.respond_to_stuck(self.obs, self._target_col)  # the target the policy just observed
             return
         w, t = self.world, self.cfg.task
         wp.launch(joint_actions_kernel, dim=(self.num_envs, self.num_actions),

@@ -104,6 +104,13 @@ measured pitch and roll (an IMU's reading) feed back into the tilt terms,
 
 so the legs under a raised corner bend within milliseconds while the policy (50 Hz, through the parameter
 filter) sets the posture it wants. k = 0 turns the reflex off.
+
+Stuck response (ours, ``CPGConfig.stuck_lift``; 0 = off): a way out for a foot caught between blocks. Once per
+control step, after the actions are scaled, :func:`stuck_response_kernel` reads each robot's goal distance from the
+target the policy observes (the goal relative to the robot, odometry on a real robot) into a ring of its last
+``stuck_window`` distances. A robot whose distance fell by less than ``stuck_progress`` over that window walks the next
+``stuck_hold`` control steps with ``stuck_lift`` more knee amplitude A2 on every leg (the knee target stays clipped
+to its limit), then, while it still gains no ground, again. ``reset`` empties the ring of the envs it resets.
 """
 
 from __future__ import annotations
@@ -301,6 +308,37 @@ def mapping_kernel(
         targets[e, col + 2] = wp.clamp(stand[2] - params[e, 9 + leg] * lift, lower[2], upper[2])
 
 
+@wp.kernel
+def stuck_response_kernel(
+    target: wp.array2d[wp.float32],
+    col: int,
+    lift: float,
+    progress: float,
+    hold: int,
+    history: wp.array2d[wp.float32],
+    count: wp.array[wp.int32],
+    left: wp.array[wp.int32],
+    params_target: wp.array2d[wp.float32],
+):
+    """One control step of the stuck response (module docstring); ``target[e, col:col + 2]``: the goal relative to
+    robot e, x and y."""
+    e = wp.tid()
+    x = target[e, col]
+    y = target[e, col + 1]
+    d = wp.sqrt(x * x + y * y)
+    w = history.shape[1]
+    k = count[e]
+    slot = k % w
+    if k >= w and left[e] == 0 and history[e, slot] - d < progress:
+        left[e] = hold
+    history[e, slot] = d
+    count[e] = k + 1
+    if left[e] > 0:
+        for j in range(6):
+            params_target[e, 3 + j] = params_target[e, 3 + j] + lift
+        left[e] = left[e] - 1
+
+
 # ----------------------------------------------------------------------------------------------------
 # the controller
 # ----------------------------------------------------------------------------------------------------
@@ -313,6 +351,8 @@ def _reset_cpg(
     params: wp.array2d[wp.float32],
     state: wp.array2d[wp.float32],
     dy: wp.array2d[wp.float32],
+    stuck_count: wp.array[wp.int32],
+    stuck_left: wp.array[wp.int32],
 ):
     e = wp.tid()
     if not mask[e]:
@@ -323,6 +363,8 @@ def _reset_cpg(
         state[e, k] = init_state[k]
     dy[e, 0] = 0.0
     dy[e, 1] = 0.0
+    stuck_count[e] = 0
+    stuck_left[e] = 0
 
 
 class CPGController:
@@ -335,6 +377,9 @@ class CPGController:
             raise ValueError(f"cpg.duty must lie in (0, 1), got {cfg.duty}")
         if not (cfg.mu > 0 and cfg.alpha >= 0 and cfg.param_tau >= 0):
             raise ValueError("cpg.mu must be > 0, cpg.alpha and cpg.param_tau >= 0")
+        if not (cfg.stuck_lift >= 0 and cfg.stuck_progress >= 0 and cfg.stuck_window >= 1 and cfg.stuck_hold >= 1):
+            raise ValueError("cpg.stuck_lift and cpg.stuck_progress must be >= 0, cpg.stuck_window and "
+                             "cpg.stuck_hold >= 1 control step")
         n, dev = world.num_envs, world.device
         self.num_envs, self.device, self.num_params = n, dev, cfg.num_params
         self.dt = world.sim_dt
@@ -351,6 +396,11 @@ class CPGController:
         self.dy = wp.zeros((n, 2), dtype=wp.float32, device=dev)
         self._actions = wp.zeros((n, self.num_params), dtype=wp.float32, device=dev)
         self._mask = wp.zeros(n, dtype=wp.bool, device=dev)
+        # the stuck response's ring of goal distances, steps seen and steps of the response to go (one ring entry
+        # when it is off)
+        self.stuck_history = wp.zeros((n, cfg.stuck_window if cfg.stuck_lift > 0 else 1), dtype=wp.float32, device=dev)
+        self.stuck_count = wp.zeros(n, dtype=wp.int32, device=dev)
+        self.stuck_left = wp.zeros(n, dtype=wp.int32, device=dev)
         lower, upper = leg_bounds(robot)
         self.stand, self.joint_lower, self.joint_upper = wp.vec3(*robot.stand_pose), wp.vec3(*lower), wp.vec3(*upper)
 
@@ -367,6 +417,17 @@ class CPGController:
             a = self._actions
         wp.launch(scale_actions_kernel, dim=(self.num_envs, self.num_params),
                   inputs=[a, self.lower, self.upper, self.params_target], device=self.device)  # fmt: skip
+
+    def respond_to_stuck(self, target: wp.array, col: int) -> None:
+        """The stuck response's control step (module docstring), after ``set_actions``: ``target[:, col:col + 2]``
+        the goal relative to each robot (the policy's target observation). Nothing with ``stuck_lift`` 0."""
+        c = self.cfg
+        if c.stuck_lift <= 0:
+            return
+        wp.launch(stuck_response_kernel, dim=self.num_envs,
+                  inputs=[target, col, c.stuck_lift, c.stuck_progress, c.stuck_hold],
+                  outputs=[self.stuck_history, self.stuck_count, self.stuck_left, self.params_target],
+                  device=self.device)  # fmt: skip
 
     def set_params(self, params) -> None:
         """Physical parameters, (P,) for every env or (N, P)."""
@@ -394,8 +455,10 @@ class CPGController:
         )
 
     def reset(self, mask=None) -> None:
-        """Selected envs (all if None): oscillators back to the locked start, parameters at their targets."""
+        """Selected envs (all if None): oscillators back to the locked start, parameters at their targets, the stuck
+        response's ring emptied."""
         m = as_mask(mask, self._mask)
         wp.launch(_reset_cpg, dim=self.num_envs,
                   inputs=[m, self._start_state, self.params_target],
-                  outputs=[self.params, self.state, self.dy], device=self.device)  # fmt: skip
+                  outputs=[self.params, self.state, self.dy, self.stuck_count, self.stuck_left],
+                  device=self.device)  # fmt: skip

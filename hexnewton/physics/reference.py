@@ -124,6 +124,25 @@ def mapping_reference(state, dy, params, mu, stand, lower, upper, rpy=None, refl
     return out.reshape(len(out), 18)
 
 
+def stuck_response_reference(target, history, count, left, params_target, lift, progress, hold):
+    """Float64 reference of :func:`hexnewton.physics.cpg.stuck_response_kernel`, one control step: ``target`` (N, 2+)
+    the goal relative to each robot (x, y first), ``history`` (N, W) its last W goal distances (a ring indexed by
+    ``count`` (N,) mod W), ``left`` (N,) control steps of the response still to go, ``params_target`` (N, P). Returns
+    updated copies of ``history``, ``count``, ``left`` and ``params_target``."""
+    h, p = np.array(history, np.float64), np.array(params_target, np.float64)
+    c, n_left = np.array(count, np.int64), np.array(left, np.int64)
+    t = np.asarray(target, np.float64)
+    d = np.hypot(t[:, 0], t[:, 1])
+    rows, slot = np.arange(len(d)), c % h.shape[1]
+    start = (c >= h.shape[1]) & (n_left == 0) & (h[rows, slot] - d < progress)
+    n_left[start] = hold
+    h[rows, slot] = d
+    on = n_left > 0
+    p[on, 3:9] += lift
+    n_left[on] -= 1
+    return h, c + 1, n_left, p
+
+
 def scale_actions_reference(actions, lower, upper):
     """Float64 reference of :func:`scale_actions_kernel`."""
     a = np.asarray(actions, np.float64)

@@ -221,6 +221,42 @@ def test_reflex_bundle_reads_the_attitude_at_every_substep(tmp_path):
         ctrl.substep()
 
 
+def test_stuck_response_in_the_simulator_and_the_runtime(tmp_path):
+    """A policy whose config turns the stuck response on (here so that every robot counts as stuck after 3 control
+    steps): its bundle carries the response's settings, the runtime reproduces the simulator's joint targets with it
+    (the lifted knees included), and setting actions without the observed target is refused with one clear error."""
+    import torch
+
+    from hexnewton.deploy.runtime import Controller, replay
+    from hexnewton.physics.reference import scale_actions_reference
+
+    ck = torch.load(POLICY, map_location="cpu", weights_only=False)
+    ck["infos"]["hexnewton"]["config"]["cpg"].update(stuck_lift=0.3, stuck_window=3, stuck_progress=100.0, stuck_hold=2)
+    torch.save(ck, tmp_path / "stuck.pt")
+    out = tmp_path / "stuck"
+    proc = _run(["-m", "hexnewton.apps.export", "--checkpoint", str(tmp_path / "stuck.pt"), "--out", str(out),
+                 "--steps", "12", "--robots", "2"])  # fmt: skip
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    spec = json.loads((out / "controller.json").read_text())
+    assert (spec["stuck_lift"], spec["stuck_window"], spec["stuck_progress"], spec["stuck_hold"]) == (0.3, 3, 100.0, 2)
+    assert replay(str(out))["max_target_diff_rad"] < 1e-4
+    rec = np.load(out / "check.npz")
+    ctrl = Controller(str(out), num_robots=2)
+    lay = ctrl.layout
+    lift = []
+    for obs in rec["obs"]:
+        actions = ctrl.act(obs)
+        ctrl.set_actions(actions, obs[:, lay["target"][0]:lay["target"][1]])
+        lift.append(ctrl.target - scale_actions_reference(actions, ctrl.lower, ctrl.upper))
+    lift = np.array(lift)  # (steps, robots, params): what the response added
+    assert np.all(lift[:, :, :3] == 0) and np.all(lift[:, :, 9:] == 0)
+    # every robot stuck from the 4th control step: 2 steps of lift, then at once again (still no ground gained)
+    np.testing.assert_allclose(lift[3:, :, 3:9], 0.3)
+    assert np.all(lift[:3] == 0)
+    with pytest.raises(ValueError, match="stuck response"):
+        ctrl.set_actions(ctrl.act(rec["obs"][0]))
+
+
 class _Payload:
     """Unpickling this runs ``os.system``: what a crafted checkpoint could do to whoever loads it."""
 

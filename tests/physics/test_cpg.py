@@ -9,7 +9,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from hexnewton.config import CPGConfig
-from hexnewton.physics.cpg import hopf_cpg_kernel, mapping_kernel, scale_actions_kernel
+from hexnewton.physics.cpg import hopf_cpg_kernel, mapping_kernel, scale_actions_kernel, stuck_response_kernel
 from hexnewton.physics.reference import (
     hopf_cpg_reference,
     mapping_offsets_np,
@@ -17,6 +17,7 @@ from hexnewton.physics.reference import (
     params_to_actions,
     quat_to_rpy_np,
     scale_actions_reference,
+    stuck_response_reference,
 )
 
 DEV = "cpu"
@@ -105,6 +106,39 @@ def test_action_scaling_matches_reference(seed):
     np.testing.assert_allclose(out.numpy(), ref, rtol=1e-6, atol=1e-6)
     assert np.all(ref >= np.asarray(lo) - 1e-12) and np.all(ref <= np.asarray(hi) + 1e-12)
     np.testing.assert_allclose(scale_actions_reference(params_to_actions(ref[2:], lo, hi), lo, hi), ref[2:])
+
+
+@settings(max_examples=20, deadline=None)
+@given(seed=st.integers(0, 2**31 - 1), window=st.integers(1, 6), hold=st.integers(1, 4), posture=st.booleans())
+def test_stuck_response_matches_reference(seed, window, hold, posture):
+    """Robots 0-7 stand still (the goal 3 m away, jittering by 1 mm), robots 8-15 walk 5 cm a step toward it; some
+    envs are reset on the way (ring emptied, as ``CPGController.reset`` does): kernel == reference at every step, the
+    standing robots get the lift and the walking ones never."""
+    rng = np.random.default_rng(seed)
+    n, p, lift, progress = 16, 18 if posture else 15, 0.3, 0.02
+    hist, count, left = np.zeros((n, window)), np.zeros(n, np.int64), np.zeros(n, np.int64)
+    h_wp, c_wp, l_wp = _arr(hist), wp.zeros(n, dtype=wp.int32, device=DEV), wp.zeros(n, dtype=wp.int32, device=DEV)
+    lifted = np.zeros(n, bool)
+    for step in range(3 * window + 2 * hold):
+        dist = np.where(np.arange(n) < 8, 3.0 + rng.uniform(-1e-3, 1e-3, n), 3.0 - 0.05 * step)
+        yaw = rng.uniform(-math.pi, math.pi, n)
+        target = np.c_[dist * np.cos(yaw), dist * np.sin(yaw), rng.normal(0, 0.05, n)]
+        params = rng.uniform(0.0, 1.0, (n, p)).astype(np.float32).astype(np.float64)
+        if step == window + 1:  # a reset of two envs, one standing, one walking
+            count[[3, 12]] = left[[3, 12]] = 0
+            c_wp.assign(count.astype(np.int32))
+            l_wp.assign(left.astype(np.int32))
+        p_wp = _arr(params)
+        wp.launch(stuck_response_kernel, dim=n, inputs=[_arr(np.c_[np.zeros(n), target]), 1, lift, progress, hold],
+                  outputs=[h_wp, c_wp, l_wp, p_wp], device=DEV)  # fmt: skip
+        hist, count, left, ref = stuck_response_reference(target, hist, count, left, params, lift, progress, hold)
+        np.testing.assert_allclose(h_wp.numpy(), hist, rtol=1e-6, atol=1e-6)
+        assert np.array_equal(c_wp.numpy(), count) and np.array_equal(l_wp.numpy(), left)
+        np.testing.assert_allclose(p_wp.numpy(), ref, rtol=1e-6, atol=1e-6)
+        on = np.any(ref != params, axis=1)
+        assert np.allclose(ref[on, 3:9] - params[on, 3:9], lift) and np.array_equal(ref[:, :3], params[:, :3])
+        lifted |= on
+    assert lifted[:8].all() and not lifted[8:].any()
 
 
 # ------------------------------------------------------------------ properties of Eq. 3 (float64 reference)
