@@ -56,6 +56,9 @@ SETTINGS = {
     # newton_frame and newton_boxes with the bundle's effort clamp (on the actuators: SimConfig.effort_clamp)
     "newton_actuator_clamp": {"sim.effort_clamp": "actuator"},
     "newton_boxes_actuator_clamp": {"terrain.collision": "boxes", "sim.effort_clamp": "actuator"},
+    # newton_frame with the controller's stuck response at mujoco_stuck_lift's settings (STUCK)
+    "newton_stuck_lift": {"cpg.stuck_lift": 0.3, "cpg.stuck_window": 100, "cpg.stuck_progress": 0.02,
+                          "cpg.stuck_hold": 50},
 }
 #: C MuJoCo settings: the bundle's closed loop on its MJCF, with one model option moved to Newton's training physics
 #: (``mujoco_variant``); the bundle's files stay as shipped
@@ -208,33 +211,26 @@ def mujoco_variant(m, name: str, robot: RobotConfig | None = None) -> None:
 
 
 def stall_reflex(r, lag: float, lift: float) -> dict:
-    """Replace ``Rounds.control_step`` of ``r`` by one whose joint targets carry the stalled-swing reflex (``STALL``);
-    returns its counters (substeps x legs stalled, of them in swing)."""
+    """Wrap the runtime controller's ``substep`` in ``r`` so that its joint targets carry the stalled-swing reflex
+    (``STALL``), on the joint readings of the same substep; returns its counters (substeps x legs stalled, substeps x
+    legs in swing)."""
     counts = {"stalled_leg_substeps": 0, "swing_leg_substeps": 0}
     osc = np.arange(6) % 2
     knee_upper = float(np.asarray(r.ctrl.joint_upper, np.float64).reshape(-1, 3)[0, 1])
+    substep = r.ctrl.substep
 
-    def control_step() -> None:
-        for k in range(r.substeps):
-            r.mj.mj_step1(r.m, r.d)
-            s = r.sensors()
-            if k == 0 and r.policy:
-                o = r.observation_inputs(s)
-                obs = r.ctrl.observe(s["joint_pos"], s["joint_vel"], s["quat"], o["target"], o["max_height"])
-                r.ctrl.set_actions(r.ctrl.act(obs))
-            t = r.ctrl.substep(s["quat"]).reshape(r.n, 6, 3)
-            q = s["joint_pos"].reshape(r.n, 6, 3)
-            swing = r.ctrl.dy[:, osc] >= 0.0
-            stalled = swing & (t[..., 1] - q[..., 1] > lag)
-            t[..., 0] = np.where(stalled, q[..., 0], t[..., 0])
-            t[..., 1] = np.where(stalled, np.minimum(t[..., 1] + lift, knee_upper), t[..., 1])
-            counts["stalled_leg_substeps"] += int(stalled[r.alive].sum())
-            counts["swing_leg_substeps"] += int(swing[r.alive].sum())
-            r.d.ctrl[:] = t.ravel()
-            r.mj.mj_step2(r.m, r.d)
-        r.steps += 1
+    def with_reflex(base_quat=None) -> np.ndarray:
+        t = substep(base_quat).reshape(r.n, 6, 3)
+        q = r.sensors()["joint_pos"].reshape(r.n, 6, 3)  # the readings mj_step1 just took
+        swing = r.ctrl.dy[:, osc] >= 0.0
+        stalled = swing & (t[..., 1] - q[..., 1] > lag)
+        t[..., 0] = np.where(stalled, q[..., 0], t[..., 0])
+        t[..., 1] = np.where(stalled, np.minimum(t[..., 1] + lift, knee_upper), t[..., 1])
+        counts["stalled_leg_substeps"] += int(stalled[r.alive].sum())
+        counts["swing_leg_substeps"] += int(swing[r.alive].sum())
+        return t.reshape(r.n, 18)
 
-    r.control_step = control_step
+    r.ctrl.substep = with_reflex
     return counts
 
 

@@ -170,7 +170,7 @@ class _Ctrl:
     def act(self, obs):
         return None
 
-    def set_actions(self, actions):
+    def set_actions(self, actions, target=None):
         self.set += 1
         self.target[:] = 0.5  # what the policy asks: every parameter 0.5
 
@@ -205,8 +205,10 @@ def test_stall_reflex_lifts_a_lagging_swing_knee():
     r = _Rounds(2)
     r.knee[0, 0] = 0.8  # robot 0, leg R1 (oscillator 0, swing): knee 0.5 rad behind its 1.3 rad target
     r.knee[0, 1] = 0.8  # leg R2 lags as much, but oscillator 1 is in stance
+    from hexnewton.analysis.sim2sim import Rounds
+
     counts = w.stall_reflex(r, lag=0.3, lift=0.4)
-    r.control_step()
+    Rounds.control_step(r)  # the closed loop's own control step on the stand-in
     t = r.d.ctrl.reshape(2, 6, 3)
     assert t[0, 0, 0] == 0.2 and t[0, 0, 1] == 1.5  # hip held at its measured angle, knee 1.3 + 0.4 clipped to 1.5
     assert t[0, 1, 0] == 0.0 and t[0, 1, 1] == 1.3 and np.all(t[1, :, 1] == 1.3)  # stance leg and robot 1 unchanged
@@ -214,9 +216,9 @@ def test_stall_reflex_lifts_a_lagging_swing_knee():
 
 
 def test_stuck_response_turns_on_the_runtimes_and_counts_it():
-    """The script's ``mujoco_stuck_lift`` turns on the runtime controller's own stuck response (as a bundle exported with
-    ``CPGConfig.stuck_*`` has it) and counts its control steps: the robot that gains no ground gets the lift once the
-    window is full, for ``hold`` steps and at once again; the walking robot never."""
+    """The script's ``mujoco_stuck_lift`` turns on the runtime controller's own stuck response (as a bundle exported
+    with ``CPGConfig.stuck_*`` has it) and counts its control steps: the robot that gains no ground gets the lift once
+    the window is full, for ``hold`` steps and at once again; the walking robot never."""
     from hexnewton.analysis.sim2sim import fixed_cpg_spec
     from hexnewton.deploy.runtime import Controller
 
