@@ -45,6 +45,15 @@ job() {
       --out "$RUNS/extra/$name" --no-progress > "$RUNS/extra/$name.log" 2>&1
     echo "exit $?" >> "$RUNS/extra/$name.log" ) &
 }
+# readme_queue: a script (for bash -c) of the README command, `train.py --task complex`, its console and exit in
+# $RUNS/extra/readme_train.log, its result kept as $KEEP/readme.pt, then that result's curves (NAME readme)
+readme_queue() {
+  echo "python train.py --task complex --log_dir $RUNS/readme --experiment complex > $RUNS/extra/readme_train.log 2>&1
+    echo \"exit \$?\" >> $RUNS/extra/readme_train.log
+    R=\$(sed -n 's/^  python play.py --checkpoint //p' $RUNS/extra/readme_train.log | tail -1)
+    [ -n \"\$R\" ] && mkdir -p ${KEEP:-/root/keep} && cp \"\$R\" ${KEEP:-/root/keep}/readme.pt && \\
+      FOREGROUND=1 bash scripts/device/capability.sh curves readme \"\$R\""
+}
 case "$cmd" in
 curves)
   name=$1 ckpt=$2; shift 2
@@ -82,12 +91,7 @@ curves4)
   code=$RUNS/code; rm -rf "$code"; mkdir -p "$code"
   tar --exclude='./.dw*' --exclude=./runs --exclude=./.git -cf - . | tar -xf - -C "$code"
   here=scripts/device/capability.sh P=results/capability/policies
-  readme="python train.py --task complex --log_dir $RUNS/readme --experiment complex > $RUNS/extra/readme_train.log 2>&1
-    echo \"exit \$?\" >> $RUNS/extra/readme_train.log
-    R=\$(sed -n 's/^  python play.py --checkpoint //p' $RUNS/extra/readme_train.log | tail -1)
-    [ -n \"\$R\" ] && mkdir -p ${KEEP:-/root/keep} && cp \"\$R\" ${KEEP:-/root/keep}/readme.pt && \
-      bash $here curves readme \"\$R\""
-  queues=("bash $here curves shipped results/policies/cpg_rl_complex.pt cpg cpg_rl" "$readme"
+  queues=("bash $here curves shipped results/policies/cpg_rl_complex.pt cpg cpg_rl" "$(readme_queue)"
           "bash $here curves seed1 $P/complex_margin_seed1.pt; bash $here curves seed3 $P/complex_margin_seed3.pt"
           "bash $here curves seed2 $P/complex_margin_seed2.pt")
   for gpu in 0 1 2 3; do
@@ -101,10 +105,7 @@ margin)
   TASK=${TASK:-complex-margin} \
   SEED_AFTER="FOREGROUND=1 bash $here curves \$NAME \$CKPT & FOREGROUND=1 bash $here points \$NAME \$CKPT; wait" \
   GPU3_AFTER="FOREGROUND=1 bash $here curves shipped results/policies/cpg_rl_complex.pt cpg cpg_rl &
-    python train.py --task complex --log_dir \$RUNS/readme --experiment complex > \$RUNS/extra/readme_train.log 2>&1
-    R=\$(sed -n 's/^  python play.py --checkpoint //p' \$RUNS/extra/readme_train.log | tail -1)
-    [ -n \"\$R\" ] && mkdir -p ${KEEP:-/root/keep} && cp \"\$R\" ${KEEP:-/root/keep}/readme.pt && \
-      FOREGROUND=1 bash $here curves readme \"\$R\"
+    $(readme_queue)
     wait" \
   bash scripts/device/time_to_skill.sh gate "$@"
   exit $?
