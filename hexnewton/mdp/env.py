@@ -66,7 +66,6 @@ from hexnewton.mdp.status import NONFINITE, SUCCESS, TIMEOUT
 from hexnewton.mdp.terms import (
     LAYOUTS,
     OBS_DIM,
-    OBS_LAYOUT,
     TERMINATIONS,
     EndInputs,
     ObsInputs,
@@ -75,6 +74,7 @@ from hexnewton.mdp.terms import (
     make_rewards_kernel,
     make_status_kernel,
     make_struct,
+    obs_span,
     observation_noise,
     observations_kernel,
     reward_table,
@@ -153,7 +153,7 @@ class HexapodEnv(VecEnv):
         self.obs_layout = "cpg_posture" if posture else action_mode
         self.num_actions = cfg.cpg.num_params if action_mode == "cpg" else 18
         self.num_obs = OBS_DIM[self.obs_layout]
-        self._target_col = next(a for name, a, _ in OBS_LAYOUT[self.obs_layout] if name == "target")
+        self._target_col = obs_span(self.obs_layout, "target")[0]
         self.max_episode_length = task.max_episode_steps
         self.device = world.device
 

@@ -26,6 +26,7 @@ from hexnewton.mdp.terms.observations import (
     OBS_TERMS,
     ObsInputs,
     ObsTerm,
+    obs_span,
     observation_noise,
     observations_kernel,
     observations_reference,
@@ -56,6 +57,6 @@ __all__ = ["H_HALF_EXTENT", "LAYOUTS", "OBS_DIM", "OBS_LAYOUT", "OBS_TERMS", "RE
            "TERMINATIONS", "EndInputs", "HeightField", "ObsInputs", "ObsTerm", "RewardFrame", "RewardInputs",
            "RewardParams", "RewardTerm", "TaskParams", "Termination", "config_params", "episode_status_kernel",
            "episode_status_np", "height_field_from_grid", "make_rewards_kernel", "make_status_kernel", "make_struct",
-           "max_terrain_height", "observation_noise", "observations_kernel", "observations_reference",
+           "max_terrain_height", "obs_span", "observation_noise", "observations_kernel", "observations_reference",
            "reward_table", "reward_weights", "rewards_kernel", "rewards_reference", "sample_heights",
            "terrain_height"]

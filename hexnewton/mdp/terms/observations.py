@@ -211,12 +211,18 @@ if __doc__:  # None under python -OO
     __doc__ += "\n" + "\n\n".join(_describe(layout) for layout in LAYOUTS) + "\n"
 
 
+def obs_span(layout: str, name: str) -> tuple[int, int]:
+    """The columns [start, end) of part ``name`` in ``layout``'s observation."""
+    _, a, b = next(span for span in OBS_LAYOUT[layout] if span[0] == name)
+    return a, b
+
+
 def observation_noise(layout: str, randomization) -> np.ndarray:
     """Uniform noise amplitude per column of ``layout`` from a ``RandomizationConfig`` (0 where exact)."""
     noise = np.zeros(OBS_DIM[layout], np.float32)
     for t in OBS_TERMS:
         if t.noise is not None and layout in t.layouts:
-            _, a, b = next(span for span in OBS_LAYOUT[layout] if span[0] == t.name)
+            a, b = obs_span(layout, t.name)
             noise[a:b] = getattr(randomization, t.noise)
     return noise
 
