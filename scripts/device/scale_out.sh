@@ -12,7 +12,8 @@
 #        # GPU count of $GPU_COUNTS (default "1 2 4") x each of $BENCH_ENVS envs per GPU (default "4096 16384"),
 #        # one after another, under torchrun from 2 GPUs on ($BENCH_MODES: default train; $BENCH_ITERATIONS: 10)
 #   bash scripts/device/scale_out.sh train                 # the time-to-skill runs of $ROUNDS: rounds separated by
-#        # "|", each a set of NAME:GPUS:ENVS_PER_GPU run at once; the next round starts when the round ends
+#        # "|", each a set of NAME:GPUS:ENVS_PER_GPU[:SCALINGS] run at once; the next round starts when the round
+#        # ends; SCALINGS (comma-separated, e.g. iterations or mini_batches,iterations) -> --agent.scale_with_ranks
 #   bash scripts/device/scale_out.sh eval                  # each run's result on $ROUNDS_PER_TERRAIN (1000) unseen
 #        # rounds of each of $TERRAINS (rugged stepped complex): one evaluate job per run and terrain, all at once,
 #        # spread over the GPUs
@@ -65,10 +66,11 @@ train)
   IFS='|' read -ra rounds <<< "$ROUNDS"
   for round in "${rounds[@]}"; do
     for spec in $round; do
-      IFS=: read -r name gpus envs <<< "$spec"
+      IFS=: read -r name gpus envs scalings <<< "$spec"
       k=$(ngpu "$gpus")
       launch="python train.py"; [ "$k" -gt 1 ] && launch="torchrun --standalone --nproc_per_node=$k train.py"
-      run="$launch --task complex --num_envs $envs $TRAIN_ARGS --log_dir $RUNS --experiment $name"
+      scale=""; [ -n "$scalings" ] && scale="--agent.scale_with_ranks ${scalings//,/ } "
+      run="$launch --task complex --num_envs $envs $scale$TRAIN_ARGS --log_dir $RUNS --experiment $name"
       log_cmd "CUDA_VISIBLE_DEVICES=$gpus $run"
       ( t0=$(date +%s.%N)
         CUDA_VISIBLE_DEVICES=$gpus $run > "$RUNS/$name.log" 2>&1

@@ -20,7 +20,8 @@ def _bench(k: int, train: dict[int, list[float]]) -> dict:
             "command": f"torchrun --standalone --nproc_per_node={k} -m hexnewton.apps.bench --task complex", "ranks": ranks}
 
 
-def _run(folder, name: str, k: int, envs: int, train_s: float, wall: float, start: float, evals: dict) -> None:
+def _run(folder, name: str, k: int, envs: int, train_s: float, wall: float, start: float, evals: dict,
+         scaled: tuple = ()) -> None:
     run_dir = folder / "runs" / name
     run_dir.mkdir(parents=True)
     steps = 300 * 24 * envs * k
@@ -29,7 +30,7 @@ def _run(folder, name: str, k: int, envs: int, train_s: float, wall: float, star
         "world_size": k, "num_envs_per_rank": envs, "device_name": "NVIDIA H100 80GB HBM3", "process_start": start,
         "wall_s_to_result": wall, "result": f"/root/scale_out/{name}/x/model_result.pt"}))  # fmt: skip
     (run_dir / "config.json").write_text(json.dumps({"hexnewton": {"world_size": k, "config": {"sim": {
-        "num_envs": envs, "device": "cuda:0"}}}, "train": {}}))  # fmt: skip
+        "num_envs": envs, "device": "cuda:0"}}, "agent": {"scale_with_ranks": list(scaled)}}, "train": {}}))  # fmt: skip
     (run_dir / "wall.txt").write_text(f"{wall + 3.0}\n")
     for terrain, (success, falls) in evals.items():
         d = folder / "evals" / f"{name}_{terrain}"
@@ -49,7 +50,7 @@ def lease(tmp_path):
     _run(folder, "g1x4096", 1, 4096, 120.0, 170.0, 1000.0, ev)
     _run(folder, "g2x4096", 2, 4096, 126.0, 176.0, 2000.0, ev)
     _run(folder, "g2x2048", 2, 2048, 80.0, 125.0, 2010.0, ev)
-    _run(folder, "g4x1024", 4, 1024, 60.0, 100.0, 3000.0, {"rugged": (0.95, 0.04)})
+    _run(folder, "g4x1024", 4, 1024, 60.0, 100.0, 3000.0, {"rugged": (0.95, 0.04)}, scaled=("iterations",))
     (folder / "commands.txt").write_text("CUDA_VISIBLE_DEVICES=0 python train.py --task complex --num_envs 4096\n")
     return folder
 
@@ -80,7 +81,8 @@ def test_report_from_a_lease(lease, tmp_path, capsys):
     md = open(out / "report.md").read()
     assert "| train | complex | 16384 | 4 | 640,000 env-steps/s | 160,000 | 100.0 % | 80.0 % (below 90 %) |" in md
     assert "CUDA_VISIBLE_DEVICES=0 python train.py --task complex --num_envs 4096" in md
-    assert "| g4x1024 | NVIDIA H100 80GB HBM3 | 4 | 1024 | 4096 |" in md and "95.0 % / 4.0 %" in md
+    assert four["runs"]["g4x1024"]["scale_with_ranks"] == ["iterations"] and g2["scale_with_ranks"] == []
+    assert "| g4x1024 | NVIDIA H100 80GB HBM3 | 4 | 1024 | 4096 | iterations | 300 |" in md and "95.0 % / 4.0 %" in md
     # nothing is overwritten; an empty folder or a run without timing.json is one line, exit 2
     for argv, message in (([str(lease), "--out", str(out)], "exists"),
                           ([str(tmp_path / "report"), "--out", str(tmp_path / "r2")], "nothing to report"),
