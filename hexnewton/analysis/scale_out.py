@@ -165,34 +165,38 @@ def by_gpu_count(rows: list[dict], runs: dict[str, dict]) -> dict[int, dict]:
     return dict(sorted(out.items()))
 
 
-def collect(folder: str) -> tuple[list[dict], dict[str, dict]]:
-    """A scale-out lease's outputs (``scripts/device/scale_out.sh pack``): ``bench_*.json`` (bench runs),
+def collect(folders: list[str]) -> tuple[list[dict], dict[str, dict]]:
+    """Scale-out leases' outputs (``scripts/device/scale_out.sh pack``), joined: ``bench_*.json`` (bench runs),
     ``runs/<name>/`` (train.py runs) and ``evals/<name>_<terrain>/`` (their evaluations)."""
-    benches = [_load(p) for p in sorted(glob.glob(os.path.join(folder, "bench_*.json")))]
-    for b, p in zip(benches, sorted(glob.glob(os.path.join(folder, "bench_*.json")))):
-        if "ranks" not in b or "world_size" not in b:
-            raise ValueError(f"{p} has no per-rank rates: not written by hexnewton-bench --json")
-    runs = {}
-    for run_dir in sorted(glob.glob(os.path.join(folder, "runs", "*", ""))):
-        name = os.path.basename(os.path.dirname(run_dir))
-        evals = [os.path.dirname(p) for p in sorted(glob.glob(os.path.join(folder, "evals", f"{name}_*", "results.json")))]
-        runs[name] = run_summary(run_dir, evals)
+    benches, runs = [], {}
+    for folder in folders:
+        for p in sorted(glob.glob(os.path.join(folder, "bench_*.json"))):
+            b = _load(p)
+            if "ranks" not in b or "world_size" not in b:
+                raise ValueError(f"{p} has no per-rank rates: not written by hexnewton-bench --json")
+            benches.append(b)
+        for run_dir in sorted(glob.glob(os.path.join(folder, "runs", "*", ""))):
+            name = os.path.basename(os.path.dirname(run_dir))
+            if name in runs:
+                raise ValueError(f"two runs named {name} in {', '.join(folders)}")
+            evals = glob.glob(os.path.join(folder, "evals", f"{name}_*", "results.json"))
+            runs[name] = run_summary(run_dir, [os.path.dirname(p) for p in sorted(evals)])
     if not benches and not runs:
-        raise ValueError(f"{folder} holds no bench_*.json and no runs/*/: nothing to report")
+        raise ValueError(f"{', '.join(folders)} hold no bench_*.json and no runs/*/: nothing to report")
     return benches, with_training_efficiency(runs)
 
 
-def build_report(folder: str, out: str, commands: list[str]) -> dict:
-    """``out/report.md`` and ``out/results.json`` from a scale-out lease's ``folder`` (:func:`collect`); ``commands``:
-    the calls that made it, quoted in the report. Returns results.json's content."""
-    benches, runs = collect(folder)
+def build_report(folders: list[str], out: str, commands: list[str]) -> dict:
+    """``out/report.md`` and ``out/results.json`` from scale-out leases' ``folders`` (:func:`collect`); ``commands``:
+    the calls that made them, quoted in the report. Returns results.json's content."""
+    benches, runs = collect(folders)
     rows = scaling_rows(benches)
     devices = sorted({b.get("device_name", "?") for b in benches} | {r["device_name"] for r in runs.values()})
     results = {"devices": devices, "target_efficiency": TARGET_EFFICIENCY, "by_gpus": by_gpu_count(rows, runs),
                "bench": rows, "runs": runs,
                "bench_commands": sorted({b.get("command", "?") for b in benches}), "commands": commands}  # fmt: skip
     md = [f"# Scale-out on one host: {', '.join(devices)}", "", "Made by `python -m hexnewton.apps.scale_out "
-          f"{folder} --out {out}` from the outputs of these calls (`scripts/device/scale_out.sh`):", "", "```bash",
+          f"{' '.join(folders)} --out {out}` from the outputs of these calls (`scripts/device/scale_out.sh`):", "", "```bash",
           *commands, "```", ""]  # fmt: skip
     if rows:
         md += ["## Throughput (`hexnewton-bench` under torchrun, each rank one GPU)", "",

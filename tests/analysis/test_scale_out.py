@@ -109,3 +109,23 @@ def test_rate_rows_line_up_with_the_ranks():
     assert gathered[2]["per_rank"] == [200.0, 190.0] and gathered[2]["total"] == 390.0
     one = scaling_rows([{"world_size": 1, "ranks": with_ranks(rows, [[r["rate"] for r in rows]])}])
     assert all(r["efficiency"] == pytest.approx(1.0) for r in one)
+
+
+def test_report_joins_leases(lease, tmp_path):
+    """The benches of one lease and the runs of another make one report; two runs of one name are an error."""
+    benches = tmp_path / "benches"
+    benches.mkdir()
+    for p in lease.glob("bench_*.json"):
+        p.rename(benches / p.name)
+    (benches / "commands.txt").write_text("torchrun --standalone --nproc_per_node=4 -m hexnewton.apps.bench\n")
+    out = tmp_path / "joined"
+    assert run(main, "python -m hexnewton.apps.scale_out", [str(benches), str(lease), "--out", str(out)]) == 0
+    res = json.load(open(out / "results.json"))
+    assert len(res["bench"]) == 6 and len(res["runs"]) == 4
+    assert res["commands"][0].startswith("torchrun") and res["commands"][1].startswith("CUDA_VISIBLE_DEVICES=0")
+    assert f"scale_out {benches} {lease} --out {out}`" in open(out / "report.md").read()
+    assert run(main, "python -m hexnewton.apps.scale_out", [str(lease), str(lease), "--out", str(tmp_path / "x")]) == 2
+    # the leases' own folder may hold the report, once
+    argv = [str(benches), str(lease), "--out", str(tmp_path)]
+    assert run(main, "python -m hexnewton.apps.scale_out", argv) == 0 and (tmp_path / "report.md").is_file()
+    assert run(main, "python -m hexnewton.apps.scale_out", argv) == 2
