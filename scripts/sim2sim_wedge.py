@@ -302,7 +302,7 @@ def combine(paths: list[str]) -> dict:
         with open(path) as f:
             run = json.load(f)
         out["runs"].append({"file": path, "command": run["command"], "terrain_seed": run["terrain_seed"]})
-        for s in (*SETTINGS, *MUJOCO):
+        for s in [k for k, v in run.items() if isinstance(v, dict) and "rounds" in v]:  # settings, labelled or not
             if s in run:
                 tot = out.setdefault(s, {k: 0 for k in COUNTS if k in run[s]})
                 for k in COUNTS:
@@ -331,6 +331,8 @@ def main() -> None:
     p.add_argument("--stuck_window", type=int, default=STUCK["window"], help="mujoco_stuck_lift: control steps watched")
     p.add_argument("--stuck_progress", type=float, default=STUCK["progress"],
                    help="mujoco_stuck_lift: goal distance gained over the window below which a robot is stuck [m]")
+    p.add_argument("--label", help="keep each setting's counts as SETTING:LABEL (one setting under different "
+                   "parameters side by side in --combine)")
     p.add_argument("--out", required=True)
     a = p.parse_args()
     STALL.update(lag=a.stall_lag, lift=a.stall_lift)
@@ -352,9 +354,10 @@ def main() -> None:
            "terrain_seed": a.seed, "start_seed": a.seed + 1000,
            "policy": POLICY, "bundle": BUNDLE}
     for s in a.settings:
-        res[s] = (mujoco_setting(s, a.robots, a.steps, a.seed) if s in MUJOCO
-                  else newton_setting(s, a.robots, a.steps, a.seed))
-        print(s, json.dumps(res[s]), flush=True)
+        key = f"{s}:{a.label}" if a.label else s
+        res[key] = (mujoco_setting(s, a.robots, a.steps, a.seed) if s in MUJOCO
+                    else newton_setting(s, a.robots, a.steps, a.seed))
+        print(key, json.dumps(res[key]), flush=True)
         os.makedirs(os.path.dirname(os.path.abspath(a.out)), exist_ok=True)
         with open(a.out, "w") as f:
             json.dump(res, f, indent=1)

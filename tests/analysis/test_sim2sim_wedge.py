@@ -69,8 +69,13 @@ def test_combine_sums_the_runs(tmp_path):
         paths.append(str(tmp_path / f"m{seed}.json"))
         with open(paths[-1], "w") as f:
             f.write(__import__("json").dumps(run))
+    run = {"command": "c", "terrain_seed": 1000, "mujoco_stuck_lift:w200": {"rounds": 20, "success": 12, "wedged": 0}}
+    paths.append(str(tmp_path / "labelled.json"))
+    with open(paths[-1], "w") as f:
+        f.write(__import__("json").dumps(run))
     out = w.combine(paths)
     assert out["mujoco"]["rounds"] == 40 and out["mujoco"]["wedged"] == 3 and out["mujoco"]["terrain_seeds"] == [1000, 1001]
+    assert out["mujoco_stuck_lift:w200"] == {"rounds": 20, "success": 12, "wedged": 0, "terrain_seeds": [1000]}
 
 
 #: Newton's hinge-limit solref of the first leg (R1 hip, knee, ankle) for RobotConfig's limit_ke / limit_kd, read from
