@@ -56,9 +56,9 @@ SETTINGS = {
     # newton_frame and newton_boxes with the bundle's effort clamp (on the actuators: SimConfig.effort_clamp)
     "newton_actuator_clamp": {"sim.effort_clamp": "actuator"},
     "newton_boxes_actuator_clamp": {"terrain.collision": "boxes", "sim.effort_clamp": "actuator"},
-    # newton_frame with the controller's stuck response at mujoco_stuck_lift's settings (STUCK)
-    "newton_stuck_lift": {"cpg.stuck_lift": 0.3, "cpg.stuck_window": 100, "cpg.stuck_progress": 0.02,
-                          "cpg.stuck_hold": 50},
+    # newton_frame with the controller's stuck response at mujoco_stuck_lift's settings (STUCK, filled in by
+    # newton_setting from the --stuck_* options)
+    "newton_stuck_lift": {},
 }
 #: C MuJoCo settings: the bundle's closed loop on its MJCF, with one model option moved to Newton's training physics
 #: (``mujoco_variant``); the bundle's files stay as shipped
@@ -149,8 +149,8 @@ def newton_setting(name: str, robots: int, steps: int, seed: int) -> dict:
 
     t0 = time.perf_counter()
     ckpt = read_controller_checkpoint("cpg_rl", POLICY)
-    cfg = course(TERRAIN, trained_config(ckpt), dict(SETTINGS[name]), robots, "cpu", seed,
-                 seed=seed + START_SEED_OFFSET)
+    overrides = {f"cpg.stuck_{k}": v for k, v in STUCK.items()} if name == "newton_stuck_lift" else SETTINGS[name]
+    cfg = course(TERRAIN, trained_config(ckpt), dict(overrides), robots, "cpu", seed, seed=seed + START_SEED_OFFSET)
     env = make_env(cfg, CONTROLLERS["cpg_rl"])
     policy = controller_policy(env, "cpg_rl", POLICY, ckpt, False, False, None)
     m = env.world.model
