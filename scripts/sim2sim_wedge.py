@@ -303,12 +303,11 @@ def combine(paths: list[str]) -> dict:
             run = json.load(f)
         out["runs"].append({"file": path, "command": run["command"], "terrain_seed": run["terrain_seed"]})
         for s in [k for k, v in run.items() if isinstance(v, dict) and "rounds" in v]:  # settings, labelled or not
-            if s in run:
-                tot = out.setdefault(s, {k: 0 for k in COUNTS if k in run[s]})
-                for k in COUNTS:
-                    if k in tot:
-                        tot[k] += run[s][k]
-                tot.setdefault("terrain_seeds", []).append(run["terrain_seed"])
+            tot = out.setdefault(s, {k: 0 for k in COUNTS if k in run[s]})
+            for k in COUNTS:
+                if k in tot:
+                    tot[k] += run[s][k]
+            tot.setdefault("terrain_seeds", []).append(run["terrain_seed"])
     return out
 
 
@@ -325,12 +324,12 @@ def main() -> None:
     p.add_argument("--stall_lag", type=float, default=STALL["lag"], help="mujoco_stall_reflex: knee lag [rad]")
     p.add_argument("--stall_lift", type=float, default=STALL["lift"], help="mujoco_stall_reflex: extra knee lift [rad]")
     p.add_argument("--stuck_lift", type=float, default=STUCK["lift"],
-                   help="mujoco_stuck_lift: extra knee amplitude [rad]")
+                   help="*_stuck_lift: extra knee amplitude [rad]")
     p.add_argument("--stuck_hold", type=int, default=STUCK["hold"],
-                   help="mujoco_stuck_lift: control steps of the response")
-    p.add_argument("--stuck_window", type=int, default=STUCK["window"], help="mujoco_stuck_lift: control steps watched")
+                   help="*_stuck_lift: control steps of the response")
+    p.add_argument("--stuck_window", type=int, default=STUCK["window"], help="*_stuck_lift: control steps watched")
     p.add_argument("--stuck_progress", type=float, default=STUCK["progress"],
-                   help="mujoco_stuck_lift: goal distance gained over the window below which a robot is stuck [m]")
+                   help="*_stuck_lift: goal distance gained over the window below which a robot is stuck [m]")
     p.add_argument("--label", help="keep each setting's counts as SETTING:LABEL (one setting under different "
                    "parameters side by side in --combine)")
     p.add_argument("--out", required=True)

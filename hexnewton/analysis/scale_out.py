@@ -98,7 +98,8 @@ def run_summary(run_dir: str, evals: list[str]) -> dict:
             terrains[terrain] = {"rounds": s["rounds"], "success_3m": s["success_3m"], "fall_rate": s["fall_rate"]}
     scaled = list(meta.get("agent", {}).get("scale_with_ranks", ()))
     return {"gpus": k, "device_name": timing.get("device_name", meta["config"]["sim"]["device"]), "envs_per_gpu": envs,
-            "total_envs": k * envs, "scale_with_ranks": scaled, "iterations": timing["iterations"], "env_steps": timing["env_steps"],
+            "total_envs": k * envs, "scale_with_ranks": scaled, "iterations": timing["iterations"],
+            "env_steps": timing["env_steps"],
             "train_s": timing["train_s"], "env_steps_per_s": timing["env_steps"] / timing["train_s"],
             "first_iteration_s": timing["first_iteration_s"], "wall_s_to_result": timing["wall_s_to_result"],
             "shell_wall_s": float(open(shell).read().split()[0]) if os.path.isfile(shell) else None,
@@ -131,17 +132,17 @@ def _pct(v: float | None) -> str:
 def runs_markdown(runs: dict[str, dict]) -> str:
     """One row per training run: GPUs, envs, training rate and efficiency, seconds to the result, per terrain."""
     terrains = list(dict.fromkeys(t for r in runs.values() for t in r["terrains"]))
-    md = ("| run | device | GPUs | envs per GPU | total envs | scaled with ranks | iterations | env-steps/s (training) | "
-          "efficiency | first iteration [s] | training [s] | process start to result [s] | speed-up | ran beside | "
+    md = ("| run | device | GPUs | envs per GPU | total envs | scaled with ranks | iterations | env-steps/s "
+          "(training) | efficiency | first iteration [s] | training [s] | process start to result [s] | speed-up | ran beside | "
           + " | ".join(f"{t} 3 m / falls" for t in terrains) + " |\n|---|---|" + "---:|" * 3 + "---|" + "---:|" * 7
-          + "---|"
-          + "---:|" * len(terrains) + "\n")
+          + "---|" + "---:|" * len(terrains) + "\n")
     for name, r in sorted(runs.items(), key=lambda kv: (kv[1]["total_envs"], kv[1]["gpus"])):
         cells = [f"{_pct(r['terrains'][t]['success_3m'])} / {_pct(r['terrains'][t]['fall_rate'])}"
                  if t in r["terrains"] else "—" for t in terrains]  # fmt: skip
         speedup = "—" if r["speedup"] is None else f"{r['speedup']:.2f}x"
         md += (f"| {name} | {r['device_name']} | {r['gpus']} | {r['envs_per_gpu']} | {r['total_envs']} | "
-               f"{' '.join(r.get('scale_with_ranks', ())) or 'no'} | {r['iterations']} | {r['env_steps_per_s']:,.0f} | {_pct(r['efficiency'])} | "
+               f"{' '.join(r.get('scale_with_ranks', ())) or 'no'} | {r['iterations']} | "
+               f"{r['env_steps_per_s']:,.0f} | {_pct(r['efficiency'])} | "
                f"{r['first_iteration_s']:.1f} | {r['train_s']:.1f} | {r['wall_s_to_result']:.1f} | {speedup} | "
                f"{', '.join(r['beside']) or 'alone'} | "
                + " | ".join(cells) + " |\n")  # fmt: skip
@@ -157,7 +158,8 @@ def by_gpu_count(rows: list[dict], runs: dict[str, dict]) -> dict[int, dict]:
         k["devices"] = sorted(set(k["devices"]) | {r["device_name"]})
         k["bench"].setdefault(r["measure"], {})[r["envs_per_gpu"]] = {
             "total": r["total"], "per_gpu": r["per_gpu"], "efficiency": r["efficiency"]}  # fmt: skip
-    keys = ("envs_per_gpu", "total_envs", "scale_with_ranks", "env_steps_per_s", "efficiency", "wall_s_to_result", "speedup", "terrains")
+    keys = ("envs_per_gpu", "total_envs", "scale_with_ranks", "env_steps_per_s", "efficiency", "wall_s_to_result",
+            "speedup", "terrains")
     for name, r in runs.items():
         k = out.setdefault(r["gpus"], {"devices": [], "bench": {}, "runs": {}})
         k["devices"] = sorted(set(k["devices"]) | {r["device_name"]})
@@ -196,7 +198,8 @@ def build_report(folders: list[str], out: str, commands: list[str]) -> dict:
                "bench": rows, "runs": runs,
                "bench_commands": sorted({b.get("command", "?") for b in benches}), "commands": commands}  # fmt: skip
     md = [f"# Scale-out on one host: {', '.join(devices)}", "", "Made by `python -m hexnewton.apps.scale_out "
-          f"{' '.join(folders)} --out {out}` from the outputs of these calls (`scripts/device/scale_out.sh`):", "", "```bash",
+          f"{' '.join(folders)} --out {out}` from the outputs of these calls (`scripts/device/scale_out.sh`):", "",
+          "```bash",
           *commands, "```", ""]  # fmt: skip
     if rows:
         md += ["## Throughput (`hexnewton-bench` under torchrun, each rank one GPU)", "",

@@ -30,7 +30,8 @@ def _run(folder, name: str, k: int, envs: int, train_s: float, wall: float, star
         "world_size": k, "num_envs_per_rank": envs, "device_name": "NVIDIA H100 80GB HBM3", "process_start": start,
         "wall_s_to_result": wall, "result": f"/root/scale_out/{name}/x/model_result.pt"}))  # fmt: skip
     (run_dir / "config.json").write_text(json.dumps({"hexnewton": {"world_size": k, "config": {"sim": {
-        "num_envs": envs, "device": "cuda:0"}}, "agent": {"scale_with_ranks": list(scaled)}}, "train": {}}))  # fmt: skip
+        "num_envs": envs, "device": "cuda:0"}}, "agent": {"scale_with_ranks": list(scaled)}},
+        "train": {}}))  # fmt: skip
     (run_dir / "wall.txt").write_text(f"{wall + 3.0}\n")
     for terrain, (success, falls) in evals.items():
         d = folder / "evals" / f"{name}_{terrain}"
