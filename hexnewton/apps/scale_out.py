@@ -2,9 +2,9 @@
 
     python -m hexnewton.apps.scale_out LEASE [LEASE ...] --out results/scale_out
 
-LEASE (one or more, joined: e.g. the benches of one lease and the runs of another) is what ``bash
-scripts/device/scale_out.sh pack`` brings back, unpacked: ``bench_<K>gpu.json`` (``hexnewton-bench --json`` under
-torchrun at K GPUs), ``runs/<name>/`` (a ``train.py`` run's ``timing.json`` and ``config.json``, its
+LEASE (one or more, joined: e.g. the benches of one lease and the runs of another) is what
+``bash scripts/device/scale_out.sh pack`` brings back, unpacked: ``bench_<K>gpu.json`` (``hexnewton-bench --json``
+under torchrun at K GPUs), ``runs/<name>/`` (a ``train.py`` run's ``timing.json`` and ``config.json``, its
 console log and ``wall.txt``), ``evals/<name>_<terrain>/`` (``python -m hexnewton.apps.evaluate --out`` of the run's
 result) and ``commands.txt`` (the calls, quoted in the report). Writes ``report.md`` and ``results.json``
 (:mod:`hexnewton.analysis.scale_out`): per GPU count the device, envs per GPU, env-steps/s, the scaling efficiency,
