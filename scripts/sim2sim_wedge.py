@@ -255,6 +255,10 @@ def stuck_response(r, window: int, progress: float, hold: int, lift: float) -> d
     return counts
 
 
+#: the C MuJoCo settings with a way out for a caught foot: the function that turns it on and its settings
+RESPONSES = {"mujoco_stall_reflex": (stall_reflex, STALL), "mujoco_stuck_lift": (stuck_response, STUCK)}
+
+
 def mujoco_setting(name: str, robots: int, steps: int, seed: int) -> dict:
     import mujoco
 
@@ -266,9 +270,8 @@ def mujoco_setting(name: str, robots: int, steps: int, seed: int) -> dict:
 
     t0 = time.perf_counter()
     r = Rounds(BUNDLE, TERRAIN, robots, seed)
-    stall = stall_reflex(r, **STALL) if name == "mujoco_stall_reflex" else None
-    if name == "mujoco_stuck_lift":
-        stall = stuck_response(r, **STUCK)
+    way_out = RESPONSES.get(name)  # a way out for a caught foot in the runtime, and its settings
+    counts = way_out[0](r, **way_out[1]) if way_out else None
     mujoco_variant(r.m, name)
     names = [mujoco.mj_id2name(r.m, mujoco.mjtObj.mjOBJ_GEOM, g) or "" for g in range(r.m.ngeom)]
     feet_idx = [[g for g, s in enumerate(names) if s.startswith(f"r{k}_") and s.endswith("_foot")]
@@ -282,8 +285,8 @@ def mujoco_setting(name: str, robots: int, steps: int, seed: int) -> dict:
     LOGS[name] = {"base_x": base_x[-WINDOW - 1:], "feet": feet[-WINDOW - 1:], "running": running}
     out = summarize_rounds(ends, x_end, wedge, len(fs), time.perf_counter() - t0)
     out["contact_wedged_of_stuck"] = wedged_feet(r, wedge["stuck"])
-    if stall is not None:
-        out["response"] = {**(STALL if name == "mujoco_stall_reflex" else STUCK), **stall}
+    if way_out:
+        out["response"] = {**way_out[1], **counts}
     out["physics"] = {"change": MUJOCO[name], "iterations": int(r.m.opt.iterations),
                       "ls_iterations": int(r.m.opt.ls_iterations), "tolerance": float(r.m.opt.tolerance),
                       "hinge_limit_solref_first_leg": r.m.jnt_solref[1:4].round(5).tolist(),

@@ -141,7 +141,7 @@ def runs_markdown(runs: dict[str, dict]) -> str:
                  if t in r["terrains"] else "—" for t in terrains]  # fmt: skip
         speedup = "—" if r["speedup"] is None else f"{r['speedup']:.2f}x"
         md += (f"| {name} | {r['device_name']} | {r['gpus']} | {r['envs_per_gpu']} | {r['total_envs']} | "
-               f"{' '.join(r.get('scale_with_ranks', ())) or 'no'} | {r['iterations']} | "
+               f"{' '.join(r['scale_with_ranks']) or 'no'} | {r['iterations']} | "
                f"{r['env_steps_per_s']:,.0f} | {_pct(r['efficiency'])} | "
                f"{r['first_iteration_s']:.1f} | {r['train_s']:.1f} | {r['wall_s_to_result']:.1f} | {speedup} | "
                f"{', '.join(r['beside']) or 'alone'} | "
