@@ -5,7 +5,7 @@ policy into one report.
         --policy complex-margin=seed1,seed2,seed3 --out results/capability/margin
 
 ``FOLDER`` holds one evaluation per job, named ``<prefix>_<curve>`` (``evaluate --sweep CURVE --no-nominal``, the
-curves of ``hexnewton.analysis.rollout.DEFAULT_SWEEPS``) and ``<prefix>_at_<point>`` (the named points, 1000 rounds),
+curves of ``hexnewton.analysis.rollout.DEFAULT_SWEEPS``) and ``<prefix>_at_<point>`` (the named points, ``$POINT_ROUNDS`` rounds),
 each a folder with ``results.json`` once finished and a console log ``<job>.log`` beside it. A curve whose job was cut
 off is read from the points its log printed (whole percentages) and marked partial; a point or curve with neither is
 missing. ``--policy LABEL=PREFIX[,PREFIX...]`` groups the seeds of one recipe (median over them); the fixed CPG's curve
@@ -111,13 +111,20 @@ def _pct(v) -> str:
     return "—" if v is None else f"{100 * v:.1f}"
 
 
+def _point_rounds(res: dict) -> str:
+    """How many rounds each named point ran, from its results ("1000 rounds each"; several counts listed)."""
+    rounds = sorted({v.get("rounds") for by_label in res["points"].values() for p in by_label.values()
+                     for v in p["seeds"].values() if v.get("rounds")})  # fmt: skip
+    return " or ".join(str(r) for r in rounds) + " rounds each" if rounds else "none measured"
+
+
 def report(res: dict) -> str:
     """The markdown report: the named points against the target, then one table per curve."""
     meta = res["meta"]
     lines = ["# Capability: curves and named points", "", "```bash", meta["command"], "```", "",
              f"Evaluations in `{meta['folder']}`; deterministic action, success at 3 m and rounds that fell (%).",
              "Curves: `evaluate --sweep CURVE --no-nominal` at 200 rounds a point; a curve marked *partial* was cut "
-             "off and shows the points its console printed (whole percentages). Named points: 1000 rounds each.", "",
+             f"off and shows the points its console printed (whole percentages). Named points: {_point_rounds(res)}.", "",
              f"## Named points (target: median of the seeds >= {100 * TARGET:.0f} % at 3 m)", "",
              "| point | policy | per seed: success / falls | median success | median falls | target |",
              "|---|---|---|---:|---:|---|"]  # fmt: skip

@@ -52,6 +52,7 @@ def test_gathers_complete_partial_and_points(tmp_path):
     report = (out / "report.md").read_text()
     assert "python -m hexnewton.apps.capability_runs" in report and "| friction 0.3 (complex) | margin |" in report
     assert "shipped (shipped, partial)" in report
+    assert "Named points: 200 rounds each." in report  # the rounds the points' results name
     assert (out / "fig_sweep_tread_depth.png").stat().st_size > 2000 and not (out / "fig_sweep_push.png").exists()
 
 
