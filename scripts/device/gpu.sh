@@ -9,7 +9,7 @@
 #                                                            # past its imports; refuses a NAME that is running
 #                                                            # (start_run below; `baseline` alike)
 #   bash scripts/device/gpu.sh wait SECONDS NAME...          # until those runs end (at most SECONDS), their progress
-#   bash scripts/device/gpu.sh pack NAME...                  # config, events, log, best and last checkpoint ->
+#   bash scripts/device/gpu.sh pack NAME...                  # config, events, log, the result, best and last ->
 #                                                            # $OUT/run_NAME.tgz; the shipped checkpoint -> $KEEP/NAME.pt
 #   bash scripts/device/gpu.sh eval SECONDS NAME[@GPU]:ARGS...   # `python -m hexnewton.apps.evaluate ARGS` jobs at once,
 #                                                                # each cut off after SECONDS -> $OUT/evals.tgz
@@ -110,7 +110,8 @@ pack)
     cp "${final:-$last}" "$KEEP/$name.pt"
     tar czf "$OUT/run_$name.tgz" -C "$RUNS" "$name.log" -C "$RUNS/$name" $(cd "$RUNS/$name" && \
       ls "$(basename "$run")"/{config.json,policy.onnx,events.*} "$(basename "$run")/$(basename "$last")" 2>/dev/null; \
-      [ -f "$best" ] && echo "$(basename "$run")/model_best.pt")
+      [ -f "$best" ] && echo "$(basename "$run")/model_best.pt"
+      [ -n "$final" ] && [ "$final" != "$last" ] && [ -f "$final" ] && echo "$(basename "$run")/$(basename "$final")")
     echo "packed $name: $(basename "${final:-$last}") kept as $KEEP/$name.pt"
   done
   ;;
