@@ -2,18 +2,18 @@
 # Recipe candidates in one device call (scripts/device/README.md, "Open measurements"): one pipeline per GPU, all at
 # once, each `python train.py ARGS`, then `gpu.sh pack` (its run to $OUT/run_NAME.tgz, its result to $KEEP/NAME.pt),
 # then its result on validation rounds ($VAL_ROUNDS per terrain, `--seed 3000`, deterministic action, one evaluate
-# job per terrain of $VAL_TERRAINS on the same GPU), or with `points` the named capability points
-# (capability.sh points, $POINT_ROUNDS each, `--seed 3000`). Everything ends by $LIMIT seconds after the start
-# (evaluations are cut off there), and the evaluations are packed into $OUT/evals.tgz, so the call brings back
-# whatever finished even when the machine is given back after it:
+# job per terrain of $VAL_TERRAINS on the same GPU), or with `points` the named capability points (capability.sh
+# points, $POINT_ROUNDS each, `--seed 3000`). Everything ends by $LIMIT seconds after the start (evaluations are cut
+# off there), and the evaluations ($EVALS, default /root/evals) are packed into $OUT/evals.tgz, so the call brings
+# back whatever finished: a machine given back after the call keeps nothing.
 #
 #   LIMIT=560 bash scripts/device/candidates.sh "stuck1@0:--task complex --seed 1 --env.cpg.stuck_lift 0.3" \
 #       "margin600@3:points:--task complex-margin --seed 1 --max_iterations 600"
 set -u
 export PYTHONPATH=/opt/site${PYTHONPATH:+:$PYTHONPATH} PYTHONUNBUFFERED=1
-OUT=${OUT:-out} RUNS=${RUNS:-/root/runs} KEEP=${KEEP:-/root/keep}
+OUT=${OUT:-out} RUNS=${RUNS:-/root/runs} KEEP=${KEEP:-/root/keep} EVALS=${EVALS:-/root/evals}
 export OUT RUNS KEEP
-mkdir -p "$OUT" "$RUNS" "$KEEP" /root/evals
+mkdir -p "$OUT" "$RUNS" "$KEEP" "$EVALS"
 here=$(cd "$(dirname "$0")" && pwd)
 deadline=$((SECONDS + ${LIMIT:-560}))
 [ $# -gt 0 ] || { echo "usage: candidates.sh NAME@GPU[:points]:TRAIN_ARGS ..." >&2; exit 2; }
@@ -25,15 +25,15 @@ pipeline() {
   bash "$here/gpu.sh" pack "$name"
   [ -f "$KEEP/$name.pt" ] || return 0
   if [ "$what" = points ]; then
-    CUDA_VISIBLE_DEVICES=$gpu RUNS=/root/evals FOREGROUND=1 MAX_JOBS=6 POINT_ROUNDS=${POINT_ROUNDS:-500} \
+    CUDA_VISIBLE_DEVICES=$gpu RUNS=$EVALS FOREGROUND=1 MAX_JOBS=6 POINT_ROUNDS=${POINT_ROUNDS:-500} \
       EVAL_ARGS="--seed 3000" timeout -k 10 $((deadline - SECONDS)) bash "$here/capability.sh" points "$name" \
       "$KEEP/$name.pt"
   else
     for t in ${VAL_TERRAINS:-complex rugged stepped}; do
       ( CUDA_VISIBLE_DEVICES=$gpu timeout -k 10 $((deadline - SECONDS)) python -m hexnewton.apps.evaluate \
           --controllers cpg_rl --checkpoint "cpg_rl=$KEEP/$name.pt" --terrains "$t" --rounds "${VAL_ROUNDS:-1000}" \
-          --seed 3000 --out "/root/evals/${name}_$t" --no-progress > "/root/evals/${name}_$t.log" 2>&1
-        echo "exit $?" >> "/root/evals/${name}_$t.log" ) &
+          --seed 3000 --out "$EVALS/${name}_$t" --no-progress > "$EVALS/${name}_$t.log" 2>&1
+        echo "exit $?" >> "$EVALS/${name}_$t.log" ) &
     done
     wait
   fi
@@ -46,7 +46,7 @@ for spec in "$@"; do
   pipeline "${head%@*}" "${head#*@}" "$what" $rest &
 done
 wait
-tar czf "$OUT/evals.tgz" -C /root/evals .
-for f in /root/evals/*/report.md /root/evals/extra/*/report.md; do
+tar czf "$OUT/evals.tgz" -C "$EVALS" .
+for f in "$EVALS"/*/report.md "$EVALS"/extra/*/report.md; do
   [ -f "$f" ] && { echo "== $f"; grep -E '^\| ' "$f" | head -6; }
 done

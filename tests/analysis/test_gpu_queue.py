@@ -170,3 +170,37 @@ def test_capability_jobs_at_most_max_jobs_at_once(tmp_path):
     subprocess.run(["bash", "scripts/device/capability.sh", "curves", "p", "ck.pt"], cwd=ROOT, env=env, check=True,
                    capture_output=True, timeout=120)  # fmt: skip
     assert not (runs / "concurrency").exists()  # every curve finished: nothing runs again
+
+
+FAKE_TRAIN_EVAL = """#!/bin/bash
+# train.py: a run folder whose result is an earlier checkpoint, named on the console as train.py names it;
+# evaluate (-m hexnewton.apps.evaluate ... --out DIR): a report
+out= ld= ex=
+while [ $# -gt 0 ]; do case $1 in --out) out=$2; shift;; --log_dir) ld=$2; shift;; --experiment) ex=$2; shift;; esac; shift; done
+if [ -n "$out" ]; then mkdir -p "$out"; echo '{}' > "$out/results.json"; printf '| rugged | CPG_RL |\\n' > "$out/report.md"; exit 0; fi
+run="$ld/$ex/2026-01-01"; mkdir -p "$run"; touch "$run/config.json" "$run/model_250.pt" "$run/model_299.pt"
+cp "$run/model_250.pt" "$run/model_result.pt"
+echo "training $ex"; echo "  python play.py --checkpoint $run/model_result.pt"
+"""
+
+
+def test_candidates_train_pack_and_evaluate_in_one_call(tmp_path):
+    """candidates.sh: each pipeline trains, packs (the chosen result travels in the archive) and evaluates its result
+    on validation rounds, or on the named capability points; the evaluations come back in one archive."""
+    import tarfile
+
+    out, keep = tmp_path / "out", tmp_path / "keep"
+    env = _env(tmp_path, FAKE_TRAIN_EVAL, RUNS=str(tmp_path / "runs"), OUT=str(out), KEEP=str(keep),
+               EVALS=str(tmp_path / "evals"), LIMIT="60", VAL_TERRAINS="rugged stepped")
+    done = subprocess.run(["bash", "scripts/device/candidates.sh", "a1@0:--task complex --seed 1",
+                           "m1@1:points:--task complex-margin --seed 1"], cwd=ROOT, env=env, check=True,
+                          capture_output=True, text=True)  # fmt: skip
+    assert "a1: evaluations ended" in done.stdout and "m1: evaluations ended" in done.stdout, done.stdout
+    with tarfile.open(out / "run_a1.tgz") as tar:
+        assert "2026-01-01/model_result.pt" in tar.getnames() and "a1.log" in tar.getnames()
+    assert (keep / "a1.pt").is_file() and (keep / "m1.pt").is_file()
+    with tarfile.open(out / "evals.tgz") as tar:
+        names = set(tar.getnames())
+    assert {"./a1_rugged/results.json", "./a1_stepped/results.json"} <= names
+    assert "./extra/m1_at_rise8/results.json" in names and "./extra/m1_at_payload1/results.json" in names
+    assert not any(n.startswith("./m1_") for n in names)  # points only for the points pipeline
