@@ -5,8 +5,8 @@ policy into one report.
         --policy complex-margin=seed1,seed2,seed3 --out results/capability/margin
 
 ``FOLDER`` holds one evaluation per job, named ``<prefix>_<curve>`` (``evaluate --sweep CURVE --no-nominal``, the
-curves of ``hexnewton.analysis.rollout.DEFAULT_SWEEPS``) and ``<prefix>_at_<point>`` (the named points, ``$POINT_ROUNDS`` rounds),
-each a folder with ``results.json`` once finished and a console log ``<job>.log`` beside it. A curve whose job was cut
+curves of ``hexnewton.analysis.rollout.DEFAULT_SWEEPS``) and ``<prefix>_at_<point>`` (the named points,
+``$POINT_ROUNDS`` rounds), each a folder with ``results.json`` once finished and a console log ``<job>.log`` beside it. A curve whose job was cut
 off is read from the points its log printed (whole percentages) and marked partial; a point or curve with neither is
 missing. ``--policy LABEL=PREFIX[,PREFIX...]`` groups the seeds of one recipe (median over them); the fixed CPG's curve
 comes from any job that evaluated it. ``--out`` (which must not exist) receives ``report.md``, ``results.json`` and one
@@ -124,7 +124,8 @@ def report(res: dict) -> str:
     lines = ["# Capability: curves and named points", "", "```bash", meta["command"], "```", "",
              f"Evaluations in `{meta['folder']}`; deterministic action, success at 3 m and rounds that fell (%).",
              "Curves: `evaluate --sweep CURVE --no-nominal` at 200 rounds a point; a curve marked *partial* was cut "
-             f"off and shows the points its console printed (whole percentages). Named points: {_point_rounds(res)}.", "",
+             "off and shows the points its console printed (whole percentages). "
+             f"Named points: {_point_rounds(res)}.", "",
              f"## Named points (target: median of the seeds >= {100 * TARGET:.0f} % at 3 m)", "",
              "| point | policy | per seed: success / falls | median success | median falls | target |",
              "|---|---|---|---:|---:|---|"]  # fmt: skip
