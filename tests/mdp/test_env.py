@@ -77,7 +77,8 @@ def test_ppo_stores_the_observation_each_action_was_taken_from():
     kls, kl = [], runner.alg.actor.get_kl_divergence
     runner.alg.actor.get_kl_divergence = lambda old, new: kls.append(float(kl(old, new).mean())) or kl(old, new)
     runner.learn(1)
-    assert len(kls) == 8 and kls[0] < 1e-10, kls[:3]
+    # float32 rounding of the batched recomputation leaves ~1e-9 (BLAS paths vary with the batch and the threads)
+    assert len(kls) == 8 and kls[0] < 1e-6, kls[:3]
 
 
 def test_ppo_update_options_reach_rsl_rl():
