@@ -43,9 +43,15 @@ def check_writable(path: str, ext: str) -> None:
         raise ValueError(f"cannot write {path}: {parent} is not a writable directory")
 
 
-def check_new_dir(path: str) -> None:
+def check_new_dir(path: str, files: tuple[str, ...] = ()) -> None:
     """Fail before any simulation unless ``path`` is a folder that does not exist yet and can be made with its
-    missing parents (``os.makedirs``; nothing is overwritten)."""
+    missing parents (``os.makedirs``), or, given ``files``, an existing folder that holds none of them (nothing is
+    overwritten)."""
+    if files and os.path.isdir(path):
+        for name in files:
+            if os.path.exists(os.path.join(path, name)):
+                raise ValueError(f"{path}/{name} exists: choose a new --out (nothing is overwritten)")
+        return
     if os.path.exists(path):
         raise ValueError(f"{path} exists: choose a new --out (nothing is overwritten)")
     parent = os.path.dirname(os.path.abspath(path))

@@ -36,12 +36,7 @@ def main(argv: list[str] | None = None) -> int:
     for folder in args.lease:
         if not os.path.isdir(folder):
             raise ValueError(f"{folder} is not a folder")
-    if os.path.isdir(args.out):
-        for name in ("report.md", "results.json"):
-            if os.path.exists(os.path.join(args.out, name)):
-                raise ValueError(f"{args.out}/{name} exists: choose a new --out (nothing is overwritten)")
-    else:
-        check_new_dir(args.out)
+    check_new_dir(args.out, files=("report.md", "results.json"))
     commands = []
     for folder in args.lease:
         path = os.path.join(folder, "commands.txt")

@@ -16,21 +16,22 @@ export OUT RUNS KEEP
 mkdir -p "$OUT" "$RUNS" "$KEEP" "$EVALS"
 here=$(cd "$(dirname "$0")" && pwd)
 deadline=$((SECONDS + ${LIMIT:-560}))
+left() { local s=$((deadline - SECONDS)); echo $((s > 1 ? s : 1)); }   # seconds to the deadline (timeout 0: none)
 [ $# -gt 0 ] || { echo "usage: candidates.sh NAME@GPU[:points]:TRAIN_ARGS ..." >&2; exit 2; }
 pipeline() {
   local name=$1 gpu=$2 what=$3; shift 3
-  CUDA_VISIBLE_DEVICES=$gpu timeout -k 10 $((deadline - SECONDS)) python train.py "$@" --log_dir "$RUNS" \
+  CUDA_VISIBLE_DEVICES=$gpu timeout -k 10 $(left) python train.py "$@" --log_dir "$RUNS" \
     --experiment "$name" > "$RUNS/$name.log" 2>&1
   echo "$name: train exit $? at $SECONDS s"
   bash "$here/gpu.sh" pack "$name"
   [ -f "$KEEP/$name.pt" ] || return 0
   if [ "$what" = points ]; then
     CUDA_VISIBLE_DEVICES=$gpu RUNS=$EVALS FOREGROUND=1 MAX_JOBS=6 POINT_ROUNDS=${POINT_ROUNDS:-500} \
-      EVAL_ARGS="--seed 3000" timeout -k 10 $((deadline - SECONDS)) bash "$here/capability.sh" points "$name" \
+      EVAL_ARGS="--seed 3000" timeout -k 10 $(left) bash "$here/capability.sh" points "$name" \
       "$KEEP/$name.pt"
   else
     for t in ${VAL_TERRAINS:-complex rugged stepped}; do
-      ( CUDA_VISIBLE_DEVICES=$gpu timeout -k 10 $((deadline - SECONDS)) python -m hexnewton.apps.evaluate \
+      ( CUDA_VISIBLE_DEVICES=$gpu timeout -k 10 $(left) python -m hexnewton.apps.evaluate \
           --controllers cpg_rl --checkpoint "cpg_rl=$KEEP/$name.pt" --terrains "$t" --rounds "${VAL_ROUNDS:-1000}" \
           --seed 3000 --out "$EVALS/${name}_$t" --no-progress > "$EVALS/${name}_$t.log" 2>&1
         echo "exit $?" >> "$EVALS/${name}_$t.log" ) &
