@@ -56,8 +56,8 @@ SETTINGS = {
     # newton_frame and newton_boxes with the bundle's effort clamp (on the actuators: SimConfig.effort_clamp)
     "newton_actuator_clamp": {"sim.effort_clamp": "actuator"},
     "newton_boxes_actuator_clamp": {"terrain.collision": "boxes", "sim.effort_clamp": "actuator"},
-    # newton_frame with the controller's stuck response at mujoco_stuck_lift's settings (STUCK, filled in by
-    # newton_setting from the --stuck_* options)
+    # newton_frame with the controller's stuck response at mujoco_stuck_lift's settings (STUCK; main sets them from
+    # the --stuck_* options)
     "newton_stuck_lift": {},
 }
 #: C MuJoCo settings: the bundle's closed loop on its MJCF, with one model option moved to Newton's training physics
@@ -149,8 +149,8 @@ def newton_setting(name: str, robots: int, steps: int, seed: int) -> dict:
 
     t0 = time.perf_counter()
     ckpt = read_controller_checkpoint("cpg_rl", POLICY)
-    overrides = {f"cpg.stuck_{k}": v for k, v in STUCK.items()} if name == "newton_stuck_lift" else SETTINGS[name]
-    cfg = course(TERRAIN, trained_config(ckpt), dict(overrides), robots, "cpu", seed, seed=seed + START_SEED_OFFSET)
+    cfg = course(TERRAIN, trained_config(ckpt), dict(SETTINGS[name]), robots, "cpu", seed,
+                 seed=seed + START_SEED_OFFSET)
     env = make_env(cfg, CONTROLLERS["cpg_rl"])
     policy = controller_policy(env, "cpg_rl", POLICY, ckpt, False, False, None)
     m = env.world.model
@@ -339,6 +339,7 @@ def main() -> None:
     a = p.parse_args()
     STALL.update(lag=a.stall_lag, lift=a.stall_lift)
     STUCK.update(lift=a.stuck_lift, hold=a.stuck_hold, window=a.stuck_window, progress=a.stuck_progress)
+    SETTINGS["newton_stuck_lift"] = {f"cpg.stuck_{k}": v for k, v in STUCK.items()}
     POLICY, BUNDLE = a.policy, a.bundle  # read by newton_setting and mujoco_setting
     if a.combine:
         missing = [f for f in a.combine if not os.path.isfile(f)]
