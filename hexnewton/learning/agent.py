@@ -18,15 +18,39 @@ Only this module and :mod:`hexnewton.tasks` hold learner settings; ``train.py --
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass, field, replace
+from dataclasses import asdict, dataclass, field, fields, replace
 
-from hexnewton.config import TERRAINS
+from hexnewton.config import TERRAINS, RewardConfig
 
 DISTRIBUTIONS = ("beta", "gaussian")
 #: torch.compile modes rsl-rl accepts (it rejects the CUDA-graph ones)
 COMPILE_MODES = ("default", "max-autotune-no-cudagraphs")
 #: what ``AgentConfig.scale_with_ranks`` may scale with the number of torchrun ranks
 RANK_SCALINGS = ("mini_batches", "iterations", "learning_rate")
+#: PPO settings a curriculum stage may change besides the reflex gain and the reward weights (``AgentConfig.stages``):
+#: train.py's runner sets them on rsl-rl's PPO as the stage begins (the adaptive schedule goes on from a stage's
+#: learning rate); the skrl baselines take none
+STAGE_ALGORITHM_FIELDS = ("learning_rate", "desired_kl", "entropy_coef")
+
+
+def stage_at(stages: tuple, iteration: int) -> tuple[int, dict]:
+    """(index, merged changes) of the curriculum stage begun by PPO iteration ``iteration`` (the changes of it and
+    of every stage before it); (-1, {}) before the first."""
+    begun = [k for k, (start, _) in enumerate(stages) if iteration >= start]
+    if not begun:
+        return -1, {}
+    changes: dict = {}
+    for _, c in stages[: begun[-1] + 1]:
+        changes.update(c)
+    return begun[-1], changes
+
+
+def split_stage_changes(changes: dict) -> tuple[float | None, dict, dict]:
+    """A stage's changes as (its ``posture_reflex`` or None, its RewardConfig fields, its PPO fields)."""
+    rest = dict(changes)
+    reflex = rest.pop("posture_reflex", None)
+    algorithm = {k: rest.pop(k) for k in STAGE_ALGORITHM_FIELDS if k in rest}
+    return reflex, rest, algorithm
 
 
 @dataclass
@@ -89,8 +113,9 @@ class AgentConfig:
     target_success: float | None = None
     #: torch.compile the actor and critic (rsl-rl's ``torch_compile_mode``); none: off
     torch_compile: str | None = field(default=None, metadata={"choices": COMPILE_MODES})
-    #: curriculum of the reflex gain and the reward weights: ((first iteration, {field: value}), ...), applied from
-    #: that iteration on; fields are ``posture_reflex`` (CPGConfig) and RewardConfig's
+    #: curriculum of the reflex gain, the reward weights and PPO settings: ((first iteration, {field: value}), ...),
+    #: applied from that iteration on; fields are ``posture_reflex`` (CPGConfig), RewardConfig's and
+    #: :data:`STAGE_ALGORITHM_FIELDS` (e.g. ``{'desired_kl': 0.005}``: smaller steps from that stage on)
     stages: tuple = ()
     #: deterministic validation at the end (``hexnewton.analysis.validation``): the run's result is the candidate
     #: checkpoint of the last stage (the last, the best by training success and the newest saved ones, at most
@@ -136,9 +161,21 @@ class AgentConfig:
                              "(torch has no bfloat16 Dirichlet); use it with --agent.distribution.name gaussian")
         if a.num_learning_epochs <= 0 or a.num_mini_batches <= 0 or (a.mini_batch_size or 1) <= 0:
             raise ValueError("agent.algorithm epochs, mini-batches and mini-batch size must be positive")
+        reward_fields = {f.name for f in fields(RewardConfig)}
         for start, changes in self.stages:
             if not isinstance(start, int) or not isinstance(changes, dict):
                 raise ValueError("agent.stages: expected ((first_iteration, {field: value}), ...)")
+            unknown = [k for k in changes if k != "posture_reflex" and k not in reward_fields
+                       and k not in STAGE_ALGORITHM_FIELDS]  # fmt: skip
+            if unknown:
+                raise ValueError(f"agent.stages: {unknown[0]} is none of posture_reflex, a reward weight "
+                                 f"(RewardConfig) or {', '.join(STAGE_ALGORITHM_FIELDS)}")  # fmt: skip
+            algorithm = split_stage_changes(changes)[2]
+            if any(not isinstance(v, (int, float)) or not v >= 0 for v in algorithm.values()):
+                raise ValueError(f"agent.stages: {', '.join(algorithm)} must be numbers >= 0")
+            if "desired_kl" in algorithm and a.schedule != "adaptive":
+                raise ValueError("agent.stages: desired_kl needs the adaptive schedule (--agent.algorithm.schedule "
+                                 "adaptive)")  # fmt: skip
         unknown = [t for t in self.validation_terrains if t not in TERRAINS]
         if unknown:
             raise ValueError(f"agent.validation_terrains: {unknown[0]} is not one of {', '.join(TERRAINS)}")
@@ -165,6 +202,8 @@ class AgentConfig:
                 replace(a, num_mini_batches=a.num_mini_batches * k)  # fmt: skip
         if "learning_rate" in todo:
             a = replace(a, learning_rate=a.learning_rate * k)
+            out = replace(out, stages=tuple((start, {n: v * k if n == "learning_rate" else v for n, v in c.items()})
+                                            for start, c in out.stages))  # fmt: skip
         if "iterations" in todo:
             def div(n: int) -> int:
                 return max(1, -(-n // k))

@@ -19,6 +19,7 @@ import numpy as np
 from rsl_rl.runners import OnPolicyRunner
 
 from hexnewton import startup
+from hexnewton.learning.agent import split_stage_changes, stage_at
 from hexnewton.learning.checkpoint import load_checkpoint, load_into_runner
 from hexnewton.learning.policy import export_onnx
 from hexnewton.learning.stopping import TrainingStopped, catch_stop_signals
@@ -323,24 +324,27 @@ class HexRunner(RankedRunner):
         self.enter_stage(self.current_learning_iteration + 1)
 
     def enter_stage(self, iteration: int) -> None:
-        """The curriculum: from its first iteration on, a stage's reflex gain and reward weights (with those of
-        the stages before it). The best checkpoint is chosen within the last stage begun."""
+        """The curriculum: from its first iteration on, a stage's reflex gain, reward weights and PPO settings (with
+        those of the stages before it). The best checkpoint is chosen within the last stage begun."""
         stages = self.agent.stages
-        begun = [k for k, (start, _) in enumerate(stages) if iteration >= start]
-        if not begun or begun[-1] == self._stage:
+        index, changes = stage_at(stages, iteration)
+        if index < 0 or index == self._stage:
             return
-        self._stage = begun[-1]
-        changes = {}
-        for _, c in stages[: self._stage + 1]:
-            changes.update(c)
+        self._stage = index
         env = self.env
-        reflex = changes.pop("posture_reflex", env.cfg.cpg.posture_reflex)
-        env.set_shaping(dataclasses.replace(env.cfg.reward, **changes), reflex)
+        reflex, reward, algorithm = split_stage_changes(changes)
+        reflex = env.cfg.cpg.posture_reflex if reflex is None else reflex
+        env.set_shaping(dataclasses.replace(env.cfg.reward, **reward), reflex)
+        for name, value in algorithm.items():
+            setattr(self.alg, name, value)
+            if name == "learning_rate":
+                for group in self.alg.optimizer.param_groups:
+                    group["lr"] = value
         self.meta["config"] = dataclasses.asdict(env.cfg)  # checkpoints carry the gain they run with
         self.best.reset()
         if self.rank.is_main:
-            print(f"iteration {iteration}: curriculum stage {self._stage + 2} of {len(stages) + 1}: posture_reflex "
-                  f"{reflex:g}, " + ", ".join(f"{k} {v:g}" for k, v in changes.items()), flush=True)
+            print(f"iteration {iteration}: curriculum stage {index + 2} of {len(stages) + 1}: posture_reflex "
+                  f"{reflex:g}, " + ", ".join(f"{k} {v:g}" for k, v in {**reward, **algorithm}.items()), flush=True)
 
     # -------------------------------------------------------------- the run
     def train(self, iterations: int) -> str:

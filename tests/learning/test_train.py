@@ -225,14 +225,22 @@ def test_curriculum_stages_change_reflex_and_weights_in_one_run(tmp_path, capsys
 
     from hexnewton.apps import train
 
-    stages = "((1, {'posture_reflex': 2.0, 'w_tilt': 15.0}), (2, {'w_tilt': 40.0, 'w_ang_vel': 0.3}))"
+    stages = ("((1, {'posture_reflex': 2.0, 'w_tilt': 15.0}), (2, {'w_tilt': 40.0, 'w_ang_vel': 0.3, "
+              "'learning_rate': 2.5e-4, 'entropy_coef': 0.001}))")
     assert train.main(["--task", "complex", "--num_envs", "8", "--agent.num_steps_per_env", "4", "--max_iterations",
                        "3", "--device", "cpu", "--log_dir", str(tmp_path), "--agent.stages", stages,
                        "--agent.save_interval", "1", "--agent.validation_rounds", "2", "--agent.validation_steps",
-                       "8"]) == 0  # fmt: skip
+                       "8", "--agent.algorithm.schedule", "fixed"]) == 0  # fmt: skip
     out = capsys.readouterr().out
     assert "iteration 1: curriculum stage 2 of 3: posture_reflex 2, w_tilt 15" in out
-    assert "iteration 2: curriculum stage 3 of 3: posture_reflex 2, w_tilt 40, w_ang_vel 0.3" in out
+    assert ("iteration 2: curriculum stage 3 of 3: posture_reflex 2, w_tilt 40, w_ang_vel 0.3, learning_rate "
+            "0.00025, entropy_coef 0.001") in out
+    # the stage's learning rate is PPO's from its first iteration on (rsl-rl logs the rate each iteration ran with)
+    from tensorboard.backend.event_processing.event_accumulator import EventAccumulator
+
+    (events,) = [str(p.parent) for p in tmp_path.glob("*/*/events.out.tfevents.*")]
+    rates = {e.step: e.value for e in EventAccumulator(events).Reload().Scalars("Loss/learning_rate")}
+    assert rates[0] == rates[1] == pytest.approx(1e-3) and rates[2] == pytest.approx(2.5e-4)
     # deterministic validation among the last stage's checkpoints only (iteration 2 on), on the complex course
     assert "deterministic validation, 2 rounds of the complex course (seed 3000) per candidate" in out
     assert "model_2.pt (last, iteration 2)" in out and "model_1.pt" not in out and "model_0.pt" not in out

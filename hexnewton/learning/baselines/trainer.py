@@ -10,6 +10,7 @@ import signal
 import time
 from dataclasses import dataclass
 
+from hexnewton.learning.agent import split_stage_changes, stage_at
 from hexnewton.learning.baselines.checkpoint import save_checkpoint
 from hexnewton.learning.baselines.config import BaselineConfig
 from hexnewton.learning.baselines.env import wrap_env
@@ -53,13 +54,7 @@ class EpisodeReturns:
 def stage_changes(stages: tuple, env_step: int, steps_per_iteration: int) -> tuple[int, dict]:
     """(index, merged changes) of the task's curriculum stage that has begun by ``env_step`` steps of every env
     (a stage beginning at PPO iteration ``i`` begins at ``i x steps_per_iteration``); (-1, {}) before the first."""
-    begun = [k for k, (start, _) in enumerate(stages) if env_step >= start * steps_per_iteration]
-    if not begun:
-        return -1, {}
-    changes: dict = {}
-    for _, c in stages[: begun[-1] + 1]:
-        changes.update(c)
-    return begun[-1], changes
+    return stage_at(stages, env_step // steps_per_iteration)
 
 
 class BaselineTrainer:
@@ -71,6 +66,10 @@ class BaselineTrainer:
                  steps_per_iteration: int = 24):  # fmt: skip
         from skrl.trainers.torch import SequentialTrainerCfg
 
+        ppo = [k for _, c in stages for k in split_stage_changes(c)[2]]
+        if ppo:
+            raise ValueError(f"stages: {ppo[0]} is one of train.py's PPO settings; the baselines' stages change the "
+                             "reflex gain and reward weights only")  # fmt: skip
         self.hex_env, self.env, self.agent, self.algo, self.cfg = env, wrap_env(env), agent, algo, cfg
         self.meta, self.run_dir = meta, run_dir
         self.stages, self.steps_per_iteration, self._stage = stages, steps_per_iteration, -1
@@ -95,11 +94,12 @@ class BaselineTrainer:
             return
         self._stage = index
         env = self.hex_env
-        reflex = changes.pop("posture_reflex", env.cfg.cpg.posture_reflex)
-        env.set_shaping(dataclasses.replace(env.cfg.reward, **changes), reflex)
+        reflex, reward, _ = split_stage_changes(changes)
+        reflex = env.cfg.cpg.posture_reflex if reflex is None else reflex
+        env.set_shaping(dataclasses.replace(env.cfg.reward, **reward), reflex)
         self.meta["config"] = dataclasses.asdict(env.cfg)
         print(f"step {self.timestep}: curriculum stage {index + 2} of {len(self.stages) + 1}: posture_reflex "
-              f"{reflex:g}, " + ", ".join(f"{k} {v:g}" for k, v in changes.items()), flush=True)  # fmt: skip
+              f"{reflex:g}, " + ", ".join(f"{k} {v:g}" for k, v in reward.items()), flush=True)  # fmt: skip
 
     def train(self, budget: Budget) -> str:
         """Train until the budget is spent; save and return why it ended."""
