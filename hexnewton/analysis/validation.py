@@ -78,7 +78,9 @@ def validate(cands: list[Candidate], controller: str, terrain, rounds: int, devi
     """Each candidate's validation: ``rounds`` robots each on the course of ``terrain`` (a name, or the task's
     ``TerrainConfig``: its rises and blocks without the curriculum lanes) with the goal ``goal_distance`` ahead (None:
     the default), with the physics and CPG of the newest candidate's checkpoint (one stage: one configuration).
-    Returns per candidate the shares of rounds that reached the goal, walked 3 m, fell and left the course."""
+    Returns per candidate the shares of rounds that reached the goal, walked 3 m, fell and left the course, and its
+    body's pitch and roll variance over its rounds [deg²] (the stability the last curriculum stage trains: the choice
+    does not weigh it, the console and ``timing.json`` show it)."""
     from hexnewton.analysis.rollout import CONTROLLERS, START_SEED_OFFSET, read_controller_checkpoint, stepped
     from hexnewton.learning.checkpoint import trained_config
     from hexnewton.mdp.env import make_env
@@ -101,12 +103,28 @@ def validate(cands: list[Candidate], controller: str, terrain, rounds: int, devi
         if finished.all():
             break
     env.world.check_contacts()
-    status = np.stack(status)
-    m = round_metrics(np.stack(pos), np.stack(rpy), status != 0, status, cfg.task.control_dt, (3.0,))
+    status, rpy = np.stack(status), np.stack(rpy)
+    m = round_metrics(np.stack(pos), rpy, status != 0, status, cfg.task.control_dt, (3.0,))
     end, walked = m["end"], m["reached"][0]
+    pitch, roll = candidate_variances(rpy, m["in_episode"], k)
     return [{"goal": float((end[i::k] == SUCCESS).mean()), "walk_3m": float(walked[i::k].mean()),
              "fell": float((end[i::k] == FELL).mean()), "off_course": float((end[i::k] == OFF_COURSE).mean()),
-             "rounds": int(end[i::k].size)} for i in range(k)]  # fmt: skip
+             "pitch_var": pitch[i], "roll_var": roll[i], "rounds": int(end[i::k].size)} for i in range(k)]  # fmt: skip
+
+
+def candidate_variances(rpy: np.ndarray, in_episode: np.ndarray, k: int) -> tuple[list[float], list[float]]:
+    """Each of ``k`` interleaved candidates' (robots i, i + k, ...) body pitch and roll variance [deg²] over the
+    steps of its rounds' first episodes (``rpy`` (T, N, 3) roll, pitch, yaw [rad]; ``in_episode`` (T, N));
+    non-finite angles are left out, nan for none."""
+    out = []
+    for axis in (1, 0):
+        per = []
+        for i in range(k):
+            a = np.degrees(np.asarray(rpy[:, i::k, axis], np.float64))[in_episode[:, i::k]]
+            a = a[np.isfinite(a)]
+            per.append(float(a.var()) if a.size else float("nan"))
+        out.append(per)
+    return out[0], out[1]
 
 
 def validate_courses(cands: list[Candidate], controller: str, terrains: list, rounds: int, device: str | None,
@@ -117,7 +135,7 @@ def validate_courses(cands: list[Candidate], controller: str, terrains: list, ro
     for terrain in terrains:
         name = terrain if isinstance(terrain, str) else terrain.name
         per[name] = validate(cands, controller, terrain, rounds, device, max_steps, goal_distance)
-    keys = ("goal", "walk_3m", "fell", "off_course")
+    keys = ("goal", "walk_3m", "fell", "off_course", "pitch_var", "roll_var")
     mean = [dict({k: float(np.mean([r[i][k] for r in per.values()])) for k in keys},
                  rounds=sum(r[i]["rounds"] for r in per.values())) for i in range(len(cands))]  # fmt: skip
     return mean, per
@@ -138,4 +156,5 @@ def report_lines(cands: list[Candidate], results: list[dict], chosen: int) -> li
     """One console line per candidate, the chosen one marked."""
     return [f"  {'->' if i == chosen else '  '} {os.path.basename(c.path)} ({c.why}, iteration {c.iteration}): goal "
             f"{100 * r['goal']:.1f} %, 3 m {100 * r['walk_3m']:.1f} %, fell {100 * r['fell']:.1f} %, off course "
-            f"{100 * r['off_course']:.1f} %" for i, (c, r) in enumerate(zip(cands, results))]  # fmt: skip
+            f"{100 * r['off_course']:.1f} %, pitch / roll var {r['pitch_var']:.1f} / {r['roll_var']:.1f} deg²"
+            for i, (c, r) in enumerate(zip(cands, results))]  # fmt: skip

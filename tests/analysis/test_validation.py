@@ -1,7 +1,9 @@
 """Deterministic validation's candidates and choice (hexnewton.analysis.validation); the validation itself runs in
 train.py's tests (tests/learning/test_train.py)."""
 
-from hexnewton.analysis.validation import Candidate, candidates, choose, report_lines
+import numpy as np
+
+from hexnewton.analysis.validation import Candidate, candidate_variances, candidates, choose, report_lines
 
 
 def test_candidates_are_the_last_stage_newest_first_and_the_kept_ones(tmp_path):
@@ -21,14 +23,34 @@ def test_candidates_are_the_last_stage_newest_first_and_the_kept_ones(tmp_path):
 
 def test_choice_goal_first_then_3m_then_falls_then_the_later():
     cands = [Candidate(it, f"model_{it}.pt", "saved") for it in (100, 150, 200)]
-    r = [{"goal": 1.0, "walk_3m": 1.0, "fell": 0.0, "off_course": 0.0},
-         {"goal": 0.0, "walk_3m": 1.0, "fell": 0.0, "off_course": 1.0},  # walks 3 m, passes beside the goal
-         {"goal": 1.0, "walk_3m": 1.0, "fell": 0.0, "off_course": 0.0}]  # fmt: skip
+    var = {"pitch_var": 20.0, "roll_var": 8.0}
+    r = [{"goal": 1.0, "walk_3m": 1.0, "fell": 0.0, "off_course": 0.0, **var},
+         {"goal": 0.0, "walk_3m": 1.0, "fell": 0.0, "off_course": 1.0, **var},  # walks 3 m, passes beside the goal
+         {"goal": 1.0, "walk_3m": 1.0, "fell": 0.0, "off_course": 0.0, **var}]  # fmt: skip
     assert choose(cands, r) == 2  # a tie goes to the later checkpoint
     r[2] = dict(r[2], fell=0.1)
     assert choose(cands, r) == 0
+    assert choose(cands, [dict(x, pitch_var=99.0) if i == 0 else x for i, x in enumerate(r)]) == 0  # not weighed
     lines = report_lines(cands, r, 0)
     assert lines[0].startswith("  -> model_100.pt (saved, iteration 100): goal 100.0 %") and "off course 100.0 %" in lines[1]
+    assert lines[0].endswith("off course 0.0 %, pitch / roll var 20.0 / 8.0 deg²")
+
+
+def test_each_candidates_variance_is_over_its_own_rounds_first_episodes():
+    """Random angles, 3 candidates interleaved over 12 robots, episodes of random lengths, a few non-finite angles:
+    each candidate's variance equals the one over its own robots' steps in their first episode (float64 reference)."""
+    rng = np.random.default_rng(0)
+    t, n, k = 40, 12, 3
+    rpy = rng.normal(0.0, 0.2, (t, n, 3))
+    rpy[5, 4, 1] = np.nan
+    in_episode = np.arange(t)[:, None] < rng.integers(1, t + 1, n)[None, :]
+    pitch, roll = candidate_variances(rpy.astype(np.float32), in_episode, k)
+    for i in range(k):
+        for axis, got in ((1, pitch[i]), (0, roll[i])):
+            ref = [np.degrees(rpy[s, e, axis]) for e in range(i, n, k) for s in range(t)
+                   if in_episode[s, e] and np.isfinite(rpy[s, e, axis])]  # fmt: skip
+            assert np.isclose(got, np.var(ref), rtol=1e-5)
+    assert np.isnan(candidate_variances(rpy, np.zeros((t, n), bool), k)[0][0])
 
 
 def test_validation_on_several_courses_averages_each_candidates_shares(monkeypatch):
@@ -40,10 +62,12 @@ def test_validation_on_several_courses_averages_each_candidates_shares(monkeypat
     from hexnewton.apps.train import configs, parser
     from hexnewton.tasks import task
 
-    per = {"rugged": [{"goal": 0.9, "walk_3m": 1.0, "fell": 0.1, "off_course": 0.0, "rounds": 8},
-                      {"goal": 1.0, "walk_3m": 1.0, "fell": 0.0, "off_course": 0.0, "rounds": 8}],
-           "complex": [{"goal": 1.0, "walk_3m": 1.0, "fell": 0.0, "off_course": 0.0, "rounds": 8},
-                       {"goal": 0.8, "walk_3m": 0.9, "fell": 0.0, "off_course": 0.2, "rounds": 8}]}  # fmt: skip
+    var = {"pitch_var": 20.0, "roll_var": 8.0}
+    per = {"rugged": [{"goal": 0.9, "walk_3m": 1.0, "fell": 0.1, "off_course": 0.0, **var, "rounds": 8},
+                      {"goal": 1.0, "walk_3m": 1.0, "fell": 0.0, "off_course": 0.0, **var, "rounds": 8}],
+           "complex": [{"goal": 1.0, "walk_3m": 1.0, "fell": 0.0, "off_course": 0.0, "pitch_var": 30.0,
+                        "roll_var": 10.0, "rounds": 8},
+                       {"goal": 0.8, "walk_3m": 0.9, "fell": 0.0, "off_course": 0.2, **var, "rounds": 8}]}  # fmt: skip
     seen = []
 
     def fake(cands, controller, terrain, rounds, device, max_steps, goal_distance=None):
@@ -54,7 +78,8 @@ def test_validation_on_several_courses_averages_each_candidates_shares(monkeypat
     cands = [Candidate(it, f"model_{it}.pt", "saved") for it in (250, 299)]
     mean, got = validation.validate_courses(cands, "cpg_rl", ["rugged", "complex"], 8, "cpu", 30)
     assert seen == ["rugged", "complex"] and got == per
-    assert mean[0] == {"goal": 0.95, "walk_3m": 1.0, "fell": 0.05, "off_course": 0.0, "rounds": 16}
+    assert mean[0] == {"goal": 0.95, "walk_3m": 1.0, "fell": 0.05, "off_course": 0.0, "pitch_var": 25.0,
+                       "roll_var": 9.0, "rounds": 16}
     assert mean[1]["goal"] == 0.9 and choose(cands, mean) == 0
     assert validation.course_names(["complex"]) == "the complex course"
     assert validation.course_names(["rugged", "stepped", "complex"]) == "the rugged, stepped and complex courses"
