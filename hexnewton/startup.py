@@ -54,6 +54,20 @@ def note(name: str, value) -> None:
     _notes[name] = value
 
 
+def timed_imports(*modules: str) -> dict[str, float]:
+    """Import ``modules`` one after another, each with whatever it needs that is not loaded yet, and keep their
+    seconds as the note ``imports_s`` (where "python and imports" goes; a module loaded before costs 0)."""
+    import importlib
+
+    seconds = {}
+    for name in modules:
+        t0 = time.time()
+        importlib.import_module(name)
+        seconds[name] = round(time.time() - t0, 2)
+    note("imports_s", seconds)
+    return seconds
+
+
 def notes() -> dict[str, object]:
     """The details kept with :func:`note`."""
     return dict(_notes)
@@ -76,5 +90,7 @@ def summary() -> str:
     for name, value in _notes.items():
         if isinstance(value, list):  # the count here, the items in timing.json
             line += f"; {name.replace('_', ' ')}: {len(value)}"
+        elif name == "imports_s":
+            line += "; imports: " + ", ".join(f"{k} {v:.1f}" for k, v in value.items())
     return line
 

@@ -346,8 +346,11 @@ def main(argv: list[str] | None = None) -> int:
         print(task_table())
         return 0
     env_cfg, agent = configs(args, base, ckpt)
-    check_outputs(args)
+    from hexnewton import startup
 
+    # the heavy imports one by one, so that the start-up line says where "python and imports" goes
+    startup.timed_imports("torch", "warp", "newton", "rsl_rl", "hexnewton.mdp.env", "hexnewton.learning.runner")
+    check_outputs(args)
     from hexnewton.mdp.env import make_env
 
     rank, cfg = rank_config(args, env_cfg)

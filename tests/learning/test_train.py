@@ -275,6 +275,10 @@ def test_training_reports_its_start_up_and_writes_timing(trained):
     loads = timing["startup_notes"]["first_step_loaded_modules"]
     assert isinstance(loads, list) and all(isinstance(n, str) for n in loads)
     assert f"first step loaded modules: {len(loads)}" in out
+    # the heavy imports one by one (0 for a module an earlier test loaded in this process)
+    imports = timing["startup_notes"]["imports_s"]
+    assert list(imports)[:3] == ["torch", "warp", "newton"] and all(v >= 0 for v in imports.values())
+    assert "; imports: torch " in line
     assert os.path.isfile(timing["result"])
     # the result chosen on deterministic validation (the fixture: 4 rounds of 30 steps per candidate), kept as
     # model_result.pt, which play.py and evaluate take for the run's result
