@@ -127,18 +127,51 @@ def candidate_variances(rpy: np.ndarray, in_episode: np.ndarray, k: int) -> tupl
     return out[0], out[1]
 
 
-def validate_courses(cands: list[Candidate], controller: str, terrains: list, rounds: int, device: str | None,
-                     max_steps: int, goal_distance: float | None = None) -> tuple[list[dict], dict[str, list[dict]]]:
-    """:func:`validate` on each of ``terrains`` (names or ``TerrainConfig`` objects) one after another. Returns per
-    candidate its shares averaged over the courses, and each course's own results by its name."""
-    per = {}
-    for terrain in terrains:
-        name = terrain if isinstance(terrain, str) else terrain.name
-        per[name] = validate(cands, controller, terrain, rounds, device, max_steps, goal_distance)
+def validation_share(candidates: int, courses: int, rank: int = 0, world_size: int = 1) -> dict[int, list[int]]:
+    """Rank ``rank``'s share of a validation of ``candidates`` candidates on ``courses`` courses among ``world_size``
+    torchrun ranks, as {course index: [candidate indices]}: whole courses dealt over the ranks while there are no more
+    ranks than courses, else each course's candidates dealt over its ranks (ranks c, c + courses, ...), so that no
+    rank steps more envs than it must (an env's step costs about the same for 256 robots as for 1024)."""
+    if world_size <= courses:
+        return {c: list(range(candidates)) for c in range(courses) if c % world_size == rank}
+    course = rank % courses
+    ranks = list(range(course, world_size, courses))
+    mine = list(range(candidates))[ranks.index(rank)::len(ranks)]
+    return {course: mine} if mine else {}
+
+
+def validate_share(cands: list[Candidate], controller: str, terrains: list, rounds: int, device: str | None,
+                   max_steps: int, goal_distance: float | None = None, rank: int = 0,
+                   world_size: int = 1) -> dict[tuple[int, int], dict]:  # fmt: skip
+    """:func:`validate` of this rank's :func:`validation_share`, course by course: {(course index, candidate index):
+    result}. Each candidate walks ``rounds`` rounds of the validation seeds; a share of the candidates takes its own
+    env of the same seeds (the rounds dealt differently among the candidates, as among those of one env)."""
+    out = {}
+    for course, idx in validation_share(len(cands), len(terrains), rank, world_size).items():
+        results = validate([cands[i] for i in idx], controller, terrains[course], rounds, device, max_steps,
+                           goal_distance)  # fmt: skip
+        out.update({(course, i): r for i, r in zip(idx, results)})
+    return out
+
+
+def combine_courses(cands: list[Candidate], terrains: list,
+                    results: dict[tuple[int, int], dict]) -> tuple[list[dict], dict[str, list[dict]]]:  # fmt: skip
+    """Each candidate's shares averaged over the courses, and each course's own results by its name, from the
+    results of every (course, candidate) pair (:func:`validate_share` of every rank)."""
+    per = {(t if isinstance(t, str) else t.name): [results[(c, i)] for i in range(len(cands))]
+           for c, t in enumerate(terrains)}  # fmt: skip
     keys = ("goal", "walk_3m", "fell", "off_course", "pitch_var", "roll_var")
     mean = [dict({k: float(np.mean([r[i][k] for r in per.values()])) for k in keys},
                  rounds=sum(r[i]["rounds"] for r in per.values())) for i in range(len(cands))]  # fmt: skip
     return mean, per
+
+
+def validate_courses(cands: list[Candidate], controller: str, terrains: list, rounds: int, device: str | None,
+                     max_steps: int, goal_distance: float | None = None) -> tuple[list[dict], dict[str, list[dict]]]:
+    """:func:`validate` on each of ``terrains`` (names or ``TerrainConfig`` objects) one after another. Returns per
+    candidate its shares averaged over the courses, and each course's own results by its name."""
+    return combine_courses(cands, terrains, validate_share(cands, controller, terrains, rounds, device, max_steps,
+                                                           goal_distance))  # fmt: skip
 
 
 def course_names(names: list[str]) -> str:

@@ -252,34 +252,57 @@ def check_ranks_agree(runner, rank) -> None:
         raise RuntimeError(f"the ranks' parameters differ by {spread:.2e}: the gradients were not shared")
 
 
-def choose_on_validation(runner, cfg, agent, run_dir: str, first_it: int) -> tuple[str, dict]:
-    """The run's result chosen on deterministic validation (:mod:`hexnewton.analysis.validation`) among the last
-    stage's candidates, loaded into the actor and kept as ``model_result.pt``; returns it and what was measured."""
-    from hexnewton.analysis.validation import (VALIDATION_SEED, Candidate, candidates, choose, course_names,
-                                               report_lines, validate_courses)
+def validate_result(runner, cfg, agent, run_dir: str | None, first_it: int, rank) -> dict | None:
+    """Deterministic validation (:mod:`hexnewton.analysis.validation`) of rank 0's candidates: the last stage's
+    checkpoints. Every rank of a torchrun job calls it and validates its share (:func:`validation_share`) on its own
+    GPU, where every rank reads rank 0's checkpoints (one host); else rank 0 validates them all. Returns on rank 0
+    the candidates, each one's results and the seconds (None on the other ranks)."""
+    from hexnewton.analysis.validation import Candidate, candidates, combine_courses, validate_share
+    from hexnewton.learning.runner import share_objects
 
-    it, best = runner.current_learning_iteration, runner.best
-    stage_start = max([start for start, _ in agent.stages if start <= it] + [first_it])
-    last = Candidate(it, os.path.join(run_dir, f"model_{it}.pt"), "last")
-    kept = Candidate(best.iteration, best.path, f"best training success {best.rate:.3f}") if best.iteration is not None \
-        else None  # fmt: skip
-    cands = candidates(run_dir, stage_start, last, kept, agent.validation_candidates)
-    controller = "joint" if runner.meta["action_mode"] == "joint" else "cpg_rl"
+    cands = None
+    if rank.is_main:
+        it, best = runner.current_learning_iteration, runner.best
+        stage_start = max([start for start, _ in agent.stages if start <= it] + [first_it])
+        last = Candidate(it, os.path.join(run_dir, f"model_{it}.pt"), "last")
+        kept = Candidate(best.iteration, best.path, f"best training success {best.rate:.3f}") \
+            if best.iteration is not None else None  # fmt: skip
+        cands = candidates(run_dir, stage_start, last, kept, agent.validation_candidates)
     t0 = time.time()
+    cands = share_objects(cands, cfg.sim.device)[0]
+    ranks = rank.world_size if all(share_objects(all(os.path.isfile(c.path) for c in cands), cfg.sim.device)) else 1
+    controller = "joint" if runner.meta["action_mode"] == "joint" else "cpg_rl"
     terrains = list(agent.validation_terrains) or [cfg.terrain]
-    results, per_course = validate_courses(cands, controller, terrains, agent.validation_rounds, cfg.sim.device,
-                                           agent.validation_steps, cfg.task.goal_distance)  # fmt: skip
+    mine = validate_share(cands, controller, terrains, agent.validation_rounds, cfg.sim.device,
+                          agent.validation_steps, cfg.task.goal_distance, rank.rank, ranks) \
+        if rank.rank < ranks else {}  # fmt: skip
+    shares = share_objects(mine, cfg.sim.device) if ranks > 1 else [mine]
+    if not rank.is_main:
+        return None
+    results, per_course = combine_courses(cands, terrains, {k: v for share in shares for k, v in share.items()})
+    return {"candidates": cands, "results": results, "courses": per_course, "ranks": ranks,
+            "seconds": time.time() - t0}
+
+
+def choose_on_validation(runner, agent, run_dir: str, validated: dict) -> tuple[str, dict]:
+    """The run's result chosen on :func:`validate_result`'s numbers, loaded into the actor and kept as
+    ``model_result.pt``; returns it and what was measured."""
+    from hexnewton.analysis.validation import VALIDATION_SEED, choose, course_names, report_lines
+
+    cands, results, per_course = validated["candidates"], validated["results"], validated["courses"]
     k = choose(cands, results)
-    seconds = time.time() - t0
+    seconds = validated["seconds"]
     how = " (shares averaged over the courses)" if len(per_course) > 1 else ""
+    shared = f" on {validated['ranks']} ranks" if validated["ranks"] > 1 else ""
+    lines = report_lines(cands, results, k)
     print(f"deterministic validation, {agent.validation_rounds} rounds of {course_names(list(per_course))} (seed "
-          f"{VALIDATION_SEED}) per candidate, {seconds:.0f} s{how}:\n" + "\n".join(report_lines(cands, results, k)))
+          f"{VALIDATION_SEED}) per candidate, {seconds:.0f} s{shared}{how}:\n" + "\n".join(lines))
     runner.load(cands[k].path, {"actor": True}, map_location=runner.device)
     result = os.path.join(run_dir, "model_result.pt")
     shutil.copyfile(cands[k].path, result)
     print(f"the result: {os.path.basename(cands[k].path)} ({cands[k].why}), kept as {result}")
     return result, {"seconds": seconds, "chosen": cands[k].path, "rounds": agent.validation_rounds,
-                    "courses": per_course,
+                    "courses": per_course, "ranks": validated["ranks"],
                     "candidates": [dict(r, path=c.path, iteration=c.iteration, why=c.why)
                                    for c, r in zip(cands, results)]}  # fmt: skip
 
@@ -291,15 +314,18 @@ def device_label(device: str) -> str:
     return device_name(device) if device.startswith("cuda") else "cpu"
 
 
-def finish(args, runner, cfg, agent, rank, run_dir: str, views, train_s: float, first_it: int) -> None:
-    """Rank 0 after training: the last episodes, the policy to ship (the best iteration's or the last) exported as
-    ONNX, ``timing.json``, and the commands that use the result."""
+def finish(args, runner, cfg, agent, rank, run_dir: str, views, train_s: float, first_it: int,
+           validated: dict | None, started: tuple[dict, dict]) -> None:  # fmt: skip
+    """Rank 0 after training: the last episodes, the policy to ship (chosen on ``validated``, the result of
+    :func:`validate_result`; without validation the best iteration's or the last) exported as ONNX, ``timing.json``
+    (``started``: the start-up's phases and notes, taken before validation builds its env), and the commands that use
+    the result."""
     from hexnewton import startup
     from hexnewton.learning.runner import training_success
 
     num_envs = cfg.sim.num_envs
     iterations = runner.current_learning_iteration + 1 - first_it  # this run's (a resumed one starts later)
-    timing = {"startup_phases_s": startup.phases(), "startup_notes": startup.notes(),
+    timing = {"startup_phases_s": started[0], "startup_notes": started[1],
               "first_iteration_s": runner.first_iteration_s,
               "train_s": train_s, "iterations": iterations,
               "env_steps": iterations * num_envs * agent.num_steps_per_env * rank.world_size,
@@ -308,8 +334,8 @@ def finish(args, runner, cfg, agent, rank, run_dir: str, views, train_s: float, 
               "wall_s_to_result": None}  # fmt: skip
     stats = runner.env.episode_stats()
     print("last episodes: " + ", ".join(f"{k} {v}" if isinstance(v, int) else f"{k} {v:.3f}" for k, v in stats.items()))
-    if agent.validation_rounds:
-        final, timing["validation"] = choose_on_validation(runner, cfg, agent, run_dir, first_it)
+    if validated is not None:
+        final, timing["validation"] = choose_on_validation(runner, agent, run_dir, validated)
     else:
         final = runner.final_policy()
         if final == runner.best.path:
@@ -380,9 +406,12 @@ def main(argv: list[str] | None = None) -> int:
     print(f"finished at iteration {runner.current_learning_iteration} after {train_s:.0f} s ({reason})")
     if rank.world_size > 1:
         check_ranks_agree(runner, rank)
+    started = startup.phases(), startup.notes()  # validation's env marks its own build
+    validated = validate_result(runner, cfg, agent, run_dir, first_it, rank) if agent.validation_rounds else None
+    if rank.world_size > 1:
         runner.leave_group()
     if rank.is_main:
-        finish(args, runner, cfg, agent, rank, run_dir, views, train_s, first_it)
+        finish(args, runner, cfg, agent, rank, run_dir, views, train_s, first_it, validated, started)
     return exit_status(reason)
 
 

@@ -177,6 +177,18 @@ def gather_floats(values: list[float], device: str) -> list[list[float]]:
     return [t.tolist() for t in out]
 
 
+def share_objects(value, device: str) -> list:
+    """Every rank's picklable ``value``, in rank order, on every rank (NCCL on the GPU, Gloo on the CPU); ``[value]``
+    without a process group. Every rank must call it."""
+    import torch.distributed as td
+
+    if not td.is_initialized():
+        return [value]
+    out = [None] * td.get_world_size()
+    td.all_gather_object(out, value)
+    return out
+
+
 def close_group() -> None:
     """Every rank at the end of a torchrun job: wait for the others, then close the process group (a process that
     exits with its Gloo group open can abort in the group's teardown)."""

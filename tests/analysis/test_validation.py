@@ -3,7 +3,8 @@ train.py's tests (tests/learning/test_train.py)."""
 
 import numpy as np
 
-from hexnewton.analysis.validation import Candidate, candidate_variances, candidates, choose, report_lines
+from hexnewton.analysis.validation import (Candidate, candidate_variances, candidates, choose, report_lines,
+                                           validation_share)
 
 
 def test_candidates_are_the_last_stage_newest_first_and_the_kept_ones(tmp_path):
@@ -95,3 +96,36 @@ def test_validation_on_several_courses_averages_each_candidates_shares(monkeypat
         AgentConfig(validation_terrains=("moon",)).check()
     with pytest.raises(ValueError, match="name each course once"):
         AgentConfig(validation_terrains=("rugged", "rugged")).check()
+
+
+def test_the_ranks_shares_cover_every_course_and_candidate_once():
+    """Under torchrun each rank validates a share (whole courses while there are no more ranks than courses, else a
+    course's candidates dealt over its ranks); together the shares hold every (course, candidate) pair once, and no
+    rank steps more envs than the pairs need."""
+    for k, courses, world in [(4, 1, 1), (4, 1, 4), (4, 1, 6), (4, 3, 2), (4, 3, 3), (4, 3, 4), (6, 3, 8), (3, 2, 5)]:
+        shares = [validation_share(k, courses, r, world) for r in range(world)]
+        pairs = sorted((c, i) for share in shares for c, idx in share.items() for i in idx)
+        assert pairs == [(c, i) for c in range(courses) for i in range(k)], (k, courses, world)
+        assert max(len(share) for share in shares) == -(-courses // world)
+    assert validation_share(4, 1, 0, 4) == {0: [0]} and validation_share(4, 1, 5, 6) == {}
+    assert validation_share(4, 3, 3, 4) == {0: [1, 3]}
+
+
+def test_shared_validation_gives_what_one_process_gives(monkeypatch):
+    """The results of every rank's share, combined, are those of one process validating everything (with a stand-in
+    validation whose result depends only on the course and the candidate)."""
+    from hexnewton.analysis import validation
+
+    def fake(cands, controller, terrain, rounds, device, max_steps, goal_distance=None):
+        return [{"goal": 0.1 * c.iteration + (terrain == "rugged"), "walk_3m": 1.0, "fell": 0.0, "off_course": 0.0,
+                 "pitch_var": 1.0, "roll_var": 2.0, "rounds": rounds} for c in cands]  # fmt: skip
+
+    monkeypatch.setattr(validation, "validate", fake)
+    cands = [Candidate(it, f"model_{it}.pt", "saved") for it in (1, 2, 3, 4)]
+    terrains = ["rugged", "stepped", "complex"]
+    one = validation.validate_courses(cands, "cpg_rl", terrains, 8, "cpu", 30)
+    for world in (2, 4, 8):
+        merged = {}
+        for r in range(world):
+            merged.update(validation.validate_share(cands, "cpg_rl", terrains, 8, "cpu", 30, None, r, world))
+        assert validation.combine_courses(cands, terrains, merged) == one

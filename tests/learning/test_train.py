@@ -148,8 +148,9 @@ def test_torchrun_ranks_devices_and_seeds():
 def test_torchrun_two_cpu_processes_train_as_one(tmp_path):
     """``torchrun --nproc_per_node=2 train.py --device cpu``: two processes (Gloo) train two iterations with their
     gradients averaged; their parameters agree at the end, and only rank 0 writes a run directory and chooses the
-    result on validation rounds, as one process does. ``--agent.scale_with_ranks iterations``: 4 iterations of one
-    process are 2 per rank; the checkpoints keep the unscaled config, timing.json the ranks and envs per rank."""
+    result on validation rounds, as one process does, from the candidates both ranks validated.
+    ``--agent.scale_with_ranks iterations``: 4 iterations of one process are 2 per rank; the checkpoints keep the
+    unscaled config, timing.json the ranks and envs per rank."""
     cmd = ["torchrun", "--standalone", "--nproc_per_node=2", "train.py", "--task", "flat", "--num_envs", "4",
            "--max_iterations", "4", "--agent.scale_with_ranks", "iterations", "--device", "cpu",
            "--agent.validation_rounds", "2", "--agent.validation_steps", "5", "--log_dir", str(tmp_path)]  # fmt: skip
@@ -161,6 +162,9 @@ def test_torchrun_two_cpu_processes_train_as_one(tmp_path):
     runs = glob.glob(str(tmp_path / "hexnewton_flat" / "*"))
     assert len(runs) == 1 and os.path.isfile(os.path.join(runs[0], "model_1.pt"))
     assert proc.stdout.count("deterministic validation, 2 rounds") == 1
+    # the candidates were validated by both ranks (each its share, on its own device), chosen on rank 0
+    assert re.search(r"deterministic validation, 2 rounds of the flat course \(seed 3000\) per candidate, \d+ s on 2 "
+                     r"ranks:", proc.stdout), proc.stdout[-2000:]  # fmt: skip
     assert os.path.isfile(os.path.join(runs[0], "model_result.pt"))
     from hexnewton.learning.checkpoint import checkpoint_meta, load_checkpoint
 
@@ -170,6 +174,7 @@ def test_torchrun_two_cpu_processes_train_as_one(tmp_path):
     assert not os.path.exists(os.path.join(runs[0], "model_2.pt"))
     timing = json.load(open(os.path.join(runs[0], "timing.json")))
     assert (timing["world_size"], timing["num_envs_per_rank"], timing["device_name"]) == (2, 4, "cpu")
+    assert timing["validation"]["ranks"] == 2 and len(timing["validation"]["candidates"]) >= 2
     assert timing["env_steps"] == 2 * 4 * 24 * 2 and timing["process_start"] <= time.time()
 
 
