@@ -280,7 +280,7 @@ def test_training_reports_its_start_up_and_writes_timing(trained):
     loads = timing["startup_notes"]["first_step_loaded_modules"]
     assert isinstance(loads, list) and all(isinstance(n, str) for n in loads)
     assert f"first step loaded modules: {len(loads)}" in out
-    # the heavy imports one by one (0 for a module another test loaded in this process)
+    # the heavy imports one by one (0 for a module already loaded)
     imports = timing["startup_notes"]["imports_s"]
     assert list(imports)[:3] == ["torch", "warp", "newton"] and all(v >= 0 for v in imports.values())
     assert "; imports: torch " in line
