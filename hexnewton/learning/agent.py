@@ -31,6 +31,9 @@ RANK_SCALINGS = ("mini_batches", "iterations", "learning_rate")
 #: train.py's runner sets them on rsl-rl's PPO as the stage begins (the adaptive schedule goes on from a stage's
 #: learning rate); the skrl baselines take none
 STAGE_ALGORITHM_FIELDS = ("learning_rate", "desired_kl", "entropy_coef")
+#: physics a curriculum stage may change, with the values it may take: the servos' effort clamp moved to the
+#: actuators, as the deployment bundle's MJCF has it (``SimConfig.effort_clamp``; ``HexapodEnv.set_effort_clamp``)
+STAGE_PHYSICS_FIELDS = {"effort_clamp": ("actuator",)}
 
 
 def stage_at(stages: tuple, iteration: int) -> tuple[int, dict]:
@@ -45,12 +48,19 @@ def stage_at(stages: tuple, iteration: int) -> tuple[int, dict]:
     return begun[-1], changes
 
 
-def split_stage_changes(changes: dict) -> tuple[float | None, dict, dict]:
-    """A stage's changes as (its ``posture_reflex`` or None, its RewardConfig fields, its PPO fields)."""
+def stage_line(changes: dict) -> str:
+    """A stage's changes for the console: ``w_tilt 40, desired_kl 0.005, effort_clamp actuator``."""
+    return ", ".join(f"{k} {v:g}" if isinstance(v, (int, float)) else f"{k} {v}" for k, v in changes.items())
+
+
+def split_stage_changes(changes: dict) -> tuple[float | None, dict, dict, dict]:
+    """A stage's changes as (its ``posture_reflex`` or None, its RewardConfig fields, its PPO fields, its physics
+    fields)."""
     rest = dict(changes)
     reflex = rest.pop("posture_reflex", None)
     algorithm = {k: rest.pop(k) for k in STAGE_ALGORITHM_FIELDS if k in rest}
-    return reflex, rest, algorithm
+    physics = {k: rest.pop(k) for k in STAGE_PHYSICS_FIELDS if k in rest}
+    return reflex, rest, algorithm, physics
 
 
 @dataclass
@@ -113,9 +123,10 @@ class AgentConfig:
     target_success: float | None = None
     #: torch.compile the actor and critic (rsl-rl's ``torch_compile_mode``); none: off
     torch_compile: str | None = field(default=None, metadata={"choices": COMPILE_MODES})
-    #: curriculum of the reflex gain, the reward weights and PPO settings: ((first iteration, {field: value}), ...),
-    #: applied from that iteration on; fields are ``posture_reflex`` (CPGConfig), RewardConfig's and
-    #: :data:`STAGE_ALGORITHM_FIELDS` (e.g. ``{'desired_kl': 0.005}``: smaller steps from that stage on)
+    #: curriculum of the reflex gain, the reward weights, PPO settings and physics: ((first iteration, {field:
+    #: value}), ...), applied from that iteration on; fields are ``posture_reflex`` (CPGConfig), RewardConfig's,
+    #: :data:`STAGE_ALGORITHM_FIELDS` (e.g. ``{'desired_kl': 0.005}``: smaller steps from that stage on) and
+    #: :data:`STAGE_PHYSICS_FIELDS` (``{'effort_clamp': 'actuator'}``: the deployment bundle's clamp from then on)
     stages: tuple = ()
     #: deterministic validation at the end (``hexnewton.analysis.validation``): the run's result is the candidate
     #: checkpoint of the last stage (the last, the best by training success and the newest saved ones, at most
@@ -166,11 +177,16 @@ class AgentConfig:
             if not isinstance(start, int) or not isinstance(changes, dict):
                 raise ValueError("agent.stages: expected ((first_iteration, {field: value}), ...)")
             unknown = [k for k in changes if k != "posture_reflex" and k not in reward_fields
-                       and k not in STAGE_ALGORITHM_FIELDS]  # fmt: skip
+                       and k not in STAGE_ALGORITHM_FIELDS and k not in STAGE_PHYSICS_FIELDS]  # fmt: skip
             if unknown:
                 raise ValueError(f"agent.stages: {unknown[0]} is none of posture_reflex, a reward weight "
-                                 f"(RewardConfig) or {', '.join(STAGE_ALGORITHM_FIELDS)}")  # fmt: skip
-            algorithm = split_stage_changes(changes)[2]
+                                 f"(RewardConfig), {', '.join(STAGE_ALGORITHM_FIELDS)} or "
+                                 f"{', '.join(STAGE_PHYSICS_FIELDS)}")  # fmt: skip
+            _, _, algorithm, physics = split_stage_changes(changes)
+            for name, value in physics.items():
+                if value not in STAGE_PHYSICS_FIELDS[name]:
+                    raise ValueError(f"agent.stages: {name} {value!r}: a stage may set it to "
+                                     f"{', '.join(STAGE_PHYSICS_FIELDS[name])}")  # fmt: skip
             if any(not isinstance(v, (int, float)) or not v >= 0 for v in algorithm.values()):
                 raise ValueError(f"agent.stages: {', '.join(algorithm)} must be numbers >= 0")
             if "desired_kl" in algorithm and a.schedule != "adaptive":

@@ -19,7 +19,7 @@ import numpy as np
 from rsl_rl.runners import OnPolicyRunner
 
 from hexnewton import startup
-from hexnewton.learning.agent import split_stage_changes, stage_at
+from hexnewton.learning.agent import split_stage_changes, stage_at, stage_line
 from hexnewton.learning.checkpoint import load_checkpoint, load_into_runner
 from hexnewton.learning.policy import export_onnx
 from hexnewton.learning.stopping import TrainingStopped, catch_stop_signals
@@ -336,17 +336,19 @@ class HexRunner(RankedRunner):
         self.enter_stage(self.current_learning_iteration + 1)
 
     def enter_stage(self, iteration: int) -> None:
-        """The curriculum: from its first iteration on, a stage's reflex gain, reward weights and PPO settings (with
-        those of the stages before it). The best checkpoint is chosen within the last stage begun."""
+        """The curriculum: from its first iteration on, a stage's reflex gain, reward weights, PPO settings and
+        physics (with those of the stages before it). The best checkpoint is chosen within the last stage begun."""
         stages = self.agent.stages
         index, changes = stage_at(stages, iteration)
         if index < 0 or index == self._stage:
             return
         self._stage = index
         env = self.env
-        reflex, reward, algorithm = split_stage_changes(changes)
+        reflex, reward, algorithm, physics = split_stage_changes(changes)
         reflex = env.cfg.cpg.posture_reflex if reflex is None else reflex
         env.set_shaping(dataclasses.replace(env.cfg.reward, **reward), reflex)
+        if "effort_clamp" in physics:
+            env.set_effort_clamp(physics["effort_clamp"])
         for name, value in algorithm.items():
             setattr(self.alg, name, value)
             if name == "learning_rate":
@@ -356,7 +358,7 @@ class HexRunner(RankedRunner):
         self.best.reset()
         if self.rank.is_main:
             print(f"iteration {iteration}: curriculum stage {index + 2} of {len(stages) + 1}: posture_reflex "
-                  f"{reflex:g}, " + ", ".join(f"{k} {v:g}" for k, v in {**reward, **algorithm}.items()), flush=True)
+                  f"{reflex:g}, " + stage_line({**reward, **algorithm, **physics}), flush=True)
 
     # -------------------------------------------------------------- the run
     def train(self, iterations: int) -> str:

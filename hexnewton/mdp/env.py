@@ -503,6 +503,14 @@ class HexapodEnv(VecEnv):
             self.cpg.cfg = self.cfg.cpg
         self.graph = self.world.graph = None
 
+    def set_effort_clamp(self, mode: str) -> None:
+        """The servos' effort clamp from now on (``SimConfig.effort_clamp``, a training curriculum's stage:
+        :meth:`World.set_effort_clamp`); checkpoints taken after it record it."""
+        import dataclasses
+
+        self.world.set_effort_clamp(mode)
+        self.cfg = dataclasses.replace(self.cfg, sim=self.world.cfg.sim)
+
     def close(self) -> None:
         self.graph = None
 

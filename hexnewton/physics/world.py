@@ -21,7 +21,7 @@ import logging
 import math
 import warnings
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import newton
 import numpy as np
@@ -298,6 +298,17 @@ class World:
         startup.mark("collision pipeline")
         precompile(self.device, self.solver if since is not None else None, since, pipeline=self.pipeline)
         startup.mark("kernels")
+        self.apply_effort_clamp()
+
+    def set_effort_clamp(self, mode: str) -> None:
+        """``SimConfig.effort_clamp`` from now on, on the built model (a training curriculum's stage): "actuator"
+        moves the servos' effort limits to their actuators (:meth:`apply_effort_clamp`); the joint clamp cannot come
+        back within a world (ValueError)."""
+        if mode == self.cfg.sim.effort_clamp:
+            return
+        if mode != "actuator":
+            raise ValueError(f"sim.effort_clamp: a built world moves its clamp to the actuators, not back to '{mode}'")
+        self.cfg = replace(self.cfg, sim=replace(self.cfg.sim, effort_clamp=mode))
         self.apply_effort_clamp()
 
     def apply_effort_clamp(self) -> None:

@@ -5,7 +5,7 @@ from dataclasses import replace
 
 import pytest
 
-from hexnewton.learning.agent import AgentConfig, AlgorithmConfig, split_stage_changes, stage_at
+from hexnewton.learning.agent import AgentConfig, AlgorithmConfig, split_stage_changes, stage_at, stage_line
 from hexnewton.learning.baselines.trainer import BaselineTrainer, stage_changes
 from hexnewton.tasks import task
 
@@ -18,18 +18,23 @@ def test_a_stage_holds_its_changes_and_those_before_it():
     assert stage_at(STAGES, 250) == (1, {"posture_reflex": 2.0, "w_tilt": 40.0, "desired_kl": 0.005})
     # the baselines count env-steps per env: a stage beginning at iteration i begins at i x steps per iteration
     assert stage_changes(STAGES, 200 * 24 - 1, 24)[0] == 0 and stage_changes(STAGES, 200 * 24, 24)[0] == 1
-    assert split_stage_changes(stage_at(STAGES, 250)[1]) == (2.0, {"w_tilt": 40.0}, {"desired_kl": 0.005})
-    assert split_stage_changes({"w_tilt": 1.0}) == (None, {"w_tilt": 1.0}, {})
+    assert split_stage_changes(stage_at(STAGES, 250)[1]) == (2.0, {"w_tilt": 40.0}, {"desired_kl": 0.005}, {})
+    assert split_stage_changes({"w_tilt": 1.0, "effort_clamp": "actuator"}) == (None, {"w_tilt": 1.0}, {},
+                                                                                 {"effort_clamp": "actuator"})
+    assert stage_line({"w_tilt": 40.0, "desired_kl": 0.005, "effort_clamp": "actuator"}) == \
+        "w_tilt 40, desired_kl 0.005, effort_clamp actuator"
 
 
 def test_stage_fields_are_checked_before_training():
     AgentConfig(stages=STAGES).check()
+    AgentConfig(stages=((300, {"effort_clamp": "actuator"}),)).check()
     task("complex").agent.check()
-    for stages, message in [(((10, {"w_tilts": 1.0}),), "w_tilts is none of posture_reflex"),
-                            (((10, {"entropy_coef": -0.1}),), "must be numbers >= 0"),
-                            (((10, {"learning_rate": "fast"}),), "must be numbers >= 0")]:  # fmt: skip
+    bad = [({"w_tilts": 1.0}, "w_tilts is none of posture_reflex"), ({"entropy_coef": -0.1}, "must be numbers >= 0"),
+           ({"learning_rate": "fast"}, "must be numbers >= 0"),
+           ({"effort_clamp": "joint"}, "effort_clamp 'joint': a stage may set it to actuator")]
+    for changes, message in bad:
         with pytest.raises(ValueError, match=message):
-            AgentConfig(stages=stages).check()
+            AgentConfig(stages=((10, changes),)).check()
     fixed = AgentConfig(stages=STAGES, algorithm=AlgorithmConfig(schedule="fixed"))
     with pytest.raises(ValueError, match="desired_kl needs the adaptive schedule"):
         fixed.check()

@@ -223,15 +223,15 @@ def test_max_minutes_stops_at_an_iteration_boundary(tmp_path):
 
 
 def test_curriculum_stages_change_reflex_and_weights_in_one_run(tmp_path, capsys):
-    """The complex recipe's curriculum, on shortened stages (--agent.stages): each stage begins at its iteration, the
-    checkpoints carry the task, the gain and weights they were trained under; a resumed run continues in its
-    stage, on its own task."""
+    """The complex recipe's curriculum, on shortened stages (--agent.stages): each stage begins at its iteration (its
+    reflex gain, reward weights, PPO settings and effort clamp), the checkpoints carry the task, the gain, weights and
+    physics they were trained under; a resumed run continues in its stage, on its own task."""
     import torch
 
     from hexnewton.apps import train
 
     stages = ("((1, {'posture_reflex': 2.0, 'w_tilt': 15.0}), (2, {'w_tilt': 40.0, 'w_ang_vel': 0.3, "
-              "'learning_rate': 2.5e-4, 'entropy_coef': 0.001}))")
+              "'learning_rate': 2.5e-4, 'entropy_coef': 0.001, 'effort_clamp': 'actuator'}))")
     assert train.main(["--task", "complex", "--num_envs", "8", "--agent.num_steps_per_env", "4", "--max_iterations",
                        "3", "--device", "cpu", "--log_dir", str(tmp_path), "--agent.stages", stages,
                        "--agent.save_interval", "1", "--agent.validation_rounds", "2", "--agent.validation_steps",
@@ -239,7 +239,7 @@ def test_curriculum_stages_change_reflex_and_weights_in_one_run(tmp_path, capsys
     out = capsys.readouterr().out
     assert "iteration 1: curriculum stage 2 of 3: posture_reflex 2, w_tilt 15" in out
     assert ("iteration 2: curriculum stage 3 of 3: posture_reflex 2, w_tilt 40, w_ang_vel 0.3, learning_rate "
-            "0.00025, entropy_coef 0.001") in out
+            "0.00025, entropy_coef 0.001, effort_clamp actuator") in out
     # the stage's learning rate is PPO's from its first iteration on (rsl-rl logs the rate each iteration ran with)
     from tensorboard.backend.event_processing.event_accumulator import EventAccumulator
 
@@ -256,6 +256,7 @@ def test_curriculum_stages_change_reflex_and_weights_in_one_run(tmp_path, capsys
     cfg = meta["config"]
     assert meta["task"] == "complex" and meta["agent"]["max_iterations"] == 3
     assert cfg["cpg"]["posture"] and cfg["cpg"]["posture_reflex"] == 2.0 and cfg["reward"]["w_tilt"] == 40.0
+    assert cfg["sim"]["effort_clamp"] == "actuator"  # the stage's physics travels with the checkpoint
     # resumed: the run goes on with its own task and configs, in the stage its iteration is in
     assert train.main(["--resume", str(last), "--num_envs", "8", "--max_iterations", "1", "--device", "cpu",
                        "--log_dir", str(tmp_path), "--agent.validation_rounds", "0"]) == 0  # fmt: skip

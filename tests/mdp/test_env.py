@@ -286,3 +286,28 @@ def test_env_compiles_its_generated_kernels_before_the_first_step():
     context = wp.get_device(DEV).context
     for kernel in (e.status_kernel, e.rewards_kernel):
         assert any(ctx == context for ctx, _ in kernel.module.execs)
+
+
+def test_a_curriculum_stage_moves_the_effort_clamp_to_the_actuators():
+    """``HexapodEnv.set_effort_clamp("actuator")`` on a built env (a training stage's ``effort_clamp``): the
+    mujoco_warp model's joint clamp off and every actuator clamped to its joint's limit, as a world built with it has
+    them; the env's and the world's configs say so (checkpoints record it); the robots step on; the joint clamp does
+    not come back (one-line ValueError)."""
+    env = make_env(_cfg("flat", 3))
+    built = make_env(dataclasses.replace(_cfg("flat", 3), sim=SimConfig(num_envs=3, device=DEV,
+                                                                        effort_clamp="actuator")))  # fmt: skip
+    mw = env.world.solver.mjw_model
+    assert mw.jnt_actfrclimited.numpy().any() and not mw.actuator_forcelimited.numpy().any()
+    actions = torch.zeros((3, env.num_actions))
+    env.step(actions)
+    env.set_effort_clamp("actuator")
+    assert env.cfg.sim.effort_clamp == env.world.cfg.sim.effort_clamp == "actuator"
+    ref = built.world.solver.mjw_model
+    for name in ("jnt_actfrclimited", "actuator_forcelimited", "actuator_forcerange"):
+        assert np.array_equal(getattr(mw, name).numpy(), getattr(ref, name).numpy()), name
+    for _ in range(3):
+        obs, *_ = env.step(actions)
+    assert torch.isfinite(obs["policy"]).all()
+    env.set_effort_clamp("actuator")  # already there: nothing to do
+    with pytest.raises(ValueError, match="moves its clamp to the actuators, not back to 'joint'"):
+        env.set_effort_clamp("joint")

@@ -10,7 +10,7 @@ import signal
 import time
 from dataclasses import dataclass
 
-from hexnewton.learning.agent import split_stage_changes, stage_at
+from hexnewton.learning.agent import split_stage_changes, stage_at, stage_line
 from hexnewton.learning.baselines.checkpoint import save_checkpoint
 from hexnewton.learning.baselines.config import BaselineConfig
 from hexnewton.learning.baselines.env import wrap_env
@@ -69,7 +69,7 @@ class BaselineTrainer:
         ppo = [k for _, c in stages for k in split_stage_changes(c)[2]]
         if ppo:
             raise ValueError(f"stages: {ppo[0]} is one of train.py's PPO settings; the baselines' stages change the "
-                             "reflex gain and reward weights only")  # fmt: skip
+                             "reflex gain, reward weights and physics only")  # fmt: skip
         self.hex_env, self.env, self.agent, self.algo, self.cfg = env, wrap_env(env), agent, algo, cfg
         self.meta, self.run_dir = meta, run_dir
         self.stages, self.steps_per_iteration, self._stage = stages, steps_per_iteration, -1
@@ -94,12 +94,14 @@ class BaselineTrainer:
             return
         self._stage = index
         env = self.hex_env
-        reflex, reward, _ = split_stage_changes(changes)
+        reflex, reward, _, physics = split_stage_changes(changes)
         reflex = env.cfg.cpg.posture_reflex if reflex is None else reflex
         env.set_shaping(dataclasses.replace(env.cfg.reward, **reward), reflex)
+        if "effort_clamp" in physics:
+            env.set_effort_clamp(physics["effort_clamp"])
         self.meta["config"] = dataclasses.asdict(env.cfg)
         print(f"step {self.timestep}: curriculum stage {index + 2} of {len(self.stages) + 1}: posture_reflex "
-              f"{reflex:g}, " + ", ".join(f"{k} {v:g}" for k, v in reward.items()), flush=True)  # fmt: skip
+              f"{reflex:g}, " + stage_line({**reward, **physics}), flush=True)  # fmt: skip
 
     def train(self, budget: Budget) -> str:
         """Train until the budget is spent; save and return why it ended."""
