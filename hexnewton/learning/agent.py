@@ -53,6 +53,18 @@ def stage_line(changes: dict) -> str:
     return ", ".join(f"{k} {v:g}" if isinstance(v, (int, float)) else f"{k} {v}" for k, v in changes.items())
 
 
+def apply_stage(env, changes: dict) -> tuple[dict, str]:
+    """A stage's merged ``changes`` (:func:`stage_at`) set on ``env`` (a ``HexapodEnv``): its reflex gain and reward
+    weights (``set_shaping``) and its physics (``set_effort_clamp``). Returns its PPO fields, for the learner to set,
+    and the console text of the whole stage (``posture_reflex 2, w_tilt 40, ...``)."""
+    reflex, reward, algorithm, physics = split_stage_changes(changes)
+    reflex = env.cfg.cpg.posture_reflex if reflex is None else reflex
+    env.set_shaping(replace(env.cfg.reward, **reward), reflex)
+    if "effort_clamp" in physics:
+        env.set_effort_clamp(physics["effort_clamp"])
+    return algorithm, f"posture_reflex {reflex:g}, " + stage_line({**reward, **algorithm, **physics})
+
+
 def split_stage_changes(changes: dict) -> tuple[float | None, dict, dict, dict]:
     """A stage's changes as (its ``posture_reflex`` or None, its RewardConfig fields, its PPO fields, its physics
     fields)."""

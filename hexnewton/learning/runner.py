@@ -19,7 +19,7 @@ import numpy as np
 from rsl_rl.runners import OnPolicyRunner
 
 from hexnewton import startup
-from hexnewton.learning.agent import split_stage_changes, stage_at, stage_line
+from hexnewton.learning.agent import apply_stage, stage_at
 from hexnewton.learning.checkpoint import load_checkpoint, load_into_runner
 from hexnewton.learning.policy import export_onnx
 from hexnewton.learning.stopping import TrainingStopped, catch_stop_signals
@@ -343,22 +343,16 @@ class HexRunner(RankedRunner):
         if index < 0 or index == self._stage:
             return
         self._stage = index
-        env = self.env
-        reflex, reward, algorithm, physics = split_stage_changes(changes)
-        reflex = env.cfg.cpg.posture_reflex if reflex is None else reflex
-        env.set_shaping(dataclasses.replace(env.cfg.reward, **reward), reflex)
-        if "effort_clamp" in physics:
-            env.set_effort_clamp(physics["effort_clamp"])
+        algorithm, line = apply_stage(self.env, changes)
         for name, value in algorithm.items():
             setattr(self.alg, name, value)
             if name == "learning_rate":
                 for group in self.alg.optimizer.param_groups:
                     group["lr"] = value
-        self.meta["config"] = dataclasses.asdict(env.cfg)  # checkpoints carry the gain they run with
+        self.meta["config"] = dataclasses.asdict(self.env.cfg)  # checkpoints carry the gain they run with
         self.best.reset()
         if self.rank.is_main:
-            print(f"iteration {iteration}: curriculum stage {index + 2} of {len(stages) + 1}: posture_reflex "
-                  f"{reflex:g}, " + stage_line({**reward, **algorithm, **physics}), flush=True)
+            print(f"iteration {iteration}: curriculum stage {index + 2} of {len(stages) + 1}: {line}", flush=True)
 
     # -------------------------------------------------------------- the run
     def train(self, iterations: int) -> str:

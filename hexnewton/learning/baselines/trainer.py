@@ -10,7 +10,7 @@ import signal
 import time
 from dataclasses import dataclass
 
-from hexnewton.learning.agent import split_stage_changes, stage_at, stage_line
+from hexnewton.learning.agent import apply_stage, split_stage_changes, stage_at
 from hexnewton.learning.baselines.checkpoint import save_checkpoint
 from hexnewton.learning.baselines.config import BaselineConfig
 from hexnewton.learning.baselines.env import wrap_env
@@ -93,15 +93,9 @@ class BaselineTrainer:
         if index == self._stage:
             return
         self._stage = index
-        env = self.hex_env
-        reflex, reward, _, physics = split_stage_changes(changes)
-        reflex = env.cfg.cpg.posture_reflex if reflex is None else reflex
-        env.set_shaping(dataclasses.replace(env.cfg.reward, **reward), reflex)
-        if "effort_clamp" in physics:
-            env.set_effort_clamp(physics["effort_clamp"])
-        self.meta["config"] = dataclasses.asdict(env.cfg)
-        print(f"step {self.timestep}: curriculum stage {index + 2} of {len(self.stages) + 1}: posture_reflex "
-              f"{reflex:g}, " + stage_line({**reward, **physics}), flush=True)  # fmt: skip
+        _, line = apply_stage(self.hex_env, changes)  # no PPO fields: refused when the trainer was made
+        self.meta["config"] = dataclasses.asdict(self.hex_env.cfg)
+        print(f"step {self.timestep}: curriculum stage {index + 2} of {len(self.stages) + 1}: {line}", flush=True)
 
     def train(self, budget: Budget) -> str:
         """Train until the budget is spent; save and return why it ended."""
