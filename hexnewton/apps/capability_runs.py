@@ -8,9 +8,9 @@ policy into one report.
 curves of ``hexnewton.analysis.rollout.DEFAULT_SWEEPS``) and ``<prefix>_at_<point>`` (the named points,
 ``$POINT_ROUNDS`` rounds), each a folder with ``results.json`` once finished and a console log ``<job>.log`` beside
 it. A curve whose job was cut off is read from the points its log printed (whole percentages) and marked partial; a
-point or curve with neither is missing. ``--policy LABEL=PREFIX[,PREFIX...]`` groups the seeds of one recipe (median over them); the fixed CPG's curve
-comes from any job that evaluated it. ``--out`` (which must not exist) receives ``report.md``, ``results.json`` and one
-``fig_sweep_<curve>.png`` per curve; the report names the command.
+point or curve with neither is missing. ``--policy LABEL=PREFIX[,PREFIX...]`` groups the seeds of one recipe (median
+over them); the fixed CPG's curve comes from any job that evaluated it. ``--out`` (which must not exist) receives
+``report.md``, ``results.json`` and one ``fig_sweep_<curve>.png`` per curve; the report names the command.
 """
 
 from __future__ import annotations
