@@ -95,6 +95,10 @@ class TerrainConfig:
     # §3.1: complex = 1.5 m rugged followed by 1.5 m of steps
     complex_rugged_length: float = 1.5
     complex_stepped_length: float = 1.5
+    # ours: metres of rugged blocks on the complex terrain's landing after its steps (block_height_max high, on the
+    # landing's height, up to x_max); 0: the flat landing of §3.1. Training with them shows a policy blocks near its
+    # goal, as the rugged course has them (results/time_to_skill/recipes/kl_choice).
+    complex_landing_blocks: float = 0.0
     # ours: where the steps begin on the stepped terrain (flat run-up so the robot starts on level ground)
     stepped_start_x: float = 0.5
     # ours: extent of the terrain patch: x in [x_min, x_max], |y| <= width / 2. 5 m across the walking

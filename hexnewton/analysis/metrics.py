@@ -73,7 +73,9 @@ def gait_quality(metrics: dict, ang_rate: np.ndarray, dparam: np.ndarray, dactio
 def summarize(metrics: dict, rpy: np.ndarray, distances: tuple[float, ...] = DISTANCES) -> dict:
     """Rates and stability over all rounds (JSON-ready; angles in degrees): success and time at each distance, the
     paper's roll / pitch mean, variance and peak, the 99.9th percentile of |roll| and |pitch|, the share of rounds
-    that ended in a fall (anywhere, also after the last distance), Y deviation and how the rounds ended."""
+    that ended in a fall (anywhere, also after the last distance), Y deviation, how the rounds ended (``ended``) and
+    how those that walked the last distance ended (``ended_past_3m``: a fall there happened on the way to the goal,
+    after the success column counted the round)."""
     deg = 180.0 / math.pi
     mask = metrics["in_episode"]
     rpy = np.asarray(rpy, np.float64)
@@ -94,6 +96,9 @@ def summarize(metrics: dict, rpy: np.ndarray, distances: tuple[float, ...] = DIS
     out["y_dev_mean_m"] = float(metrics["y_dev"].mean())
     out["y_dev_max_m"] = float(metrics["y_dev"].max())
     out["ended"] = {STATUS_NAMES[c]: int((metrics["end"] == c).sum()) for c in range(len(STATUS_NAMES))}
+    past = metrics["reached"][-1]  # how the rounds that walked the last distance ended: the way to the goal beyond it
+    out[f"ended_past_{distances[-1]:g}m"] = {STATUS_NAMES[c]: int(((metrics["end"] == c) & past).sum())
+                                             for c in range(len(STATUS_NAMES))}  # fmt: skip
     return out
 
 

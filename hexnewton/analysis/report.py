@@ -32,6 +32,14 @@ def percent(v: float | None) -> str:
     return "—" if v is None else f"{100 * v:.0f}%"
 
 
+def ended_cell(s: dict, last: float) -> str:
+    """How the rounds ended, "fell 69 (60 past 3 m), success 909": the bad endings of rounds that had walked the
+    last distance (``ended_past_3m``) in brackets; reports written without it show the counts alone."""
+    past = s.get(f"ended_past_{last:g}m", {})
+    return ", ".join(f"{k} {v}" + (f" ({past[k]} past {last:g} m)" if k != "success" and past.get(k) else "")
+                     for k, v in s["ended"].items() if v)  # fmt: skip
+
+
 def report_markdown(results: dict, meta: dict, robustness: dict | None = None, sweeps: dict | None = None) -> str:
     """Table 3's shape (ours beside the paper's), stability and gait quality per terrain and controller, the
     parameters on blocks and stairs, one robustness table per controller (``robustness[name][ctrl][terrain]``), then
@@ -57,7 +65,7 @@ def report_markdown(results: dict, meta: dict, robustness: dict | None = None, s
             ang = {n: " / ".join("—" if s[f"{n}_{k}"] is None else f"{s[f'{n}_{k}']:.2f}"
                                  for k in ("mean_deg", "var_deg2", "peak_deg")) for n in ("pitch", "roll")}  # fmt: skip
             t3 = s[f"time_to_{distances[-1]:g}m_s"]
-            ended = ", ".join(f"{k} {v}" for k, v in s["ended"].items() if v)
+            ended = ended_cell(s, distances[-1])
             lines.append(f"| {terrain} | {LABELS[ctrl]} | {s['rounds']} | {ang['pitch']} | {ang['roll']} | "
                          f"{s['y_dev_mean_m']:.3f} / {s['y_dev_max_m']:.3f} | "
                          f"{'—' if t3 is None else f'{t3:.1f}'} | {ended} |")  # fmt: skip

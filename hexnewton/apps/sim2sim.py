@@ -34,6 +34,7 @@ import os
 import sys
 import time
 
+from hexnewton.analysis.report import ended_cell
 from hexnewton.analysis.rollout import EVAL_TERRAIN_SEED, START_SEED_OFFSET
 from hexnewton.analysis.sim2sim import Film, Viewer, fixed_cpg_spec, measure
 from hexnewton.apps.cli import ArgumentParser, check_writable, positive_int, run, terrain_name
@@ -97,7 +98,7 @@ def comparison_rows(label: str, mine: dict, newton: dict) -> list[str]:
         cells = [f"{_fmt(m.get(k), kind)} / {_fmt(n.get(k), kind)}" for k, kind in (
             ("success_3m", "pct"), ("fall_rate", "pct"), ("pitch_var_deg2", "x"), ("roll_var_deg2", "x"),
             ("pitch_p999_deg", "x"), ("roll_p999_deg", "x"), ("time_to_3m_s", "x"))]  # fmt: skip
-        ended = ", ".join(f"{k} {v}" for k, v in m["ended"].items() if v)
+        ended = ended_cell(m, 3.0)
         rows.append(f"| {terrain} | {label} | {m['rounds']} / {n.get('rounds', '—')} | " + " | ".join(cells)
                     + f" | {ended} |")
     return rows

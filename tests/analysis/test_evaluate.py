@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from hexnewton.analysis.metrics import DISTANCES, round_metrics, summarize
+from hexnewton.analysis.report import ended_cell
 from hexnewton.mdp.status import FELL, OFF_COURSE, SUCCESS
 
 DT = 0.02
@@ -62,6 +63,14 @@ def test_summary_rates_and_angles():
     assert s["pitch_peak_deg"] <= 2.0 + 1e-9 and s["pitch_var_deg2"] == pytest.approx(2.0, rel=0.1)
     assert s["ended"]["success"] == 1 and s["ended"]["running"] == 1
     assert s["time_to_3m_s"] == pytest.approx(250 * DT)
+    # only round 0 walked 3 m (then reached the goal); a fall of a round past 3 m counts there as well
+    assert s["ended_past_3m"] == {**{k: 0 for k in s["ended"]}, "success": 1}
+    status[149, 1], x = 0, pos[..., 0]
+    x[:, 1] = 0.012 * np.arange(1, 301)  # round 1 walks on and falls at step 279, x = 3.36 m
+    done[149, 1], done[279, 1], status[279, 1] = False, True, FELL
+    s = summarize(round_metrics(pos, rpy, done, status, DT), rpy)
+    assert s["ended_past_3m"]["fell"] == 1 and s["ended"]["fell"] == 1 and s["success_3m"] == 0.5
+    assert ended_cell(s, 3.0) == "running 1, fell 1 (1 past 3 m), off_course 1, success 1"
 
 
 def _fake_run(path, rewards):

@@ -184,6 +184,23 @@ def test_complex(terrains: dict[str, Terrain]) -> None:
     assert (h[x > 3.0] == np.float32(0.36)).all()  # landing after 6 steps
 
 
+def test_complex_landing_blocks(terrains: dict[str, Terrain]) -> None:
+    """``complex_landing_blocks``: the rugged terrain's blocks on the landing's height over that length, the course
+    before it unchanged, flat landing beyond it and beyond |y| = rugged_half_width."""
+    plain = terrains["complex"].grid
+    g = build_height_grid(TerrainConfig(name="complex", complex_landing_blocks=1.0))
+    xc, yc = g.cell_centers()
+    before, on, after = xc < 3.0, (xc >= 3.0) & (xc < 4.0), xc >= 4.0
+    np.testing.assert_array_equal(g.heights[before], plain.heights[before])
+    np.testing.assert_array_equal(g.heights[after], plain.heights[after])
+    band = np.abs(yc) < TerrainConfig().rugged_half_width
+    blocks = terrains["rugged"].grid.heights[on][:, band]  # the same seed: the same blocks, 0.36 m higher
+    np.testing.assert_allclose(g.heights[on][:, band], 0.36 + blocks.astype(np.float64), atol=1e-6)
+    assert (g.heights[on][:, ~band] == np.float32(0.36)).all() and blocks.std() > 0.01
+    lanes = build_height_grid(replace(TerrainConfig(name="complex", levels=2, complex_landing_blocks=0.5), seed=1))
+    assert lanes.heights.max() <= 0.36 + 0.06 + 1e-6  # the lanes scale the blocks with the heights
+
+
 def test_unknown_terrain() -> None:
     msg = "unknown terrain 'hills': choose one of flat, rugged, stepped, complex"
     with pytest.raises(ValueError, match=re.escape(msg)):
@@ -205,6 +222,8 @@ def test_unknown_terrain() -> None:
         ("stepped", {"step_count": 0}, "step_count must be a positive integer"),
         ("stepped", {"x_max": 2.0}, "beyond x_max"),
         ("rugged", {"rugged_x_max": 3.99}, "rugged_x_max - x_min (4.99 m) must be a multiple of block_size"),
+        ("complex", {"complex_landing_blocks": 0.51}, "complex_landing_blocks (0.51 m) must be a multiple of block_size"),
+        ("complex", {"complex_landing_blocks": -1.0}, "complex_landing_blocks (-1.0) must be >= 0"),
     ],
 )
 def test_invalid_parameters(name: str, overrides: dict, message: str) -> None:

@@ -167,6 +167,14 @@ def _check_complex(cfg: TerrainConfig) -> None:
     _require(n >= 1, f"complex_stepped_length ({cfg.complex_stepped_length!r}) must hold at least one step "
                      f"of step_depth ({cfg.step_depth!r})")
     _check_stairs(cfg, cfg.complex_rugged_length, n, "complex_rugged_length")
+    if cfg.complex_landing_blocks:
+        _require(cfg.complex_landing_blocks > 0, f"complex_landing_blocks ({cfg.complex_landing_blocks!r}) must be >= 0")
+        landing = cfg.complex_rugged_length + n * cfg.step_depth
+        _multiple(landing - cfg.x_min, cfg.block_size, "the landing's start (complex_rugged_length + steps) - x_min",
+                  "block_size")
+        end = landing + cfg.complex_landing_blocks
+        if end < cfg.x_max:
+            _multiple(cfg.complex_landing_blocks, cfg.block_size, "complex_landing_blocks", "block_size")
 
 
 def complex_step_count(cfg: TerrainConfig) -> int:
@@ -199,11 +207,13 @@ def _block_heights(cfg: TerrainConfig, grid: HeightGrid) -> np.ndarray:
     return np.repeat(np.repeat(blocks, bc, axis=0), bc, axis=1)[: grid.nx, : grid.ny]
 
 
-def _rugged_region(cfg: TerrainConfig, grid: HeightGrid, heights: np.ndarray, x_end: float) -> None:
-    """Write block heights into cells of x in [x_min, x_end), |y| <= rugged_half_width."""
+def _rugged_region(cfg: TerrainConfig, grid: HeightGrid, heights: np.ndarray, x_end: float,
+                   x_start: float | None = None) -> None:
+    """Add block heights to cells of x in [x_start (default x_min), x_end), |y| <= rugged_half_width."""
     xc, yc = grid.cell_centers()
-    mask = (xc < x_end)[:, None] & (np.abs(yc) < cfg.rugged_half_width)[None, :]
-    heights[mask] = _block_heights(cfg, grid)[mask]
+    mask = ((xc < x_end) & (xc >= (cfg.x_min if x_start is None else x_start)))[:, None] \
+        & (np.abs(yc) < cfg.rugged_half_width)[None, :]
+    heights[mask] += _block_heights(cfg, grid)[mask]
 
 
 def _stairs(grid: HeightGrid, heights: np.ndarray, start: float, count: int, rise: float, depth: float) -> None:
@@ -232,9 +242,14 @@ def _build_stepped(cfg: TerrainConfig, grid: HeightGrid, heights: np.ndarray) ->
 
 
 def _build_complex(cfg: TerrainConfig, grid: HeightGrid, heights: np.ndarray) -> None:
-    """complex (§3.1): 1.5 m rugged (up to x = complex_rugged_length) followed by 1.5 m of steps."""
+    """complex (§3.1): 1.5 m rugged (up to x = complex_rugged_length) followed by 1.5 m of steps, then the landing
+    (``complex_landing_blocks`` of it covered in blocks)."""
     _rugged_region(cfg, grid, heights, cfg.complex_rugged_length)
-    _stairs(grid, heights, cfg.complex_rugged_length, complex_step_count(cfg), cfg.step_rise, cfg.step_depth)
+    n = complex_step_count(cfg)
+    _stairs(grid, heights, cfg.complex_rugged_length, n, cfg.step_rise, cfg.step_depth)
+    if cfg.complex_landing_blocks > 0:
+        landing = cfg.complex_rugged_length + n * cfg.step_depth
+        _rugged_region(cfg, grid, heights, landing + cfg.complex_landing_blocks, landing)
 
 
 @dataclass(frozen=True)
