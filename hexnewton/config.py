@@ -129,6 +129,10 @@ class TerrainConfig:
     hardest_step_rise: float | None = None
     hardest_step_depth: float | None = None
     hardest_block_height_max: float | None = None
+    # ours: when a robot on a lane past the course moves down one lane: "half", as on the others, after an episode that
+    # walked less than half the way; "miss", after any episode that missed the goal. "miss" keeps robots near the
+    # course's lane unless they master the lanes past it (results/capability/report.md, 1062 iterations).
+    past_down: str = field(default="half", metadata={"choices": ("half", "miss")})
     # robots start evenly spread over levels 0 .. start_levels - 1 (legged_gym: max_init_terrain_level)
     start_levels: int = 1
     # ours: how the terrain collides (flat is always an infinite ground plane). "mesh_boxes" (the default): every

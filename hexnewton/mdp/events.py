@@ -25,7 +25,8 @@ When an env's episode ends (status != 0), before it is reset (:func:`curriculum_
 - success (the goal reached, i.e. ``goal_distance - goal_radius`` walked): one level up; an env that solves
   the last level goes to a random level, so every level keeps being visited (as legged_gym does);
 - fell, off course or timed out having walked less than half of ``goal_distance`` along x: one level down
-  (never below 0); otherwise the level stays;
+  (never below 0); otherwise the level stays; on the lanes past the course with ``TerrainConfig.past_down`` "miss"
+  (levels from ``strict_from`` on), any of these: one level down;
 - nonfinite (blown-up physics): the level stays.
 The env's lane start moves to the new level's lane centre (plus the env's own fixed lateral offset), at
 ``spawn_height`` above the highest terrain under the robot's footprint there; the reset then places the
@@ -218,6 +219,7 @@ def curriculum_kernel(
     start: wp.array[wp.vec2],
     goal_distance: float,
     levels: int,
+    strict_from: int,
     lane_width: float,
     offset_y: wp.array[wp.float32],
     hf: HeightField,
@@ -239,7 +241,7 @@ def curriculum_kernel(
         if lv >= levels:
             rng = wp.rand_init(seed, e + joint_q.shape[0] * counter[0])
             lv = wp.min(int(wp.randf(rng) * float(levels)), levels - 1)
-    elif joint_q[e, 0] - start[e][0] < 0.5 * goal_distance:
+    elif lv >= strict_from or joint_q[e, 0] - start[e][0] < 0.5 * goal_distance:
         lv = wp.max(lv - 1, 0)
     level[e] = lv
     p = _place(hf, lv, levels, lane_width, offset_y[e], footprint, spawn_height)
@@ -270,13 +272,21 @@ def start_levels(num_envs: int, start_levels: int) -> np.ndarray:
     return (np.arange(num_envs) * start_levels // max(num_envs, 1)).astype(np.int32)
 
 
-def curriculum_reference(status, walked, level, goal_distance, levels, random_level):
+def strict_from(cfg) -> int:
+    """The first level on which any missed goal moves a robot down (:func:`curriculum_kernel`): the first lane past
+    the course with ``TerrainConfig.past_down`` "miss", else ``levels`` (none)."""
+    return cfg.levels - cfg.levels_past if cfg.past_down == "miss" and cfg.levels_past else cfg.levels
+
+
+def curriculum_reference(status, walked, level, goal_distance, levels, random_level, strict_from=None):
     """Float64 reference of :func:`curriculum_kernel`'s level update (``walked`` = x - start x; ``random_level``
-    (N,) stands in for the kernel's draw where an env solves the last level). Returns the new levels."""
+    (N,) stands in for the kernel's draw where an env solves the last level; ``strict_from`` as the kernel's, None:
+    ``levels``). Returns the new levels."""
     status, walked, level = np.asarray(status), np.asarray(walked, np.float64), np.asarray(level, np.int64)
+    strict = level >= (levels if strict_from is None else strict_from)
     up = level + 1
     up = np.where(up >= levels, random_level, up)
-    down = np.where(walked < 0.5 * goal_distance, np.maximum(level - 1, 0), level)
+    down = np.where(strict | (walked < 0.5 * goal_distance), np.maximum(level - 1, 0), level)
     new = np.where(status == SUCCESS, up, down)
     return np.where((status == 0) | (status == NONFINITE), level, new)
 

@@ -10,7 +10,7 @@ import warp as wp
 
 from hexnewton.config import HexConfig, SimConfig, TaskConfig, TerrainConfig
 from hexnewton.mdp.env import make_env
-from hexnewton.mdp.events import curriculum_kernel, curriculum_reference, placement_kernel, start_levels
+from hexnewton.mdp.events import curriculum_kernel, curriculum_reference, placement_kernel, start_levels, strict_from
 from hexnewton.mdp.status import NONFINITE, SUCCESS
 from hexnewton.mdp.terms import height_field_from_grid
 from hexnewton.physics.terrain import build_height_grid, max_terrain_height_np, terrain_height_np
@@ -105,7 +105,9 @@ def test_bad_curriculum_config(bad, message):
     assert message in str(err.value)
 
 
-def test_curriculum_kernel_matches_reference():
+@pytest.mark.parametrize("strict", [None, 3])
+def test_curriculum_kernel_matches_reference(strict):
+    """``strict`` (``strict_from``, the first lane past the course with ``past_down`` "miss"): None, none."""
     rng = np.random.default_rng(0)
     cfg = TerrainConfig(name="complex", levels=5, lane_width=1.0)
     grid = build_height_grid(cfg)
@@ -122,14 +124,17 @@ def test_curriculum_kernel_matches_reference():
     arr = lambda a, dt=None: wp.array(a, dtype=dt, device=DEV) if dt else wp.array(a, device=DEV)  # noqa: E731
     level_wp, lane_wp, z_wp = arr(level), arr(lane_in, wp.vec2), arr(np.full(n, 9.0, np.float32))
     wp.launch(curriculum_kernel, dim=n,
-              inputs=[arr(status), arr(q), arr(start, wp.vec2), goal, levels, cfg.lane_width, arr(offset), hf,
+              inputs=[arr(status), arr(q), arr(start, wp.vec2), goal, levels, levels if strict is None else strict,
+                      cfg.lane_width, arr(offset), hf,
                       footprint, clearance, 3, arr(np.array([5], np.int32))],
               outputs=[level_wp, lane_wp, z_wp], device=DEV)  # fmt: skip
     got = level_wp.numpy()
     top = (status == SUCCESS) & (level == levels - 1)
     assert top.any() and np.all((got[top] >= 0) & (got[top] < levels))
-    want = curriculum_reference(status, q[:, 0].astype(np.float64) - start[:, 0], level, goal, levels, got)
+    want = curriculum_reference(status, q[:, 0].astype(np.float64) - start[:, 0], level, goal, levels, got, strict)
     np.testing.assert_array_equal(got, want)
+    missed = (status != 0) & (status != SUCCESS) & (status != NONFINITE) & (walked >= 0.5 * goal) & (level >= 3)
+    assert missed.any() and (np.all(got[missed] == level[missed] - 1) if strict else np.all(got[missed] == level[missed]))
     moved = (status != 0) & (status != NONFINITE)
     y = lane_center_y(cfg, got) + offset
     np.testing.assert_allclose(lane_wp.numpy()[moved], np.stack([np.zeros(n), y], 1)[moved], atol=1e-5)
@@ -140,6 +145,12 @@ def test_curriculum_kernel_matches_reference():
     wp.launch(placement_kernel, dim=n, inputs=[level_wp, levels, cfg.lane_width, arr(offset), hf, footprint, clearance],
               outputs=[lane_wp, z_wp], device=DEV)  # fmt: skip
     np.testing.assert_allclose(lane_wp.numpy()[:, 1], y, atol=1e-5)
+
+
+def test_strict_from():
+    past = TerrainConfig(name="complex", levels=10, levels_past=3)
+    assert strict_from(replace(past, past_down="miss")) == 7 and strict_from(past) == 10
+    assert strict_from(TerrainConfig(name="complex", levels=10, past_down="miss")) == 10  # no lanes past the course
 
 
 def test_start_levels_spread():
