@@ -222,7 +222,8 @@ def test_unknown_terrain() -> None:
         ("stepped", {"step_count": 0}, "step_count must be a positive integer"),
         ("stepped", {"x_max": 2.0}, "beyond x_max"),
         ("rugged", {"rugged_x_max": 3.99}, "rugged_x_max - x_min (4.99 m) must be a multiple of block_size"),
-        ("complex", {"complex_landing_blocks": 0.51}, "complex_landing_blocks (0.51 m) must be a multiple of block_size"),
+        ("complex", {"complex_landing_blocks": 0.51},
+         "complex_landing_blocks (0.51 m) must be a multiple of block_size"),
         ("complex", {"complex_landing_blocks": -1.0}, "complex_landing_blocks (-1.0) must be >= 0"),
     ],
 )

@@ -13,7 +13,8 @@ order (each function's docstring gives its value):
 - ``goal``: r_goal, +300 once on reaching the goal (ours);
 - ``off_course``: r_off, -100 once on leaving the course (ours);
 - ``fall``: r_fall, -``fall_penalty`` once on falling (ours; 0: off);
-- ``tilt``, ``ang_vel``, ``action_rate``: the stability shaping's costs (ours; weight 0: off).
+- ``tilt``, ``ang_vel``, ``action_rate``: the stability shaping's costs (ours; weight 0: off);
+- ``lateral``: the squared offset from the start-to-goal line, a cost (ours; weight 0: off).
 
 ``docs/internals.md`` ("The MDP") gives the paper's wording, our reading of it, the weights and how to add a term."""
 
@@ -233,6 +234,16 @@ def tilt_np(inputs, frame):
 
 
 @wp.func
+def lateral(inputs: RewardInputs, frame: RewardFrame) -> float:
+    """(y - y_start)² [m²], the offset from the start-to-goal line, a cost: r_lateral = -w_lateral x this."""
+    return frame.to_goal[1] * frame.to_goal[1]
+
+
+def lateral_np(inputs, frame):
+    return frame.to_goal[:, 1] ** 2
+
+
+@wp.func
 def body_roll_pitch_rate(qx: float, qy: float, qz: float, qw: float, wx: float, wy: float, wz: float) -> wp.vec2:
     """The base's world-frame angular velocity (a free joint's qd[3:6]) in its own frame: (roll rate, pitch rate)."""
     w_body = wp.quat_rotate_inv(wp.quat(qx, qy, qz, qw), wp.vec3(wx, wy, wz))
@@ -319,6 +330,8 @@ REWARD_TERMS = (
     RewardTerm("tilt", "w_tilt", tilt, tilt_np, cost=True),
     RewardTerm("ang_vel", "w_ang_vel", ang_vel, ang_vel_np, cost=True),
     RewardTerm("action_rate", "w_action_rate", action_rate, action_rate_np, state=False, cost=True),
+    # ours: the drift from the start-to-goal line
+    RewardTerm("lateral", "w_lateral", lateral, lateral_np, cost=True),
 )
 REWARD_NAMES = tuple(t.name for t in REWARD_TERMS)  # the columns of ``terms``
 

@@ -168,7 +168,8 @@ def _check_complex(cfg: TerrainConfig) -> None:
                      f"of step_depth ({cfg.step_depth!r})")
     _check_stairs(cfg, cfg.complex_rugged_length, n, "complex_rugged_length")
     if cfg.complex_landing_blocks:
-        _require(cfg.complex_landing_blocks > 0, f"complex_landing_blocks ({cfg.complex_landing_blocks!r}) must be >= 0")
+        _require(cfg.complex_landing_blocks > 0,
+                 f"complex_landing_blocks ({cfg.complex_landing_blocks!r}) must be >= 0")
         landing = cfg.complex_rugged_length + n * cfg.step_depth
         _multiple(landing - cfg.x_min, cfg.block_size, "the landing's start (complex_rugged_length + steps) - x_min",
                   "block_size")
