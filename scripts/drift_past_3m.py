@@ -3,7 +3,7 @@
 Every ``results/**/results.json`` of ``python -m hexnewton.apps.evaluate`` with a learnt CPG policy (``cpg_rl``) on the
 rugged course, at least 300 rounds, deterministic action. A round that never walked 3 m ended badly (fell, left the
 course, timed out), so the bad endings of the rounds that did are (fell + off course + time-outs) / rounds - (1 - 3 m
-success) (``ended_past_3m`` in newer reports gives the same directly). Prints one line per evaluation and the
+success) (a report that carries ``ended_past_3m`` gives the same directly). Prints one line per evaluation and the
 correlation with ``y_dev_mean_m``; ``--out`` writes them as JSON.
 
     python scripts/drift_past_3m.py --out results/time_to_skill/recipes/kl_choice/drift.json
