@@ -96,7 +96,8 @@ class TerrainConfig:
     complex_rugged_length: float = 1.5
     complex_stepped_length: float = 1.5
     # ours: metres of rugged blocks on the complex terrain's landing after its steps (block_height_max high, on the
-    # landing's height, up to x_max); 0: the flat landing of §3.1. Training with them shows a policy blocks near its
+    # landing's height, from the block lattice's first edge after the last step, up to x_max); 0: the flat landing of
+    # §3.1. Training with them shows a policy blocks near its
     # goal, as the rugged course has them (results/time_to_skill/recipes/kl_choice).
     complex_landing_blocks: float = 0.0
     # ours: where the steps begin on the stepped terrain (flat run-up so the robot starts on level ground)

@@ -199,6 +199,15 @@ def test_complex_landing_blocks(terrains: dict[str, Terrain]) -> None:
     assert (g.heights[on][:, ~band] == np.float32(0.36)).all() and blocks.std() > 0.01
     lanes = build_height_grid(replace(TerrainConfig(name="complex", levels=2, complex_landing_blocks=0.5), seed=1))
     assert lanes.heights.max() <= 0.36 + 0.06 + 1e-6  # the lanes scale the blocks with the heights
+    # lanes past the course with treads off the block lattice (23 cm: the last step ends at 3.11 m): the blocks begin
+    # on the lattice's next edge, 3.12 m
+    past = TerrainConfig(name="complex", complex_landing_blocks=1.0, step_depth=0.23)
+    g, steps = build_height_grid(past), round(1.5 / 0.23)
+    xc, yc = g.cell_centers()
+    band = np.abs(yc) < past.rugged_half_width
+    top = steps * past.step_rise
+    assert np.allclose(g.heights[(xc > 3.11) & (xc < 3.12)][:, band], top)
+    assert g.heights[(xc > 3.12) & (xc < 4.12)][:, band].std() > 0.01 and np.allclose(g.heights[xc > 4.12], top)
 
 
 def test_unknown_terrain() -> None:

@@ -170,12 +170,15 @@ def _check_complex(cfg: TerrainConfig) -> None:
     if cfg.complex_landing_blocks:
         _require(cfg.complex_landing_blocks > 0,
                  f"complex_landing_blocks ({cfg.complex_landing_blocks!r}) must be >= 0")
-        landing = cfg.complex_rugged_length + n * cfg.step_depth
-        _multiple(landing - cfg.x_min, cfg.block_size, "the landing's start (complex_rugged_length + steps) - x_min",
-                  "block_size")
-        end = landing + cfg.complex_landing_blocks
-        if end < cfg.x_max:
+        if _landing_blocks_start(cfg, n) + cfg.complex_landing_blocks < cfg.x_max:
             _multiple(cfg.complex_landing_blocks, cfg.block_size, "complex_landing_blocks", "block_size")
+
+
+def _landing_blocks_start(cfg: TerrainConfig, steps: int) -> float:
+    """Where the complex terrain's landing blocks begin: the first edge of the block lattice on or after the last step's
+    end (a lane past the course may have treads off the lattice)."""
+    landing = cfg.complex_rugged_length + steps * cfg.step_depth
+    return cfg.x_min + math.ceil((landing - cfg.x_min) / cfg.block_size - ALIGN_TOL) * cfg.block_size
 
 
 def complex_step_count(cfg: TerrainConfig) -> int:
@@ -249,8 +252,8 @@ def _build_complex(cfg: TerrainConfig, grid: HeightGrid, heights: np.ndarray) ->
     n = complex_step_count(cfg)
     _stairs(grid, heights, cfg.complex_rugged_length, n, cfg.step_rise, cfg.step_depth)
     if cfg.complex_landing_blocks > 0:
-        landing = cfg.complex_rugged_length + n * cfg.step_depth
-        _rugged_region(cfg, grid, heights, landing + cfg.complex_landing_blocks, landing)
+        start = _landing_blocks_start(cfg, n)
+        _rugged_region(cfg, grid, heights, start + cfg.complex_landing_blocks, start)
 
 
 @dataclass(frozen=True)
