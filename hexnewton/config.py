@@ -134,6 +134,11 @@ class TerrainConfig:
     # walked less than half the way; "miss", after any episode that missed the goal. "miss" keeps robots near the
     # course's lane unless they master the lanes past it (results/capability/report.md, 1062 iterations).
     past_down: str = field(default="half", metadata={"choices": ("half", "miss")})
+    # ours: lanes a robot moves up after reaching its goal. A robot climbs once per episode (~50 iterations of 24 steps
+    # on the complex course), so a run of fewer iterations, e.g. one iteration count split over torchrun ranks, ends on
+    # lower lanes (results/scale_out/report.md: lane 3.3 of 9 after 150 iterations, 5.9 after 300); 2 climbs as fast
+    # per iteration at half the iterations.
+    climb: int = 1
     # robots start evenly spread over levels 0 .. start_levels - 1 (legged_gym: max_init_terrain_level)
     start_levels: int = 1
     # ours: how the terrain collides (flat is always an infinite ground plane). "mesh_boxes" (the default): every

@@ -423,8 +423,8 @@ class HexapodEnv(VecEnv):
         w, t, tc = self.world, self.cfg.task, self.cfg.terrain
         wp.launch(
             curriculum_kernel, dim=self.num_envs,
-            inputs=[self.status, w.joint_q_wp, self.start, t.goal_distance, tc.levels, strict_from(tc), tc.lane_width,
-                    self._lane_offset, self.height_field, w.footprint, w.spawn_clearance, t.seed + 7919,
+            inputs=[self.status, w.joint_q_wp, self.start, t.goal_distance, tc.levels, tc.climb, strict_from(tc),
+                    tc.lane_width, self._lane_offset, self.height_field, w.footprint, w.spawn_clearance, t.seed + 7919,
                     self.counter],
             outputs=[self.level, self.lane, self.lane_z], device=self.device,
         )  # fmt: skip

@@ -22,8 +22,9 @@ The curriculum terrain is L lanes side by side along y; lane k is the chosen ter
 rise scaled by (k + 1) / L, or with ``TerrainConfig.levels_past`` = P lanes past the course by (k + 1) / (L - P) up to
 the course and toward the ``hardest_*`` rise, tread and block height beyond it (``terrain.heightmap.lane_config``).
 When an env's episode ends (status != 0), before it is reset (:func:`curriculum_kernel`):
-- success (the goal reached, i.e. ``goal_distance - goal_radius`` walked): one level up; an env that solves
-  the last level goes to a random level, so every level keeps being visited (as legged_gym does);
+- success (the goal reached, i.e. ``goal_distance - goal_radius`` walked): ``TerrainConfig.climb`` levels up (1 by
+  default); an env that solves the last level goes to a random level, so every level keeps being visited (as
+  legged_gym does);
 - fell, off course or timed out having walked less than half of ``goal_distance`` along x: one level down
   (never below 0); otherwise the level stays; on the lanes past the course with ``TerrainConfig.past_down`` "miss"
   (levels from ``strict_from`` on), any of these: one level down;
@@ -219,6 +220,7 @@ def curriculum_kernel(
     start: wp.array[wp.vec2],
     goal_distance: float,
     levels: int,
+    climb: int,
     strict_from: int,
     lane_width: float,
     offset_y: wp.array[wp.float32],
@@ -237,10 +239,11 @@ def curriculum_kernel(
         return
     lv = level[e]
     if st == SUCCESS:
-        lv = lv + 1
-        if lv >= levels:
+        if lv + 1 >= levels:  # the last level solved
             rng = wp.rand_init(seed, e + joint_q.shape[0] * counter[0])
             lv = wp.min(int(wp.randf(rng) * float(levels)), levels - 1)
+        else:
+            lv = wp.min(lv + climb, levels - 1)
     elif lv >= strict_from or joint_q[e, 0] - start[e][0] < 0.5 * goal_distance:
         lv = wp.max(lv - 1, 0)
     level[e] = lv
@@ -278,14 +281,13 @@ def strict_from(cfg) -> int:
     return cfg.levels - cfg.levels_past if cfg.past_down == "miss" and cfg.levels_past else cfg.levels
 
 
-def curriculum_reference(status, walked, level, goal_distance, levels, random_level, strict_from=None):
+def curriculum_reference(status, walked, level, goal_distance, levels, random_level, strict_from=None, climb=1):
     """Float64 reference of :func:`curriculum_kernel`'s level update (``walked`` = x - start x; ``random_level``
-    (N,) stands in for the kernel's draw where an env solves the last level; ``strict_from`` as the kernel's, None:
-    ``levels``). Returns the new levels."""
+    (N,) stands in for the kernel's draw where an env solves the last level; ``strict_from`` and ``climb`` as the
+    kernel's, None: ``levels``). Returns the new levels."""
     status, walked, level = np.asarray(status), np.asarray(walked, np.float64), np.asarray(level, np.int64)
     strict = level >= (levels if strict_from is None else strict_from)
-    up = level + 1
-    up = np.where(up >= levels, random_level, up)
+    up = np.where(level + 1 >= levels, random_level, np.minimum(level + climb, levels - 1))
     down = np.where(strict | (walked < 0.5 * goal_distance), np.maximum(level - 1, 0), level)
     new = np.where(status == SUCCESS, up, down)
     return np.where((status == 0) | (status == NONFINITE), level, new)

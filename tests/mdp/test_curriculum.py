@@ -97,6 +97,7 @@ def test_lanes_past_the_course():
     ({"levels": -1}, "levels must be an integer >= 0"),
     ({"levels": 3, "start_levels": 4}, "start_levels must be an integer in [1, levels = 3]"),
     ({"levels": 3, "lane_width": 0.0}, "lane_width must be positive"),
+    ({"levels": 3, "climb": 0}, "climb must be an integer >= 1"),
     ({"levels": 3, "lane_width": 1.005}, "width (1.005 m) must be a multiple of query_resolution"),
 ])  # fmt: skip
 def test_bad_curriculum_config(bad, message):
@@ -105,9 +106,10 @@ def test_bad_curriculum_config(bad, message):
     assert message in str(err.value)
 
 
-@pytest.mark.parametrize("strict", [None, 3])
-def test_curriculum_kernel_matches_reference(strict):
-    """``strict`` (``strict_from``, the first lane past the course with ``past_down`` "miss"): None, none."""
+@pytest.mark.parametrize(("strict", "climb"), [(None, 1), (3, 1), (None, 2)])
+def test_curriculum_kernel_matches_reference(strict, climb):
+    """``strict`` (``strict_from``, the first lane past the course with ``past_down`` "miss"): None, none; ``climb``:
+    lanes up per goal."""
     rng = np.random.default_rng(0)
     cfg = TerrainConfig(name="complex", levels=5, lane_width=1.0)
     grid = build_height_grid(cfg)
@@ -124,15 +126,18 @@ def test_curriculum_kernel_matches_reference(strict):
     arr = lambda a, dt=None: wp.array(a, dtype=dt, device=DEV) if dt else wp.array(a, device=DEV)  # noqa: E731
     level_wp, lane_wp, z_wp = arr(level), arr(lane_in, wp.vec2), arr(np.full(n, 9.0, np.float32))
     wp.launch(curriculum_kernel, dim=n,
-              inputs=[arr(status), arr(q), arr(start, wp.vec2), goal, levels, levels if strict is None else strict,
+              inputs=[arr(status), arr(q), arr(start, wp.vec2), goal, levels, climb, levels if strict is None else strict,
                       cfg.lane_width, arr(offset), hf,
                       footprint, clearance, 3, arr(np.array([5], np.int32))],
               outputs=[level_wp, lane_wp, z_wp], device=DEV)  # fmt: skip
     got = level_wp.numpy()
     top = (status == SUCCESS) & (level == levels - 1)
     assert top.any() and np.all((got[top] >= 0) & (got[top] < levels))
-    want = curriculum_reference(status, q[:, 0].astype(np.float64) - start[:, 0], level, goal, levels, got, strict)
+    want = curriculum_reference(status, q[:, 0].astype(np.float64) - start[:, 0], level, goal, levels, got, strict,
+                                climb)
     np.testing.assert_array_equal(got, want)
+    up = (status == SUCCESS) & (level + 1 < levels)
+    np.testing.assert_array_equal(got[up], np.minimum(level[up] + climb, levels - 1))
     missed = (status != 0) & (status != SUCCESS) & (status != NONFINITE) & (walked >= 0.5 * goal) & (level >= 3)
     assert missed.any()
     np.testing.assert_array_equal(got[missed], level[missed] - 1 if strict else level[missed])

@@ -112,6 +112,7 @@ def validate_config(cfg: TerrainConfig) -> None:
                  f"start_levels must be an integer in [1, levels = {cfg.levels}], got {cfg.start_levels!r}")
         _require(math.isfinite(cfg.lane_width) and cfg.lane_width > 0,
                  f"lane_width must be positive, got {cfg.lane_width!r}")
+        _require(int(cfg.climb) == cfg.climb and cfg.climb >= 1, f"climb must be an integer >= 1, got {cfg.climb!r}")
         _check_levels_past(cfg)
         for level in range(cfg.levels - cfg.levels_past - 1, cfg.levels):  # the course's lane and those past it
             validate_config(lane_config(cfg, level))
