@@ -209,9 +209,9 @@ def build_report(folders: list[str], out: str, commands: list[str]) -> dict:
     if runs:
         md += ["## Time to the result (`train.py` under torchrun, then the result's test rounds per terrain)", "",
                "Process start to result: rank 0's `timing.json` (`wall_s_to_result`: from its process start through "
-               "training, deterministic validation (`timing.json`'s `validation.ranks`: the ranks that shared it) and the ONNX "
-               "export; `shell_wall_s` in results.json: "
-               "the shell's seconds from the launch, torchrun's own start included). Speed-up: the 1-GPU run's seconds "
+               "training, deterministic validation (`timing.json`'s `validation.ranks`: the ranks that shared it) and "
+               "the ONNX export; `shell_wall_s` in results.json: the shell's seconds from the launch, torchrun's own "
+               "start included). Speed-up: the 1-GPU run's seconds "
                "over the run's (same total envs, else same envs per GPU). Success at 3 m and falls: the "
                "result's deterministic action on unseen rounds (`python -m hexnewton.apps.evaluate`). Efficiency: "
                "training env-steps/s over (GPUs x the 1-GPU run's at the same envs per GPU). Ran beside: the runs whose "

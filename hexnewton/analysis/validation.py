@@ -166,14 +166,6 @@ def combine_courses(cands: list[Candidate], terrains: list,
     return mean, per
 
 
-def validate_courses(cands: list[Candidate], controller: str, terrains: list, rounds: int, device: str | None,
-                     max_steps: int, goal_distance: float | None = None) -> tuple[list[dict], dict[str, list[dict]]]:
-    """:func:`validate` on each of ``terrains`` (names or ``TerrainConfig`` objects) one after another. Returns per
-    candidate its shares averaged over the courses, and each course's own results by its name."""
-    return combine_courses(cands, terrains, validate_share(cands, controller, terrains, rounds, device, max_steps,
-                                                           goal_distance))  # fmt: skip
-
-
 def course_names(names: list[str]) -> str:
     """``the complex course`` / ``the rugged and complex courses`` for the console."""
     return f"the {names[0]} course" if len(names) == 1 else f"the {', '.join(names[:-1])} and {names[-1]} courses"

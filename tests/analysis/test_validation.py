@@ -77,7 +77,9 @@ def test_validation_on_several_courses_averages_each_candidates_shares(monkeypat
 
     monkeypatch.setattr(validation, "validate", fake)
     cands = [Candidate(it, f"model_{it}.pt", "saved") for it in (250, 299)]
-    mean, got = validation.validate_courses(cands, "cpg_rl", ["rugged", "complex"], 8, "cpu", 30)
+    terrains = ["rugged", "complex"]  # one process: every (course, candidate) pair, course by course
+    mean, got = validation.combine_courses(cands, terrains, validation.validate_share(cands, "cpg_rl", terrains, 8,
+                                                                                      "cpu", 30))  # fmt: skip
     assert seen == ["rugged", "complex"] and got == per
     assert mean[0] == {"goal": 0.95, "walk_3m": 1.0, "fell": 0.05, "off_course": 0.0, "pitch_var": 25.0,
                        "roll_var": 9.0, "rounds": 16}
@@ -123,7 +125,8 @@ def test_shared_validation_gives_what_one_process_gives(monkeypatch):
     monkeypatch.setattr(validation, "validate", fake)
     cands = [Candidate(it, f"model_{it}.pt", "saved") for it in (1, 2, 3, 4)]
     terrains = ["rugged", "stepped", "complex"]
-    one = validation.validate_courses(cands, "cpg_rl", terrains, 8, "cpu", 30)
+    one = validation.combine_courses(cands, terrains,
+                                     validation.validate_share(cands, "cpg_rl", terrains, 8, "cpu", 30))
     for world in (2, 4, 8):
         merged = {}
         for r in range(world):
