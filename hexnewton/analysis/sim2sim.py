@@ -132,22 +132,29 @@ class Rounds:
 
     ``controller``: a bundle folder (its policy acts) or a spec dict without a policy (:func:`fixed_cpg_spec`).
     ``terrain``: a terrain name (its config from ``TerrainConfig``, patch long enough for the goal), seed ``seed``;
-    starts from ``seed + START_SEED_OFFSET`` (:func:`start_poses`). MuJoCo's timestep is the bundle's substep."""
+    starts from ``seed + START_SEED_OFFSET`` (:func:`start_poses`). MuJoCo's timestep is the bundle's substep.
+    ``robots``: the indices of the rounds this model runs (default all ``rounds``), each with the start it has among
+    all of them, so that a split of the rounds over processes (:func:`measure`'s ``workers``) runs the same rounds."""
 
     def __init__(self, controller: str | dict, terrain: str, rounds: int, seed: int = EVAL_TERRAIN_SEED,
-                 robot: RobotConfig | None = None, task: TaskConfig | None = None):
+                 robot: RobotConfig | None = None, task: TaskConfig | None = None, robots=None):
         import mujoco
 
         from hexnewton.physics.terrain.heightmap import build_height_grid
 
+        keep = np.arange(rounds) if robots is None else np.asarray(robots, dtype=np.int64)
+        if keep.ndim != 1 or keep.size == 0 or keep.min() < 0 or keep.max() >= rounds:
+            raise ValueError(f"robots must be indices of the {rounds} rounds, got {robots!r}")
         self.mj, self.robot, self.task = mujoco, robot or RobotConfig(), task or TaskConfig()
+        total, rounds = rounds, keep.size
         self.ctrl = Controller(controller, num_robots=rounds)
         self.spec, self.n = self.ctrl.spec, rounds
         self.policy = self.ctrl.session is not None
         self.control_dt, self.substeps = float(self.spec["control_dt"]), int(self.spec["substeps_per_control"])
         self.task = replace(self.task, goal_distance=float(self.spec.get("goal_distance", self.task.goal_distance)))
         self.grid = build_height_grid(terrain_for_goal(TerrainConfig(name=terrain, seed=seed), self.task.goal_distance))
-        s = start_poses(rounds, seed + START_SEED_OFFSET, self.task, stand=self.spec["stand_pose"], robot=self.robot)
+        s = start_poses(total, seed + START_SEED_OFFSET, self.task, stand=self.spec["stand_pose"], robot=self.robot)
+        s = {k: v[keep] for k, v in s.items()}
         places = [(0.0, y, 1.0, a) for y, a in zip(s["y"], s["yaw"])]
         self.m = build_model(self.robot, self.grid, places, float(self.spec["substep_dt"]))
         self.d = mujoco.MjData(self.m)
@@ -241,15 +248,51 @@ class Rounds:
         return {"pos": np.stack(pos), "rpy": np.stack(rpy), "done": np.stack(done), "status": np.stack(status)}
 
 
-def measure(controller: str | dict, terrain: str, rounds: int, seed: int = EVAL_TERRAIN_SEED,
-            max_steps: int | None = None, on_step=None) -> dict:
-    """:class:`Rounds` run to the end and summarised with :mod:`hexnewton.analysis.metrics` (``summarize``'s dict plus the
-    wall time and the scanner's ray count)."""
-    t0 = time.perf_counter()
-    r = Rounds(controller, terrain, rounds, seed)
+def run_part(controller: str | dict, terrain: str, rounds: int, seed: int, max_steps: int | None,
+             robots=None, on_step=None) -> dict:
+    """The rounds ``robots`` (indices of ``rounds``; None: all) run to the end: :meth:`Rounds.run`'s arrays plus
+    ``control_dt``, ``steps`` and the scanner's ``rays``. A top-level function, so that worker processes can run it."""
+    r = Rounds(controller, terrain, rounds, seed, robots=robots)
     ep = r.run(max_steps, on_step)
-    out = summarize(round_metrics(ep["pos"], ep["rpy"], ep["done"], ep["status"], r.control_dt), ep["rpy"])
-    out.update(control_steps=r.steps, wall_s=round(time.perf_counter() - t0, 1), rays=r.scan.rays)
+    ep.update(control_dt=r.control_dt, steps=r.steps, rays=r.scan.rays)
+    return ep
+
+
+def join_parts(parts: list[dict]) -> dict:
+    """:func:`run_part` results of consecutive robot ranges as one: the robots side by side in the order given, each
+    part's steps padded to the longest as its ended robots read (position and angles NaN, not done, RUNNING)."""
+    t = max(p["pos"].shape[0] for p in parts)
+    fill = {"pos": np.nan, "rpy": np.nan, "done": False, "status": RUNNING}
+    out = {}
+    for k, v in fill.items():
+        padded = [np.concatenate([p[k], np.full((t - p[k].shape[0],) + p[k].shape[1:], v, p[k].dtype)]) for p in parts]
+        out[k] = np.concatenate(padded, axis=1)
+    out.update(control_dt=parts[0]["control_dt"], steps=t, rays=sum(p["rays"] for p in parts))
+    return out
+
+
+def measure(controller: str | dict, terrain: str, rounds: int, seed: int = EVAL_TERRAIN_SEED,
+            max_steps: int | None = None, on_step=None, workers: int = 1) -> dict:
+    """:class:`Rounds` run to the end and summarised with :mod:`hexnewton.analysis.metrics` (``summarize``'s dict plus the
+    wall time, the control steps and the scanner's ray count). ``workers`` > 1 splits the rounds into that many
+    consecutive ranges, each a MuJoCo model of its own in a process of its own (no ``on_step`` then): the robots of
+    one model never touch each other, so each round walks as in one model of all of them."""
+    t0 = time.perf_counter()
+    workers = max(1, min(int(workers), rounds))
+    if workers > 1 and on_step is not None:
+        raise ValueError("a film or viewer (on_step) shows one model: run it with workers=1")
+    if workers == 1:
+        ep = run_part(controller, terrain, rounds, seed, max_steps, None, on_step)
+    else:
+        import multiprocessing
+        from concurrent.futures import ProcessPoolExecutor
+
+        ranges = np.array_split(np.arange(rounds), workers)
+        with ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn")) as pool:
+            parts = list(pool.map(run_part, *zip(*[(controller, terrain, rounds, seed, max_steps, r) for r in ranges])))
+        ep = join_parts(parts)
+    out = summarize(round_metrics(ep["pos"], ep["rpy"], ep["done"], ep["status"], ep["control_dt"]), ep["rpy"])
+    out.update(control_steps=ep["steps"], wall_s=round(time.perf_counter() - t0, 1), rays=ep["rays"])
     return out
 
 

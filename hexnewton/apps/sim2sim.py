@@ -2,6 +2,7 @@
 
     python -m hexnewton.apps.sim2sim results/controllers/cpg_rl_complex --terrains rugged stepped complex --rounds 100 \\
         --out results/sim2sim
+    python -m hexnewton.apps.sim2sim BUNDLE --terrains rugged --rounds 300 --workers 0 --out /tmp/s2s     # every core
     python -m hexnewton.apps.sim2sim BUNDLE --terrains rugged --rounds 1 --video walk.mp4 --out /tmp/s2s  # one round filmed
     python -m hexnewton.apps.sim2sim BUNDLE --terrains complex --rounds 1 --viewer --out /tmp/s2s         # MuJoCo's viewer
 
@@ -20,7 +21,9 @@ run_rounds`): terrain seed S (default 1000), robot k in lane y_k of ``linspace(-
 drawn from seed S + 1000 (+-0.1 m across, +-0.2 rad yaw, +-0.05 rad per joint), the goal 3.5 m ahead, the episode's
 ends of ``TaskConfig`` (fall: torso below 5 cm over the ground or tilted past 60 deg; off course: 1.5 m sideways;
 goal within 0.5 m; 7000 steps). All rounds run at once as robots of one model that touch the terrain but not each
-other; a finished robot is parked out of the way. Metrics: :mod:`hexnewton.analysis.metrics`, as for Newton.
+other; a finished robot is parked out of the way. ``--workers N`` splits a terrain's rounds into N consecutive ranges,
+each a model of its own in a process of its own (0: one per core), the same rounds on more cores (a film or the
+viewer runs its terrain in one process). Metrics: :mod:`hexnewton.analysis.metrics`, as for Newton.
 
 Outputs in ``--out`` (which must not exist): ``results.json`` (``{terrain: metrics}`` of the bundle), ``details.json``
 (the fixed CPG's rounds, the Newton reference numbers, the command, versions) and ``report.md``. The fixed CPG
@@ -165,7 +168,12 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--newton", default=NEWTON_REFERENCE, help="a Newton evaluation's results.json ('none': skip)")
     p.add_argument("--video", metavar="PATH.mp4", help="film robot 0 of the first terrain's bundle rounds")
     p.add_argument("--viewer", action="store_true", help="show robot 0 in MuJoCo's interactive viewer")
+    p.add_argument("--workers", type=int, default=1,
+                   help="processes per terrain, each a consecutive range of the rounds (0: one per core)")
     args = p.parse_args(argv)
+    if args.workers < 0:
+        raise ValueError(f"--workers must be 0 (one per core) or more, got {args.workers}")
+    args.workers = args.workers or os.cpu_count() or 1
     args.argv = list(sys.argv[1:] if argv is None else argv)
     if os.path.exists(args.out):
         raise ValueError(f"--out {args.out} exists already (nothing is overwritten)")
@@ -190,13 +198,15 @@ def run_all(args, newton: dict) -> int:
     for i, terrain in enumerate(args.terrains):
         hook = (Film(args.video) if args.video else Viewer() if args.viewer else None) if i == 0 else None
         try:
-            bundle_res[terrain] = measure(args.bundle, terrain, args.rounds, args.seed, args.max_steps, hook)
+            bundle_res[terrain] = measure(args.bundle, terrain, args.rounds, args.seed, args.max_steps, hook,
+                                          1 if hook is not None else args.workers)
         finally:
             if hook is not None:
                 hook.close()
         print(_line("bundle", terrain, bundle_res[terrain]), flush=True)
     for terrain in args.fixed_terrains:
-        fixed_res[terrain] = measure(fixed_cpg_spec(), terrain, args.rounds, args.seed, args.max_steps)
+        fixed_res[terrain] = measure(fixed_cpg_spec(), terrain, args.rounds, args.seed, args.max_steps,
+                                     workers=args.workers)
         print(_line("fixed CPG", terrain, fixed_res[terrain]), flush=True)
     from hexnewton.analysis.report import git_rev
 
@@ -204,7 +214,7 @@ def run_all(args, newton: dict) -> int:
     meta = {"command": f"`{cmd}`", "MuJoCo": mujoco.__version__, "git": git_rev(),
             "rounds per terrain": args.rounds,
             "terrain seed / start seed": f"{args.seed} / {args.seed + START_SEED_OFFSET}",
-            "machine": f"CPU ({os.cpu_count()} cores)", "wall time": f"{time.perf_counter() - t0:.0f} s"}  # fmt: skip
+            "machine": f"CPU ({os.cpu_count()} cores, {args.workers} worker processes)", "wall time": f"{time.perf_counter() - t0:.0f} s"}  # fmt: skip
     os.makedirs(args.out)
     with open(os.path.join(args.out, "results.json"), "w") as f:
         json.dump({t: headline(s) for t, s in bundle_res.items()}, f, indent=1)

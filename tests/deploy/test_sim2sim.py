@@ -11,11 +11,11 @@ import pytest
 
 mujoco = pytest.importorskip("mujoco")
 
-from hexnewton.analysis.sim2sim import HeightScanner, Rounds, fixed_cpg_spec  # noqa: E402
+from hexnewton.analysis.sim2sim import HeightScanner, Rounds, fixed_cpg_spec, join_parts, measure  # noqa: E402
 from hexnewton.apps.sim2sim import HEADLINE, PROG, main  # noqa: E402
 from hexnewton.config import JOINT_NAMES, RobotConfig, TerrainConfig  # noqa: E402
 from hexnewton.deploy.mjcf import build_model, robot_xml  # noqa: E402
-from hexnewton.mdp.status import RUNNING  # noqa: E402
+from hexnewton.mdp.status import RUNNING, SUCCESS  # noqa: E402
 from hexnewton.physics.terrain.heightmap import build_height_grid  # noqa: E402
 
 BUNDLE = os.path.join(os.path.dirname(__file__), "..", "..", "results", "controllers", "cpg_rl_complex")
@@ -141,8 +141,9 @@ def test_cli_writes_results_and_rejects_bad_input(tmp_path, capsys):
         run(main, PROG, [BUNDLE, "--rounds", "0", "--out", str(tmp_path / "y")])
     assert e.value.code == 2
     assert run(main, PROG, [BUNDLE, "--video", str(tmp_path / "v.avi"), "--out", str(tmp_path / "z")]) == 2
+    assert run(main, PROG, [BUNDLE, "--workers", "-1", "--out", str(tmp_path / "w")]) == 2
     err = capsys.readouterr().err.strip().splitlines()
-    assert len(err) == 3 and all(line.startswith(PROG) for line in err)
+    assert len(err) == 4 and all(line.startswith(PROG) for line in err) and "--workers" in err[-1]
 
 
 def test_newton_reference_reads_both_results_layouts(tmp_path):
@@ -159,3 +160,38 @@ def test_newton_reference_reads_both_results_layouts(tmp_path):
     a, b = newton_reference(str(own)), newton_reference(str(study))
     assert a["cpg_rl"] == {"rugged": summary} and a["device"] == "cuda:0" and "cpg" not in a
     assert b["cpg"] == {"rugged": summary} and b["device"] == "H200" and b["policy"] == "p.pt"
+
+
+def test_rounds_subset_keeps_each_rounds_start():
+    whole = Rounds(BUNDLE, "stepped", 4, 1000)
+    part = Rounds(BUNDLE, "stepped", 4, 1000, robots=[1, 3])
+    np.testing.assert_array_equal(part.d.qpos.reshape(2, 25), whole.d.qpos.reshape(4, 25)[[1, 3]])
+    np.testing.assert_array_equal(part.goal, whole.goal[[1, 3]])
+    for bad in ([], [4], [[0, 1]], [-1]):
+        with pytest.raises(ValueError, match="robots must be indices"):
+            Rounds(BUNDLE, "flat", 4, robots=bad)
+
+
+def test_join_parts_pads_the_shorter_part_as_ended_robots_read():
+    def part(t, n, ended):
+        done = np.zeros((t, n), bool)
+        done[-1] = ended
+        status = np.where(done, SUCCESS, RUNNING)
+        return {"pos": np.ones((t, n, 2)), "rpy": np.zeros((t, n, 3)), "done": done, "status": status,
+                "control_dt": 0.02, "steps": t, "rays": 5}
+
+    ep = join_parts([part(3, 2, True), part(5, 1, True)])
+    assert ep["pos"].shape == (5, 3, 2) and ep["steps"] == 5 and ep["rays"] == 10
+    assert np.isnan(ep["pos"][3:, :2]).all() and not ep["done"][3:, :2].any() and (ep["status"][3:, :2] == RUNNING).all()
+    assert ep["done"][2, :2].all() and ep["done"][4, 2] and ep["done"].sum() == 3
+
+
+def test_workers_run_the_same_rounds_as_one_model():
+    one = measure(BUNDLE, "stepped", 4, 1000, max_steps=40)
+    two = measure(BUNDLE, "stepped", 4, 1000, max_steps=40, workers=2)
+    for k in ("rounds", "success_3m", "fall_rate", "control_steps"):
+        assert one[k] == two[k], k
+    for k in ("pitch_var_deg2", "roll_var_deg2", "y_dev_mean_m"):
+        assert two[k] == pytest.approx(one[k], rel=1e-6, abs=1e-9), k
+    with pytest.raises(ValueError, match="on_step"):
+        measure(BUNDLE, "flat", 2, workers=2, on_step=lambda r: None)
