@@ -56,7 +56,8 @@ def note(name: str, value) -> None:
 
 def timed_imports(*modules: str) -> dict[str, float]:
     """Import ``modules`` one after another, each with whatever it needs that is not loaded yet, and keep their
-    seconds as the note ``imports_s`` (where "python and imports" goes; a module loaded before costs 0)."""
+    seconds in the note ``imports_s`` (where "python and imports" goes; a module loaded before costs 0), after
+    those of an earlier call."""
     import importlib
 
     seconds = {}
@@ -64,7 +65,7 @@ def timed_imports(*modules: str) -> dict[str, float]:
         t0 = time.time()
         importlib.import_module(name)
         seconds[name] = round(time.time() - t0, 2)
-    note("imports_s", seconds)
+    note("imports_s", {**_notes.get("imports_s", {}), **seconds})  # a second call adds its modules
     return seconds
 
 
@@ -92,5 +93,7 @@ def summary() -> str:
             line += f"; {name.replace('_', ' ')}: {len(value)}"
         elif name == "imports_s":
             line += "; imports: " + ", ".join(f"{k} {v:.1f}" for k, v in value.items())
+        elif name == "model_build_beside_s":
+            line += "; model built beside the imports: " + ", ".join(f"{k} {v:.1f}" for k, v in value.items())
     return line
 

@@ -13,7 +13,8 @@ import numpy as np
 
 from hexnewton.config import HexConfig, SimConfig, TerrainConfig
 from hexnewton.learning.agent import AgentConfig
-from hexnewton.learning.runner import Rank, barrier
+from hexnewton.learning.ranks import Rank
+from hexnewton.learning.runner import barrier
 
 
 @dataclass

@@ -273,8 +273,8 @@ def join_parts(parts: list[dict]) -> dict:
 
 def measure(controller: str | dict, terrain: str, rounds: int, seed: int = EVAL_TERRAIN_SEED,
             max_steps: int | None = None, on_step=None, workers: int = 1) -> dict:
-    """:class:`Rounds` run to the end and summarised with :mod:`hexnewton.analysis.metrics` (``summarize``'s dict plus the
-    wall time, the control steps and the scanner's ray count). ``workers`` > 1 splits the rounds into that many
+    """:class:`Rounds` run to the end and summarised with :mod:`hexnewton.analysis.metrics` (``summarize``'s dict plus
+    the wall time, the control steps and the scanner's ray count). ``workers`` > 1 splits the rounds into that many
     consecutive ranges, each a MuJoCo model of its own in a process of its own (no ``on_step`` then): the robots of
     one model never touch each other, so each round walks as in one model of all of them."""
     t0 = time.perf_counter()

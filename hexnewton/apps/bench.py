@@ -217,7 +217,8 @@ def main(argv: list[str] | None = None) -> int:
     args = parser().parse_args(argv)
     baseline = check_outputs(args)
     sim, ground, agent, base, terrains = settings(args)
-    from hexnewton.learning.runner import close_group, distributed_rank, gather_floats, init_group
+    from hexnewton.learning.ranks import distributed_rank
+    from hexnewton.learning.runner import close_group, gather_floats, init_group
     from hexnewton.physics.device import resolve_device
 
     rank = distributed_rank(dict(os.environ), args.device)

@@ -2,7 +2,7 @@
 
     python -m hexnewton.apps.sim2sim results/controllers/cpg_rl_complex --terrains rugged stepped complex --rounds 100 \\
         --out results/sim2sim
-    python -m hexnewton.apps.sim2sim BUNDLE --terrains rugged --rounds 300 --workers 0 --out /tmp/s2s     # every core
+    python -m hexnewton.apps.sim2sim BUNDLE --terrains rugged --rounds 300 --workers 0 --out /tmp/s2s  # every core
     python -m hexnewton.apps.sim2sim BUNDLE --terrains rugged --rounds 1 --video walk.mp4 --out /tmp/s2s  # one round filmed
     python -m hexnewton.apps.sim2sim BUNDLE --terrains complex --rounds 1 --viewer --out /tmp/s2s         # MuJoCo's viewer
 
@@ -214,7 +214,8 @@ def run_all(args, newton: dict) -> int:
     meta = {"command": f"`{cmd}`", "MuJoCo": mujoco.__version__, "git": git_rev(),
             "rounds per terrain": args.rounds,
             "terrain seed / start seed": f"{args.seed} / {args.seed + START_SEED_OFFSET}",
-            "machine": f"CPU ({os.cpu_count()} cores, {args.workers} worker processes)", "wall time": f"{time.perf_counter() - t0:.0f} s"}  # fmt: skip
+            "machine": f"CPU ({os.cpu_count()} cores, {args.workers} worker processes)",
+            "wall time": f"{time.perf_counter() - t0:.0f} s"}  # fmt: skip
     os.makedirs(args.out)
     with open(os.path.join(args.out, "results.json"), "w") as f:
         json.dump({t: headline(s) for t, s in bundle_res.items()}, f, indent=1)

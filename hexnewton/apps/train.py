@@ -105,6 +105,9 @@ def parser(base, resumed: bool) -> ArgumentParser:
     p.add_argument("--resume", metavar="PATH", help="checkpoint to continue from (a new run directory is made)")
     p.add_argument("--log_dir", default="logs")
     p.add_argument("--experiment", default=None, help="default: hexnewton_<task>")
+    p.add_argument("--sequential_start", action="store_true",
+                   help="build the terrain and the physics model after the torch and rsl-rl imports (default: in a "
+                        "thread beside them)")  # fmt: skip
     p.add_argument("--headless", action="store_true",
                    help="Isaac Lab's flag, accepted: training never opens a window (--video renders off-screen)")
     p.add_argument("--video", action="store_true",
@@ -158,15 +161,14 @@ def check_outputs(args) -> None:
 
 def rank_config(args, env_cfg):
     """This process's torchrun rank and its config: the device resolved, ``--num_envs`` (default 4096 on CUDA, 64 on
-    the CPU), the rank's own seeds (seeded here)."""
-    from hexnewton.learning.runner import distributed_rank, seed_everything
+    the CPU), the rank's own seeds (``seed_everything(cfg.task.seed)`` seeds them; no torch here)."""
+    from hexnewton.learning.ranks import distributed_rank
     from hexnewton.physics.device import resolve_device
 
     rank = distributed_rank(dict(os.environ), args.device)
     device = resolve_device(rank.device or args.device)
     num_envs = args.num_envs or (4096 if device.startswith("cuda") else 64)
     seed, terrain_seed = rank.seeds(args.seed, env_cfg.terrain.seed)
-    seed_everything(seed)
     cfg = dataclasses.replace(env_cfg, sim=dataclasses.replace(env_cfg.sim, num_envs=num_envs, device=device),
                               terrain=dataclasses.replace(env_cfg.terrain, seed=terrain_seed),
                               task=dataclasses.replace(env_cfg.task, seed=seed))  # fmt: skip
@@ -374,13 +376,20 @@ def main(argv: list[str] | None = None) -> int:
     env_cfg, agent = configs(args, base, ckpt)
     from hexnewton import startup
 
-    # the heavy imports one by one, so that the start-up line says where "python and imports" goes
-    startup.timed_imports("torch", "warp", "newton", "rsl_rl", "hexnewton.mdp.env", "hexnewton.learning.runner")
+    # the heavy imports one by one, so that the start-up line says where "python and imports" goes; the terrain and
+    # the physics model (NumPy and Newton, no torch) build in a thread while torch and rsl-rl import
+    startup.timed_imports("warp", "newton", "hexnewton.physics.world")
+    rank, cfg = rank_config(args, env_cfg)
+    from hexnewton.physics.world import ModelBuild
+
+    build = None if args.sequential_start else ModelBuild(cfg, beside=True)
+    startup.timed_imports("torch", "rsl_rl", "hexnewton.mdp.env", "hexnewton.learning.runner")
     check_outputs(args)
+    from hexnewton.learning.runner import seed_everything
     from hexnewton.mdp.env import make_env
 
-    rank, cfg = rank_config(args, env_cfg)
-    env = make_env(cfg, base.action_mode)
+    seed_everything(cfg.task.seed)
+    env = make_env(cfg, base.action_mode, build)
     if ckpt is not None:
         from hexnewton.learning.checkpoint import check_compatible
 

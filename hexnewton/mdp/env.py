@@ -85,7 +85,7 @@ from hexnewton.physics.cpg import CPGController, joint_actions_kernel
 from hexnewton.physics.graphs import capture_graph
 from hexnewton.physics.precompile import compile_modules, loaded_variants, variant_names
 from hexnewton.physics.robot import BASE_Q
-from hexnewton.physics.world import World
+from hexnewton.physics.world import ModelBuild, World
 
 RING = 1024  # finished episodes the logged rates average over
 # the ring's columns: one per episode end (its status code - 1), then distance, length and curriculum level
@@ -137,14 +137,15 @@ def _bookkeeping(
 
 
 class HexapodEnv(VecEnv):
-    """N hexapods, one terrain, the paper's observation, action, reward and terminations."""
+    """N hexapods, one terrain, the paper's observation, action, reward and terminations. ``build``: the world's
+    model built earlier (:class:`~hexnewton.physics.world.ModelBuild`, ``train.py`` beside its imports)."""
 
-    def __init__(self, cfg: HexConfig, action_mode: str = "cpg"):
+    def __init__(self, cfg: HexConfig, action_mode: str = "cpg", build: ModelBuild | None = None):
         if action_mode not in ACTION_MODES:
             raise HexnewtonError(f"unknown action mode '{action_mode}': choose one of {', '.join(ACTION_MODES)}")
         self.cfg = cfg
         self.action_mode = action_mode
-        self.world = world = World(cfg)
+        self.world = world = World(cfg, build=build)
         # each env's physical draws (friction, masses, gains, contacts), once, before anything is stepped
         self.physical_draws = randomize_physics(world, cfg.task.seed) if cfg.randomization.enabled else {}
         task = cfg.task
@@ -516,8 +517,9 @@ class HexapodEnv(VecEnv):
         self.graph = None
 
 
-def make_env(cfg: HexConfig, action_mode: str = "cpg") -> HexapodEnv:
-    """Build the environment; configuration errors become ``HexnewtonError`` / ``ValueError`` with one line."""
+def make_env(cfg: HexConfig, action_mode: str = "cpg", build: ModelBuild | None = None) -> HexapodEnv:
+    """Build the environment (on ``build``'s model where given); configuration errors become ``HexnewtonError`` /
+    ``ValueError`` with one line."""
     if not math.isfinite(cfg.task.goal_distance) or cfg.task.goal_distance <= cfg.task.goal_radius:
         raise HexnewtonError("task.goal_distance must exceed task.goal_radius")
     knee = cfg.robot.knee_limit[1] - cfg.robot.stand_pose[1]  # the knee lift the standing pose leaves
@@ -529,7 +531,7 @@ def make_env(cfg: HexConfig, action_mode: str = "cpg") -> HexapodEnv:
         raise HexnewtonError("reward.stability_tilt must lie in (0, pi/2) rad")
     if not cfg.cpg.param_tau >= 0:
         raise HexnewtonError("cpg.param_tau must be >= 0")
-    return HexapodEnv(cfg, action_mode)
+    return HexapodEnv(cfg, action_mode, build)
 
 
 __all__ = ["ACTION_MODES", "HexapodEnv", "make_env"]

@@ -19,6 +19,8 @@ from __future__ import annotations
 
 import logging
 import math
+import threading
+import time
 import warnings
 from collections.abc import Callable
 from dataclasses import dataclass, replace
@@ -186,10 +188,117 @@ class OverflowReport:
                 + "; or lower sim.rigid_gap (fewer contact candidates)")
 
 
-class World:
-    """N hexapods on one terrain, stepped by SolverMuJoCo with Newton's collision pipeline."""
+@dataclass
+class Spawn:
+    """Where the scene stands its robots: env i at x = 0 in its own lane y_i (``xy`` (N, 2)), the lanes evenly spread
+    over +-spawn_y_spread so that the robots meet different blocks, its torso ``clearance`` above the highest terrain
+    within ``footprint`` of its lane (``z`` (N,))."""
 
-    def __init__(self, cfg: HexConfig | None = None, terrain: Terrain | None = None):
+    xy: np.ndarray
+    z: np.ndarray
+    footprint: float
+    clearance: float
+
+
+def build_scene(cfg: HexConfig, terrain: Terrain) -> tuple[newton.ModelBuilder, Spawn]:
+    """The scene: ``cfg.sim.num_envs`` hexapods, each in its own world, standing at their :class:`Spawn`, and the shared
+    terrain."""
+    sim, n = cfg.sim, cfg.sim.num_envs
+    robot = build_hexapod(cfg.robot, gap=sim.rigid_gap)
+
+    scene = newton.ModelBuilder()
+    SolverMuJoCo.register_custom_attributes(scene)
+    scene.rigid_gap = sim.rigid_gap
+    scene.replicate(robot, n)
+    terrain_gap = sim.rigid_gap if sim.terrain_gap is None else sim.terrain_gap
+    ground_cfg = newton.ModelBuilder.ShapeConfig(mu=cfg.robot.friction, gap=terrain_gap)
+    terrain.add_to_builder(scene, ground_cfg)
+
+    xy = np.zeros((n, 2))
+    if n > 1:
+        xy[:, 1] = np.linspace(-sim.spawn_y_spread, sim.spawn_y_spread, n)
+    footprint = 0.5 * math.hypot(*cfg.robot.torso_size[:2]) + cfg.robot.hip_length + cfg.robot.femur_length
+    clearance = max(cfg.robot.spawn_height, stand_height(cfg.robot))
+    z = max_terrain_height_np(terrain.grid, xy[:, 0], xy[:, 1], footprint) + clearance
+    nq = BASE_Q + NUM_JOINTS
+    q = np.asarray(scene.joint_q, dtype=np.float32).reshape(n, nq)
+    q[:, 0:2] = xy
+    q[:, 2] = z
+    scene.joint_q[:] = q.reshape(-1).tolist()
+    return scene, Spawn(xy, z, footprint, clearance)
+
+
+class ModelBuild:
+    """The terrain and the finalized Newton model of ``cfg``: the height grid and its meshes, the scene
+    (:func:`build_scene`) and Newton's finalize, which for the curriculum's complex course is mostly NumPy over its
+    block mesh (the open-edge flags of ~1.1 M faces, ~10 s). None of it needs torch or rsl-rl.
+
+    Made before anything loads a Warp module: it installs the shipped modules first. ``beside=False`` builds at once,
+    marking the start-up phases terrain, scene and finalize; ``beside=True`` builds in a thread while the process goes
+    on (``train.py`` imports torch and rsl-rl meanwhile), its phases kept as the note ``model_build_beside_s`` and the
+    wait for it marked as the phase "model build". :class:`World` takes it (``World(cfg, build=...)``); an error of
+    the build is raised there."""
+
+    def __init__(self, cfg: HexConfig, terrain: Terrain | None = None, beside: bool = False):
+        validate_sim(cfg.sim)
+        self.cfg, self.device, self.beside = cfg, resolve_device(cfg.sim.device), beside
+        startup.mark("python and imports")
+        # the modules compiled ahead of time for this GPU (hexnewton/physics/aot/) into Warp's cache, before any loads
+        shipped = install_shipped_modules(self.device)
+        if shipped or "shipped_modules_installed" not in startup.notes():
+            startup.note("shipped_modules_installed", shipped)
+        startup.mark("shipped kernels")
+        # SimConfig.precompile "generated": the kernels mujoco_warp and Newton generate for this model come after these
+        is_cuda = wp.get_device(self.device).is_cuda
+        self.since = live_kernel_ids() if compiles_generated(cfg.sim.precompile, is_cuda) else None
+        self.seconds: dict[str, float] = {}
+        self._terrain, self._out, self._error, self._last = terrain, None, None, time.time()
+        self._thread = threading.Thread(target=self._build, name="hexnewton-model-build", daemon=True) if beside \
+            else None
+        if self._thread is not None:
+            self._thread.start()
+        else:
+            self._build()
+
+    def _lap(self, name: str) -> None:
+        if self.beside:
+            now = time.time()
+            self.seconds[name], self._last = round(now - self._last, 2), now
+        else:
+            startup.mark(name)
+
+    def _build(self) -> None:
+        try:
+            terrain = self._terrain if self._terrain is not None else make_terrain(self.cfg.terrain)
+            self._lap("terrain")
+            scene, spawn = build_scene(self.cfg, terrain)
+            self._lap("scene")
+            with wp.ScopedDevice(self.device):
+                model = scene.finalize(device=self.device)
+            self._lap("finalize")
+            self._out = terrain, model, spawn
+        except BaseException as exc:  # raised in the thread that takes the result
+            self._error = exc
+
+    def result(self) -> tuple[Terrain, newton.Model, Spawn]:
+        """The terrain, the finalized model and the spawn, once built (waits for a build beside)."""
+        if self._thread is not None:  # the wait, 0 if the build ended first
+            self._thread.join()
+            self._thread = None
+            startup.mark("model build")
+            startup.note("model_build_beside_s", self.seconds)
+        if self._error is not None:
+            raise self._error
+        return self._out
+
+
+class World:
+    """N hexapods on one terrain, stepped by SolverMuJoCo with Newton's collision pipeline.
+
+    ``terrain``: a built terrain to use instead of ``cfg.terrain``'s; ``build``: a :class:`ModelBuild` of ``cfg`` made
+    earlier (in ``train.py`` beside the imports), instead of building here."""
+
+    def __init__(self, cfg: HexConfig | None = None, terrain: Terrain | None = None, build: ModelBuild | None = None):
         self.cfg = cfg = cfg or HexConfig()
         sim = cfg.sim
         validate_sim(sim)
@@ -198,25 +307,18 @@ class World:
         self.frame_dt = sim.frame_dt
         self.sim_dt = sim.frame_dt / sim.substeps
         self.substeps = sim.substeps
-        startup.mark("python and imports")
-        # the modules compiled ahead of time for this GPU (hexnewton/physics/aot/) into Warp's cache, before any loads
-        shipped = install_shipped_modules(self.device)
-        if shipped or "shipped_modules_installed" not in startup.notes():
-            startup.note("shipped_modules_installed", shipped)
-        startup.mark("shipped kernels")
-        # SimConfig.precompile "generated": the kernels mujoco_warp and Newton generate for this model come after these
-        since = live_kernel_ids() if compiles_generated(sim.precompile, wp.get_device(self.device).is_cuda) else None
-
-        self.terrain = terrain if terrain is not None else make_terrain(cfg.terrain)
-        startup.mark("terrain")
-        scene = self._build_scene()
-        startup.mark("scene")
-        with wp.ScopedDevice(self.device):
-            self.model = scene.finalize(device=self.device)
-        startup.mark("finalize")
+        if build is None:
+            build = ModelBuild(cfg, terrain)
+        elif build.cfg != cfg or terrain is not None:
+            raise ValueError("World: the model build is of another config (or a terrain was given beside it)")
+        else:
+            startup.mark("python and imports")
+        self.terrain, self.model, spawn = build.result()
+        self.spawn_xy, self.spawn_z = spawn.xy, spawn.z
+        self.footprint, self.spawn_clearance = spawn.footprint, spawn.clearance
         self._init_model_arrays()
         startup.mark("model arrays")
-        self._init_physics(since)
+        self._init_physics(build.since)
         self._init_buffers()
         self._bind_views()
         self.sim_time = 0.0
@@ -224,35 +326,6 @@ class World:
         self.controller: Callable[[World], None] | None = None
         wp.synchronize_device(self.device)
         startup.mark("world buffers")
-
-    def _build_scene(self) -> newton.ModelBuilder:
-        """The scene: ``num_envs`` hexapods, each in its own world, and the shared terrain. Env i stands at x = 0 in
-        its own lane y_i, the lanes evenly spread over +-spawn_y_spread so that the robots meet different blocks, its
-        torso ``spawn_clearance`` above the highest terrain under its footprint."""
-        cfg, sim, n = self.cfg, self.cfg.sim, self.num_envs
-        robot = build_hexapod(cfg.robot, gap=sim.rigid_gap)
-
-        scene = newton.ModelBuilder()
-        SolverMuJoCo.register_custom_attributes(scene)
-        scene.rigid_gap = sim.rigid_gap
-        scene.replicate(robot, n)
-        terrain_gap = sim.rigid_gap if sim.terrain_gap is None else sim.terrain_gap
-        ground_cfg = newton.ModelBuilder.ShapeConfig(mu=cfg.robot.friction, gap=terrain_gap)
-        self.terrain.add_to_builder(scene, ground_cfg)
-
-        self.spawn_xy = np.zeros((n, 2))
-        if n > 1:
-            self.spawn_xy[:, 1] = np.linspace(-sim.spawn_y_spread, sim.spawn_y_spread, n)
-        self.footprint = 0.5 * math.hypot(*cfg.robot.torso_size[:2]) + cfg.robot.hip_length + cfg.robot.femur_length
-        self.spawn_clearance = max(cfg.robot.spawn_height, stand_height(cfg.robot))
-        ground = max_terrain_height_np(self.terrain.grid, self.spawn_xy[:, 0], self.spawn_xy[:, 1], self.footprint)
-        self.spawn_z = ground + self.spawn_clearance
-        nq = BASE_Q + NUM_JOINTS
-        q = np.asarray(scene.joint_q, dtype=np.float32).reshape(n, nq)
-        q[:, 0:2] = self.spawn_xy
-        q[:, 2] = self.spawn_z
-        scene.joint_q[:] = q.reshape(-1).tolist()
-        return scene
 
     def _init_model_arrays(self) -> None:
         """The finalized model's states (forward kinematics of the spawn poses) and control."""

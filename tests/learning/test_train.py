@@ -120,7 +120,7 @@ def test_interrupt_saves_and_exports(tmp_path):
 def test_torchrun_ranks_devices_and_seeds():
     """torchrun's variables pick cuda:LOCAL_RANK (or the CPU when asked) and rank-offset seeds; a plain run is
     unchanged (no GPU needed)."""
-    from hexnewton.learning.runner import distributed_rank
+    from hexnewton.learning.ranks import distributed_rank
 
     assert distributed_rank({}, None).device is None and distributed_rank({}, "cpu").world_size == 1
     r = distributed_rank({"WORLD_SIZE": "2", "RANK": "1", "LOCAL_RANK": "1"}, None)
@@ -283,8 +283,11 @@ def test_training_reports_its_start_up_and_writes_timing(trained):
     assert f"first step loaded modules: {len(loads)}" in out
     # the heavy imports one by one (0 for a module already loaded)
     imports = timing["startup_notes"]["imports_s"]
-    assert list(imports)[:3] == ["torch", "warp", "newton"] and all(v >= 0 for v in imports.values())
-    assert "; imports: torch " in line
+    assert list(imports)[:4] == ["warp", "newton", "hexnewton.physics.world", "torch"]
+    assert all(v >= 0 for v in imports.values()) and "; imports: warp " in line
+    # the terrain and the model built in a thread beside the torch and rsl-rl imports, the wait for it a phase
+    assert set(timing["startup_notes"]["model_build_beside_s"]) == {"terrain", "scene", "finalize"}
+    assert "model build" in timing["startup_phases_s"] and "; model built beside the imports: terrain " in line
     assert os.path.isfile(timing["result"])
     # the result chosen on deterministic validation (the fixture: 4 rounds of 30 steps per candidate), kept as
     # model_result.pt, which play.py and evaluate take for the run's result

@@ -14,7 +14,7 @@ from hexnewton.physics.cpg import CPGController
 from hexnewton.physics.device import resolve_device
 from hexnewton.physics.robot import stand_height
 from hexnewton.physics.terrain import max_terrain_height_np
-from hexnewton.physics.world import ContactOverflowError, World
+from hexnewton.physics.world import ContactOverflowError, ModelBuild, World
 
 N = 4
 
@@ -163,6 +163,35 @@ def test_envs_start_in_spread_lanes():
     world = _world("rugged")
     np.testing.assert_allclose(world.spawn_xy[:, 1], np.linspace(-0.5, 0.5, N))
     np.testing.assert_allclose(world.numpy_q()[:, :2], world.spawn_xy, atol=1e-6)
+
+
+def test_model_built_beside_is_the_model_built_at_once():
+    """train.py builds the terrain and the model in a thread beside its imports (ModelBuild(beside=True)): the world
+    on it is the world built at once, the wait is the start-up phase "model build", the thread's phases a note."""
+    from hexnewton import startup
+
+    cfg = HexConfig(sim=SimConfig(num_envs=N, device="cpu"),
+                    terrain=TerrainConfig(name="rugged", collision="mesh_boxes"))
+    build = ModelBuild(cfg, beside=True)
+    beside, at_once = World(cfg, build=build), World(cfg)
+    assert set(build.seconds) == {"terrain", "scene", "finalize"} and "model build" in startup.phases()
+    assert startup.notes()["model_build_beside_s"] == build.seconds
+    np.testing.assert_array_equal(beside.numpy_q(), at_once.numpy_q())
+    np.testing.assert_array_equal(beside.spawn_z, at_once.spawn_z)
+    assert beside.model.shape_count == at_once.model.shape_count
+    for w in (beside, at_once):
+        w.set_controller(CPGController(w))
+        w.step(20)
+    np.testing.assert_allclose(beside.numpy_q(), at_once.numpy_q(), atol=1e-5)
+    with pytest.raises(ValueError, match="another config"):
+        World(HexConfig(sim=SimConfig(num_envs=N + 1, device="cpu")), build=build)
+
+
+def test_model_build_error_is_raised_where_the_world_takes_it():
+    bad = HexConfig(sim=SimConfig(num_envs=N, device="cpu"), terrain=TerrainConfig(name="rugged", block_size=-1.0))
+    build = ModelBuild(bad, beside=True)  # the thread fails; the process goes on
+    with pytest.raises(ValueError):
+        World(bad, build=build)
 
 
 def test_device_resolution():
