@@ -9,7 +9,8 @@
 #                                                            # past its imports; refuses a NAME that is running
 #                                                            # (start_run below; `baseline` alike)
 #   bash scripts/device/gpu.sh wait SECONDS NAME...          # until those runs end (at most SECONDS), their progress
-#   bash scripts/device/gpu.sh pack NAME...                  # config, events, log, the result, best and last ->
+#   bash scripts/device/gpu.sh pack NAME...                  # config, events, log, the result (else the last
+#                                                            # checkpoint; both with PACK_LAST=1) and best ->
 #                                                            # $OUT/run_NAME.tgz; the shipped checkpoint -> $KEEP/NAME.pt
 #   bash scripts/device/gpu.sh eval SECONDS NAME[@GPU]:ARGS...   # `python -m hexnewton.apps.evaluate ARGS` jobs at once,
 #                                                                # each cut off after SECONDS -> $OUT/evals.tgz
@@ -108,10 +109,13 @@ pack)
     best="$run/model_best.pt"; last=$(ls -v "$run"/model_[0-9]*.pt | tail -1)
     final=$(sed -n 's/^  python play.py --checkpoint //p' "$RUNS/$name.log" | tail -1)
     cp "${final:-$last}" "$KEEP/$name.pt"
+    # the result (model_result.pt) where train.py chose one, else the last checkpoint; the last too with PACK_LAST=1
+    # (to resume): a checkpoint is ~5 MB and a device call brings back ~64 MB
+    keep=$last; [ -n "$final" ] && [ -f "$final" ] && keep=$final
     tar czf "$OUT/run_$name.tgz" -C "$RUNS" "$name.log" -C "$RUNS/$name" $(cd "$RUNS/$name" && \
-      ls "$(basename "$run")"/{config.json,policy.onnx,events.*} "$(basename "$run")/$(basename "$last")" 2>/dev/null; \
+      ls "$(basename "$run")"/{config.json,policy.onnx,events.*} "$(basename "$run")/$(basename "$keep")" 2>/dev/null; \
       [ -f "$best" ] && echo "$(basename "$run")/model_best.pt"
-      [ -n "$final" ] && [ "$final" != "$last" ] && [ -f "$final" ] && echo "$(basename "$run")/$(basename "$final")")
+      [ "${PACK_LAST:-0}" = 1 ] && [ "$keep" != "$last" ] && echo "$(basename "$run")/$(basename "$last")")
     echo "packed $name: $(basename "${final:-$last}") kept as $KEEP/$name.pt"
   done
   ;;

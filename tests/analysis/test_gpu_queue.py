@@ -196,8 +196,9 @@ def test_candidates_train_pack_and_evaluate_in_one_call(tmp_path):
                            "m1@1:points:--task complex-margin --seed 1"], cwd=ROOT, env=env, check=True,
                           capture_output=True, text=True)  # fmt: skip
     assert "a1: evaluations ended" in done.stdout and "m1: evaluations ended" in done.stdout, done.stdout
-    with tarfile.open(out / "run_a1.tgz") as tar:
+    with tarfile.open(out / "run_a1.tgz") as tar:  # the result, not the last checkpoint beside it (PACK_LAST=1)
         assert "2026-01-01/model_result.pt" in tar.getnames() and "a1.log" in tar.getnames()
+        assert "2026-01-01/model_299.pt" not in tar.getnames()
     assert (keep / "a1.pt").is_file() and (keep / "m1.pt").is_file()
     with tarfile.open(out / "evals.tgz") as tar:
         names = set(tar.getnames())
