@@ -42,4 +42,5 @@ def distributed_rank(environ: dict, device: str | None) -> Rank:
         raise ValueError(f"distributed training runs on cuda (one GPU per rank) or cpu, not on '{device}'")
     return Rank(rank, local, world, f"cuda:{local}")
 
+
 __all__ = ["Rank", "distributed_rank"]
