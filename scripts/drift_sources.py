@@ -1,6 +1,6 @@
 """Where a policy's lateral drift on the rugged course comes from: its rounds (``analysis.rollout.run_rounds``, the
-evaluation's courses and start draws, deterministic action), each round's start yaw and start offset against its
-lateral offset and heading when it has walked 1, 2 and 3 m.
+evaluation's courses and start draws, deterministic action), each round's start yaw against its lateral offset from
+its start line and its yaw when it has walked 1, 2 and 3 m.
 
     python scripts/drift_sources.py --checkpoint results/policies/cpg_rl_complex.pt --rounds 64 --device cpu \\
         --out drift_sources.json
@@ -45,19 +45,19 @@ def corr(a: np.ndarray, b: np.ndarray) -> float:
 
 
 def summarize(pos: np.ndarray, rpy: np.ndarray) -> dict:
-    """The start yaw's share in the drift: per mark the mean |y|, its correlation with the start yaw and with the start
-    offset (y at the first step), the mean |yaw| there, and the offset a round would have if it kept its start yaw."""
+    """The start yaw's share in the drift: per mark the mean |y| (``pos`` is relative to each round's start), its
+    correlation with the start yaw, the mean |yaw| there, and the offset a round would have if it kept its start
+    yaw."""
     yaw = np.unwrap(rpy[..., 2], axis=0)
-    yaw0, y0 = yaw[0], pos[0, :, 1]
+    yaw0 = yaw[0]
     rows = {}
     for m, v in at_distances(pos, yaw).items():
         rows[f"{m:g} m"] = {
             "rounds_reached": int(np.isfinite(v["y"]).sum()),
             "mean_abs_y_m": float(np.nanmean(np.abs(v["y"]))),
             "corr_y_start_yaw": corr(v["y"], yaw0),
-            "corr_y_start_offset": corr(v["y"], y0),
             "mean_abs_yaw_rad": float(np.nanmean(np.abs(v["yaw"]))),
-            "mean_abs_y_if_start_yaw_kept_m": float(np.nanmean(np.abs(y0 + m * np.tan(yaw0)))),
+            "mean_abs_y_if_start_yaw_kept_m": float(np.nanmean(np.abs(m * np.tan(yaw0)))),
         }
     return {"rounds": int(pos.shape[1]), "mean_abs_start_yaw_rad": float(np.mean(np.abs(yaw0))), "at": rows}
 
@@ -85,8 +85,8 @@ def main(argv: list[str] | None = None) -> int:
         json.dump(res, f, indent=1)
     for mark, r in res["at"].items():
         print(f"{mark}: |y| {r['mean_abs_y_m']:.3f} m (kept start yaw: {r['mean_abs_y_if_start_yaw_kept_m']:.3f}), "
-              f"corr with start yaw {r['corr_y_start_yaw']:+.2f}, with start offset {r['corr_y_start_offset']:+.2f}, "
-              f"|yaw| {r['mean_abs_yaw_rad']:.3f} rad ({r['rounds_reached']} rounds)")
+              f"corr with start yaw {r['corr_y_start_yaw']:+.2f}, |yaw| {r['mean_abs_yaw_rad']:.3f} rad "
+              f"({r['rounds_reached']} rounds)")
     return 0
 
 

@@ -27,7 +27,7 @@ def _straight(yaw0: np.ndarray, y0: np.ndarray, steps: int = 400, dx: float = 0.
 
 def test_a_kept_start_yaw_is_the_whole_drift():
     yaw0 = np.linspace(-0.2, 0.2, 9)
-    pos, rpy = _straight(yaw0, np.zeros(9))
+    pos, rpy = _straight(yaw0, np.zeros(9))  # positions relative to each round's start
     s = ds.summarize(pos, rpy)
     at3 = s["at"]["3 m"]
     assert at3["rounds_reached"] == 9 and at3["corr_y_start_yaw"] == pytest.approx(1.0, abs=1e-3)
