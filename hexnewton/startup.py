@@ -84,6 +84,10 @@ def since_start() -> float:
     return time.time() - START
 
 
+#: the notes of seconds the summary line shows, by their label there
+_SECONDS_NOTES = {"imports_s": "imports", "model_build_beside_s": "model built beside the imports"}
+
+
 def summary() -> str:
     """One line: the seconds since the process started and each phase's."""
     parts = ", ".join(f"{k} {v:.1f}" for k, v in _phases.items())
@@ -91,9 +95,7 @@ def summary() -> str:
     for name, value in _notes.items():
         if isinstance(value, list):  # the count here, the items in timing.json
             line += f"; {name.replace('_', ' ')}: {len(value)}"
-        elif name == "imports_s":
-            line += "; imports: " + ", ".join(f"{k} {v:.1f}" for k, v in value.items())
-        elif name == "model_build_beside_s":
-            line += "; model built beside the imports: " + ", ".join(f"{k} {v:.1f}" for k, v in value.items())
+        elif name in _SECONDS_NOTES:  # {what: seconds}
+            line += f"; {_SECONDS_NOTES[name]}: " + ", ".join(f"{k} {v:.1f}" for k, v in value.items())
     return line
 

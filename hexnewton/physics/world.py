@@ -300,19 +300,18 @@ class World:
 
     def __init__(self, cfg: HexConfig | None = None, terrain: Terrain | None = None, build: ModelBuild | None = None):
         self.cfg = cfg = cfg or HexConfig()
-        sim = cfg.sim
-        validate_sim(sim)
-        self.device = resolve_device(sim.device)
-        self.num_envs = int(sim.num_envs)
-        self.frame_dt = sim.frame_dt
-        self.sim_dt = sim.frame_dt / sim.substeps
-        self.substeps = sim.substeps
-        if build is None:
+        if build is None:  # the sim config checked and the device resolved there
             build = ModelBuild(cfg, terrain)
         elif build.cfg != cfg or terrain is not None:
             raise ValueError("World: the model build is of another config (or a terrain was given beside it)")
         else:
             startup.mark("python and imports")
+        sim = cfg.sim
+        self.device = build.device
+        self.num_envs = int(sim.num_envs)
+        self.frame_dt = sim.frame_dt
+        self.sim_dt = sim.frame_dt / sim.substeps
+        self.substeps = sim.substeps
         self.terrain, self.model, spawn = build.result()
         self.spawn_xy, self.spawn_z = spawn.xy, spawn.z
         self.footprint, self.spawn_clearance = spawn.footprint, spawn.clearance

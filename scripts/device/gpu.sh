@@ -108,15 +108,15 @@ pack)
     run=$(run_dir "$name"); [ -z "$run" ] && { echo "no run $name"; continue; }
     best="$run/model_best.pt"; last=$(ls -v "$run"/model_[0-9]*.pt | tail -1)
     final=$(sed -n 's/^  python play.py --checkpoint //p' "$RUNS/$name.log" | tail -1)
-    cp "${final:-$last}" "$KEEP/$name.pt"
     # the result (model_result.pt) where train.py chose one, else the last checkpoint; the last too with PACK_LAST=1
     # (to resume): a checkpoint is ~5 MB and a device call brings back ~64 MB
     keep=$last; [ -n "$final" ] && [ -f "$final" ] && keep=$final
+    cp "$keep" "$KEEP/$name.pt"
     tar czf "$OUT/run_$name.tgz" -C "$RUNS" "$name.log" -C "$RUNS/$name" $(cd "$RUNS/$name" && \
       ls "$(basename "$run")"/{config.json,policy.onnx,events.*} "$(basename "$run")/$(basename "$keep")" 2>/dev/null; \
       [ -f "$best" ] && echo "$(basename "$run")/model_best.pt"
       [ "${PACK_LAST:-0}" = 1 ] && [ "$keep" != "$last" ] && echo "$(basename "$run")/$(basename "$last")")
-    echo "packed $name: $(basename "${final:-$last}") kept as $KEEP/$name.pt"
+    echo "packed $name: $(basename "$keep") kept as $KEEP/$name.pt"
   done
   ;;
 eval)
