@@ -5,7 +5,9 @@
 # job per terrain of $VAL_TERRAINS on the same GPU), or with `points` the named capability points (capability.sh
 # points, $POINT_ROUNDS each, `--seed 3000`). Everything ends by $LIMIT seconds after the start (evaluations are cut
 # off there), and the evaluations ($EVALS, default /root/evals) are packed into $OUT/evals.tgz, so the call brings
-# back whatever finished: a machine given back after the call keeps nothing.
+# back whatever finished: a machine given back after the call keeps nothing. With S2S_ROUNDS set, a validation
+# candidate's bundle (`apps.export`) also runs that many rugged rounds in C MuJoCo on the host's cores, beside its
+# evaluations (`apps.sim2sim --fixed_terrains --newton none --workers $S2S_WORKERS`, default 12) -> $EVALS/s2s_NAME.
 #
 #   LIMIT=560 bash scripts/device/candidates.sh "stuck1@0:--task complex --seed 1 --env.cpg.stuck_lift 0.3" \
 #       "margin600@3:points:--task complex-margin --seed 1 --max_iterations 600"
@@ -30,6 +32,13 @@ pipeline() {
       EVAL_ARGS="--seed 3000" timeout -k 10 $(left) bash "$here/capability.sh" points "$name" \
       "$KEEP/$name.pt"
   else
+    if [ -n "${S2S_ROUNDS:-}" ]; then
+      ( timeout -k 10 $(left) python -m hexnewton.apps.export --checkpoint "$KEEP/$name.pt" \
+          --out "$EVALS/bundle_$name" \
+          && timeout -k 10 $(left) python -m hexnewton.apps.sim2sim "$EVALS/bundle_$name" --terrains rugged \
+          --rounds "$S2S_ROUNDS" --fixed_terrains --newton none --workers "${S2S_WORKERS:-12}" --out "$EVALS/s2s_$name"
+        echo "sim2sim exit $? at $SECONDS s" ) > "$EVALS/s2s_$name.log" 2>&1 &
+    fi
     for t in ${VAL_TERRAINS:-complex rugged stepped}; do
       ( CUDA_VISIBLE_DEVICES=$gpu timeout -k 10 $(left) python -m hexnewton.apps.evaluate \
           --controllers cpg_rl --checkpoint "cpg_rl=$KEEP/$name.pt" --terrains "$t" --rounds "${VAL_ROUNDS:-1000}" \
