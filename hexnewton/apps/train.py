@@ -28,6 +28,7 @@ default: this machine only).
 
 from __future__ import annotations
 
+import argparse
 import dataclasses
 import datetime
 import json
@@ -105,9 +106,9 @@ def parser(base, resumed: bool) -> ArgumentParser:
     p.add_argument("--resume", metavar="PATH", help="checkpoint to continue from (a new run directory is made)")
     p.add_argument("--log_dir", default="logs")
     p.add_argument("--experiment", default=None, help="default: hexnewton_<task>")
-    p.add_argument("--build_beside_imports", action="store_true",
-                   help="build the terrain and the physics model in a thread while torch and rsl-rl import (default: "
-                        "after them)")  # fmt: skip
+    p.add_argument("--build_beside_imports", action=argparse.BooleanOptionalAction, default=True,
+                   help="build the terrain and the physics model in a thread while torch and rsl-rl import (default; "
+                        "--no-build_beside_imports: after them)")  # fmt: skip
     p.add_argument("--headless", action="store_true",
                    help="Isaac Lab's flag, accepted: training never opens a window (--video renders off-screen)")
     p.add_argument("--video", action="store_true",
@@ -376,8 +377,8 @@ def main(argv: list[str] | None = None) -> int:
     env_cfg, agent = configs(args, base, ckpt)
     from hexnewton import startup
 
-    # the heavy imports one by one, so that the start-up line says where "python and imports" goes; with
-    # --build_beside_imports the terrain and the physics model (NumPy and Newton, no torch) build in a thread meanwhile
+    # the heavy imports one by one, so that the start-up line says where "python and imports" goes; the terrain and
+    # the physics model (NumPy and Newton, no torch) build in a thread meanwhile (--no-build_beside_imports: after)
     startup.timed_imports("warp", "newton", "hexnewton.physics.world")
     rank, cfg = rank_config(args, env_cfg)
     from hexnewton.physics.world import ModelBuild

@@ -225,8 +225,8 @@ def test_max_minutes_stops_at_an_iteration_boundary(tmp_path):
 def test_curriculum_stages_change_reflex_and_weights_in_one_run(tmp_path, capsys):
     """The complex recipe's curriculum, on shortened stages (--agent.stages): each stage begins at its iteration (its
     reflex gain, reward weights, PPO settings and effort clamp), the checkpoints carry the task, the gain, weights and
-    physics they were trained under; a resumed run continues in its stage, on its own task. (Built beside the
-    imports, --build_beside_imports.)"""
+    physics they were trained under; a resumed run continues in its stage, on its own task. (Built after the
+    imports, --no-build_beside_imports: the start-up phases terrain, scene and finalize.)"""
     import torch
 
     from hexnewton.apps import train
@@ -236,11 +236,12 @@ def test_curriculum_stages_change_reflex_and_weights_in_one_run(tmp_path, capsys
     assert train.main(["--task", "complex", "--num_envs", "8", "--agent.num_steps_per_env", "4", "--max_iterations",
                        "3", "--device", "cpu", "--log_dir", str(tmp_path), "--agent.stages", stages,
                        "--agent.save_interval", "1", "--agent.validation_rounds", "2", "--agent.validation_steps",
-                       "8", "--agent.algorithm.schedule", "fixed", "--build_beside_imports"]) == 0  # fmt: skip
+                       "8", "--agent.algorithm.schedule", "fixed", "--no-build_beside_imports"]) == 0  # fmt: skip
     out = capsys.readouterr().out
-    # the terrain and the model built in a thread beside the imports: the wait is a phase, the thread's phases a note
+    # the terrain and the model built after the imports, each a phase of its own
     line = next(x for x in out.splitlines() if x.startswith("start-up "))
-    assert " model build " in line and "; model built beside the imports: terrain " in line
+    assert all(f", {phase} " in line for phase in ("terrain", "scene", "finalize"))
+    assert " model build " not in line and "model built beside" not in line
     assert "iteration 1: curriculum stage 2 of 3: posture_reflex 2, w_tilt 15" in out
     assert ("iteration 2: curriculum stage 3 of 3: posture_reflex 2, w_tilt 40, w_ang_vel 0.3, learning_rate "
             "0.00025, entropy_coef 0.001, effort_clamp actuator") in out
@@ -270,12 +271,13 @@ def test_curriculum_stages_change_reflex_and_weights_in_one_run(tmp_path, capsys
 
 def test_training_reports_its_start_up_and_writes_timing(trained):
     """After the first iteration train.py prints where the start-up went (phases from the process's start), and the
-    run's timing.json records them with the training time and the result it exported."""
+    run's timing.json records them with the training time and the result it exported. The terrain and the model are
+    built in a thread beside the imports (the default): the wait is a phase, the thread's own phases a note."""
     logs, out = trained
     line = next(x for x in out.splitlines() if x.startswith("start-up "))
-    for phase in ("python and imports", "terrain", "finalize", "solver", "first step and graph capture",
-                  "first iteration"):  # fmt: skip
+    for phase in ("python and imports", "model build", "solver", "first step and graph capture", "first iteration"):
         assert f"{phase} " in line
+    assert "; model built beside the imports: terrain " in line and ", finalize " not in line.split(";")[0]
     run_dir = glob.glob(str(logs / "hexnewton_flat" / "*"))[0]
     timing = json.load(open(os.path.join(run_dir, "timing.json")))
     assert timing["iterations"] == 2 and timing["env_steps"] == 2 * 16 * 24
