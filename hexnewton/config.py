@@ -186,6 +186,10 @@ class SimConfig:
     # limits). A world may take more than its share of the contact pool: 352 rows overflowed once in
     # 4096 walking robots on complex terrain (H100), so njmax leaves room for ~110 contacts.
     contacts_per_env: int = 64
+    # ours: the contact pool's least size, all worlds together (0: contacts_per_env x num_envs exactly). Thousands of
+    # robots even out in the pool; a few on blocks do not: 4 walking the rugged course took up to 274 contacts
+    # against 4 x 64, and the pool dropped them
+    min_contact_pool: int = 4096
     constraints_per_env: int = 480
     # triangle-pair candidates per env for mesh terrain (H100, complex, 16384 envs: 64/env overflowed)
     triangle_pairs_per_env: int = 256

@@ -77,6 +77,14 @@ def validate_sim(cfg: SimConfig) -> None:
         value = getattr(cfg, name)
         if value is not None and not (math.isfinite(value) and value >= 0):
             raise HexnewtonError(f"sim.{name} must be a non-negative number of metres, got {value}")
+    if cfg.min_contact_pool < 0:
+        raise HexnewtonError(f"sim.min_contact_pool must be >= 0, got {cfg.min_contact_pool}")
+
+
+def contacts_per_world(cfg: SimConfig, num_envs: int) -> int:
+    """MuJoCo's per-world contact capacity (``nconmax``; mujoco_warp pools it over the worlds): ``contacts_per_env``,
+    raised so that the pool holds at least ``min_contact_pool`` contacts."""
+    return max(cfg.contacts_per_env, -(-cfg.min_contact_pool // num_envs))
 
 
 @wp.kernel
@@ -349,7 +357,7 @@ class World:
             integrator=sim.integrator,
             iterations=sim.iterations,
             ls_iterations=sim.ls_iterations,
-            nconmax=sim.contacts_per_env,
+            nconmax=contacts_per_world(sim, self.num_envs),
             njmax=sim.constraints_per_env,
         )
         # iteration-cap hits are reported by check_contacts(), not printed per world by mujoco_warp

@@ -14,7 +14,7 @@ from hexnewton.physics.cpg import CPGController
 from hexnewton.physics.device import resolve_device
 from hexnewton.physics.robot import stand_height
 from hexnewton.physics.terrain import max_terrain_height_np
-from hexnewton.physics.world import ContactOverflowError, ModelBuild, World
+from hexnewton.physics.world import ContactOverflowError, ModelBuild, World, contacts_per_world
 
 N = 4
 
@@ -120,7 +120,7 @@ def test_torch_views_are_zero_copy():
 
 
 def test_overflow_is_reported_never_silent():
-    world = _world("rugged", contacts_per_env=4, constraints_per_env=40)
+    world = _world("rugged", contacts_per_env=4, min_contact_pool=0, constraints_per_env=40)
     world.set_controller(CPGController(world))
     world.step(20)
     with pytest.warns(RuntimeWarning, match="overflowed"):
@@ -130,6 +130,19 @@ def test_overflow_is_reported_never_silent():
     world.step(5)
     with pytest.raises(ContactOverflowError, match="nconmax"):
         world.check_contacts(on_overflow="raise")
+
+
+def test_contact_pool_holds_a_few_robots():
+    """A few robots get a pool of at least ``min_contact_pool`` contacts (four on blocks took up to 274 against 4 x
+    64); thousands keep ``contacts_per_env`` each; a negative pool is a one-line error."""
+    sim = SimConfig()
+    assert contacts_per_world(sim, 4) == 1024 and contacts_per_world(sim, 1) == 4096
+    assert contacts_per_world(sim, 4096) == sim.contacts_per_env and contacts_per_world(sim, 100) == 64
+    assert contacts_per_world(SimConfig(min_contact_pool=0), 4) == 64
+    world = _world("flat")
+    assert world.solver.get_max_contact_count() >= sim.min_contact_pool
+    with pytest.raises(HexnewtonError, match="sim.min_contact_pool must be >= 0"):
+        _world("flat", min_contact_pool=-1)
 
 
 def test_nonfinite_env_is_reset_and_counted():
