@@ -134,6 +134,10 @@ class TerrainConfig:
     # walked less than half the way; "miss", after any episode that missed the goal. "miss" keeps robots near the
     # course's lane unless they master the lanes past it (results/capability/report.md, 1062 iterations).
     past_down: str = field(default="half", metadata={"choices": ("half", "miss")})
+    # ours: the share of episodes played on a lane past the course drawn at random (evenly among the ``levels_past``
+    # lanes), whatever the robot's level; such an episode leaves the level as it is. Every robot then meets the
+    # hardest lanes, however far it has climbed. 0: off; > 0 needs ``levels_past``
+    past_share: float = 0.0
     # ours: lanes a robot moves up after reaching its goal. A robot climbs once per episode (~50 iterations of 24 steps
     # on the complex course), so a run of fewer iterations, e.g. one iteration count split over torchrun ranks, ends on
     # lower lanes (results/scale_out/report.md: lane 3.3 of 9 after 150 iterations, 5.9 after 300); 2 climbs as fast

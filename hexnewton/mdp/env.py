@@ -88,7 +88,7 @@ from hexnewton.physics.robot import BASE_Q
 from hexnewton.physics.world import ModelBuild, World
 
 RING = 1024  # finished episodes the logged rates average over
-# the ring's columns: one per episode end (its status code - 1), then distance, length and curriculum level
+# the ring's columns: one per episode end (its status code - 1), then distance, length and the curriculum lane played
 ENDS = sorted(TERMINATIONS, key=lambda end: end.code)
 DISTANCE, LENGTH, LEVEL = len(ENDS), len(ENDS) + 1, len(ENDS) + 2
 
@@ -229,6 +229,7 @@ class HexapodEnv(VecEnv):
         if cfg.terrain.levels:
             self.level = wp.array(start_levels(n, cfg.terrain.start_levels), dtype=wp.int32, device=dev)
             self._level_t = wp.to_torch(self.level)
+            self._played = wp.clone(self.level)  # the lane each episode is played on (past_share: drawn ones)
             self._lane_offset = wp.array(world.spawn_xy[:, 1].astype(np.float32), device=dev)
             wp.launch(placement_kernel, dim=n,
                       inputs=[self.level, cfg.terrain.levels, cfg.terrain.lane_width, self._lane_offset,
@@ -328,7 +329,7 @@ class HexapodEnv(VecEnv):
         if self.cpg is not None:
             arrays += [self.cpg.params, self.cpg.params_target, self.cpg.state]
         if self.level is not None:
-            arrays += [self.level, self.lane, self.lane_z]
+            arrays += [self.level, self._played, self.lane, self.lane_z]
         if self.randomized:
             arrays += [self._prev_actions]
         return arrays
@@ -402,7 +403,7 @@ class HexapodEnv(VecEnv):
         w = self.world
         wp.launch(
             _bookkeeping, dim=self.num_envs,
-            inputs=[self.status, w.joint_q_wp, self.start, self.level if self.level is not None else self._no_level],
+            inputs=[self.status, w.joint_q_wp, self.start, self._no_level if self.level is None else self._played],
             outputs=[self.episode_steps, self.done, self.done_u8, self.time_out, self._cursor, self._ring,
                      self._nonfinite_total], device=self.device,
         )  # fmt: skip
@@ -425,9 +426,9 @@ class HexapodEnv(VecEnv):
         wp.launch(
             curriculum_kernel, dim=self.num_envs,
             inputs=[self.status, w.joint_q_wp, self.start, t.goal_distance, tc.levels, tc.climb, strict_from(tc),
-                    tc.lane_width, self._lane_offset, self.height_field, w.footprint, w.spawn_clearance, t.seed + 7919,
-                    self.counter],
-            outputs=[self.level, self.lane, self.lane_z], device=self.device,
+                    tc.lane_width, self._lane_offset, self.height_field, w.footprint, w.spawn_clearance,
+                    tc.levels_past, tc.past_share, t.seed + 7919, self.counter],
+            outputs=[self.level, self._played, self.lane, self.lane_z], device=self.device,
         )  # fmt: skip
 
     def _reset(self, mask: wp.array | None) -> None:

@@ -28,8 +28,11 @@ When an env's episode ends (status != 0), before it is reset (:func:`curriculum_
 - fell, off course or timed out having walked less than half of ``goal_distance`` along x: one level down
   (never below 0); otherwise the level stays; on the lanes past the course with ``TerrainConfig.past_down`` "miss"
   (levels from ``strict_from`` on), any of these: one level down;
-- nonfinite (blown-up physics): the level stays.
-The env's lane start moves to the new level's lane centre (plus the env's own fixed lateral offset), at
+- nonfinite (blown-up physics): the level stays;
+- an episode played on a drawn lane past the course (below): the level stays.
+With ``TerrainConfig.past_share`` = s > 0, each new episode is played with probability s on a lane past the course
+drawn evenly among the P, whatever the level (which it does not change); the others on the level's lane.
+The env's lane start moves to the new (or drawn) level's lane centre (plus the env's own fixed lateral offset), at
 ``spawn_height`` above the highest terrain under the robot's footprint there; the reset then places the
 robot there. :func:`placement_kernel` does the placement alone (at construction).
 
@@ -227,9 +230,12 @@ def curriculum_kernel(
     hf: HeightField,
     footprint: float,
     spawn_height: float,
+    levels_past: int,
+    past_share: float,
     seed: int,
     counter: wp.array[wp.int32],
     level: wp.array[wp.int32],
+    played: wp.array[wp.int32],
     lane: wp.array[wp.vec2],
     spawn_z: wp.array[wp.float32],
 ):
@@ -238,16 +244,22 @@ def curriculum_kernel(
     if st == 0 or st == NONFINITE:
         return
     lv = level[e]
-    if st == SUCCESS:
+    rng = wp.rand_init(seed, e + joint_q.shape[0] * counter[0])
+    if played[e] != lv:  # an episode on a drawn lane past the course leaves the level as it is
+        pass
+    elif st == SUCCESS:
         if lv + 1 >= levels:  # the last level solved
-            rng = wp.rand_init(seed, e + joint_q.shape[0] * counter[0])
             lv = wp.min(int(wp.randf(rng) * float(levels)), levels - 1)
         else:
             lv = wp.min(lv + climb, levels - 1)
     elif lv >= strict_from or joint_q[e, 0] - start[e][0] < 0.5 * goal_distance:
         lv = wp.max(lv - 1, 0)
     level[e] = lv
-    p = _place(hf, lv, levels, lane_width, offset_y[e], footprint, spawn_height)
+    play = lv
+    if past_share > 0.0 and wp.randf(rng) < past_share:  # this episode on a lane past the course, drawn evenly
+        play = levels - levels_past + wp.min(int(wp.randf(rng) * float(levels_past)), levels_past - 1)
+    played[e] = play
+    p = _place(hf, play, levels, lane_width, offset_y[e], footprint, spawn_height)
     lane[e] = wp.vec2(p[0], p[1])
     spawn_z[e] = p[2]
 
@@ -281,16 +293,21 @@ def strict_from(cfg) -> int:
     return cfg.levels - cfg.levels_past if cfg.past_down == "miss" and cfg.levels_past else cfg.levels
 
 
-def curriculum_reference(status, walked, level, goal_distance, levels, random_level, strict_from=None, climb=1):
+def curriculum_reference(status, walked, level, goal_distance, levels, random_level, strict_from=None, climb=1,
+                         played=None):
     """Float64 reference of :func:`curriculum_kernel`'s level update (``walked`` = x - start x; ``random_level``
     (N,) stands in for the kernel's draw where an env solves the last level; ``strict_from`` and ``climb`` as the
-    kernel's, None: ``levels``). Returns the new levels."""
+    kernel's, None: ``levels``; ``played`` (N,): the lane each episode was played on, None: its level; one drawn
+    past the course leaves the level as it is). Returns the new levels."""
     status, walked, level = np.asarray(status), np.asarray(walked, np.float64), np.asarray(level, np.int64)
     strict = level >= (levels if strict_from is None else strict_from)
     up = np.where(level + 1 >= levels, random_level, np.minimum(level + climb, levels - 1))
     down = np.where(strict | (walked < 0.5 * goal_distance), np.maximum(level - 1, 0), level)
     new = np.where(status == SUCCESS, up, down)
-    return np.where((status == 0) | (status == NONFINITE), level, new)
+    keep = (status == 0) | (status == NONFINITE)
+    if played is not None:
+        keep |= np.asarray(played) != level
+    return np.where(keep, level, new)
 
 
 # ====================================================================================================

@@ -106,10 +106,12 @@ def test_bad_curriculum_config(bad, message):
     assert message in str(err.value)
 
 
-@pytest.mark.parametrize(("strict", "climb"), [(None, 1), (3, 1), (None, 2)])
-def test_curriculum_kernel_matches_reference(strict, climb):
+@pytest.mark.parametrize(("strict", "climb", "share"),
+                         [(None, 1, 0.0), (3, 1, 0.0), (None, 2, 0.0), (None, 1, 0.5)])
+def test_curriculum_kernel_matches_reference(strict, climb, share):
     """``strict`` (``strict_from``, the first lane past the course with ``past_down`` "miss"): None, none; ``climb``:
-    lanes up per goal."""
+    lanes up per goal; ``share``: ``past_share`` over the last two lanes (the episodes that ended on a drawn lane keep
+    their level; the next ones are drawn with that probability)."""
     rng = np.random.default_rng(0)
     cfg = TerrainConfig(name="complex", levels=5, lane_width=1.0)
     grid = build_height_grid(cfg)
@@ -124,24 +126,37 @@ def test_curriculum_kernel_matches_reference(strict, climb):
     offset = rng.uniform(-0.3, 0.3, n).astype(np.float32)
     lane_in = np.full((n, 2), 9.0, np.float32)
     arr = lambda a, dt=None: wp.array(a, dtype=dt, device=DEV) if dt else wp.array(a, device=DEV)  # noqa: E731
+    past = 2
+    played = np.where(rng.random(n) < share, rng.integers(levels - past, levels, n), level).astype(np.int32)
     level_wp, lane_wp, z_wp = arr(level), arr(lane_in, wp.vec2), arr(np.full(n, 9.0, np.float32))
+    played_wp = arr(played)
     wp.launch(curriculum_kernel, dim=n,
               inputs=[arr(status), arr(q), arr(start, wp.vec2), goal, levels, climb, levels if strict is None else strict,
-                      cfg.lane_width, arr(offset), hf,
-                      footprint, clearance, 3, arr(np.array([5], np.int32))],
-              outputs=[level_wp, lane_wp, z_wp], device=DEV)  # fmt: skip
-    got = level_wp.numpy()
-    top = (status == SUCCESS) & (level == levels - 1)
+                      cfg.lane_width, arr(offset), hf, footprint, clearance, past, share, 3,
+                      arr(np.array([5], np.int32))],
+              outputs=[level_wp, played_wp, lane_wp, z_wp], device=DEV)  # fmt: skip
+    got, played_next = level_wp.numpy(), played_wp.numpy()
+    top = (status == SUCCESS) & (level == levels - 1) & (played == level)
     assert top.any() and np.all((got[top] >= 0) & (got[top] < levels))
     want = curriculum_reference(status, q[:, 0].astype(np.float64) - start[:, 0], level, goal, levels, got, strict,
-                                climb)
+                                climb, played)
     np.testing.assert_array_equal(got, want)
+    moved = (status != 0) & (status != NONFINITE)
+    # the next episode: on a lane past the course drawn with probability share, else on the level's lane
+    assert np.all(played_next[~moved] == played[~moved])
+    np.testing.assert_allclose(lane_wp.numpy()[moved, 1], lane_center_y(cfg, played_next[moved]) + offset[moved],
+                               atol=1e-5)  # fmt: skip
+    if share:
+        drawn = moved & (played_next != got)
+        assert (moved & (played != level)).any() and abs(drawn.mean() / moved.mean() - share) < 0.1
+        assert set(np.unique(played_next[drawn])) == {levels - 2, levels - 1}  # both lanes past the course drawn
+        return
+    np.testing.assert_array_equal(played_next[moved], got[moved])
     up = (status == SUCCESS) & (level + 1 < levels)
     np.testing.assert_array_equal(got[up], np.minimum(level[up] + climb, levels - 1))
     missed = (status != 0) & (status != SUCCESS) & (status != NONFINITE) & (walked >= 0.5 * goal) & (level >= 3)
     assert missed.any()
     np.testing.assert_array_equal(got[missed], level[missed] - 1 if strict else level[missed])
-    moved = (status != 0) & (status != NONFINITE)
     y = lane_center_y(cfg, got) + offset
     np.testing.assert_allclose(lane_wp.numpy()[moved], np.stack([np.zeros(n), y], 1)[moved], atol=1e-5)
     z = max_terrain_height_np(grid, np.zeros(n), y, footprint) + clearance
@@ -151,6 +166,15 @@ def test_curriculum_kernel_matches_reference(strict, climb):
     wp.launch(placement_kernel, dim=n, inputs=[level_wp, levels, cfg.lane_width, arr(offset), hf, footprint, clearance],
               outputs=[lane_wp, z_wp], device=DEV)  # fmt: skip
     np.testing.assert_allclose(lane_wp.numpy()[:, 1], y, atol=1e-5)
+
+
+def test_past_share_needs_lanes_past_the_course():
+    with pytest.raises(ValueError, match="needs levels_past > 0"):
+        build_height_grid(TerrainConfig(name="complex", levels=4, past_share=0.2))
+    with pytest.raises(ValueError, match="needs a curriculum"):
+        build_height_grid(TerrainConfig(name="complex", past_share=0.2))
+    with pytest.raises(ValueError, match=r"past_share must be in \[0, 1\]"):
+        build_height_grid(TerrainConfig(name="complex", levels=4, levels_past=1, past_share=1.5))
 
 
 def test_strict_from():

@@ -107,6 +107,7 @@ def validate_config(cfg: TerrainConfig) -> None:
     _multiple(cfg.width, res, "width", "query_resolution")
     _multiple(cfg.width / 2, res, "width / 2", "query_resolution")
     _require(int(cfg.levels) == cfg.levels and cfg.levels >= 0, f"levels must be an integer >= 0, got {cfg.levels!r}")
+    _require(cfg.levels or cfg.past_share == 0.0, f"past_share {cfg.past_share} needs a curriculum (levels > 0)")
     if cfg.levels:
         _require(int(cfg.start_levels) == cfg.start_levels and 1 <= cfg.start_levels <= cfg.levels,
                  f"start_levels must be an integer in [1, levels = {cfg.levels}], got {cfg.start_levels!r}")
@@ -124,6 +125,10 @@ def _check_levels_past(cfg: TerrainConfig) -> None:
     """``levels_past`` leaves the course a lane; the ``hardest_*`` values are finite and not negative."""
     _require(int(cfg.levels_past) == cfg.levels_past and 0 <= cfg.levels_past < cfg.levels,
              f"levels_past must be an integer in [0, levels - 1 = {cfg.levels - 1}], got {cfg.levels_past!r}")
+    _require(math.isfinite(cfg.past_share) and 0.0 <= cfg.past_share <= 1.0,
+             f"past_share must be in [0, 1], got {cfg.past_share!r}")
+    _require(cfg.past_share == 0.0 or cfg.levels_past > 0,
+             f"past_share {cfg.past_share} draws lanes past the course: it needs levels_past > 0")
     for field_name in ("hardest_step_rise", "hardest_step_depth", "hardest_block_height_max"):
         value = getattr(cfg, field_name)
         _require(value is None or (math.isfinite(value) and value >= 0),
@@ -281,7 +286,7 @@ def lane_config(cfg: TerrainConfig, level: int) -> TerrainConfig:
     (``levels - levels_past - 1``) the heights scaled by (level + 1) / (levels - levels_past); past it the step
     rise, tread and block height a share (level + 1 - course lanes) / levels_past of the way from ``cfg``'s to the
     ``hardest_*`` values (None: ``cfg``'s), the tread rounded to the query grid."""
-    lanes = dict(levels=0, width=cfg.lane_width, rugged_half_width=min(cfg.rugged_half_width, cfg.lane_width / 2),
+    lanes = dict(levels=0, past_share=0.0, width=cfg.lane_width, rugged_half_width=min(cfg.rugged_half_width, cfg.lane_width / 2),
                  seed=cfg.seed * 1000 + level)  # fmt: skip
     course = cfg.levels - cfg.levels_past
     if level < course:
