@@ -186,12 +186,13 @@ echo "training $ex"; echo "  python play.py --checkpoint $run/model_result.pt"
 
 def test_candidates_train_pack_and_evaluate_in_one_call(tmp_path):
     """candidates.sh: each pipeline trains, packs (the chosen result travels in the archive) and evaluates its result
-    on validation rounds, or on the named capability points; the evaluations come back in one archive."""
+    on validation rounds, or on the named capability points; with ``S2S_ROUNDS`` a validation candidate's bundle
+    runs in C MuJoCo beside its evaluations; the evaluations come back in one archive."""
     import tarfile
 
     out, keep = tmp_path / "out", tmp_path / "keep"
     env = _env(tmp_path, FAKE_TRAIN_EVAL, RUNS=str(tmp_path / "runs"), OUT=str(out), KEEP=str(keep),
-               EVALS=str(tmp_path / "evals"), LIMIT="60", VAL_TERRAINS="rugged stepped")
+               EVALS=str(tmp_path / "evals"), LIMIT="60", VAL_TERRAINS="rugged stepped", S2S_ROUNDS="2")
     done = subprocess.run(["bash", "scripts/device/candidates.sh", "a1@0:--task complex --seed 1",
                            "m1@1:points:--task complex-margin --seed 1"], cwd=ROOT, env=env, check=True,
                           capture_output=True, text=True)  # fmt: skip
@@ -205,3 +206,6 @@ def test_candidates_train_pack_and_evaluate_in_one_call(tmp_path):
     assert {"./a1_rugged/results.json", "./a1_stepped/results.json"} <= names
     assert "./extra/m1_at_rise8/results.json" in names and "./extra/m1_at_payload1/results.json" in names
     assert not any(n.startswith("./m1_") for n in names)  # points only for the points pipeline
+    assert "./s2s_a1/results.json" in names and "./bundle_a1" in names  # the bundle in MuJoCo, beside
+    assert not any(n.startswith(("./s2s_m1", "./bundle_m1")) for n in names)
+    assert "sim2sim exit 0" in (tmp_path / "evals" / "s2s_a1.log").read_text()
