@@ -49,6 +49,15 @@ def mark(name: str) -> float:
     return seconds
 
 
+def restart() -> None:
+    """Forget the phases and notes so far; the next phase is timed from now. For a command run again in the same
+    process (the tests call ``train.main`` several times): its record is its own."""
+    global _last
+    _phases.clear()
+    _notes.clear()
+    _last = time.time()
+
+
 def note(name: str, value) -> None:
     """Keep a detail of the start-up (JSON-serialisable) beside the phases, e.g. what the first step compiled."""
     _notes[name] = value

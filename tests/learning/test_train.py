@@ -229,8 +229,10 @@ def test_curriculum_stages_change_reflex_and_weights_in_one_run(tmp_path, capsys
     imports, --no-build_beside_imports: the start-up phases terrain, scene and finalize.)"""
     import torch
 
+    from hexnewton import startup
     from hexnewton.apps import train
 
+    startup.restart()  # the phases of this run alone (other tests ran train.main in this process)
     stages = ("((1, {'posture_reflex': 2.0, 'w_tilt': 15.0}), (2, {'w_tilt': 40.0, 'w_ang_vel': 0.3, "
               "'learning_rate': 2.5e-4, 'entropy_coef': 0.001, 'effort_clamp': 'actuator'}))")
     assert train.main(["--task", "complex", "--num_envs", "8", "--agent.num_steps_per_env", "4", "--max_iterations",
