@@ -286,8 +286,8 @@ def lane_config(cfg: TerrainConfig, level: int) -> TerrainConfig:
     (``levels - levels_past - 1``) the heights scaled by (level + 1) / (levels - levels_past); past it the step
     rise, tread and block height a share (level + 1 - course lanes) / levels_past of the way from ``cfg``'s to the
     ``hardest_*`` values (None: ``cfg``'s), the tread rounded to the query grid."""
-    lanes = dict(levels=0, past_share=0.0, width=cfg.lane_width, rugged_half_width=min(cfg.rugged_half_width, cfg.lane_width / 2),
-                 seed=cfg.seed * 1000 + level)  # fmt: skip
+    lanes = dict(levels=0, past_share=0.0, width=cfg.lane_width,
+                 rugged_half_width=min(cfg.rugged_half_width, cfg.lane_width / 2), seed=cfg.seed * 1000 + level)
     course = cfg.levels - cfg.levels_past
     if level < course:
         scale = (level + 1) / course
