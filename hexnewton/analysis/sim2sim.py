@@ -276,7 +276,9 @@ def measure(controller: str | dict, terrain: str, rounds: int, seed: int = EVAL_
     """:class:`Rounds` run to the end and summarised with :mod:`hexnewton.analysis.metrics` (``summarize``'s dict plus
     the wall time, the control steps and the scanner's ray count). ``workers`` > 1 splits the rounds into that many
     consecutive ranges, each a MuJoCo model of its own in a process of its own (no ``on_step`` then): the robots of
-    one model never touch each other, so each round walks as in one model of all of them."""
+    one model never touch each other, so each round starts and walks as in one model of all of them, to rounding (a
+    smaller model and policy batch round differently, and over thousands of steps on blocks that can change how a
+    round ends: compare results at the same ``workers``)."""
     t0 = time.perf_counter()
     workers = max(1, min(int(workers), rounds))
     if workers > 1 and on_step is not None:

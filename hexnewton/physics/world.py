@@ -261,9 +261,9 @@ class ModelBuild:
         self.since = live_kernel_ids() if compiles_generated(cfg.sim.precompile, is_cuda) else None
         self.seconds: dict[str, float] = {}
         self._terrain, self._out, self._error, self._last = terrain, None, None, time.time()
-        self._thread = threading.Thread(target=self._build, name="hexnewton-model-build", daemon=True) if beside \
-            else None
-        if self._thread is not None:
+        self._thread = None
+        if beside:
+            self._thread = threading.Thread(target=self._build, name="hexnewton-model-build", daemon=True)
             self._thread.start()
         else:
             self._build()
