@@ -126,6 +126,9 @@ def test_complex_margin_recipe():
 
     grids = [build_height_grid(course(g).terrain).heights for g in (m.env.terrain, c.env.terrain, "complex")]
     assert np.array_equal(grids[0], grids[1]) and np.array_equal(grids[0], grids[2])
+    # a curriculum drawing lanes past the course (``past_share``) validates on the same course
+    drawn = dataclasses.replace(m.env.terrain, past_share=0.2)
+    assert np.array_equal(build_height_grid(course(drawn).terrain).heights, grids[0])
 
 
 def test_complex_margin_steps():
