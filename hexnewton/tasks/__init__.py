@@ -120,12 +120,13 @@ def task_table() -> str:
 def course(terrain: str | TerrainConfig, trained: HexConfig | None = None, overrides: dict | None = None,
            num_envs: int | None = None, device: str | None = None, terrain_seed: int = 0, **task_fields) -> HexConfig:
     """The course a trained controller is played or evaluated on: ``terrain`` (a name: as §3.1 defines it; a
-    ``TerrainConfig``: that one) without curriculum lanes (nor lanes drawn past them), no randomisation, with the controller's own physics and CPG
-    (``trained``: a checkpoint's config; the defaults for the fixed CPG) and ``TaskConfig`` with ``task_fields``;
-    then ``overrides`` ({"terrain.step_rise": 0.07, ...}), ``num_envs`` robots on ``device``, terrain seed
-    ``terrain_seed`` and the patch long enough for the goal."""
+    ``TerrainConfig``: that one) without curriculum lanes (nor lanes drawn past them), no randomisation, with the
+    controller's own physics and CPG (``trained``: a checkpoint's config; the defaults for the fixed CPG) and
+    ``TaskConfig`` with ``task_fields``; then ``overrides`` ({"terrain.step_rise": 0.07, ...}), ``num_envs`` robots
+    on ``device``, terrain seed ``terrain_seed`` and the patch long enough for the goal."""
     trained = trained or HexConfig()
-    ground = TerrainConfig(name=terrain) if isinstance(terrain, str) else replace(terrain, levels=0, start_levels=1, past_share=0.0)
+    ground = TerrainConfig(name=terrain) if isinstance(terrain, str) else \
+        replace(terrain, levels=0, start_levels=1, past_share=0.0)  # fmt: skip
     cfg = HexConfig(sim=trained.sim, cpg=trained.cpg, task=replace(TaskConfig(), **task_fields), terrain=ground)
     cfg = apply_overrides(cfg, overrides or {})
     sim = cfg.sim if num_envs is None else replace(cfg.sim, num_envs=num_envs, device=device)
