@@ -34,6 +34,11 @@
 #   bash scripts/device/gpu.sh report WHAT                      # Fig. 5a + Table 3 over seeds (hexnewton.apps.compare)
 #                                                                # -> $OUT/WHAT/{report.md,results.json,fig5a.*}
 #   bash scripts/device/gpu.sh busy                             # exit 0 while `methods` or `evals` jobs run
+#   bash scripts/device/gpu.sh queue FILE                       # FILE (bash) in the background, detached (setsid),
+#        # from this folder: a lease's whole work in one queue, log in $QUEUE/log (default /root/queue)
+#   bash scripts/device/gpu.sh poll SECONDS [PATH...]           # exit 3 at once where no queue was started (the call
+#        # landed on a fresh machine: the queue is lost); else until it ends (at most SECONDS), its log's last
+#        # $TAIL lines (30), then each PATH copied into $OUT
 #
 # Example (the complex task from its name, then 1000 test rounds per terrain, one H200):
 #   bash scripts/device/gpu.sh train complex -- --task complex --num_envs 4096
@@ -289,7 +294,29 @@ report)
 busy)
   pgrep -f -- "gpu.sh _(methods|evals)" > /dev/null
   ;;
+queue)
+  file=${1:-}; q=${QUEUE:-/root/queue}
+  [ -f "$file" ] || { echo "gpu.sh queue: no file ${file:-(none given)}" >&2; exit 2; }
+  if [ -f "$q/pid" ] && [ ! -f "$q/ended" ]; then
+    echo "gpu.sh queue: a queue is running already ($q/log)" >&2; exit 1
+  fi
+  mkdir -p "$q" && cp "$file" "$q/queue.sh" && rm -f "$q/ended"
+  nohup setsid bash -c "bash '$q/queue.sh'; echo \$? > '$q/ended'" > "$q/log" 2>&1 < /dev/null &
+  echo $! > "$q/pid"
+  echo "started the queue $file in $PWD (log $q/log)"
+  ;;
+poll)
+  limit=${1:?gpu.sh poll SECONDS [PATH...]}; shift; q=${QUEUE:-/root/queue}
+  if [ ! -f "$q/pid" ]; then
+    echo "gpu.sh poll: no queue on this machine: a fresh machine, the queue and its outputs are lost" >&2; exit 3
+  fi
+  t=$SECONDS
+  while [ ! -f "$q/ended" ] && [ $((SECONDS - t)) -lt "$limit" ]; do sleep 5; done
+  if [ -f "$q/ended" ]; then echo "the queue ended (exit $(cat "$q/ended"))"; else echo "the queue runs on"; fi
+  tail -n "${TAIL:-30}" "$q/log"
+  for path in "$@"; do cp -r "$path" "$OUT/" || echo "gpu.sh poll: $path not copied" >&2; done
+  ;;
 *)
-  sed -n '2,36p' "$0"; exit 2
+  sed -n '2,41p' "$0"; exit 2
   ;;
 esac

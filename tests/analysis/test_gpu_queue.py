@@ -209,3 +209,31 @@ def test_candidates_train_pack_and_evaluate_in_one_call(tmp_path):
     assert "./s2s_a1/results.json" in names and "./bundle_a1" in names  # the bundle in MuJoCo, beside
     assert not any(n.startswith(("./s2s_m1", "./bundle_m1")) for n in names)
     assert "sim2sim exit 0" in (tmp_path / "evals" / "s2s_a1.log").read_text()
+
+
+def test_queue_and_poll(tmp_path):
+    """gpu.sh queue runs a file detached from the call; poll waits for it, shows its log and copies what it made into
+    $OUT; on a machine where no queue was started (a fresh one) poll answers at once with exit 3."""
+    out, q = tmp_path / "out", tmp_path / "queue"
+    env = dict(os.environ, OUT=str(out), RUNS=str(tmp_path / "runs"), KEEP=str(tmp_path / "keep"), QUEUE=str(q))
+    t0 = time.time()
+    lost = subprocess.run(["bash", "scripts/device/gpu.sh", "poll", "60"], cwd=ROOT, env=env, capture_output=True,
+                          text=True)  # fmt: skip
+    assert lost.returncode == 3 and "the queue and its outputs are lost" in lost.stderr
+    assert time.time() - t0 < 10
+    made = tmp_path / "made.txt"
+    work = tmp_path / "work.sh"
+    work.write_text(f"sleep 2; echo step one; echo done > {made}; exit 4\n")
+    started = subprocess.run(["bash", "scripts/device/gpu.sh", "queue", str(work)], cwd=ROOT, env=env, check=True,
+                             capture_output=True, text=True)  # fmt: skip
+    assert "started the queue" in started.stdout
+    again = subprocess.run(["bash", "scripts/device/gpu.sh", "queue", str(work)], cwd=ROOT, env=env,
+                           capture_output=True, text=True)  # fmt: skip
+    assert again.returncode == 1 and "running already" in again.stderr
+    polled = subprocess.run(["bash", "scripts/device/gpu.sh", "poll", "60", str(made)], cwd=ROOT, env=env, check=True,
+                            capture_output=True, text=True)  # fmt: skip
+    assert "the queue ended (exit 4)" in polled.stdout and "step one" in polled.stdout
+    assert (out / "made.txt").read_text() == "done\n"
+    missing = subprocess.run(["bash", "scripts/device/gpu.sh", "queue", str(tmp_path / "none.sh")], cwd=ROOT, env=env,
+                             capture_output=True, text=True)  # fmt: skip
+    assert missing.returncode == 2 and "no file" in missing.stderr
