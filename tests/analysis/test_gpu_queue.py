@@ -237,3 +237,25 @@ def test_queue_and_poll(tmp_path):
     missing = subprocess.run(["bash", "scripts/device/gpu.sh", "queue", str(tmp_path / "none.sh")], cwd=ROOT, env=env,
                              capture_output=True, text=True)  # fmt: skip
     assert missing.returncode == 2 and "no file" in missing.stderr
+
+
+def test_sample_scaled_queue_on_two_gpus(tmp_path):
+    """scripts/device/sample_scaled.sh on a 2-GPU machine: the three seeds of the sample-scaled recipe and the recipe's
+    seed 1, two runs at a time, each packed with its validation rounds; no scale-out on fewer than 4 GPUs."""
+    cand, args = tmp_path / "cand", tmp_path / "args.txt"
+    env = _env(tmp_path, FAKE_TRAIN_EVAL.replace("#!/bin/bash\n", '#!/bin/bash\necho "$@" >> "$ARGS_LOG"\n', 1),
+               ARGS_LOG=str(args), CAND=str(cand), SO_OUT=str(tmp_path / "so"), RUNS=str(tmp_path / "runs"),
+               KEEP=str(tmp_path / "keep"), EVALS=str(tmp_path / "evals"), LIMIT="60", S2S_ROUNDS="",
+               VAL_TERRAINS="rugged")  # fmt: skip
+    _tool(tmp_path / "bin", "nvidia-smi", "#!/bin/bash\necho 'GPU 0: H100'; echo 'GPU 1: H100'\n")
+    done = subprocess.run(["bash", "scripts/device/sample_scaled.sh"], cwd=ROOT, env=env, check=True,
+                          capture_output=True, text=True)  # fmt: skip
+    assert "item 1 ended" in done.stdout and "item 2" not in done.stdout
+    assert {p.name for p in cand.iterdir()} == {"run_rep1.tgz", "run_rep2.tgz", "run_rep3.tgz", "run_recipe1.tgz",
+                                                 "evals_a.tgz", "evals_b.tgz"}  # fmt: skip
+    trained = [line for line in args.read_text().splitlines() if line.startswith("train.py")]
+    rep3 = next(line for line in trained if "--experiment rep3" in line)
+    assert "--num_envs 16384 --max_iterations 150 --agent.save_interval 13 --env.terrain.climb 2" in rep3
+    assert "--agent.algorithm.num_mini_batches 8 --agent.stages ((25," in rep3 and "--seed 3" in rep3
+    assert any("--num_envs 4096 --seed 1" in line and "--experiment recipe1" in line for line in trained)
+    assert not (tmp_path / "so").exists()
