@@ -259,3 +259,19 @@ def test_sample_scaled_queue_on_two_gpus(tmp_path):
     assert "--agent.algorithm.num_mini_batches 8 --agent.stages ((25," in rep3 and "--seed 3" in rep3
     assert any("--num_envs 4096 --seed 1" in line and "--experiment recipe1" in line for line in trained)
     assert not (tmp_path / "so").exists()
+    # the one-GPU flags compute what g4cmi600's 4 ranks do: the same iterations, checkpoints, stages, and mini-batches
+    # of the same size (16384 envs in 8 against 4096 per rank in 8, the ranks' gradients averaged)
+    from hexnewton.apps.train import _base_task, configs, parser
+
+    def agent_of(argv):
+        base, ckpt = _base_task(argv)
+        return configs(parser(base, False).parse_args(argv), base, ckpt)
+
+    env1, one = agent_of(rep3.split()[1:rep3.split().index("--log_dir")])
+    env4, four = agent_of("--task complex --num_envs 4096 --max_iterations 600 --env.terrain.climb 2 "
+                          "--agent.scale_with_ranks mini_batches iterations".split())  # fmt: skip
+    four = four.for_ranks(4)
+    assert (one.max_iterations, one.save_interval, one.stages) == (four.max_iterations, four.save_interval, four.stages)
+    assert one.algorithm.num_mini_batches == four.algorithm.num_mini_batches == 8
+    assert one.to_rsl_rl(16384)["num_steps_per_env"] == four.to_rsl_rl(4096)["num_steps_per_env"]
+    assert env1.terrain.climb == env4.terrain.climb == 2
