@@ -300,8 +300,9 @@ queue)
   if [ -f "$q/pid" ] && [ ! -f "$q/ended" ]; then
     echo "gpu.sh queue: a queue is running already ($q/log)" >&2; exit 1
   fi
-  mkdir -p "$q" && cp "$file" "$q/queue.sh" && rm -f "$q/ended"
-  nohup setsid bash -c "bash '$q/queue.sh'; echo \$? > '$q/ended'" > "$q/log" 2>&1 < /dev/null &
+  file=$(cd "$(dirname "$file")" && pwd)/$(basename "$file")   # run in place: it finds its neighbours from its path
+  mkdir -p "$q" && rm -f "$q/ended"
+  nohup setsid bash -c "bash '$file'; echo \$? > '$q/ended'" > "$q/log" 2>&1 < /dev/null &
   echo $! > "$q/pid"
   echo "started the queue $file in $PWD (log $q/log)"
   ;;

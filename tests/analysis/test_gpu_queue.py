@@ -248,8 +248,11 @@ def test_sample_scaled_queue_on_two_gpus(tmp_path):
                KEEP=str(tmp_path / "keep"), EVALS=str(tmp_path / "evals"), LIMIT="60", S2S_ROUNDS="",
                VAL_TERRAINS="rugged")  # fmt: skip
     _tool(tmp_path / "bin", "nvidia-smi", "#!/bin/bash\necho 'GPU 0: H100'; echo 'GPU 1: H100'\n")
-    done = subprocess.run(["bash", "scripts/device/sample_scaled.sh"], cwd=ROOT, env=env, check=True,
-                          capture_output=True, text=True)  # fmt: skip
+    env["QUEUE"] = str(tmp_path / "queue")  # as a lease starts it: one detached queue, polled
+    for cmd in (["queue", "scripts/device/sample_scaled.sh"], ["poll", "120"]):
+        done = subprocess.run(["bash", "scripts/device/gpu.sh", *cmd], cwd=ROOT, env=env, check=True,
+                              capture_output=True, text=True)  # fmt: skip
+    assert "the queue ended (exit 0)" in done.stdout, done.stdout
     assert "item 1 ended" in done.stdout and "item 2" not in done.stdout
     assert {p.name for p in cand.iterdir()} == {"run_rep1.tgz", "run_rep2.tgz", "run_rep3.tgz", "run_recipe1.tgz",
                                                  "evals_a.tgz", "evals_b.tgz"}  # fmt: skip
