@@ -491,6 +491,14 @@ def terrain_for_goal(terrain: TerrainConfig, goal_distance: float) -> TerrainCon
     return terrain if need <= terrain.x_max else replace(terrain, x_max=need)
 
 
+def without_lanes(terrain: TerrainConfig, **fields) -> TerrainConfig:
+    """``terrain`` as one course, no curriculum: no lanes and nothing only lanes use (``start_levels``,
+    ``past_share``), then ``fields``."""
+    from dataclasses import replace
+
+    return replace(terrain, levels=0, start_levels=1, past_share=0.0, **fields)
+
+
 def _as_tuples(v):
     """Lists (JSON's and ``asdict``'s form of tuples) back to tuples, at any depth; dicts stay dicts."""
     if isinstance(v, (list, tuple)):

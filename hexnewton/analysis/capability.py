@@ -30,7 +30,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from hexnewton.config import LEG_NAMES, LEG_OSCILLATOR, CPGConfig, RobotConfig, TerrainConfig
+from hexnewton.config import LEG_NAMES, LEG_OSCILLATOR, CPGConfig, RobotConfig, TerrainConfig, without_lanes
 from hexnewton.physics.reference import hopf_cpg_reference, initial_cpg_state, mapping_reference
 from hexnewton.physics.robot.geometry import hip_mount, joint_limits, leg_bounds, leg_yaw, stand_height
 from hexnewton.physics.terrain.heightmap import build_height_grid, complex_step_count, validate_config
@@ -401,7 +401,7 @@ def terrain_limits(terrain: TerrainConfig, goal: float) -> dict:
     a walk to ``goal`` metres meets and the complex course's stair count per tread, the block lattice."""
     def message(**fields):
         try:
-            validate_config(replace(terrain, name="stepped", levels=0, **fields))
+            validate_config(without_lanes(terrain, name="stepped", **fields))
         except ValueError as exc:
             return str(exc)
         return None

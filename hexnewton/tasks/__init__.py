@@ -38,6 +38,7 @@ from hexnewton.config import (
     TerrainConfig,
     apply_overrides,
     terrain_for_goal,
+    without_lanes,
 )
 from hexnewton.learning.agent import AgentConfig, paper_agent
 
@@ -125,8 +126,7 @@ def course(terrain: str | TerrainConfig, trained: HexConfig | None = None, overr
     ``TaskConfig`` with ``task_fields``; then ``overrides`` ({"terrain.step_rise": 0.07, ...}), ``num_envs`` robots
     on ``device``, terrain seed ``terrain_seed`` and the patch long enough for the goal."""
     trained = trained or HexConfig()
-    ground = TerrainConfig(name=terrain) if isinstance(terrain, str) else \
-        replace(terrain, levels=0, start_levels=1, past_share=0.0)  # fmt: skip
+    ground = TerrainConfig(name=terrain) if isinstance(terrain, str) else without_lanes(terrain)
     cfg = HexConfig(sim=trained.sim, cpg=trained.cpg, task=replace(TaskConfig(), **task_fields), terrain=ground)
     cfg = apply_overrides(cfg, overrides or {})
     sim = cfg.sim if num_envs is None else replace(cfg.sim, num_envs=num_envs, device=device)

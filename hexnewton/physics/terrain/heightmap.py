@@ -13,11 +13,11 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 import numpy as np
 
-from hexnewton.config import TERRAIN_COLLISIONS, TERRAINS, TerrainConfig
+from hexnewton.config import TERRAIN_COLLISIONS, TERRAINS, TerrainConfig, without_lanes
 
 # Lengths must be integer multiples of the grid resolution to within this many metres.
 ALIGN_TOL = 1e-9
@@ -286,20 +286,21 @@ def lane_config(cfg: TerrainConfig, level: int) -> TerrainConfig:
     (``levels - levels_past - 1``) the heights scaled by (level + 1) / (levels - levels_past); past it the step
     rise, tread and block height a share (level + 1 - course lanes) / levels_past of the way from ``cfg``'s to the
     ``hardest_*`` values (None: ``cfg``'s), the tread rounded to the query grid."""
-    lanes = dict(levels=0, past_share=0.0, width=cfg.lane_width,
-                 rugged_half_width=min(cfg.rugged_half_width, cfg.lane_width / 2), seed=cfg.seed * 1000 + level)
+    lanes = dict(width=cfg.lane_width, rugged_half_width=min(cfg.rugged_half_width, cfg.lane_width / 2),
+                 seed=cfg.seed * 1000 + level)
     course = cfg.levels - cfg.levels_past
     if level < course:
         scale = (level + 1) / course
-        return replace(cfg, block_height_max=cfg.block_height_max * scale, step_rise=cfg.step_rise * scale, **lanes)
+        return without_lanes(cfg, block_height_max=cfg.block_height_max * scale, step_rise=cfg.step_rise * scale,
+                             **lanes)  # fmt: skip
     t = (level + 1 - course) / cfg.levels_past
 
     def toward(value: float, hardest: float | None) -> float:
         return value if hardest is None else value + t * (hardest - value)
 
     depth = round(toward(cfg.step_depth, cfg.hardest_step_depth) / cfg.query_resolution) * cfg.query_resolution
-    return replace(cfg, block_height_max=toward(cfg.block_height_max, cfg.hardest_block_height_max),
-                   step_rise=toward(cfg.step_rise, cfg.hardest_step_rise), step_depth=depth, **lanes)  # fmt: skip
+    return without_lanes(cfg, block_height_max=toward(cfg.block_height_max, cfg.hardest_block_height_max),
+                         step_rise=toward(cfg.step_rise, cfg.hardest_step_rise), step_depth=depth, **lanes)  # fmt: skip
 
 
 def lane_center_y(cfg: TerrainConfig, level: int | np.ndarray) -> float | np.ndarray:
