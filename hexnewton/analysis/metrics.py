@@ -23,7 +23,8 @@ def round_metrics(pos: np.ndarray, rpy: np.ndarray, done: np.ndarray, status: np
     episode ended at that step; ``status`` (T, N) why (``physics.reference`` status codes); ``dt`` the control
     period. Returns arrays over the N rounds: ``reached`` (D, N) bool, ``time_to`` (D, N) [s] (nan if not
     reached), ``y_dev`` (N,) [m], ``end`` (N,) status code (0 = still running at the last step),
-    ``steps`` (N,), and ``in_episode`` (T, N), the rows that belong to each first episode.
+    ``steps`` (N,), ``x_far`` (N,) [m] the farthest x of each first episode (-inf if none), and ``in_episode`` (T, N),
+    the rows that belong to each first episode.
     """
     pos, rpy = np.asarray(pos, np.float64), np.asarray(rpy, np.float64)
     done, status = np.asarray(done, bool), np.asarray(status)
@@ -47,7 +48,7 @@ def round_metrics(pos: np.ndarray, rpy: np.ndarray, done: np.ndarray, status: np
         time_to[k] = np.where(reached[k], (first + 1) * dt, np.nan)
     y_abs = np.where(in_episode & np.isfinite(pos[..., 1]), np.abs(pos[..., 1]), 0.0)
     return {"reached": reached, "time_to": time_to, "y_dev": y_abs.max(axis=0), "end": end, "steps": last + 1,
-            "in_episode": in_episode}  # fmt: skip
+            "x_far": x.max(axis=0), "in_episode": in_episode}  # fmt: skip
 
 
 def gait_quality(metrics: dict, ang_rate: np.ndarray, dparam: np.ndarray, daction: np.ndarray) -> dict:
@@ -70,12 +71,15 @@ def gait_quality(metrics: dict, ang_rate: np.ndarray, dparam: np.ndarray, dactio
     return out
 
 
-def summarize(metrics: dict, rpy: np.ndarray, distances: tuple[float, ...] = DISTANCES) -> dict:
+def summarize(metrics: dict, rpy: np.ndarray, distances: tuple[float, ...] = DISTANCES,
+              goal_line: float | None = None) -> dict:
     """Rates and stability over all rounds (JSON-ready; angles in degrees): success and time at each distance, the
     paper's roll / pitch mean, variance and peak, the 99.9th percentile of |roll| and |pitch|, the share of rounds
     that ended in a fall (anywhere, also after the last distance), Y deviation, how the rounds ended (``ended``) and
-    how those that walked the last distance ended (``ended_past_3m``: a fall there happened on the way to the goal,
-    after the success column counted the round)."""
+    how those that walked the last distance ended (``ended_past_3m``: a fall there happened after the success column
+    counted the round). With ``goal_line`` (the goal's distance plus its radius [m]): how the rounds that walked
+    beyond it ended (``ended_past_goal``: they passed the goal without reaching it; walking on, the course's patch
+    ends under them) and the share of rounds that fell before it (``fall_rate_before_goal``)."""
     deg = 180.0 / math.pi
     mask = metrics["in_episode"]
     rpy = np.asarray(rpy, np.float64)
@@ -99,6 +103,12 @@ def summarize(metrics: dict, rpy: np.ndarray, distances: tuple[float, ...] = DIS
     past = metrics["reached"][-1]  # how the rounds that walked the last distance ended: the way to the goal beyond it
     out[f"ended_past_{distances[-1]:g}m"] = {STATUS_NAMES[c]: int(((metrics["end"] == c) & past).sum())
                                              for c in range(len(STATUS_NAMES))}  # fmt: skip
+    if goal_line is not None:
+        passed = metrics["x_far"] >= goal_line
+        out["goal_line_m"] = float(goal_line)
+        out["ended_past_goal"] = {STATUS_NAMES[c]: int(((metrics["end"] == c) & passed).sum())
+                                  for c in range(len(STATUS_NAMES))}  # fmt: skip
+        out["fall_rate_before_goal"] = float(((metrics["end"] == FELL) & ~passed).mean())
     return out
 
 

@@ -40,6 +40,13 @@ def ended_cell(s: dict, last: float) -> str:
                      for k, v in s["ended"].items() if v)  # fmt: skip
 
 
+def falls_cell(s: dict) -> str:
+    """The rounds that fell, "30 / 1000 (22 past the goal)": in brackets those that had passed the goal line
+    (``ended_past_goal``); reports written without it show the count alone."""
+    fell, past = s["ended"].get("fell", 0), s.get("ended_past_goal", {}).get("fell", 0)
+    return f"{fell} / {s['rounds']}" + (f" ({past} past the goal)" if past else "")
+
+
 def report_markdown(results: dict, meta: dict, robustness: dict | None = None, sweeps: dict | None = None) -> str:
     """Table 3's shape (ours beside the paper's), stability and gait quality per terrain and controller, the
     parameters on blocks and stairs, one robustness table per controller (``robustness[name][ctrl][terrain]``), then
@@ -70,7 +77,8 @@ def report_markdown(results: dict, meta: dict, robustness: dict | None = None, s
                          f"{s['y_dev_mean_m']:.3f} / {s['y_dev_max_m']:.3f} | "
                          f"{'—' if t3 is None else f'{t3:.1f}'} | {ended} |")  # fmt: skip
     lines += ["", "## Gait quality (deterministic actions unless stated in the header)", "",
-              "Falls: rounds that ended in a fall anywhere (also after the last distance). p99.9: the 99.9th "
+              "Falls: rounds that ended in a fall anywhere (also after the last distance; in brackets those that had "
+              "walked past the goal without reaching it: beyond it the course's patch ends). p99.9: the 99.9th "
               "percentile of |angle| over every step. Rates: RMS of the body's roll / pitch rate. Δparam: mean change per "
               "control step of the CPG parameters the oscillators and the mapping use (15; 18 with the body "
               "posture), requested by the policy in brackets, in % of each parameter's range. Ratios: variance "
@@ -87,7 +95,7 @@ def report_markdown(results: dict, meta: dict, robustness: dict | None = None, s
                 ok = b and ctrl != base and b["pitch_var_deg2"] and b["roll_var_deg2"]
                 ratios.append(f"{s['pitch_var_deg2'] / b['pitch_var_deg2']:.2f} / "
                               f"{s['roll_var_deg2'] / b['roll_var_deg2']:.2f}" if ok else "—")  # fmt: skip
-            lines.append(f"| {terrain} | {LABELS[ctrl]} | {s['ended'].get('fell', 0)} / {s['rounds']} | "
+            lines.append(f"| {terrain} | {LABELS[ctrl]} | {falls_cell(s)} | "
                          f"{f(s['pitch_var_deg2'])} | {f(s['roll_var_deg2'])} | {f(s['pitch_p999_deg'])} / "
                          f"{f(s['roll_p999_deg'])} | {f(s.get('roll_rate_rms_deg_s'))} / "
                          f"{f(s.get('pitch_rate_rms_deg_s'))} | {f(s.get('param_change_pct'), '.2f')} "

@@ -187,6 +187,7 @@ class Episode:
     dparam: np.ndarray  # (T, N) mean |change| of the 15 filtered parameters since the last step / their ranges
     daction: np.ndarray  # (T, N) the same for the parameters the policy asks for (params_target)
     segments: dict  # complex course: mean parameters (physical units) on the blocks and on the stairs, all rounds
+    goal_line: float | None = None  # [m] ahead of the start: beyond it a round has passed its goal (distance + radius)
 
 
 def controller_policy(env, controller: str, checkpoint: str | None = None, ckpt: dict | None = None,
@@ -228,6 +229,7 @@ class RoundLog:
     def __init__(self, cfg: HexConfig, rounds: int, action_mode: str, split_x: float | None = None):
         self.rounds, self.action_mode, self.split_x = rounds, action_mode, split_x
         self.lo, self.hi = (np.asarray(b, np.float64) for b in cfg.cpg.param_ranges())
+        self.goal_line = cfg.task.goal_distance + cfg.task.goal_radius
         npar = cfg.cpg.num_params
         self.seg_sum, self.seg_n = {"blocks": np.zeros(npar), "stairs": np.zeros(npar)}, {"blocks": 0, "stairs": 0}
         self.pos, self.rpy, self.done, self.status, self.params = [], [], [], [], []
@@ -273,7 +275,7 @@ class RoundLog:
         segments = {seg: (self.seg_sum[seg] / self.seg_n[seg]).tolist() for seg in self.seg_sum if self.seg_n[seg]}
         return Episode(np.stack(self.pos), np.stack(self.rpy), np.stack(self.done), np.stack(self.status),
                        np.stack(self.params), dt, np.stack(self.ang_rate), np.stack(self.dparam),
-                       np.stack(self.daction), segments)  # fmt: skip
+                       np.stack(self.daction), segments, self.goal_line)  # fmt: skip
 
 
 def run_rounds(controller: str, checkpoint: str | None, terrain: str, rounds: int, device: str | None,

@@ -259,7 +259,7 @@ def evaluator(args, checkpoints: dict[str, str], env_overrides: dict, fixed_phys
         ep = run_rounds(ctrl, ck, terrain, args.rounds, device, args.max_steps, progress, args.seed, overrides,
                         args.stochastic, args.expected, fixed_params)  # fmt: skip
         m = round_metrics(ep.pos, ep.rpy, ep.done, ep.status, ep.dt, distances)
-        s = summarize(m, ep.rpy, distances)
+        s = summarize(m, ep.rpy, distances, ep.goal_line)
         s.update(gait_quality(m, ep.ang_rate, ep.dparam, ep.daction), segments=ep.segments, checkpoint=ck)
         return s, ep, m
 

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from hexnewton.analysis.metrics import DISTANCES, round_metrics, summarize
-from hexnewton.analysis.report import ended_cell
+from hexnewton.analysis.report import ended_cell, falls_cell
 from hexnewton.mdp.status import FELL, OFF_COURSE, SUCCESS
 
 DT = 0.02
@@ -71,6 +71,23 @@ def test_summary_rates_and_angles():
     s = summarize(round_metrics(pos, rpy, done, status, DT), rpy)
     assert s["ended_past_3m"]["fell"] == 1 and s["ended"]["fell"] == 1 and s["success_3m"] == 0.5
     assert ended_cell(s, 3.0) == "running 1, fell 1 (1 past 3 m), off_course 1, success 1"
+
+
+def test_falls_past_the_goal_line():
+    """A round that walked beyond the goal line (goal distance + radius) without reaching the goal and then fell
+    counts in ``ended_past_goal``, not in ``fall_rate_before_goal``; a fall short of the line counts there."""
+    pos, rpy, done, status = _synthetic()
+    m = round_metrics(pos, rpy, done, status, DT)
+    np.testing.assert_allclose(m["x_far"], [3.24, 0.012 * 149, 0.012 * 199, 0.9])  # the falling row does not count
+    x = pos[..., 0]
+    x[:, 0] = 0.012 * np.arange(1, 301)  # round 0 walks on past the line (3.0 m) and falls at x = 3.48 m
+    status[269, 0], done[269, 0], done[289, 0], status[289, 0] = 0, False, True, FELL
+    s = summarize(round_metrics(pos, rpy, done, status, DT), rpy, DISTANCES, goal_line=3.0)
+    assert s["goal_line_m"] == 3.0 and s["fall_rate"] == 0.5
+    assert s["ended_past_goal"] == {**{k: 0 for k in s["ended"]}, "fell": 1}
+    assert s["fall_rate_before_goal"] == 0.25  # round 1, at 1.8 m
+    assert falls_cell(s) == "2 / 4 (1 past the goal)"
+    assert "ended_past_goal" not in summarize(m, rpy)
 
 
 def _fake_run(path, rewards):
