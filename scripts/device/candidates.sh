@@ -1,7 +1,7 @@
 #!/bin/bash
-# Recipe candidates in one device call (scripts/device/README.md, "Open measurements"): one pipeline per GPU, all at
-# once, each `python train.py ARGS`, then `gpu.sh pack` (its run to $OUT/run_NAME.tgz, its result to $KEEP/NAME.pt),
-# then its result on validation rounds ($VAL_ROUNDS per terrain, `--seed 3000`, deterministic action, one evaluate
+# Recipe candidates in one device call (scripts/device/README.md, "A lease's work as one queue"): one pipeline per
+# GPU, all at once, each `python train.py ARGS`, then `gpu.sh pack` (its run to $OUT/run_NAME.tgz, its result to
+# $KEEP/NAME.pt), then its result on validation rounds ($VAL_ROUNDS per terrain, `--seed 3000`, deterministic action, one evaluate
 # job per terrain of $VAL_TERRAINS on the same GPU), or with `points` the named capability points (capability.sh
 # points, $POINT_ROUNDS each, `--seed 3000`). Everything ends by $LIMIT seconds after the start (evaluations are cut
 # off there), and the evaluations ($EVALS, default /root/evals) are packed into $OUT/evals.tgz, so the call brings

@@ -38,7 +38,7 @@
 #        # from this folder: a lease's whole work in one queue, log in $QUEUE/log (default /root/queue)
 #   bash scripts/device/gpu.sh poll SECONDS [PATH...]           # exit 3 at once where no queue was started (the call
 #        # landed on a fresh machine: the queue is lost); else until it ends (at most SECONDS), its log's last
-#        # $TAIL lines (30), then each PATH copied into $OUT
+#        # $TAIL lines (30), then each PATH copied into $OUT (a quoted glob, '/root/cand/*', is expanded then)
 #
 # Example (the complex task from its name, then 1000 test rounds per terrain, one H200):
 #   bash scripts/device/gpu.sh train complex -- --task complex --num_envs 4096
@@ -315,7 +315,10 @@ poll)
   while [ ! -f "$q/ended" ] && [ $((SECONDS - t)) -lt "$limit" ]; do sleep 5; done
   if [ -f "$q/ended" ]; then echo "the queue ended (exit $(cat "$q/ended"))"; else echo "the queue runs on"; fi
   tail -n "${TAIL:-30}" "$q/log"
-  for path in "$@"; do cp -r "$path" "$OUT/" || echo "gpu.sh poll: $path not copied" >&2; done
+  # a quoted glob is expanded here, after the wait: the call's shell would have expanded it before the files existed
+  for pattern in "$@"; do
+    for path in $pattern; do cp -r "$path" "$OUT/" || echo "gpu.sh poll: $path not copied" >&2; done
+  done
   ;;
 *)
   sed -n '2,41p' "$0"; exit 2

@@ -230,10 +230,10 @@ def test_queue_and_poll(tmp_path):
     again = subprocess.run(["bash", "scripts/device/gpu.sh", "queue", str(work)], cwd=ROOT, env=env,
                            capture_output=True, text=True)  # fmt: skip
     assert again.returncode == 1 and "running already" in again.stderr
-    polled = subprocess.run(["bash", "scripts/device/gpu.sh", "poll", "60", str(made)], cwd=ROOT, env=env, check=True,
-                            capture_output=True, text=True)  # fmt: skip
+    polled = subprocess.run(["bash", "scripts/device/gpu.sh", "poll", "60", str(tmp_path / "made*")], cwd=ROOT,
+                            env=env, check=True, capture_output=True, text=True)  # fmt: skip
     assert "the queue ended (exit 4)" in polled.stdout and "step one" in polled.stdout
-    assert (out / "made.txt").read_text() == "done\n"
+    assert (out / "made.txt").read_text() == "done\n"  # the glob, given before the file existed, expanded after
     missing = subprocess.run(["bash", "scripts/device/gpu.sh", "queue", str(tmp_path / "none.sh")], cwd=ROOT, env=env,
                              capture_output=True, text=True)  # fmt: skip
     assert missing.returncode == 2 and "no file" in missing.stderr
