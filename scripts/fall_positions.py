@@ -6,6 +6,7 @@
 """
 
 import argparse
+import os
 import time
 
 from hexnewton.analysis.metrics import round_metrics
@@ -21,6 +22,8 @@ def main() -> None:
     p.add_argument("--seed", type=int, default=3000, help="terrain seed (validation rounds: 3000)")
     p.add_argument("--device", default="cpu")
     a = p.parse_args()
+    if not os.path.isfile(a.checkpoint):
+        p.error(f"no checkpoint {a.checkpoint}")
     t0 = time.time()
     ep = run_rounds("cpg_rl", a.checkpoint, a.terrain, a.rounds, a.device, 7000, progress=False, seed=a.seed)
     m = round_metrics(ep.pos, ep.rpy, ep.done, ep.status, ep.dt)

@@ -78,8 +78,9 @@ def summarize(metrics: dict, rpy: np.ndarray, distances: tuple[float, ...] = DIS
     that ended in a fall (anywhere, also after the last distance), Y deviation, how the rounds ended (``ended``) and
     how those that walked the last distance ended (``ended_past_3m``: a fall there happened after the success column
     counted the round). With ``goal_line`` (the goal's distance plus its radius [m]): how the rounds that walked
-    beyond it ended (``ended_past_goal``: they passed the goal without reaching it; walking on, the course's patch
-    ends under them) and the share of rounds that fell before it (``fall_rate_before_goal``)."""
+    beyond it ended (``ended_past_goal``: but for a success at the goal's far edge, they passed the goal without
+    reaching it, and walking on, the course's patch ends under them) and the share of rounds that fell before it
+    (``fall_rate_before_goal``)."""
     deg = 180.0 / math.pi
     mask = metrics["in_episode"]
     rpy = np.asarray(rpy, np.float64)
