@@ -141,9 +141,13 @@ def configs(args, base, ckpt: dict | None):
 
         if agent.distribution.name != checkpoint_agent(ckpt).distribution.name:
             raise ValueError("--agent.distribution.name: a resumed run keeps the distribution it was trained with")
-    if agent.stages and not (env_cfg.cpg.posture and base.action_mode == "cpg"):
+    reflex = any("posture_reflex" in changes for _, changes in agent.stages)
+    if reflex and base.action_mode != "cpg":
+        raise ValueError("agent.stages: posture_reflex is the CPG's levelling reflex, which the joint targets do not "
+                         "have: a joint-mode stage changes reward weights, PPO settings and physics only")  # fmt: skip
+    if reflex and not env_cfg.cpg.posture:
         raise ValueError("agent.stages change the levelling reflex of the body posture: set --env.cpg.posture true "
-                         "or --agent.stages '()'")  # fmt: skip
+                         "or drop posture_reflex from the stages")  # fmt: skip
     return env_cfg, agent
 
 

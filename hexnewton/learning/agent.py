@@ -62,7 +62,8 @@ def apply_stage(env, changes: dict) -> tuple[dict, str]:
     env.set_shaping(replace(env.cfg.reward, **reward), reflex)
     if "effort_clamp" in physics:
         env.set_effort_clamp(physics["effort_clamp"])
-    return algorithm, f"posture_reflex {reflex:g}, " + stage_line({**reward, **algorithm, **physics})
+    head = f"posture_reflex {reflex:g}, " if getattr(env, "cpg", None) is not None else ""  # joint mode: no CPG
+    return algorithm, head + stage_line({**reward, **algorithm, **physics})
 
 
 def split_stage_changes(changes: dict) -> tuple[float | None, dict, dict, dict]:

@@ -59,6 +59,11 @@ STABLE_STAGES = ((100, dict(posture_reflex=2.0, w_tilt=15.0, w_ang_vel=0.1)), (2
 STABLE_ITERATIONS = 300
 #: The same curriculum over 1062 iterations, for the 5 m courses (``complex-5m``, ``stairs-8cm``): their episodes are
 #: longer, so the terrain curriculum needs more iterations per level (not measured with the 300-iteration schedule).
+#: The stable-gait curriculum's reward part (:data:`STABLE_STAGES` without the CPG's levelling reflex), at the same
+#: iterations, so at the same env-steps at 4096 envs (9.8 M and 19.7 M): pure DRL's stages
+#: (``complex-joint-staged``), which have no CPG to level
+STABLE_REWARD_STAGES = tuple((start, {k: v for k, v in changes.items() if k != "posture_reflex"})
+                             for start, changes in STABLE_STAGES)
 LONG_STABLE_STAGES = ((382, dict(posture_reflex=2.0, w_tilt=15.0, w_ang_vel=0.1)), (744, dict(w_tilt=40.0, w_ang_vel=0.3)))
 LONG_STABLE_ITERATIONS = 1062
 #: ``complex-margin``'s curriculum lanes: the complex recipe's 10 lanes with the last 3 past the course (lane 6 is the
@@ -205,8 +210,12 @@ register(Task("paper", "the complex course with Table 1's reward and Table 2's P
 register(Task("complex-joint", "pure DRL on the complex course: the 18 joint targets, the complex recipe's "
               "terrain, physics and reward without the CPG", _recipe("complex"), AgentConfig(**TERRAIN_VALIDATION),
               action_mode="joint"))
+register(Task("complex-joint-staged", "pure DRL on the complex course as complex-joint, with the stable-gait "
+              "curriculum's reward weights (w_tilt 5 -> 15 -> 40, w_ang_vel 0.05 -> 0.1 -> 0.3 at iterations 100 and "
+              "200, as the complex task's CPG_RL)", _recipe("complex"),
+              AgentConfig(stages=STABLE_REWARD_STAGES, **TERRAIN_VALIDATION), action_mode="joint"))
 
 
 __all__ = ["ACTION_MODES", "FLAT_VALIDATION", "FOOT_CONTACT_RANGES", "LONG_STABLE_STAGES", "MARGIN_LANES",
-           "MARGIN_RANDOMIZATION", "STABLE_SHAPING", "STABLE_STAGES", "TASKS", "TERRAIN_VALIDATION", "Task", "course",
-           "register", "task", "task_table"]
+           "MARGIN_RANDOMIZATION", "STABLE_REWARD_STAGES", "STABLE_SHAPING", "STABLE_STAGES", "TASKS",
+           "TERRAIN_VALIDATION", "Task", "course", "register", "task", "task_table"]

@@ -18,8 +18,9 @@
 #   bash scripts/device/gpu.sh methods TASK MINUTES ENV_STEPS NUM_ENVS "SEEDS" "GPUS"
 #        # in the background: every method ($METHODS: cpg_rl sac_cpg td3_cpg a2c_cpg joint; also paper: CPG_RL with
 #        # task paper) x seed on TASK (joint: $JOINT_TASK, default complex-joint), or the runs $JOBS names
-#        # ("cpg_rl:1 paper:1 ..."), each run ending at ENV_STEPS env-steps or MINUTES of wall time, whichever comes
-#        # first, one run per GPU at a time (equal GPUs: equal wall time); runs in $RUNS/methods/, NAME.done when a run
+#        # ("cpg_rl:1 paper:1 ..."; joint_staged: task complex-joint-staged), each run ending at ENV_STEPS env-steps or
+#        # MINUTES of wall time, whichever comes first, one run per word of GPUS at a time ("0 1": one per GPU, equal
+#        # wall time; "0 0": two at a time on GPU 0); runs in $RUNS/methods/, NAME.done when a run
 #        # ends well (finished runs are skipped); none starts after $DEADLINE (seconds since the epoch);
 #        # $EVALS_AFTER="ROUNDS TERRAIN...": a GPU with no more runs starts `evals ROUNDS GPU TERRAIN...` at once
 #   bash scripts/device/gpu.sh evals ROUNDS "GPUS" TERRAIN...    # in the background: the fixed CPG, then each
@@ -164,15 +165,16 @@ _methods)   # the queue behind `methods`
   dest="$RUNS/methods"
   jobs=(); for s in $seeds; do for m in ${METHODS:-cpg_rl sac_cpg td3_cpg a2c_cpg joint}; do jobs+=("$m $s"); done; done
   [ -n "${JOBS:-}" ] && { jobs=(); for j in $JOBS; do jobs+=("${j%:*} ${j#*:}"); done; }   # JOBS="cpg_rl:1 joint:2 ..."
-  declare -A pid
+  # one slot per word of GPUS: "0 0" runs two at a time on GPU 0
+  slots=($gpus); declare -A pid
   for job in "${jobs[@]}"; do
-    set -- $job; m=$1 s=$2 free=
+    set -- $job; m=$1 s=$2 free= slot=
     name=${m}_s$s
     # finished runs are skipped (NAME.done: this lease's, or an earlier lease's copied in by `gpu.sh study`); a run
     # cut off starts again
     [ -f "$dest/$name.done" ] && { echo "$(date +%T) $name finished: skipped"; continue; }
     while [ -z "$free" ]; do
-      for g in $gpus; do p=${pid[$g]:-}; { [ -z "$p" ] || ! kill -0 "$p" 2>/dev/null; } && { free=$g; break; }; done
+      for i in "${!slots[@]}"; do p=${pid[$i]:-}; { [ -z "$p" ] || ! kill -0 "$p" 2>/dev/null; } && { free=${slots[$i]}; slot=$i; break; }; done
       [ -z "$free" ] && sleep 5
     done
     # no run starts past the deadline ($DEADLINE: seconds since the epoch), so the lease ends with whole runs
@@ -181,6 +183,7 @@ _methods)   # the queue behind `methods`
       cpg_rl) cmd=(python train.py --task "$task" --max_iterations "$its" --agent.max_minutes "$minutes") ;;
       paper)  cmd=(python train.py --task paper --max_iterations "$its" --agent.max_minutes "$minutes") ;;
       joint)  cmd=(python train.py --task "${JOINT_TASK:-complex-joint}" --max_iterations "$its" --agent.max_minutes "$minutes") ;;
+      joint_staged) cmd=(python train.py --task complex-joint-staged --max_iterations "$its" --agent.max_minutes "$minutes") ;;
       *_cpg)  cmd=(python -m hexnewton.apps.baselines --task "$task" --algo "${m%_cpg}" --total_steps "$steps" --max_minutes "$minutes") ;;
       *) echo "unknown method $m"; continue ;;
     esac
@@ -193,13 +196,14 @@ _methods)   # the queue behind `methods`
       rc=$?; [ $rc = 0 ] && printf '{"exit": 0, "process_s": %d, "gpu": "%s", "command": "%s"}\n' \
         $((SECONDS - t)) "$gpu_name" "${cmd[*]} --seed $s --num_envs $envs" > "$dest/$name.done"
       echo "$(date +%T) $name ended: exit $rc after $((SECONDS - t)) s" ) &
-    pid[$free]=$!
+    pid[$slot]=$!
   done
   # $EVALS_AFTER="ROUNDS TERRAIN...": each GPU starts an evaluation queue (`evals`) as soon as its last run ends
   if [ -n "${EVALS_AFTER:-}" ]; then
     set -- $EVALS_AFTER; rounds=$1; shift
-    for g in $gpus; do
-      ( p=${pid[$g]:-}; while [ -n "$p" ] && kill -0 "$p" 2>/dev/null; do sleep 5; done
+    for i in "${!slots[@]}"; do
+      g=${slots[$i]}
+      ( p=${pid[$i]:-}; while [ -n "$p" ] && kill -0 "$p" 2>/dev/null; do sleep 5; done
         echo "$(date +%T) GPU $g: no more runs, evaluations"; bash "$0" evals "$rounds" "$g" "$@" ) &
     done
   fi
@@ -245,10 +249,20 @@ _evals)   # the queue behind `evals`
   while :; do
     started=0
     sampled=(); specs=()   # "NAME CONTROLLER CHECKPOINT TERRAIN FLAGS": every finished run, deterministic and sampled, and the fixed CPG
-    for terrain in "${terrains[@]}"; do specs+=("cpg_s0_$terrain cpg - $terrain -"); done
+    # the fixed CPG ($FIXED_CPG, default both): cpg at its default 10 ms frame (the paper's setting), cpg_frame20 on
+    # the policies' physics (20 ms frame, 4 substeps); FLAGS are evaluate's flags with commas for spaces
+    for terrain in "${terrains[@]}"; do
+      for f in ${FIXED_CPG:-cpg cpg_frame20}; do
+        case $f in
+          cpg) specs+=("cpg_s0_$terrain cpg - $terrain -") ;;
+          cpg_frame20) specs+=("cpg_frame20_s0_$terrain cpg - $terrain --env.sim.frame_dt,0.02,--env.sim.substeps,4") ;;
+        esac
+      done
+    done
     for done in "$RUNS"/methods/*.done; do
       [ -e "$done" ] || continue
-      name=$(basename "$done" .done); m=${name%_s*}; ctrl=$m; [ "$m" = paper ] && ctrl=cpg_rl
+      name=$(basename "$done" .done); m=${name%_s*}; ctrl=$m
+      case $m in paper) ctrl=cpg_rl ;; joint_staged) ctrl=joint ;; esac   # compare.CONTROLLER
       run=$(ls -d "$RUNS/methods/$name"/*/ | tail -1); ck=$(ls -v "$run"model_*[0-9].pt 2>/dev/null | tail -1)
       [ -z "$ck" ] && { echo "no checkpoint in $run"; continue; }
       for terrain in "${terrains[@]}"; do
@@ -271,7 +285,7 @@ _evals)   # the queue behind `evals`
       done
       args=(--controllers "$ctrl" --terrains "$terrain" --rounds "$rounds" --out "$dest/$out" --no-progress)
       [ "$ck" != - ] && args+=(--checkpoint "$ctrl=$ck")
-      [ "$flags" != - ] && args+=($flags)
+      [ "$flags" != - ] && args+=(${flags//,/ })
       echo "$(date +%T) $out on GPU ${slots[$free]}: ${args[*]}"
       ( CUDA_VISIBLE_DEVICES=${slots[$free]} timeout -k 10 "${EVAL_TIMEOUT:-3000}" python -m hexnewton.apps.evaluate "${args[@]}" ${EVAL_ARGS:-} \
           > "$dest/$out.log" 2>&1; echo "$(date +%T) $out ended: exit $?" ) &
