@@ -103,11 +103,71 @@ def seed_band(specs: list[str], x: str, tag: str, points: int = 200) -> dict | N
             "final": ys[:, -1].tolist()}  # finite: NaN points are dropped above
 
 
+def crossings(xs, ys, level: float, window: float) -> dict:
+    """Where a curve (``xs`` rising, ``ys``) reaches ``level``: ``first`` (the first x with y >= level), ``sustained``
+    (the first x from which y stays >= level over the next ``window`` of x, within the curve), ``dip_after_first``
+    (the lowest y after the first crossing, and its x); None where it never does."""
+    import numpy as np
+
+    xs, ys = np.asarray(xs, float), np.asarray(ys, float)
+    above = ys >= level
+    first = float(xs[above.argmax()]) if above.any() else None
+    sustained = None
+    for i in np.flatnonzero(above):
+        if xs[i] + window > xs[-1]:
+            break
+        span = (xs >= xs[i]) & (xs <= xs[i] + window)
+        if above[span].all():
+            sustained = float(xs[i])
+            break
+    dip = None
+    if first is not None:
+        after = xs >= first
+        k = int(ys[after].argmin())
+        dip = {"value": float(ys[after][k]), "at": float(xs[after][k])}
+    return {"first": first, "sustained": sustained, "dip_after_first": dip}
+
+
+def curve_numbers(specs: list[str], x: str, tag: str, level: float | None, window: float, common: float) -> dict:
+    """The numbers of Fig. 5a's ``tag`` against ``x`` for one method's runs (``specs``, one per seed): per seed its
+    peak (value, x), its value at ``common`` (None past its end) and at its own end (value, x), and where it crosses
+    ``level`` (:func:`crossings`, with ``window``); the same of the seeds' mean curve (:func:`seed_band`), whose
+    ``common`` value is read where every seed has a point."""
+    import numpy as np
+
+    out: dict = {"seeds": []}
+    for spec in specs:
+        c = [(a, v) for a, v in read_curve(spec, x).get(tag, []) if math.isfinite(v)]
+        if not c:
+            out["seeds"].append(None)
+            continue
+        xs, ys = map(np.asarray, zip(*c))
+        k = int(ys.argmax())
+        row = {"peak": {"value": float(ys[k]), "at": float(xs[k])}, "end": {"value": float(ys[-1]), "at": float(xs[-1])},
+               "at_common": float(np.interp(common, xs, ys)) if common <= xs[-1] else None}  # fmt: skip
+        if level is not None:
+            row.update(crossings(xs, ys, level, window))
+        out["seeds"].append(row)
+    band = seed_band(specs, x, tag, points=2000)
+    if band is not None:
+        k = int(band["mean"].argmax())
+        out["mean"] = {"peak": {"value": float(band["mean"][k]), "at": float(band["x"][k])},
+                       "end": {"value": float(band["mean"][-1]), "at": float(band["x"][-1])},
+                       "at_common": float(np.interp(common, band["x"], band["mean"])) if common <= band["x"][-1]
+                       else None}  # fmt: skip
+        if level is not None:
+            out["mean"].update(crossings(band["x"], band["mean"], level, window))
+    return out
+
+
 def plot_fig5a(path: str, methods: dict[str, list[str]], axes: tuple[str, ...] = ("env_steps", "wall_time"),
-               title: str = "Fig. 5a: mean over seeds, min to max shaded") -> dict:
+               title: str = "Fig. 5a: mean over seeds, min to max shaded", labels: dict[str, str] | None = None,
+               marked: dict[str, list[tuple[str, str]]] | None = None) -> dict:
     """Fig. 5a: reward, success and curriculum level (rows) against each of ``axes`` (columns: env-steps, wall time), one band per
-    method (its seeds' mean, min to max shaded); writes ``path`` (PNG) and the bands as ``<path>.csv``; returns each
-    method's final values {method: {axis: {tag: [per seed]}}} and the axis end it was read at."""
+    method (its seeds' mean, min to max shaded; ``labels`` names them); ``marked`` {method: [(run, note), ...]}: runs
+    drawn apart as dashed lines with their note (a cold kernel cache, a shared GPU), outside the bands; writes ``path``
+    (PNG) and the bands as ``<path>.csv``; returns each method's final values {method: {axis: {tag: [per seed]}}} and
+    the axis end it was read at."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -121,12 +181,18 @@ def plot_fig5a(path: str, methods: dict[str, list[str]], axes: tuple[str, ...] =
     for col, x in enumerate(axes):
         for row, (tag, ylabel) in enumerate(FIG5A_TAGS.items()):
             ax = grid[row, col]
-            for k, (name, specs) in enumerate(methods.items()):
-                band = seed_band(specs, x, tag)
+            names = {**dict.fromkeys(methods), **dict.fromkeys(marked or {})}
+            for k, name in enumerate(names):
+                text = (labels or {}).get(name) or LABELS.get(name, name)
+                for spec, note in (marked or {}).get(name, []):
+                    c = [(a, v) for a, v in read_curve(spec, x).get(tag, []) if math.isfinite(v)]
+                    if c:
+                        ax.plot(*zip(*c), color=f"C{k}", ls="--", lw=0.8, label=f"{text}, {note}")
+                band = seed_band(methods[name], x, tag) if methods.get(name) else None
                 if band is None:
                     continue
                 # one colour per method on every panel, whichever tags its runs lack
-                ax.plot(band["x"], band["mean"], color=f"C{k}", label=f"{LABELS.get(name, name)} ({band['seeds']} seeds)")
+                ax.plot(band["x"], band["mean"], color=f"C{k}", label=f"{text} ({band['seeds']} seeds)")
                 ax.fill_between(band["x"], band["min"], band["max"], color=f"C{k}", alpha=0.2, lw=0)
                 summary.setdefault(name, {}).setdefault(x, {})[tag] = {"at": float(band["x"][-1]),
                                                                       "final": band["final"]}  # fmt: skip

@@ -28,18 +28,26 @@ import os
 import re
 import sys
 
+from hexnewton.analysis.verdict import VERDICT_LEVELS, claims, paper_table3
 from hexnewton.apps.cli import ArgumentParser, positive_int, run
 
-METHODS = ("cpg_rl", "paper", "sac_cpg", "td3_cpg", "a2c_cpg", "joint")
-#: the controller ``evaluate`` runs for a method's checkpoint (``paper`` is CPG_RL trained with task ``paper``)
-CONTROLLER = {"paper": "cpg_rl"}
+METHODS = ("cpg_rl", "paper", "sac_cpg", "td3_cpg", "a2c_cpg", "joint", "joint_staged")
+#: the fixed CPG's rows (seed 0, no training run): at its default 10 ms frame (the paper's setting) and on the
+#: policies' physics (20 ms frame, 4 substeps: ``evaluate --env.sim.frame_dt 0.02 --env.sim.substeps 4``)
+FIXED_ROWS = ("cpg", "cpg_frame20")
+#: the controller ``evaluate`` runs for a method's checkpoint (``paper`` is CPG_RL trained with task ``paper``,
+#: ``joint_staged`` pure DRL trained with task ``complex-joint-staged``)
+CONTROLLER = {"paper": "cpg_rl", "joint_staged": "joint", "cpg_frame20": "cpg"}
+#: the report's names where a method's controller label (``rollout.LABELS``) does not tell its rows apart
+ROW_LABELS = {"cpg": "fixed CPG (10 ms frame)", "cpg_frame20": "fixed CPG (20 ms frame)",
+              "joint": "pure DRL (no stages)", "joint_staged": "pure DRL (stages)"}
 #: seeds each method should have (``paper``: one more row, one seed)
 SEEDS = {"paper": 1}
 ACTIONS = ("deterministic", "sampled")
 #: methods with no sampled action to evaluate: TD3's actor is deterministic (its exploration noise is no policy of its
 #: own; ``baselines.sampled_action`` gives its deterministic action)
 DETERMINISTIC_ONLY = ("td3_cpg",)
-METRICS = ("fall_rate", "pitch_var_deg2", "roll_var_deg2", "pitch_p999_deg", "roll_p999_deg")
+METRICS = ("fall_rate", "fall_rate_before_goal", "pitch_var_deg2", "roll_var_deg2", "pitch_p999_deg", "roll_p999_deg")
 _RUN = re.compile(r"^(?P<method>[a-z0-9_]+)_s(?P<seed>\d+)$")
 _EVAL = re.compile(r"^(?P<method>[a-z0-9_]+)_s(?P<seed>\d+)_(?P<terrain>[a-z]+)(?P<sampled>_sampled)?$")
 
@@ -84,7 +92,7 @@ def find_evals(evals_dir: str) -> dict[str, dict[str, dict[str, dict[int, dict]]
     out: dict = {}
     for path in sorted(glob.glob(os.path.join(evals_dir, "*", "results.json"))):
         m = _EVAL.match(os.path.basename(os.path.dirname(path)))
-        if not m or m["method"] not in (*METHODS, "cpg"):
+        if not m or m["method"] not in (*METHODS, *FIXED_ROWS):
             continue
         with open(path) as f:
             res = json.load(f)
@@ -105,12 +113,44 @@ def _stat(values: list[float]) -> dict:
     return {"mean": float(v.mean()), "min": float(v.min()), "max": float(v.max()), "n": int(len(v))}
 
 
+def label(method: str) -> str:
+    """A method's name in the report: ``pure DRL (stages)``, ``SAC-CPG``, ..."""
+    from hexnewton.analysis.rollout import LABELS
+
+    return ROW_LABELS.get(method) or LABELS.get(method, method)
+
+
+def cut_short(budgets: dict) -> dict[str, str]:
+    """{``<method>_s<seed>``: why}: runs that ended short of the env-steps the method's other seeds reached (at the
+    wall-time limit, by less than 99 % of them). They stay in the budget table and are left out of every mean."""
+    out = {}
+    for method, seeds in budgets.items():
+        top = max(b["env_steps"] for b in seeds.values())
+        for seed, b in seeds.items():
+            if len(seeds) > 1 and b["env_steps"] < 0.99 * top:
+                out[f"{method}_s{seed}"] = (f"ended at {b['env_steps'] / 1e6:.1f} M env-steps after {b['wall_min']:.1f} "
+                                            f"min, where the method's other seeds reached {top / 1e6:.1f} M")  # fmt: skip
+    return out
+
+
+def without(evals: dict, excluded: dict) -> tuple[dict, dict]:
+    """``evals`` split into (the runs the means take, the ``excluded`` runs'), both in ``find_evals``' layout."""
+    kept, left = {}, {}
+    for actions, by_t in evals.items():
+        for terrain, by_m in by_t.items():
+            for method, seeds in by_m.items():
+                for seed, summary in seeds.items():
+                    side = left if f"{method}_s{seed}" in excluded else kept
+                    side.setdefault(actions, {}).setdefault(terrain, {}).setdefault(method, {})[seed] = summary
+    return kept, left
+
+
 def table3(evals: dict, distances: tuple[float, ...]) -> dict:
     """{terrain: {method: {"success_<d>m": stat, "fall_rate": stat, ..., "rounds": R, "seeds": [...]}}}: over seeds;
-    the fixed CPG first."""
+    the fixed CPG's rows first."""
     out = {}
     for terrain, by_method in evals.items():
-        for method in [m for m in ("cpg", *METHODS) if m in by_method]:
+        for method in [m for m in (*FIXED_ROWS, *METHODS) if m in by_method]:
             seeds = by_method[method]
             row = {f"success_{d:g}m": _stat([s.get(f"success_{d:g}m") for s in seeds.values()]) for d in distances}
             row.update({k: _stat([s.get(k) for s in seeds.values()]) for k in METRICS})
@@ -133,8 +173,8 @@ def missing(runs: dict, evals: dict, terrains: tuple[str, ...], seeds: int) -> l
             got = evals.get(actions, {}).get(terrain, {})
             need = [f"{m}_s{s}" for m, ss in runs.items() for s in ss if s not in got.get(m, {})
                     and not (actions == "sampled" and m in DETERMINISTIC_ONLY)]  # fmt: skip
-            if actions == "deterministic" and 0 not in got.get("cpg", {}):
-                need.insert(0, "cpg_s0")
+            if actions == "deterministic":
+                need[:0] = [f"{m}_s0" for m in FIXED_ROWS if 0 not in got.get(m, {})]
             if need:
                 out.append(f"{actions} evaluations on {terrain}: {', '.join(need)}")
     return out
@@ -149,36 +189,56 @@ def _cell(stat: dict, scale: float = 100.0, unit: str = "%", digits: int = 1) ->
 
 
 def _table_lines(table: dict, distances: tuple[float, ...], beside: dict | None) -> list[str]:
-    head = ("| terrain | method | seeds | rounds | " + " | ".join(f"{d:g} m" for d in distances) + " | falls | pitch var "
-            "[deg²] | roll var [deg²] | \\|pitch\\| p99.9 [deg] | \\|roll\\| p99.9 [deg] |")  # fmt: skip
-    cols = len(distances) + 5
+    head = ("| terrain | method | seeds | rounds | " + " | ".join(f"{d:g} m" for d in distances) + " | falls | falls "
+            "before the goal | pitch var [deg²] | roll var [deg²] | \\|pitch\\| p99.9 [deg] | \\|roll\\| p99.9 [deg] |")  # fmt: skip
+    cols = len(distances) + len(METRICS)
     if beside is not None:
         head += " 3 m sampled | falls sampled |"
         cols += 2
     lines = [head, "|---|---|---:|---:|" + "---:|" * cols]
-    from hexnewton.analysis.rollout import LABELS
 
     for terrain, by_method in table.items():
         for method, row in by_method.items():
-            cells = [_cell(row[f"success_{d:g}m"]) for d in distances] + [_cell(row["fall_rate"])]
-            cells += [_cell(row[k], 1.0, "", 1) for k in METRICS[1:]]
+            cells = [_cell(row[f"success_{d:g}m"]) for d in distances]
+            cells += [_cell(row[k]) if k.startswith("fall_rate") else _cell(row[k], 1.0, "", 1) for k in METRICS]
             if beside is not None:
                 other = beside.get(terrain, {}).get(method)
                 last = f"success_{distances[-1]:g}m" if distances else None
                 cells += [_cell(other[last]) if other and last else "—", _cell(other["fall_rate"]) if other else "—"]
-            lines.append(f"| {terrain} | {LABELS.get(method, method)} | {len(row['seeds'])} | "
+            lines.append(f"| {terrain} | {label(method)} | {len(row['seeds'])} | "
                          f"{'/'.join(map(str, row['rounds']))} | " + " | ".join(cells) + " |")  # fmt: skip
     return lines
 
 
-def report_markdown(budgets: dict, tables: dict, distances: tuple[float, ...], figs: list[str], meta: dict,
-                    gaps: list[str], leases: list[dict]) -> str:
-    from hexnewton.analysis.rollout import LABELS
+def _run_notes(leases: list[dict]) -> dict[str, str]:
+    """{``<method>_s<seed>``: note} from the leases' ``cold_cache`` and ``shared_gpu`` lists: the runs whose wall
+    time holds the kernels' compilation or was shared with other work on their GPU."""
+    notes: dict[str, list[str]] = {}
+    for lease in leases:
+        for name in lease.get("cold_cache", []):
+            notes.setdefault(name, []).append("cold kernel cache")
+        for name in lease.get("shared_gpu", []):
+            notes.setdefault(name, []).append("GPU shared")
+    return {k: ", ".join(v) for k, v in notes.items()}
 
+
+def report_markdown(res: dict, figs: dict[str, list[str]], discussion: str | None) -> str:
+    """The study's report.md, from its ``results.json`` (``res``); ``figs``: {"env_steps": [png], "wall_time": [png
+    per GPU kind]}; ``discussion``: the study's ``discussion.md`` (prose on the baselines against the paper's rows)."""
+    from hexnewton.analysis.verdict import verdict_markdown
+
+    meta, gaps, leases, budgets = res["meta"], res["missing"], res["leases"], res["budgets"]
+    distances, tables = tuple(meta.get("distances", ())), res["table3"]
     title = "# Methods at equal budgets" + (" (partial)" if gaps else "")
     lines = [title, ""] + [f"- {k}: {v}" for k, v in meta.items()]
     if gaps:
         lines += ["", "## Partial: still missing", ""] + [f"- {g}" for g in gaps]
+    lines += ["", *verdict_markdown(res["verdict"])]
+    if res.get("excluded"):
+        lines += ["", "Left out of every mean (Table 3 and Fig. 5a), kept in the budget table: " + "; ".join(
+            f"{k} {v}" for k, v in res["excluded"].items()) + "."]
+    if discussion:
+        lines += ["", discussion.strip()]
     if leases:
         total = sum(float(x.get("device_s", 0)) for x in leases)
         lines += ["", f"## GPU leases ({total / 60:.1f} device-minutes in all)", "",
@@ -191,30 +251,47 @@ def report_markdown(budgets: dict, tables: dict, distances: tuple[float, ...], f
             if x.get("commands"):
                 lines += ["", f"Lease {i} ({x.get('date', '')}), its device calls after the install:", "", "```bash",
                           *x["commands"], "```"]  # fmt: skip
+    notes = _run_notes(leases)
     lines += ["", "## Budget used by each run", "", "Each run ended at its env-step budget or its wall-time budget, "
               "whichever came first. Wall time: the training loop's, without building the env; process: the whole "
-              "command, start-up and kernel compilation included.", "",
-              "| method | seed | env-steps | wall time [min] | process [s] | GPU | run |",
-              "|---|---:|---:|---:|---:|---|---|"]  # fmt: skip
+              "command, start-up and kernel compilation included; conditions: a run that started on an empty kernel "
+              "cache, shared its GPU, or was cut short (and so left out of the means).", "",
+              "| method | seed | env-steps | wall time [min] | process [s] | GPU | conditions | run |",
+              "|---|---:|---:|---:|---:|---|---|---|"]  # fmt: skip
     for method, seeds in budgets.items():
-        for seed, b in sorted(seeds.items()):
-            lines.append(f"| {LABELS.get(method, method)} | {seed} | {b['env_steps']:,} | {b['wall_min']:.2f} | "
-                         f"{b.get('process_s', '—')} | {b.get('gpu', '—')} | {b['run']} |")  # fmt: skip
+        for seed, b in sorted(seeds.items(), key=lambda kv: int(kv[0])):
+            name = f"{method}_s{seed}"
+            cond = ", ".join(x for x in (notes.get(name), "cut short" if name in res.get("excluded", {}) else None) if x)
+            lines.append(f"| {label(method)} | {seed} | {b['env_steps']:,} | {b['wall_min']:.2f} | "
+                         f"{b.get('process_s', '—')} | {b.get('gpu', '—')} | {cond or '—'} | {b['run']} |")  # fmt: skip
     for actions in ACTIONS:
         if not tables.get(actions):
             continue
         lines += ["", f"## Table 3, {actions} action: success at each distance, mean over seeds (min-max)", ""]
         beside = tables.get("sampled") if actions == "deterministic" else None
         lines += _table_lines(tables[actions], distances, beside)
+        if res.get("table3_excluded", {}).get(actions):
+            lines += ["", f"Left out of the means ({actions} action):", ""]
+            lines += _table_lines(res["table3_excluded"][actions], distances, None)
         if actions == "sampled":
-            lines += ["", ", ".join(LABELS.get(m, m) for m in DETERMINISTIC_ONLY) + ": no sampled action (a "
+            lines += ["", ", ".join(label(m) for m in DETERMINISTIC_ONLY) + ": no sampled action (a "
                       "deterministic actor; its exploration noise is no policy of its own)."]  # fmt: skip
+    lines += ["", "The fixed CPG's rows: at its default 10 ms frame (the paper's setting) and on the policies' physics "
+              "(20 ms frame, 4 substeps, as every policy here trains and is evaluated). Falls before the goal line: "
+              "falls of robots that had not passed the goal (the course patch ends beyond it); evaluations written "
+              "before the metric existed show a dash."]  # fmt: skip
     if figs:
-        lines += ["", "## Fig. 5a", ""] + [f"![Fig. 5a]({f})" for f in figs]
+        f5 = res.get("fig5a", {})
+        lines += ["", "## Fig. 5a", ""] + [f"![Fig. 5a]({f})" for f in figs["env_steps"] + figs["wall_time"]]
         lines += ["", "Mean episode return and training success (the last 1024 finished episodes, sampled actions) "
-                  "and the mean terrain curriculum level against env-steps and against wall time; the line is the mean "
-                  "over seeds, the band their range, up to where a method's shortest run ends (the budget table). "
-                  "Wall-time curves compare runs of one GPU kind (the budget table)."]  # fmt: skip
+                  "and the mean terrain curriculum level against env-steps, and against wall time in one figure per "
+                  "GPU kind (runs of that kind only); the line is the mean over seeds, the band their range, up to "
+                  "where a method's shortest run ends (the budget table). In the wall-time figures the runs that "
+                  "started on an empty kernel cache or shared their GPU are dashed lines of their own, outside the "
+                  "bands. `results.json` `fig5a` holds per method and seed the first and the sustained crossing of "
+                  f"{100 * f5.get('level', 0):.0f} % training success (above it for "
+                  f"{f5.get('window_env_steps', 0) / 1e6:g} M env-steps), the lowest value after the first crossing, "
+                  "the peak, the value at the common budget (the shortest run's end) and at the run's own end."]  # fmt: skip
     return "\n".join(lines) + "\n"
 
 
@@ -282,33 +359,80 @@ def main(argv: list[str] | None = None) -> int:
             for seeds in by_method.values():
                 for s in seeds.values():
                     distances = tuple(s["meta"].get("distances", distances))
-    tables = {a: table3(evals[a], distances) for a in ACTIONS if a in evals}
+    excluded = cut_short(budgets)
+    kept, left = without(evals, excluded)
+    tables = {a: table3(kept[a], distances) for a in ACTIONS if a in kept}
     os.makedirs(args.out, exist_ok=args.study is not None)
-    from hexnewton.analysis.curves import plot_fig5a
-
-    gpus = sorted({b["gpu"] for seeds in budgets.values() for b in seeds.values() if b.get("gpu")})
-    specs = {m: list(seeds.values()) for m, seeds in runs.items()}
-    final, figs = {}, []
-    for x in ("env_steps", "wall_time"):
-        figs.append(f"fig5a_{x}.png")
-        title = "Fig. 5a: mean over seeds, min to max shaded" + (f"\n({', '.join(gpus)})" if x == "wall_time" else "")
-        for m, v in plot_fig5a(os.path.join(args.out, figs[-1]), specs, (x,), title).items():
-            final.setdefault(m, {}).update(v)
     gaps = missing(runs, evals, tuple(args.terrains), args.seeds)
+    gpus = sorted({b["gpu"] for seeds in budgets.values() for b in seeds.values() if b.get("gpu")})
     meta = {"runs": os.path.relpath(args.runs), "evals": os.path.relpath(args.evals) if args.evals else None,
             "methods": list(runs), "seeds": sorted({s for seeds in runs.values() for s in seeds}),
             "checkpoints": "each run's last (the same rule for every method)", "GPUs": ", ".join(gpus) or None,
-            "complete": not gaps}  # fmt: skip
+            "distances": list(distances), "complete": not gaps}  # fmt: skip
+    figs, fig5a = fig5a_figures(args.out, runs, budgets, excluded, leases)
+    res = {"meta": meta, "missing": gaps, "leases": leases, "budgets": budgets, "excluded": excluded,
+           "table3": tables, "table3_excluded": {a: table3(left[a], distances) for a in ACTIONS if a in left},
+           "fig5a": fig5a, "paper_table3": paper_table3(), "verdict_levels": VERDICT_LEVELS,
+           "evaluations": {a: {t: {m: {str(s): {k: v for k, v in r.items() if k != "meta"}
+                                       for s, r in seeds.items()} for m, seeds in bm.items()}
+                               for t, bm in by_t.items()} for a, by_t in evals.items()}}  # fmt: skip
+    # the verdict reads the numbers as results.json holds them
+    res = json.loads(json.dumps(res))
+    res["verdict"] = claims(res, label)
     with open(os.path.join(args.out, "results.json"), "w") as f:
-        json.dump({"meta": meta, "missing": gaps, "leases": leases, "budgets": budgets, "table3": tables,
-                   "fig5a_final": final,
-                   "evaluations": {a: {t: {m: {str(s): {k: v for k, v in r.items() if k != "meta"}
-                                               for s, r in seeds.items()} for m, seeds in bm.items()}
-                                       for t, bm in by_t.items()} for a, by_t in evals.items()}}, f, indent=1)  # fmt: skip
+        json.dump(res, f, indent=1)
+    discussion = os.path.join(args.out, "discussion.md")
+    text = open(discussion).read() if os.path.isfile(discussion) else None
     with open(os.path.join(args.out, "report.md"), "w") as f:
-        f.write(report_markdown(budgets, tables, distances, figs, meta, gaps, leases))
-    print(f"report in {args.out}/ (report.md, results.json, {', '.join(figs)})" + (" — partial" if gaps else ""))
+        f.write(report_markdown(res, figs, text))
+    print(f"report in {args.out}/ (report.md, results.json, {', '.join(figs['env_steps'] + figs['wall_time'])})"
+          + (" — partial" if gaps else ""))  # fmt: skip
     return 0
+
+
+def fig5a_figures(out: str, runs: dict, budgets: dict, excluded: dict, leases: list[dict]) -> tuple[dict, dict]:
+    """Fig. 5a against env-steps (every run the means take) and against wall time, one figure per GPU kind (its runs
+    alone; those with a cold kernel cache or a shared GPU dashed, outside the bands), and the curves' numbers
+    (:func:`hexnewton.analysis.curves.curve_numbers`): ({"env_steps": [png], "wall_time": [png, ...]}, numbers)."""
+    from hexnewton.analysis.curves import curve_numbers, plot_fig5a
+
+    labels = {m: label(m) for m in runs}
+    kept = {m: [d for s, d in seeds.items() if f"{m}_s{s}" not in excluded] for m, seeds in runs.items()}
+    figs = {"env_steps": ["fig5a_env_steps.png"], "wall_time": []}
+    plot_fig5a(os.path.join(out, "fig5a_env_steps.png"), kept, ("env_steps",), labels=labels,
+               title="Fig. 5a: mean over seeds, min to max shaded")  # fmt: skip
+    notes = _run_notes(leases)
+    for kind in sorted({b.get("gpu") for seeds in budgets.values() for b in seeds.values() if b.get("gpu")}):
+        clean, marked = {}, {}
+        for m, seeds in runs.items():
+            for s, d in seeds.items():
+                name = f"{m}_s{s}"
+                if budgets[m][s].get("gpu") != kind or name in excluded:
+                    continue
+                if name in notes:
+                    marked.setdefault(m, []).append((d, f"seed {s} ({notes[name]})"))
+                else:
+                    clean.setdefault(m, []).append(d)
+        name = "fig5a_wall_time_" + re.sub(r"[^a-z0-9]+", "_", kind.lower()).strip("_") + ".png"
+        plot_fig5a(os.path.join(out, name), clean, ("wall_time",), labels=labels, marked=marked,
+                   title=f"Fig. 5a against wall time: runs on {kind}, mean over seeds, min to max shaded")  # fmt: skip
+        figs["wall_time"].append(name)
+    # the common budget: the shortest run's end among the methods of a full set of seeds (the paper task's one run
+    # ends at its own wall-time budget)
+    ends = [budgets[m][s]["env_steps"] for m, seeds in runs.items() if m not in SEEDS for s in seeds
+            if f"{m}_s{s}" not in excluded]  # fmt: skip
+    common = float(min(ends)) if ends else 0.0
+    level, window = VERDICT_LEVELS["success"], VERDICT_LEVELS["window_env_steps"]
+    numbers = {"level": level, "window_env_steps": window, "common_env_steps": common}
+    for key, tag, lv in (("success", "Episode/success_rate", level), ("reward", "Train/mean_reward", None),
+                         ("curriculum", "Curriculum/mean_level", None)):
+        numbers[key] = {}
+        for m, specs in kept.items():
+            if specs:
+                got = curve_numbers(specs, "env_steps", tag, lv, window, common)
+                numbers[key][m] = {"seeds": [int(s) for s, d in runs[m].items() if d in specs],
+                                   "per_seed": got["seeds"], "mean": got.get("mean")}  # fmt: skip
+    return figs, numbers
 
 
 if __name__ == "__main__":
