@@ -192,7 +192,7 @@ def plot_fig5a(path: str, methods: dict[str, list[str]], axes: tuple[str, ...] =
                 if band is None:
                     continue
                 # one colour per method on every panel, whichever tags its runs lack
-                ax.plot(band["x"], band["mean"], color=f"C{k}", label=f"{text} ({band['seeds']} seeds)")
+                ax.plot(band["x"], band["mean"], color=f"C{k}", label=f"{text} ({band['seeds']} seed{'s' * (band['seeds'] != 1)})")
                 ax.fill_between(band["x"], band["min"], band["max"], color=f"C{k}", alpha=0.2, lw=0)
                 summary.setdefault(name, {}).setdefault(x, {})[tag] = {"at": float(band["x"][-1]),
                                                                       "final": band["final"]}  # fmt: skip

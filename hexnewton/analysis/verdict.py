@@ -71,7 +71,7 @@ class Claims:
         self.out.append({"claim": claim, "verdict": word, "text": text})
 
     def _success(self, method: str) -> dict | None:
-        return self.fig.get("success", {}).get(method, {}).get("mean")
+        return (self.fig.get("success", {}).get(method) or {}).get("mean")
 
     def _curve_text(self, method: str) -> str:
         c = self._success(method)
@@ -98,7 +98,7 @@ class Claims:
             return
         ok = [m for m in others if cpg["sustained"] is not None
               and (self._success(m)["sustained"] is None or cpg["sustained"] < self._success(m)["sustained"])]
-        text = "Mean training success over seeds (sampled actions, the last 1024 episodes): " + "; ".join(
+        text = "Mean training success over seeds (sampled actions, the last finished episodes): " + "; ".join(
             self._curve_text(m) for m in ("cpg_rl", *others)) + "."
         self.add(claim, _word(len(ok), len(others)), text)
 
@@ -110,7 +110,7 @@ class Claims:
             return
 
         def at(tag, m):
-            return fig[tag][m].get("mean", {}).get("at_common")
+            return ((fig.get(tag, {}).get(m) or {}).get("mean") or {}).get("at_common")
 
         ok = [m for m in others if (at("success", m) or 0) < (at("success", "cpg_rl") or 0)
               and (at("curriculum", m) or 0) < (at("curriculum", "cpg_rl") or 0)]  # fmt: skip
@@ -118,8 +118,7 @@ class Claims:
             lv = at("curriculum", m)
             return f"{self.label(m)} {pct(at('success', m))}" + ("" if lv is None else f", level {lv:.1f}")
 
-        text = (f"At {msteps(common)} env-steps (the shortest run's end), mean training success and curriculum level "
-                "(levels 0-9): " + "; ".join(line(m) for m in ("cpg_rl", *others)) + ".")
+        text = (f"At {msteps(common)} env-steps (the shortest run's end), mean training success and curriculum level: " + "; ".join(line(m) for m in ("cpg_rl", *others)) + ".")
         self.add(claim, _word(len(ok), len(others)), text)
 
     def completes(self) -> None:

@@ -400,7 +400,7 @@ def fig5a_figures(out: str, runs: dict, budgets: dict, excluded: dict, leases: l
     kept = {m: [d for s, d in seeds.items() if f"{m}_s{s}" not in excluded] for m, seeds in runs.items()}
     figs = {"env_steps": ["fig5a_env_steps.png"], "wall_time": []}
     plot_fig5a(os.path.join(out, "fig5a_env_steps.png"), kept, ("env_steps",), labels=labels,
-               title="Fig. 5a: mean over seeds, min to max shaded")  # fmt: skip
+               title="Fig. 5a against env-steps\nmean over seeds, min to max shaded")  # fmt: skip
     notes = _run_notes(leases)
     for kind in sorted({b.get("gpu") for seeds in budgets.values() for b in seeds.values() if b.get("gpu")}):
         clean, marked = {}, {}
@@ -415,7 +415,7 @@ def fig5a_figures(out: str, runs: dict, budgets: dict, excluded: dict, leases: l
                     clean.setdefault(m, []).append(d)
         name = "fig5a_wall_time_" + re.sub(r"[^a-z0-9]+", "_", kind.lower()).strip("_") + ".png"
         plot_fig5a(os.path.join(out, name), clean, ("wall_time",), labels=labels, marked=marked,
-                   title=f"Fig. 5a against wall time: runs on {kind}, mean over seeds, min to max shaded")  # fmt: skip
+                   title=f"Fig. 5a against wall time, runs on {kind}\nmean over seeds, min to max shaded")  # fmt: skip
         figs["wall_time"].append(name)
     # the common budget: the shortest run's end among the methods of a full set of seeds (the paper task's one run
     # ends at its own wall-time budget)

@@ -62,11 +62,17 @@ def test_study_of_two_methods_is_stored_and_reported(tmp_path, capsys):
     assert not list(study.glob("evals/*/*.png"))
     report = (study / "report.md").read_text()
     res = json.loads((study / "results.json").read_text())
-    # both figures, against env-steps and against wall time
-    for x in ("env_steps", "wall_time"):
-        assert (study / f"fig5a_{x}.png").stat().st_size > 10000
+    # the figures, against env-steps and against wall time (one per GPU kind), and their numbers
+    for name in ("fig5a_env_steps.png", "fig5a_wall_time_cpu.png"):
+        assert (study / name).stat().st_size > 10000
+    for key in ("success", "reward", "curriculum"):
         for method in ("cpg_rl", "a2c_cpg"):
-            assert set(res["fig5a_final"][method][x]) >= {"Train/mean_reward", "Episode/success_rate"}
+            got = res["fig5a"][key][method]
+            assert got["seeds"] == [1, 2] and len(got["per_seed"]) == 2
+            # flat ground has no curriculum: no curve to read
+            assert (got["mean"] is None) == (key == "curriculum"), (key, method, got)
+            assert got["mean"] is None or {"peak", "end", "at_common"} <= set(got["mean"])
+    assert {"first", "sustained", "dip_after_first"} <= set(res["fig5a"]["success"]["cpg_rl"]["mean"])
     assert res["budgets"]["cpg_rl"]["1"]["env_steps"] == 2 * 8 * 24 and res["budgets"]["a2c_cpg"]["2"]["gpu"] == "cpu"
     # Table 3: the fixed CPG and both methods, deterministic with the sampled action beside, and the sampled table
     for actions in ("deterministic", "sampled"):
@@ -74,8 +80,17 @@ def test_study_of_two_methods_is_stored_and_reported(tmp_path, capsys):
     row = res["table3"]["deterministic"]["flat"]["a2c_cpg"]
     assert row["seeds"] == [1, 2] and row["rounds"] == [2]
     assert {"fall_rate", "pitch_var_deg2", "roll_var_deg2", "pitch_p999_deg", "roll_p999_deg"} <= set(row)
+    assert "| falls | falls before the goal | pitch var [deg²] |" in report
     assert "| \\|pitch\\| p99.9 [deg] | \\|roll\\| p99.9 [deg] | 3 m sampled | falls sampled |" in report
-    assert "| flat | CPG | 1 | 2 |" in report and "| flat | A2C-CPG | 2 | 2 |" in report
+    assert "| flat | fixed CPG (10 ms frame) | 1 | 2 |" in report and "| flat | A2C-CPG | 2 | 2 |" in report
+    # the verdict: each claim worded by its numbers, every number read from results.json
+    assert {v["verdict"] for v in res["verdict"]} <= {"holds", "holds in part", "does not hold"}
+    assert {v["claim"].split(" (")[0] for v in res["verdict"]} >= {
+        "CPG_RL converges faster than SAC-CPG and A2C-CPG", "CPG_RL completes every task: 100 % at every distance on "
+        "every terrain"}  # fmt: skip
+    section = report.split("## Verdict")[1].split("\n## ")[0]
+    assert section.count("\n- **") == len(res["verdict"])
+    assert_numbers_from(section, res)
     # the methods never run are what is missing; a second --add of the same lease adds nothing
     assert "(partial)" in report and "runs sac_cpg_s1, sac_cpg_s2" in report and "runs paper_s1" in report
     assert run(main, "compare", argv) == 0
@@ -83,6 +98,62 @@ def test_study_of_two_methods_is_stored_and_reported(tmp_path, capsys):
     # a stored policy is still what evaluate loads
     ck = next(p for p in stored if "a2c_cpg" in str(p))
     assert torch.load(ck, weights_only=True)["algo"] == "a2c"
+
+
+def leaves(obj) -> list[float]:
+    """Every number in a JSON document."""
+    if isinstance(obj, dict):
+        return [x for v in obj.values() for x in leaves(v)]
+    if isinstance(obj, list):
+        return [x for v in obj for x in leaves(v)]
+    return [float(obj)] if isinstance(obj, (int, float)) and not isinstance(obj, bool) else []
+
+
+def assert_numbers_from(text: str, res: dict) -> None:
+    """Every number of ``text`` (but the references Fig. 5a, Table 3, §3.3) is a number of ``res`` as the verdict
+    writes it: a rate in percent, env-steps in millions, or the value itself, at the text's decimals."""
+    import math
+    import re
+
+    values = [v for v in leaves(res) if math.isfinite(v)]
+    text = re.sub(r"Fig\. 5a|Table 3|§3\.3", "", text)
+    tokens = re.findall(r"(?<![\w.])\d+(?:\.\d+)?", text)
+    assert tokens
+    for tok in tokens:
+        d = len(tok.split(".")[1]) if "." in tok else 0
+        forms = {f"{k * v:.{d}f}" for v in values for k in (100.0, 1e-6, 1.0)}
+        assert tok in forms, f"{tok} in the verdict is no number of results.json"
+
+
+def test_the_verdict_check_finds_a_number_not_in_results():
+    with pytest.raises(AssertionError, match="12.5 in the verdict"):
+        assert_numbers_from("- **claim: holds.** 96.0 % and 12.5 deg²", {"a": 0.96, "b": [12.4]})
+    assert_numbers_from("- **claim (Fig. 5a): holds.** 96.0 % at 3.6 M env-steps, 12.4 deg²", {"a": [0.96, 3.6e6, 12.4]})
+
+
+def test_crossings_first_sustained_and_the_dip():
+    from hexnewton.analysis.curves import crossings
+
+    xs = [0, 1, 2, 3, 4, 5, 6, 7, 8]
+    ys = [0.0, 0.95, 0.2, 0.5, 0.92, 0.93, 0.94, 0.96, 0.97]
+    got = crossings(xs, ys, 0.9, 2.0)
+    assert got == {"first": 1.0, "sustained": 4.0, "dip_after_first": {"value": 0.2, "at": 2.0}}
+    assert crossings(xs, ys, 0.99, 2.0) == {"first": None, "sustained": None, "dip_after_first": None}
+    # above the level to the end, but for less than the window: a first crossing, no sustained one
+    assert crossings(xs, ys, 0.965, 2.0)["sustained"] is None and crossings(xs, ys, 0.965, 2.0)["first"] == 8.0
+
+
+def test_a_cut_short_run_is_left_out_of_the_means():
+    from hexnewton.apps.compare import cut_short, without
+
+    budgets = {"sac_cpg": {1: {"env_steps": 60_000_000, "wall_min": 11.9}, 2: {"env_steps": 35_400_000, "wall_min": 20.0}},
+               "paper": {1: {"env_steps": 9_100_000, "wall_min": 20.2}}}  # fmt: skip
+    out = cut_short(budgets)
+    assert list(out) == ["sac_cpg_s2"] and "35.4 M env-steps after 20.0 min" in out["sac_cpg_s2"]
+    evals = {"deterministic": {"rugged": {"sac_cpg": {1: {"x": 1}, 2: {"x": 2}}}}}
+    kept, left = without(evals, out)
+    assert kept["deterministic"]["rugged"]["sac_cpg"] == {1: {"x": 1}}
+    assert left["deterministic"]["rugged"]["sac_cpg"] == {2: {"x": 2}}
 
 
 def test_compare_arguments_give_one_line(tmp_path, capsys):
