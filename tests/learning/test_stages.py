@@ -51,3 +51,21 @@ def test_a_stage_learning_rate_scales_with_the_ranks_as_the_rate_does():
 def test_the_baselines_take_no_ppo_settings_from_stages():
     with pytest.raises(ValueError, match="desired_kl is one of train.py's PPO settings"):
         BaselineTrainer(None, None, "sac", None, {}, "", stages=STAGES)
+
+
+def test_pure_drl_takes_the_reward_part_of_the_stages_and_refuses_the_reflex(capsys):
+    """complex-joint-staged: the complex recipe's stages at the same iterations, without the CPG's levelling reflex;
+    train.py refuses a reflex stage in joint mode (one line, before anything is built)."""
+    from hexnewton.apps.cli import run
+    from hexnewton.apps.train import main
+    from hexnewton.tasks import STABLE_STAGES
+
+    staged = task("complex-joint-staged")
+    assert staged.action_mode == "joint" and staged.env == task("complex-joint").env
+    assert [start for start, _ in staged.agent.stages] == [start for start, _ in STABLE_STAGES]
+    for (_, mine), (_, theirs) in zip(staged.agent.stages, STABLE_STAGES):
+        assert "posture_reflex" not in mine and mine == {k: v for k, v in theirs.items() if k != "posture_reflex"}
+    argv = ["--task", "complex-joint", "--agent.stages", "((1, {'posture_reflex': 2.0}),)", "--device", "cpu"]
+    assert run(main, "train.py", argv) == 2
+    err = capsys.readouterr().err
+    assert "posture_reflex is the CPG's levelling reflex" in err and len(err.strip().splitlines()) == 1
