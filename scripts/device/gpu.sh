@@ -28,6 +28,7 @@
 #        # rounds per terrain, $PER_GPU jobs per GPU at a time (default 3), each cut off after $EVAL_TIMEOUT s ->
 #        # $RUNS/method_evals/<run>_<terrain>[_sampled]/ (done ones are skipped; $EVAL_ARGS: more evaluate flags);
 #        # runs finishing meanwhile are taken too: the queue ends when nothing is left and no `methods` queue runs
+#        # (both queues look for free slots and finished runs every $POLL_S seconds: 5, 2 and 10 by default)
 #   bash scripts/device/gpu.sh study DIR                        # a kept study's finished runs and evaluations into
 #        # $RUNS (results/paper_comparison): the queues skip what is finished
 #   bash scripts/device/gpu.sh collect                          # every finished run (policy, config, events, log)
@@ -175,7 +176,7 @@ _methods)   # the queue behind `methods`
     [ -f "$dest/$name.done" ] && { echo "$(date +%T) $name finished: skipped"; continue; }
     while [ -z "$free" ]; do
       for i in "${!slots[@]}"; do p=${pid[$i]:-}; { [ -z "$p" ] || ! kill -0 "$p" 2>/dev/null; } && { free=${slots[$i]}; slot=$i; break; }; done
-      [ -z "$free" ] && sleep 5
+      [ -z "$free" ] && sleep "${POLL_S:-5}"
     done
     # no run starts past the deadline ($DEADLINE: seconds since the epoch), so the lease ends with whole runs
     [ -n "${DEADLINE:-}" ] && [ "$(date +%s)" -gt "$DEADLINE" ] && { echo "$(date +%T) deadline: $name not started"; continue; }
@@ -203,7 +204,7 @@ _methods)   # the queue behind `methods`
     set -- $EVALS_AFTER; rounds=$1; shift
     for i in "${!slots[@]}"; do
       g=${slots[$i]}
-      ( p=${pid[$i]:-}; while [ -n "$p" ] && kill -0 "$p" 2>/dev/null; do sleep 5; done
+      ( p=${pid[$i]:-}; while [ -n "$p" ] && kill -0 "$p" 2>/dev/null; do sleep "${POLL_S:-5}"; done
         echo "$(date +%T) GPU $g: no more runs, evaluations"; bash "$0" evals "$rounds" "$g" "$@" ) &
     done
   fi
@@ -281,7 +282,7 @@ _evals)   # the queue behind `evals`
       rm -rf "$dest/$out"; free=
       while [ -z "$free" ]; do
         for i in "${!slots[@]}"; do p=${pid[$i]:-}; { [ -z "$p" ] || ! kill -0 "$p" 2>/dev/null; } && { free=$i; break; }; done
-        [ -z "$free" ] && sleep 2
+        [ -z "$free" ] && sleep "${POLL_S:-2}"
       done
       args=(--controllers "$ctrl" --terrains "$terrain" --rounds "$rounds" --out "$dest/$out" --no-progress)
       [ "$ck" != - ] && args+=(--checkpoint "$ctrl=$ck")
@@ -295,7 +296,7 @@ _evals)   # the queue behind `evals`
     [ "$final" = 1 ] && break
     # one more pass once no `methods` queue runs: its last runs may have finished since this pass began
     pgrep -f -- "gpu.sh _methods" > /dev/null || final=1
-    sleep 10
+    sleep "${POLL_S:-10}"
   done
   wait
   echo "$(date +%T) all evaluations ended"

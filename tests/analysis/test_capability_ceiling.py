@@ -13,6 +13,8 @@ from hexnewton.apps.cli import run
 from hexnewton.config import CPGConfig, HexConfig, RobotConfig, gait_params
 from hexnewton.physics.robot import BASE_Q, stand_height
 
+pytestmark = pytest.mark.slow  # a study's test: the CI line of its own (python -m pytest -q -m slow)
+
 
 def test_fk_at_the_standing_pose_matches_the_standing_height():
     robot = RobotConfig()

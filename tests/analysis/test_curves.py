@@ -4,6 +4,10 @@ import glob
 import subprocess
 import sys
 
+import pytest
+
+pytestmark = pytest.mark.slow  # a study's test: the CI line of its own (python -m pytest -q -m slow)
+
 
 def test_learning_curves_from_a_run(trained, tmp_path):
     logs, _ = trained

@@ -9,6 +9,8 @@ import sys
 import numpy as np
 import pytest
 
+pytestmark = pytest.mark.slow  # a study's test: the CI line of its own (python -m pytest -q -m slow)
+
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 SCRIPT = os.path.join(ROOT, "scripts", "drift_sources.py")
 spec = importlib.util.spec_from_file_location("drift_sources", SCRIPT)

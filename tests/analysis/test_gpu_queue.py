@@ -10,14 +10,17 @@ import time
 
 import pytest
 
+pytestmark = pytest.mark.slow  # a study's test: the CI line of its own (python -m pytest -q -m slow)
+
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
 FAKE_PYTHON = """#!/bin/bash
-# train.py / baselines: a run folder with a checkpoint after a pause that grows with the name; evaluate: results.json
+# train.py / baselines: a run folder with a checkpoint after a pause that grows with the name (1-4 s; tenths of a
+# second with PAUSE_PREFIX=0.); evaluate: results.json
 out= ld= ex=
 while [ $# -gt 0 ]; do case $1 in --out) out=$2; shift;; --log_dir) ld=$2; shift;; --experiment) ex=$2; shift;; esac; shift; done
 if [ -n "$out" ]; then echo "$out" >> "$(dirname "$out")/../evaluated"; mkdir -p "$out"; echo '{}' > "$out/results.json"; exit 0; fi
-echo "training $ex"; sleep $(( ${#ex} % 4 + 1 )); mkdir -p "$ld/$ex/run"; touch "$ld/$ex/run/model_10.pt"
+echo "training $ex"; sleep "${PAUSE_PREFIX:-}$(( ${#ex} % 4 + 1 ))"; mkdir -p "$ld/$ex/run"; touch "$ld/$ex/run/model_10.pt"
 """
 
 
@@ -50,19 +53,20 @@ def _gate_names(cmd: list[str], env: dict, out) -> set[str]:
 def test_methods_queue_then_evaluations(tmp_path):
     runs = tmp_path / "runs"
     env = _env(tmp_path, FAKE_PYTHON, RUNS=str(runs), OUT=str(tmp_path / "out"),
-               JOBS="paper:1 td3_cpg:1 joint:2 sac_cpg:1", PER_GPU="2", EVALS_AFTER="10 rugged stepped")
+               JOBS="paper:1 td3_cpg:1 joint:2 sac_cpg:1", PER_GPU="2", EVALS_AFTER="10 rugged stepped", POLL_S="0.1",
+               PAUSE_PREFIX="0.")
     _tool(tmp_path / "bin", "nvidia-smi", "#!/bin/bash\necho FakeGPU\n")
     subprocess.run(["bash", "scripts/device/gpu.sh", "methods", "complex", "20", "600", "16", "", "0 1"], cwd=ROOT,
                    env=env, check=True, capture_output=True)
-    deadline = time.time() + 120
+    deadline = time.time() + 60
     while time.time() < deadline:
         busy = subprocess.run(["bash", "scripts/device/gpu.sh", "busy"], cwd=ROOT, env=env).returncode == 0
         if not busy and (runs / "method_evals.log").exists():
             break
-        time.sleep(1)
+        time.sleep(0.2)
     done = sorted(p.name for p in (runs / "method_evals").iterdir() if (p / "results.json").exists())
     runs_done = ["joint_s2", "paper_s1", "sac_cpg_s1", "td3_cpg_s1"]
-    expected = [f"cpg_s0_{t}" for t in ("rugged", "stepped")]
+    expected = [f"{cpg}_s0_{t}" for cpg in ("cpg", "cpg_frame20") for t in ("rugged", "stepped")]
     expected += [f"{r}_{t}" for r in runs_done for t in ("rugged", "stepped")]
     expected += [f"{r}_{t}_sampled" for r in runs_done if r != "td3_cpg_s1" for t in ("rugged", "stepped")]
     assert done == sorted(expected)

@@ -11,6 +11,8 @@ from hexnewton.analysis.bench import BenchResult, PipelineResult
 from hexnewton.apps.cli import run
 from hexnewton.apps.scale_out import main
 
+pytestmark = pytest.mark.slow  # a study's test: the CI line of its own (python -m pytest -q -m slow)
+
 
 def _bench(k: int, train: dict[int, list[float]]) -> dict:
     """A ``hexnewton-bench --json`` of K ranks: train mode at each envs per GPU, the ranks' rates."""

@@ -8,6 +8,10 @@ import sys
 
 import numpy as np
 
+import pytest
+
+pytestmark = pytest.mark.slow  # a study's test: the CI line of its own (python -m pytest -q -m slow)
+
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 SCRIPT = os.path.join(ROOT, "scripts", "sim2sim_wedge.py")
 

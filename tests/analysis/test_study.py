@@ -9,6 +9,8 @@ import torch
 
 from hexnewton.apps.cli import run
 
+pytestmark = pytest.mark.slow  # a study's test: the CI line of its own (python -m pytest -q -m slow)
+
 
 def _lease(tmp_path):
     """A lease's $RUNS/methods and $RUNS/method_evals: cpg_rl (train.py) and a2c_cpg (skrl), seeds 1 and 2, on the flat

@@ -17,6 +17,8 @@ from hexnewton.physics.reference import (
     tripod_theta,
 )
 
+pytestmark = pytest.mark.slow  # a study's test: the CI line of its own (python -m pytest -q -m slow)
+
 CFG = CPGConfig()
 DT = 0.005
 
