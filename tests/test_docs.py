@@ -464,3 +464,19 @@ def test_docstring_flags_exist():
                 continue
             missing.append(f"{path}:{line}: {flag}")
     assert not missing, "docstrings quote flags that no command line has:\n" + "\n".join(missing)
+
+
+def test_relative_links_resolve():
+    """Every relative link of a document (``[text](path)``, ``#anchor`` dropped) names a file or folder of the
+    repository, read from the document's own folder (a link in ``docs/`` to the README is ``../README.md``)."""
+    broken = []
+    for doc in DOCUMENTS:
+        with open(os.path.join(ROOT, doc)) as f:
+            text = f.read()
+        for m in re.finditer(r"\]\(([^)\s]+)\)", text):
+            target = m.group(1).split("#", 1)[0]
+            if not target or re.match(r"[a-z][\w+.-]*:", target):  # an anchor of its own page, a URL
+                continue
+            if not os.path.exists(os.path.join(ROOT, os.path.dirname(doc), target)):
+                broken.append(f"{doc}:{text.count(chr(10), 0, m.start()) + 1}: {target}")
+    assert not broken, "links to nothing (relative to the document's folder):\n" + "\n".join(broken)
