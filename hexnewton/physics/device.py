@@ -8,6 +8,7 @@ import os
 import warp as wp
 
 from hexnewton.errors import HexnewtonError
+from hexnewton.physics.private_api import warp_started
 
 
 def init_warp() -> None:
@@ -20,7 +21,7 @@ def init_warp() -> None:
     import tempfile
 
     wp.config.log_level = wp.LOG_WARNING
-    if wp._src.context.runtime is not None:
+    if warp_started():
         return
     sys.stderr.flush()
     saved = os.dup(2)

@@ -43,31 +43,28 @@ from concurrent.futures import ThreadPoolExecutor
 
 import warp as wp
 
+from hexnewton.physics.private_api import (
+    CONTACT_REDUCTION,
+    NARROW_PHASE_SOURCES,
+    SOLVER_MODULES,
+    STEP_MODULES,
+    export_reduced_contacts_block_dim,
+    warp_user_modules,
+)
+
 log = logging.getLogger("hexnewton")
 
-# Warp modules (defined at import time) that a World's step launches, as listed by a CPU run.
-STEP_MODULES = (
-    "newton._src.geometry.broad_phase_nxn", "newton._src.geometry.bvh", "newton._src.geometry.narrow_phase",
-    "newton._src.sim.articulation", "newton._src.sim.collide", "newton._src.solvers.mujoco.kernels",
-    "mujoco_warp._src.constraint", "mujoco_warp._src.derivative", "mujoco_warp._src.forward",
-    "mujoco_warp._src.passive", "mujoco_warp._src.set_const", "mujoco_warp._src.smooth",
-    "mujoco_warp._src.solver", "mujoco_warp._src.support", "newton._src.geometry.contact_reduction_global",
-)  # fmt: skip
-
-# Warp modules (defined at import time) that building the MuJoCo solver launches: mujoco_warp's set_const and smooth
-# (the model's constants), Newton's MuJoCo conversion kernels, Warp's graph colouring. Compiled in parallel before it
+# STEP_MODULES: the Warp modules (defined at import time) that a World's step launches, as listed by a CPU run.
+# SOLVER_MODULES: those that building the MuJoCo solver launches: mujoco_warp's set_const and smooth (the model's
+# constants), Newton's MuJoCo conversion kernels, Warp's graph colouring. Compiled in parallel before it
 # (:func:`precompile_solver`); building the solver compiled them one after another (23 s of a cold build on 2 CPU
 # cores, where the parallel compile and the build take 19 s; a fresh H100 spent 54 s in the solver's set-up).
-SOLVER_MODULES = ("mujoco_warp._src.smooth", "mujoco_warp._src.set_const", "newton._src.solvers.mujoco.kernels",
-                  "warp._src.coloring")  # fmt: skip
-
-# Newton's collision modules whose generated kernels its narrow phase launches with its own block sizes on CUDA
-# (NarrowPhase's block_dim, split_convex_block_dim, mesh_triangle_block_dim and the contact reducer's export size),
-# and of the import-time modules the contact reduction (at the narrow phase's block size and Warp's default; the
-# import-time narrow phase itself only at the default): on a fresh H100 the first step compiled those variants one
-# after another (146.8 s, results/time_to_skill/report.md, "What a fresh machine compiles")
-NARROW_PHASE_SOURCES = ("newton._src.geometry.narrow_phase", "newton._src.geometry.contact_reduction_global")
-CONTACT_REDUCTION = "newton._src.geometry.contact_reduction_global"
+# NARROW_PHASE_SOURCES: Newton's collision modules whose generated kernels its narrow phase launches with its own block
+# sizes on CUDA (NarrowPhase's block_dim, split_convex_block_dim, mesh_triangle_block_dim and the contact reducer's
+# export size), and of the import-time modules the contact reduction (CONTACT_REDUCTION; at the narrow phase's block
+# size and Warp's default; the import-time narrow phase itself only at the default): on a fresh H100 the first step
+# compiled those variants one after another (146.8 s, results/time_to_skill/report.md, "What a fresh machine
+# compiles"). Their names are the packages' private module paths: hexnewton/physics/private_api.py holds them.
 
 # Generated kernels that mujoco_warp launches with a block size of its model's ``block_dim`` settings (the field
 # named here) rather than Warp's default; on CUDA each block size is a variant compiled of its own. Keyed by the
@@ -166,9 +163,7 @@ def live_kernel_ids() -> set[int]:
 
 def imported_modules() -> list[wp.Module]:
     """The Warp modules of ``STEP_MODULES`` and hexnewton's own that hold kernels."""
-    from warp._src.context import user_modules
-
-    return [m for m in list(user_modules.values())
+    return [m for m in list(warp_user_modules().values())
             if m.kernels and (m.name in STEP_MODULES or m.name.startswith("hexnewton."))]  # fmt: skip
 
 
@@ -200,10 +195,8 @@ def narrow_phase_block_dims(pipeline, device: str) -> tuple[int, ...]:
     narrow = getattr(pipeline, "narrow_phase", None)
     if narrow is None or not wp.get_device(device).is_cuda:
         return ()
-    from newton._src.geometry.contact_reduction_global import EXPORT_REDUCED_CONTACTS_BLOCK_DIM
-
     sizes = {getattr(narrow, name, None) for name in ("block_dim", "split_convex_block_dim", "mesh_triangle_block_dim")}
-    return tuple(sorted(b for b in sizes | {EXPORT_REDUCED_CONTACTS_BLOCK_DIM} if b))
+    return tuple(sorted(b for b in sizes | {export_reduced_contacts_block_dim()} if b))
 
 
 def _block_dims(module: wp.Module, device: str, block_dims, narrow_dims: tuple[int, ...]) -> list[int | None]:
@@ -246,10 +239,8 @@ def loaded_variants(device: str) -> set[tuple[str, int | None, int]]:
     """(module name, block size, module id) of every Warp module variant loaded on ``device`` now, the import-time
     modules and the generated kernels' own: taken before and after a step, the difference is what that step compiled
     (or took from Warp's cache)."""
-    from warp._src.context import user_modules
-
     context = wp.get_device(device).context
-    modules = {id(m): m for m in list(user_modules.values())}
+    modules = {id(m): m for m in list(warp_user_modules().values())}
     modules.update({id(k.module): k.module for k in _live_kernels()})
     return {(m.name, block_dim, id(m)) for m in modules.values() for ctx, block_dim in list(m.execs) if ctx == context}
 
@@ -273,10 +264,9 @@ def precompile_solver(device: str, max_workers: int | None = None) -> list[str]:
     module hashes as they are, so the step reuses them); returns the module names."""
     import importlib
 
-    from warp._src.context import user_modules
-
     for name in SOLVER_MODULES:
         importlib.import_module(name)
+    user_modules = warp_user_modules()
     modules = [user_modules[name] for name in SOLVER_MODULES if name in user_modules]
     compile_modules(device, [(m, None) for m in modules], max_workers)
     return [m.name for m in modules]

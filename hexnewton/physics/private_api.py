@@ -1,0 +1,48 @@
+"""Every private name of Warp, Newton and mujoco_warp that hexnewton's physics uses, in one place: none of the three
+has a public API for these. ``tests/physics/test_private_api.py`` imports each of them and fails, naming the package
+and its version, when an upgrade moves one.
+
+- the Python modules that define the Warp modules a step and the solver's set-up launch (``newton._src``,
+  ``mujoco_warp._src`` and ``warp._src`` module names), which :mod:`hexnewton.physics.precompile` compiles ahead;
+- Warp's registry of modules (:func:`warp_user_modules`) and whether Warp has started (:func:`warp_started`);
+- the block size of Newton's contact reduction export (:func:`export_reduced_contacts_block_dim`).
+
+What each name is for is said where it is used (``precompile.py``, ``device.py``)."""
+
+from __future__ import annotations
+
+#: Warp modules (defined at import time) that a World's step launches, as listed by a CPU run
+STEP_MODULES = (
+    "newton._src.geometry.broad_phase_nxn", "newton._src.geometry.bvh", "newton._src.geometry.narrow_phase",
+    "newton._src.sim.articulation", "newton._src.sim.collide", "newton._src.solvers.mujoco.kernels",
+    "mujoco_warp._src.constraint", "mujoco_warp._src.derivative", "mujoco_warp._src.forward",
+    "mujoco_warp._src.passive", "mujoco_warp._src.set_const", "mujoco_warp._src.smooth",
+    "mujoco_warp._src.solver", "mujoco_warp._src.support", "newton._src.geometry.contact_reduction_global",
+)  # fmt: skip
+#: Warp modules (defined at import time) that building the MuJoCo solver launches
+SOLVER_MODULES = ("mujoco_warp._src.smooth", "mujoco_warp._src.set_const", "newton._src.solvers.mujoco.kernels",
+                  "warp._src.coloring")  # fmt: skip
+#: Newton's collision modules whose generated kernels its narrow phase launches with its own block sizes on CUDA
+NARROW_PHASE_SOURCES = ("newton._src.geometry.narrow_phase", "newton._src.geometry.contact_reduction_global")
+CONTACT_REDUCTION = "newton._src.geometry.contact_reduction_global"
+
+
+def warp_user_modules() -> dict:
+    """Warp's registry of the modules defined so far, ``{module name: warp Module}``."""
+    from warp._src.context import user_modules
+
+    return user_modules
+
+
+def warp_started() -> bool:
+    """Whether ``wp.init()`` has run in this process (Warp's runtime exists)."""
+    from warp._src import context
+
+    return context.runtime is not None
+
+
+def export_reduced_contacts_block_dim() -> int:
+    """The block size Newton launches its contact reduction's export with on CUDA."""
+    from newton._src.geometry.contact_reduction_global import EXPORT_REDUCED_CONTACTS_BLOCK_DIM
+
+    return EXPORT_REDUCED_CONTACTS_BLOCK_DIM

@@ -1,0 +1,45 @@
+"""The private names of Warp, Newton and mujoco_warp that hexnewton uses (hexnewton/physics/private_api.py) exist in
+the installed versions: an upgrade that moves one fails here, naming the package, its version and the name."""
+
+import importlib
+from importlib.metadata import version
+
+import pytest
+
+from hexnewton.physics import private_api
+
+PACKAGES = {"warp": "warp-lang", "newton": "newton", "mujoco_warp": "mujoco-warp"}
+MODULES = sorted(set(private_api.STEP_MODULES + private_api.SOLVER_MODULES + private_api.NARROW_PHASE_SOURCES
+                     + (private_api.CONTACT_REDUCTION,)))  # fmt: skip
+
+
+def _moved(name: str, exc: Exception) -> str:
+    package = PACKAGES[name.split(".")[0]]
+    return (f"{name} is not in {package} {version(package)} ({type(exc).__name__}: {exc}): "
+            "hexnewton/physics/private_api.py needs its new name")  # fmt: skip
+
+
+@pytest.mark.parametrize("name", MODULES)
+def test_private_module_exists(name):
+    try:
+        importlib.import_module(name)
+    except ImportError as exc:
+        pytest.fail(_moved(name, exc))
+
+
+@pytest.mark.parametrize("func, name", [(private_api.warp_user_modules, "warp._src.context.user_modules"),
+                                        (private_api.warp_started, "warp._src.context.runtime"),
+                                        (private_api.export_reduced_contacts_block_dim,
+                                         "newton._src.geometry.contact_reduction_global")])  # fmt: skip
+def test_private_name_exists(func, name):
+    try:
+        value = func()
+    except (ImportError, AttributeError) as exc:
+        pytest.fail(_moved(name, exc))
+    assert isinstance(value, {"warp._src.context.user_modules": dict, "warp._src.context.runtime": bool}.get(name, int))
+
+
+def test_a_moved_name_fails_with_one_clear_line():
+    exc = ImportError("No module named 'newton._src.sim.collide'")
+    line = _moved("newton._src.sim.collide", exc)
+    assert "\n" not in line and f"newton {version('newton')}" in line and "private_api.py" in line
