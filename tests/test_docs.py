@@ -45,7 +45,8 @@ as the comment of a fenced line (``python train.py --old_flag   # (at e57dac3)``
 introduces a fenced block (``... ran (at e57dac3):``), which marks the whole block. A marked command is not parsed;
 the mark's commit must exist where the checkout has the history.
 
-Every ``results/...`` path a document names must be committed (``*`` globs match a file).
+Every ``results/...`` and ``studies/...`` path a document names must be committed (``*`` globs match a file); the
+reports under ``studies/`` that a document cites are checked like those under ``results/``.
 """
 
 from __future__ import annotations
@@ -77,7 +78,7 @@ def _cited_reports() -> list[str]:
     for doc in DOCUMENTS:
         with open(os.path.join(ROOT, doc)) as f:
             text = f.read()
-        for path in re.findall(r"(?<![\w/])results/[\w./-]*\w", text):
+        for path in re.findall(r"(?<![\w/])(?:results|studies)/[\w./-]*\w", text):
             folder = path if os.path.isdir(os.path.join(ROOT, path)) else os.path.dirname(path)
             report = path if path.endswith("report.md") else os.path.join(folder, "report.md")
             if os.path.isfile(os.path.join(ROOT, report)):
@@ -336,13 +337,13 @@ def test_documented_commands_parse(doc, tmp_path):
 
 
 def test_cited_results_exist():
-    """Every ``results/...`` path a document names is committed (a claim goes with its evidence); ``*`` globs match
+    """Every ``results/...`` and ``studies/...`` path a document names is committed (a claim goes with its evidence); ``*`` globs match
     at least one file, ``<word>`` placeholders are not checked."""
     missing = []
     for doc in DOCUMENTS:
         with open(os.path.join(ROOT, doc)) as f:
             for n, line in enumerate(f, 1):
-                for path in re.findall(r"(?<![\w/])results/[\w./*-]*[\w*]", line):
+                for path in re.findall(r"(?<![\w/])(?:results|studies)/[\w./*-]*[\w*]", line):
                     if "<" in line[line.find(path) + len(path) : line.find(path) + len(path) + 1]:
                         continue
                     found = (

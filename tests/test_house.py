@@ -423,3 +423,15 @@ def test_results_and_benchmarks_open_with_a_short_summary(doc):
     assert headings and lines[headings[0]] == "## Summary", f"{doc}'s first ## heading is not '## Summary'"
     end = headings[1] if len(headings) > 1 else len(lines)
     assert end <= MAX_SUMMARY_LINES, f"{doc}'s summary (its top to line {end + 1}) has {end} lines"
+
+
+def test_the_package_imports_nothing_from_studies():
+    """``studies/`` (one folder per experiment: its scripts, report and tests) imports the package, never the
+    reverse."""
+    def imports_studies(node) -> bool:
+        if isinstance(node, ast.Import):
+            return any(a.name.split(".")[0] == "studies" for a in node.names)
+        return isinstance(node, ast.ImportFrom) and not node.level and (node.module or "").split(".")[0] == "studies"
+
+    found = [f"{name}:{node.lineno}" for name, tree in TREES.items() for node in ast.walk(tree) if imports_studies(node)]
+    assert not found, f"package modules that import from studies/: {found}"

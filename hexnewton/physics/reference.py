@@ -4,7 +4,7 @@ The kernel tests compare each Warp kernel with its reference here, and the deplo
 (``hexnewton.deploy.runtime``) runs the same functions on the robot's computer: the Hopf oscillators (Eq. 3, RK4),
 the mapping function (Eq. 4) and the action scaling (all in ``physics/cpg.py``) and the base quaternion's
 roll/pitch/yaw. The kernel modules' docstrings explain the maths; this module only holds the NumPy versions. The
-n-oscillator network (``hopf_network_*``, the six-oscillator comparison of ``hexnewton.apps.cpg_figure``, explained there)
+n-oscillator network (``hopf_network_*``, the six-oscillator comparison of ``studies/fig1/figure.py``, explained there)
 shares the kernel's single-oscillator right-hand side, :func:`hopf_unit_rhs_np`.
 """
 
@@ -66,7 +66,7 @@ def tripod_theta(groups, theta):
 
 def network_omega(omega, delta, weights):
     """The frequency each oscillator of a network integrates with, (N, n): sqrt(omega^2 + (delta k_i)^2 / 4), where
-    k_i = sum_j weights[j, i] (``hexnewton.apps.cpg_figure`` derives it; k = 1 is the kernel's compensation)."""
+    k_i = sum_j weights[j, i] (``studies/fig1/figure.py`` derives it; k = 1 is the kernel's compensation)."""
     k = np.asarray(weights, np.float64).sum(axis=0)
     return np.sqrt(np.asarray(omega, np.float64)[:, None] ** 2 + 0.25 * (delta * k[None, :]) ** 2)
 

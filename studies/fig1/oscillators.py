@@ -1,5 +1,5 @@
 """Fig. 1: the two-oscillator CPG against a six-oscillator network, in NumPy: the networks, their limit cycles, the
-convergence from random starts and the figure. The command line and its report: ``python -m hexnewton.apps.cpg_figure``."""
+convergence from random starts and the figure. The command line and its report: ``python studies/fig1/figure.py``."""
 
 from __future__ import annotations
 

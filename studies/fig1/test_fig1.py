@@ -1,4 +1,4 @@
-"""Fig. 1 (``hexnewton.apps.cpg_figure``): the pair and the six-oscillator networks from random starts (NumPy only)."""
+"""Fig. 1 (``studies/fig1/figure.py``): the pair and the six-oscillator networks from random starts (NumPy only)."""
 
 import json
 import math
@@ -6,9 +6,7 @@ import math
 import numpy as np
 import pytest
 
-from hexnewton.analysis.cpg_figure import NETWORKS, convergence, limit_cycle, param_counts, random_starts
 from hexnewton.apps.cli import run
-from hexnewton.apps.cpg_figure import main
 from hexnewton.config import LEG_OSCILLATOR, CPGConfig
 from hexnewton.physics.reference import (
     hopf_cpg_reference,
@@ -16,6 +14,9 @@ from hexnewton.physics.reference import (
     initial_cpg_state,
     tripod_theta,
 )
+
+from figure import main  # this study's modules (pytest puts the study's folder on sys.path)
+from oscillators import NETWORKS, convergence, limit_cycle, param_counts, random_starts
 
 pytestmark = pytest.mark.slow  # a study's test: the CI line of its own (python -m pytest -q -m slow)
 
@@ -108,13 +109,13 @@ def test_command_writes_report_json_and_figure(tmp_path):
     assert res["param_counts"]["six"]["oscillators"] == 6 and res["paper_steps"] == {"six": 200, "two": 70}
     assert {len(v) for v in res["figure_steps"].values()} == {12}
     report = (out / "report.md").read_text()
-    assert "python -m hexnewton.apps.cpg_figure --out" in report and "| six_mean | 5 | 9.42 |" in report
+    assert "python studies/fig1/figure.py --out" in report and "| six_mean | 5 | 9.42 |" in report
     assert 0 < (out / "fig1.png").stat().st_size < 300_000
 
 
 def _exit_code(argv):
     try:
-        return run(main, "python -m hexnewton.apps.cpg_figure", argv)
+        return run(main, "python studies/fig1/figure.py", argv)
     except SystemExit as exc:  # argparse's own errors
         return exc.code
 

@@ -1,6 +1,6 @@
 """Fig. 1 of Huang et al. 2025: the two-oscillator CPG against a six-oscillator network, convergence and phase error.
 
-    python -m hexnewton.apps.cpg_figure --out results/fig1_oscillators
+    python studies/fig1/figure.py --out DIR      # this study's report.md, results.json and fig1.png in DIR
 
 §2.2 claims that two coupled Hopf oscillators (phase difference theta = pi, one per tripod) replace the usual
 fully coupled network of six: the six-oscillator CPG converges to its rhythm in about 200 steps, the two-oscillator
@@ -70,7 +70,9 @@ import time
 
 import numpy as np
 
-from hexnewton.analysis.cpg_figure import (
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))  # this study's own module, oscillators.py
+
+from oscillators import (  # noqa: E402
     NETWORKS,
     PAPER_STEPS,
     convergence,
@@ -166,7 +168,7 @@ def _check(args) -> None:
 
 def main(argv: list[str] | None = None) -> int:
     cfg = CPGConfig()
-    p = ArgumentParser(prog="python -m hexnewton.apps.cpg_figure", description=__doc__.split("\n")[0])
+    p = ArgumentParser(prog="python studies/fig1/figure.py", description=__doc__.split("\n")[0])
     p.add_argument("--out", required=True, help="output directory (must not exist)")
     p.add_argument("--samples", type=positive_int, default=1000, help="random starts per network (default 1000)")
     p.add_argument("--seed", type=int, default=0, help="seed of the random starts (default 0)")
@@ -205,7 +207,7 @@ def main(argv: list[str] | None = None) -> int:
                 b = runs[-1]["both"]
                 print(f"{name:8s} step {1000 * dt:g} ms, omega {omega:.2f}: median {_fmt(b['median_steps'])} steps, "
                       f"p95 {_fmt(b['p95_steps'])}, never {b['never']}", flush=True)  # fmt: skip
-    meta = {"command": "python -m hexnewton.apps.cpg_figure " + " ".join(argv if argv is not None else sys.argv[1:]),
+    meta = {"command": "python studies/fig1/figure.py " + " ".join(argv if argv is not None else sys.argv[1:]),
             "git_rev": git_rev(), "samples": args.samples, "seed": args.seed,
             "starts": f"each oscillator's (x, y) uniform over the disc of radius {args.radius:g} sqrt(mu)",
             "dt": args.dt, "omega": args.omega, "horizon_s": args.horizon_s, "amp_tol": args.amp_tol,
@@ -229,4 +231,4 @@ def main(argv: list[str] | None = None) -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(run(main, "python -m hexnewton.apps.cpg_figure"))
+    sys.exit(run(main, "python studies/fig1/figure.py"))
