@@ -394,9 +394,10 @@ def test_one_control_step_passes_the_files_the_readme_names():
 
 
 def test_results_holds_folders_only():
-    """``results/`` holds one folder per result (each with its report), no loose files at its root."""
+    """``results/`` holds one folder per result (each with its report), no loose files at its root but its README (the
+    table of the shipped policies)."""
     results = os.path.join(ROOT, "results")
-    loose = sorted(f for f in os.listdir(results) if os.path.isfile(os.path.join(results, f)))
+    loose = sorted(f for f in os.listdir(results) if os.path.isfile(os.path.join(results, f)) and f != "README.md")
     assert not loose, f"files at results/'s root (each belongs in its result's folder): {loose}"
 
 
@@ -435,3 +436,12 @@ def test_the_package_imports_nothing_from_studies():
 
     found = [f"{name}:{node.lineno}" for name, tree in TREES.items() for node in ast.walk(tree) if imports_studies(node)]
     assert not found, f"package modules that import from studies/: {found}"
+
+
+def test_results_readme_lists_every_shipped_policy():
+    """``results/README.md``'s table has a row for every checkpoint in ``results/policies/``."""
+    with open(os.path.join(ROOT, "results", "README.md")) as f:
+        text = f.read()
+    policies = sorted(f[: -len(".pt")] for f in os.listdir(os.path.join(ROOT, "results", "policies")) if f.endswith(".pt"))
+    missing = [p for p in policies if f"| `{p}` |" not in text]
+    assert not missing, f"results/README.md has no row for {missing}"
