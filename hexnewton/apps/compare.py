@@ -402,12 +402,12 @@ def fig5a_figures(out: str, runs: dict, budgets: dict, excluded: dict, leases: l
     plot_fig5a(os.path.join(out, "fig5a_env_steps.png"), kept, ("env_steps",), labels=labels,
                title="Fig. 5a against env-steps\nmean over seeds, min to max shaded")  # fmt: skip
     notes = _run_notes(leases)
-    for kind in sorted({b.get("gpu") for seeds in budgets.values() for b in seeds.values() if b.get("gpu")}):
+    for kind in sorted({b.get("gpu") or "unrecorded" for seeds in budgets.values() for b in seeds.values()}):
         clean, marked = {}, {}
         for m, seeds in runs.items():
             for s, d in seeds.items():
                 name = f"{m}_s{s}"
-                if budgets[m][s].get("gpu") != kind or name in excluded:
+                if (budgets[m][s].get("gpu") or "unrecorded") != kind or name in excluded:
                     continue
                 if name in notes:
                     marked.setdefault(m, []).append((d, f"seed {s} ({notes[name]})"))
@@ -415,7 +415,7 @@ def fig5a_figures(out: str, runs: dict, budgets: dict, excluded: dict, leases: l
                     clean.setdefault(m, []).append(d)
         name = "fig5a_wall_time_" + re.sub(r"[^a-z0-9]+", "_", kind.lower()).strip("_") + ".png"
         plot_fig5a(os.path.join(out, name), clean, ("wall_time",), labels=labels, marked=marked,
-                   title=f"Fig. 5a against wall time, runs on {kind}\nmean over seeds, min to max shaded")  # fmt: skip
+                   title=f"Fig. 5a against wall time, runs on {kind} GPUs\nmean over seeds, min to max shaded")  # fmt: skip
         figs["wall_time"].append(name)
     # the common budget: the shortest run's end among the methods of a full set of seeds (the paper task's one run
     # ends at its own wall-time budget)

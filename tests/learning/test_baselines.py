@@ -214,9 +214,11 @@ def test_fig5a_and_table3_over_seeds(tmp_path, capsys):
     out = tmp_path / "report"
     assert main(["--runs", str(tmp_path / "runs"), "--evals", str(tmp_path / "evals"), "--out", str(out)]) == 0
     report = (out / "report.md").read_text()
-    assert "| complex | SAC-CPG | 2 | 4 | 50.0% (40-60) | 25.0% (20-30) | 25.0% (25-25) | — | — | — | — |" in report
+    assert "| complex | SAC-CPG | 2 | 4 | 50.0% (40-60) | 25.0% (20-30) | 25.0% (25-25) | — | — | — | — | — |" in report
     res = json.loads((out / "results.json").read_text())
     assert res["budgets"]["cpg_rl"]["1"]["env_steps"] == 3 * 8 * 24 and res["budgets"]["sac_cpg"]["2"]["env_steps"] == 576
-    final = res["fig5a_final"]
-    assert final["sac_cpg"]["env_steps"]["Episode/success_rate"]["final"] == pytest.approx([0.4, 0.6])
-    assert (out / "fig5a_env_steps.png").stat().st_size > 10000 and (out / "fig5a_wall_time.png").stat().st_size > 10000
+    ends = [seed["end"]["value"] for seed in res["fig5a"]["success"]["sac_cpg"]["per_seed"]]
+    assert ends == pytest.approx([0.4, 0.6])
+    # runs with no recorded GPU (no .done beside them) share one wall-time figure
+    assert (out / "fig5a_env_steps.png").stat().st_size > 10000
+    assert (out / "fig5a_wall_time_unrecorded.png").stat().st_size > 10000
