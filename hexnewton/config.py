@@ -155,6 +155,12 @@ class TerrainConfig:
     # model), each robot shape paired only with the boxes under it (physics/terrain/box_pairs.py): the box edges
     # MuJoCo's feet meet (results/sim2sim/wedge/report.md).
     collision: str = field(default="mesh_boxes", metadata={"choices": TERRAIN_COLLISIONS})
+    # ours: terrain meshes without T-junctions (physics/terrain/mesh.py): every quad edge split at the vertices on it,
+    # so each edge lies in exactly two triangles and Newton's finalize skips its mesh-boundary pass (complex task,
+    # CPU: finalize 7.8 -> 2.9 CPU s, studies/startup_mesh), for 55 % more triangles of the same surface (nearly all
+    # in walls) and twice the mesh build. Newton then signs mesh distances by ray parity instead of pseudo-normals
+    # (mesh-mesh and particle contacts only). Off until its A/B on evaluation rounds holds (studies/startup_mesh).
+    watertight: bool = False
 
 
 @dataclass

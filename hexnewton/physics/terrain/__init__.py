@@ -69,7 +69,7 @@ class Terrain:
             return builder.add_ground_plane(cfg=cfg)
         if self.cfg.collision == "mesh_boxes":
             band = round(self.cfg.lane_width / self.grid.res) if self.cfg.levels else None
-            return add_mesh_boxes(self.grid, builder, cfg, self.name, band)[0]
+            return add_mesh_boxes(self.grid, builder, cfg, self.name, band, watertight=self.cfg.watertight)[0]
         if self.cfg.collision == "boxes":
             self.boxes = grid_boxes(self.grid)
             return add_boxes(self.boxes, self.grid, builder, cfg, self.name)
@@ -80,10 +80,10 @@ class Terrain:
         return terrain_height_np(self.grid, x, y)
 
 
-def _mesh_from_grid(grid: HeightGrid) -> newton.Mesh:
+def _mesh_from_grid(grid: HeightGrid, watertight: bool = False) -> newton.Mesh:
     import newton
 
-    vertices, indices = grid_to_mesh(grid)
+    vertices, indices = grid_to_mesh(grid, watertight=watertight)
     # a static terrain needs no mass properties
     return newton.Mesh(vertices, indices, compute_inertia=False)
 
@@ -91,7 +91,7 @@ def _mesh_from_grid(grid: HeightGrid) -> newton.Mesh:
 def make_terrain(cfg: TerrainConfig) -> Terrain:
     """Build terrain ``cfg.name``; raises ``ValueError`` for unknown names or invalid parameters."""
     grid = build_height_grid(cfg)
-    mesh = None if cfg.name == "flat" else _mesh_from_grid(grid)
+    mesh = None if cfg.name == "flat" else _mesh_from_grid(grid, cfg.watertight)
     return Terrain(name=cfg.name, cfg=cfg, grid=grid, mesh=mesh)
 
 

@@ -79,10 +79,11 @@ def split_strips(grid: HeightGrid, band: int | None = None) -> list[Part]:
 
 
 def add_mesh_boxes(grid: HeightGrid, builder: newton.ModelBuilder, cfg: newton.ModelBuilder.ShapeConfig,
-                   name: str, band: int | None = None, base_depth: float = 0.1) -> list[int]:
+                   name: str, band: int | None = None, base_depth: float = 0.1, watertight: bool = False) -> list[int]:
     """Add the parts of :func:`split_strips` as static shapes (body -1): boxes from the common bottom
-    ``min(height) - base_depth`` up to their height, closed meshes down to the same bottom. Returns the shape
-    indices (consecutive), meshes first."""
+    ``min(height) - base_depth`` up to their height, closed meshes down to the same bottom (``watertight``: without
+    T-junctions, :func:`~hexnewton.physics.terrain.mesh.grid_to_mesh`). Returns the shape indices (consecutive),
+    meshes first."""
     import newton
     import warp as wp
 
@@ -101,7 +102,7 @@ def add_mesh_boxes(grid: HeightGrid, builder: newton.ModelBuilder, cfg: newton.M
                                              label=f"terrain_{name}_box{n}"))  # fmt: skip
         else:
             sub = HeightGrid(h[p.i0:p.i1, p.j0:p.j1].copy(), xa, ya, grid.res)
-            vertices, indices = grid_to_mesh(sub, base_depth=float(sub.heights.min()) - zb)
+            vertices, indices = grid_to_mesh(sub, base_depth=float(sub.heights.min()) - zb, watertight=watertight)
             mesh = newton.Mesh(vertices, indices, compute_inertia=False)  # static: no mass properties
             ids.append(builder.add_shape_mesh(-1, mesh=mesh, cfg=cfg, label=f"terrain_{name}_mesh{n}"))
     return ids
