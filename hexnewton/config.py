@@ -459,14 +459,33 @@ class RandomizationConfig:
     contact_timeconst: tuple[float, float] | None = None
     latency_share: float = 0.5  # share of envs whose actions take effect one control step (20 ms) late
     # uniform observation noise amplitudes: joint positions [rad], joint velocities [rad/s], target [m],
-    # quaternion components, max terrain height [m] (CPG parameters are the controller's own: no noise)
+    # quaternion components, max terrain height [m], gyro [rad/s] (CPG parameters and the last actions are the
+    # controller's own: no noise)
     noise_joint_pos: float = 0.01
     noise_joint_vel: float = 0.5
     noise_target: float = 0.05
     noise_quat: float = 0.02
     noise_height: float = 0.01
+    noise_gyro: float = 0.2  # base angular velocity [rad/s] (with ObsConfig.gyro)
     push_interval: float = 6.0  # [s]
     push_velocity: float = 0.3  # largest horizontal base velocity change [m/s]
+
+
+@dataclass
+class ObsConfig:
+    """What the networks read beyond the paper's state (ours; all off: the paper's observation for actor and critic,
+    §2.4.1). ``gyro`` and ``last_action`` add columns to the policy's observation (the actor's, and the critic's too),
+    which the robot's runtime assembles from its sensors (``hexnewton.deploy.runtime``); ``critic`` gives the critic a
+    group of privileged state the robot does not sense (``hexnewton/mdp/terms/critic.py``)."""
+
+    # the base angular velocity in the body frame [rad/s], an IMU's gyro (noise: RandomizationConfig.noise_gyro)
+    gyro: bool = False
+    # the policy's last actions, clamped to [-1, 1] as the action kernel applies them; 0 before an episode's first
+    last_action: bool = False
+    # the critic's own observation group ``critic`` (rsl-rl's obs_groups: actor ["policy"], critic ["policy",
+    # "critic"]): base velocities, terrain heights around the feet and ahead of the body, the lower legs' contact
+    # forces, the env's randomised physics and the CPG's phases; the actor's input stays the policy group
+    critic: bool = False
 
 
 @dataclass
@@ -478,6 +497,7 @@ class HexConfig:
     task: TaskConfig = field(default_factory=TaskConfig)
     reward: RewardConfig = field(default_factory=RewardConfig)
     randomization: RandomizationConfig = field(default_factory=RandomizationConfig)
+    obs: ObsConfig = field(default_factory=ObsConfig)
 
 
 def control_decimation(control_dt: float, frame_dt: float) -> int:

@@ -402,13 +402,17 @@ def _docstring_commands(doc: str) -> list[tuple[str, str | None]]:
 
 
 def _parser_flags() -> set[str]:
-    """Every option string of every command line's parser (``hexnewton/apps/``, ``train.py``, ``play.py``); the
-    baselines' once per algorithm, whose presets have fields of their own."""
+    """Every option string of every command line's parser (``hexnewton/apps/``, ``train.py``, ``play.py``) and of its
+    subcommands; the baselines' once per algorithm, whose presets have fields of their own."""
     flags: set[str] = set()
     real_parse, real_known = argparse.ArgumentParser.parse_args, argparse.ArgumentParser.parse_known_args
 
+    def options(parser) -> set[str]:  # a parser's own and its subcommands' (hexnewton.apps.ros node --stats)
+        subs = [a for a in parser._actions if isinstance(a, argparse._SubParsersAction)]
+        return set(parser._option_string_actions).union(*(options(p) for a in subs for p in a.choices.values()))
+
     def parse_args(self, args=None, namespace=None):
-        flags.update(self._option_string_actions)
+        flags.update(options(self))
         raise _Parsed(None)
 
     def parse_known_args(self, args=None, namespace=None):

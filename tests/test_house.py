@@ -230,7 +230,7 @@ def _console_scripts() -> dict[str, str]:
 #: console script -> the python command it answers as
 CONSOLE_SCRIPTS = {"hexnewton-train": "train.py", "hexnewton-play": "play.py",
                    "hexnewton-evaluate": "hexnewton.apps.evaluate", "hexnewton-export": "hexnewton.apps.export",
-                   "hexnewton-bench": "hexnewton.apps.bench"}  # fmt: skip
+                   "hexnewton-bench": "hexnewton.apps.bench", "hexnewton-ros": "hexnewton.apps.ros"}  # fmt: skip
 SCRIPT_PROBE = """
 import contextlib, importlib, io, json, runpy, sys, warnings
 
@@ -344,7 +344,8 @@ def _kernel_files(obj, seen: set) -> set[str]:
 def test_one_control_step_passes_the_files_the_readme_names():
     """The README's "How one control step flows" names exactly the package files whose code one ``env.step`` runs
     (Python called, Warp kernels launched and the Warp functions they call), at most five, with every part of the step
-    switched on: the body posture and reflex, domain randomisation, the terrain curriculum. A package the README names
+    switched on: the body posture and reflex, domain randomisation, the terrain curriculum, the observation switches
+    (gyro, last actions, the critic's group). A package the README names
     as a folder (``hexnewton/mdp/terms/``) counts as one, for all its files."""
     import re
 
@@ -352,13 +353,14 @@ def test_one_control_step_passes_the_files_the_readme_names():
     import torch
     import warp as wp
 
-    from hexnewton.config import CPGConfig, HexConfig, RandomizationConfig, SimConfig, TerrainConfig
+    from hexnewton.config import CPGConfig, HexConfig, ObsConfig, RandomizationConfig, SimConfig, TerrainConfig
     from hexnewton.mdp.env import make_env
 
     cfg = HexConfig(sim=SimConfig(num_envs=4, device="cpu", use_graph=False, frame_dt=0.02, substeps=2),
                     terrain=TerrainConfig(name="complex", levels=2, start_levels=1),
                     cpg=CPGConfig(posture=True, posture_reflex=2.0),
-                    randomization=RandomizationConfig(enabled=True, push_interval=0.02))  # fmt: skip
+                    randomization=RandomizationConfig(enabled=True, push_interval=0.02),
+                    obs=ObsConfig(gyro=True, last_action=True, critic=True))  # fmt: skip
     env = make_env(cfg)
     actions = torch.zeros(env.num_envs, env.num_actions)
     env.step(actions)

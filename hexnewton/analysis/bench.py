@@ -171,7 +171,7 @@ def bench_train(terrain: str, num_envs: int, device: str, iterations: int, seed:
     used0 = _device_memory(device) if cuda else 0
     cfg = _config(terrain, num_envs, device, seed, sim, ground, base)
     env = make_env(cfg)
-    tcfg = (agent or AgentConfig()).to_rsl_rl(num_envs)
+    tcfg = (agent or AgentConfig()).to_rsl_rl(num_envs, env.obs_groups)
     # a TensorBoard writer as in train.py: rsl-rl's logger only does its per-step bookkeeping with one
     logs = tempfile.TemporaryDirectory(prefix="hexnewton-bench-")
     runner = RankedRunner(env, copy.deepcopy(tcfg), log_dir=logs.name, device=device, rank=rank)

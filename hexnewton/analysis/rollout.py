@@ -28,8 +28,8 @@ LABELS = {"cpg": "CPG", "cpg_swept": "CPG (swept)", "cpg_rl": "CPG_RL", "joint":
 #: changes one thing; everything else is the nominal robot. Values: (RandomizationConfig fields, TerrainConfig fields).
 _NOMINAL = dict(friction=(0.9, 0.9), payload=(0.0, 0.0), link_mass_scale=(1.0, 1.0), kp_scale=(1.0, 1.0),
                 kd_scale=(1.0, 1.0), effort_scale=(1.0, 1.0), latency_share=0.0, noise_joint_pos=0.0,
-                noise_joint_vel=0.0, noise_target=0.0, noise_quat=0.0, noise_height=0.0, push_velocity=0.0,
-                foot_radius=None, contact_timeconst=None, motor_strength=None)
+                noise_joint_vel=0.0, noise_target=0.0, noise_quat=0.0, noise_height=0.0, noise_gyro=0.0,
+                push_velocity=0.0, foot_radius=None, contact_timeconst=None, motor_strength=None)
 #: the RandomizationConfig fields that are per-env ranges (a sweep point sets such a field to (value, value))
 _RANGES = {name for name, hint in typing.get_type_hints(RandomizationConfig).items()
            if tuple in (typing.get_origin(hint), *map(typing.get_origin, typing.get_args(hint)))}
@@ -41,7 +41,7 @@ PERTURBATIONS = {
     "push_0.6m/s": ({"push_velocity": 0.6, "push_interval": 3.0}, {}),
     "latency_40ms": ({"latency_share": 1.0}, {}),  # every env one control step late, plus the 20 ms step itself
     "sensor_noise_x2": ({"noise_joint_pos": 0.02, "noise_joint_vel": 1.0, "noise_target": 0.1, "noise_quat": 0.04,
-                         "noise_height": 0.02}, {}),
+                         "noise_height": 0.02, "noise_gyro": 0.4}, {}),
     "steps_7cm": ({}, {"step_rise": 0.07}),
     "blocks_8cm": ({}, {"block_height_max": 0.08}),
 }  # fmt: skip

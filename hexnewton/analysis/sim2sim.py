@@ -12,7 +12,7 @@ import numpy as np
 from hexnewton.analysis.metrics import round_metrics, summarize
 from hexnewton.analysis.rollout import EVAL_TERRAIN_SEED, START_SEED_OFFSET
 from hexnewton.config import CPGConfig, RobotConfig, SimConfig, TaskConfig, TerrainConfig, terrain_for_goal
-from hexnewton.deploy.mjcf import build_model
+from hexnewton.deploy.mjcf import SENSORS_PER_ROBOT, build_model
 from hexnewton.deploy.runtime import FORMAT, Controller, target_in_heading_frame
 from hexnewton.mdp.status import FELL, NONFINITE, OFF_COURSE, RUNNING, SUCCESS, TIMEOUT
 from hexnewton.physics.reference import quat_to_rpy_np
@@ -158,7 +158,7 @@ class Rounds:
         places = [(0.0, y, 1.0, a) for y, a in zip(s["y"], s["yaw"])]
         self.m = build_model(self.robot, self.grid, places, float(self.spec["substep_dt"]))
         self.d = mujoco.MjData(self.m)
-        if self.m.nq != 25 * rounds or self.m.nsensordata != 40 * rounds:
+        if self.m.nq != 25 * rounds or self.m.nsensordata != SENSORS_PER_ROBOT * rounds:
             raise RuntimeError("unexpected MuJoCo model layout")
         mujoco.mj_forward(self.m, self.d)  # the terrain's poses, for the scanner's rays
         self.scan = HeightScanner(self.m, self.d, self.grid)
@@ -184,9 +184,11 @@ class Rounds:
                 self.m.geom_group[g] = 0 if name.startswith(f"r{k}_") else 3
 
     def sensors(self) -> dict:
-        """The robots' current readings: joint encoders and velocities (N, 18), IMU quaternion (N, 4), x y z w."""
-        s = self.d.sensordata.reshape(self.n, 40)
-        return {"quat": s[:, [1, 2, 3, 0]].copy(), "joint_pos": s[:, 4:22].copy(), "joint_vel": s[:, 22:40].copy()}
+        """The robots' current readings: joint encoders and velocities (N, 18), IMU quaternion (N, 4), x y z w, and
+        gyro (N, 3), the torso's angular velocity in its own frame [rad/s]."""
+        s = self.d.sensordata.reshape(self.n, SENSORS_PER_ROBOT)
+        return {"quat": s[:, [1, 2, 3, 0]].copy(), "joint_pos": s[:, 4:22].copy(), "joint_vel": s[:, 22:40].copy(),
+                "gyro": s[:, 40:43].copy()}
 
     def observation_inputs(self, r: dict) -> dict:
         """The rest of the observation: the goal in the heading frame (odometry: the free joint's position) and the
@@ -199,18 +201,23 @@ class Rounds:
         return {"target": target, "max_height": height}
 
     def control_step(self) -> None:
-        """One control step: policy (if any) on the first substep's readings, then the CPG substeps, each followed
-        by one MuJoCo step (``mj_step1``: sensors of the current state; the targets; ``mj_step2``: integrate)."""
+        """One control step: ``substeps`` MuJoCo steps, each split around its joint targets (``mj_step1``: sensors of
+        the current state; :meth:`targets` from them; ``mj_step2``: integrate)."""
         for k in range(self.substeps):
             self.mj.mj_step1(self.m, self.d)
-            r = self.sensors()
-            if k == 0 and self.policy:
-                o = self.observation_inputs(r)
-                obs = self.ctrl.observe(r["joint_pos"], r["joint_vel"], r["quat"], o["target"], o["max_height"])
-                self.ctrl.set_actions(self.ctrl.act(obs), o["target"])
-            self.d.ctrl[:] = self.ctrl.substep(r["quat"]).ravel()
+            self.d.ctrl[:] = np.asarray(self.targets(k, self.sensors())).ravel()
             self.mj.mj_step2(self.m, self.d)
         self.steps += 1
+
+    def targets(self, k: int, r: dict) -> np.ndarray:
+        """The joint targets (N, 18) of substep ``k`` of the control step from the readings ``r``: the runtime's policy
+        (if any) on the first substep's, then its CPG substep. A subclass may get them elsewhere (over ROS 2:
+        :class:`hexnewton.analysis.ros_robot.RosRounds`)."""
+        if k == 0 and self.policy:
+            o = self.observation_inputs(r)
+            obs = self.ctrl.observe(r["joint_pos"], r["joint_vel"], r["quat"], o["target"], o["max_height"], r["gyro"])
+            self.ctrl.set_actions(self.ctrl.act(obs), o["target"])
+        return self.ctrl.substep(r["quat"])
 
     def status(self) -> tuple[np.ndarray, np.ndarray]:
         """Episode status codes (N,) and roll / pitch / yaw (N, 3) after the last control step."""

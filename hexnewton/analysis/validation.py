@@ -2,7 +2,9 @@
 checkpoints of the last curriculum stage walk the task's course on validation rounds (terrain seed 3000, start seed
 4000, as ``evaluate --seed 3000``: never the test seeds), each with its deterministic action, all of them side by side
 in one batched env (candidate k drives robots k, k + K, k + 2K, ...); the run's result is the candidate that reaches
-the goal most often, then walks 3 m most often, then falls least, then the later one.
+the goal most often, then falls least before the goal line (``fell_before_goal``: the goal's distance plus its radius,
+``analysis.metrics.summarize``'s ``fall_rate_before_goal``; a robot that walks past the goal and off the course patch's
+end missed its steering, not its footing), then the later one. All falls (``fell``) are reported beside.
 
 Training success counts sampled actions on the training levels; a policy's deterministic action can walk past the
 goal where its samples reach it (results/cpu_main_job), so the result is chosen on what is shipped and evaluated.
@@ -78,9 +80,10 @@ def validate(cands: list[Candidate], controller: str, terrain, rounds: int, devi
     """Each candidate's validation: ``rounds`` robots each on the course of ``terrain`` (a name, or the task's
     ``TerrainConfig``: its rises and blocks without the curriculum lanes) with the goal ``goal_distance`` ahead (None:
     the default), with the physics and CPG of the newest candidate's checkpoint (one stage: one configuration).
-    Returns per candidate the shares of rounds that reached the goal, walked 3 m, fell and left the course, and its
-    body's pitch and roll variance over its rounds [deg²] (the stability the last curriculum stage trains: the choice
-    does not weigh it, the console and ``timing.json`` show it)."""
+    Returns per candidate the shares of rounds that reached the goal, walked 3 m, fell, fell before the goal line
+    (``fell_before_goal``) and left the course, and its body's pitch and roll variance over its rounds [deg²] (the
+    stability the last curriculum stage trains: the choice does not weigh it, the console and ``timing.json`` show
+    it)."""
     from hexnewton.analysis.rollout import CONTROLLERS, START_SEED_OFFSET, read_controller_checkpoint, stepped
     from hexnewton.learning.checkpoint import trained_config
     from hexnewton.mdp.env import make_env
@@ -106,10 +109,12 @@ def validate(cands: list[Candidate], controller: str, terrain, rounds: int, devi
     status, rpy = np.stack(status), np.stack(rpy)
     m = round_metrics(np.stack(pos), rpy, status != 0, status, cfg.task.control_dt, (3.0,))
     end, walked = m["end"], m["reached"][0]
+    early = (end == FELL) & (m["x_far"] < cfg.task.goal_distance + cfg.task.goal_radius)  # fell before the goal line
     pitch, roll = candidate_variances(rpy, m["in_episode"], k)
     return [{"goal": float((end[i::k] == SUCCESS).mean()), "walk_3m": float(walked[i::k].mean()),
-             "fell": float((end[i::k] == FELL).mean()), "off_course": float((end[i::k] == OFF_COURSE).mean()),
-             "pitch_var": pitch[i], "roll_var": roll[i], "rounds": int(end[i::k].size)} for i in range(k)]  # fmt: skip
+             "fell": float((end[i::k] == FELL).mean()), "fell_before_goal": float(early[i::k].mean()),
+             "off_course": float((end[i::k] == OFF_COURSE).mean()), "pitch_var": pitch[i], "roll_var": roll[i],
+             "rounds": int(end[i::k].size)} for i in range(k)]  # fmt: skip
 
 
 def candidate_variances(rpy: np.ndarray, in_episode: np.ndarray, k: int) -> tuple[list[float], list[float]]:
@@ -160,7 +165,7 @@ def combine_courses(cands: list[Candidate], terrains: list,
     results of every (course, candidate) pair (:func:`validate_share` of every rank)."""
     per = {(t if isinstance(t, str) else t.name): [results[(c, i)] for i in range(len(cands))]
            for c, t in enumerate(terrains)}  # fmt: skip
-    keys = ("goal", "walk_3m", "fell", "off_course", "pitch_var", "roll_var")
+    keys = ("goal", "walk_3m", "fell", "fell_before_goal", "off_course", "pitch_var", "roll_var")
     mean = [dict({k: float(np.mean([r[i][k] for r in per.values()])) for k in keys},
                  rounds=sum(r[i]["rounds"] for r in per.values())) for i in range(len(cands))]  # fmt: skip
     return mean, per
@@ -172,14 +177,15 @@ def course_names(names: list[str]) -> str:
 
 
 def choose(cands: list[Candidate], results: list[dict]) -> int:
-    """The index of the result: the most goals, then the most 3 m walks, then the fewest falls, then the later."""
-    return max(range(len(cands)), key=lambda i: (results[i]["goal"], results[i]["walk_3m"], -results[i]["fell"],
+    """The index of the result: the most goals, then the fewest falls before the goal line, then the later."""
+    return max(range(len(cands)), key=lambda i: (results[i]["goal"], -results[i]["fell_before_goal"],
                                                   cands[i].iteration))  # fmt: skip
 
 
 def report_lines(cands: list[Candidate], results: list[dict], chosen: int) -> list[str]:
     """One console line per candidate, the chosen one marked."""
     return [f"  {'->' if i == chosen else '  '} {os.path.basename(c.path)} ({c.why}, iteration {c.iteration}): goal "
-            f"{100 * r['goal']:.1f} %, 3 m {100 * r['walk_3m']:.1f} %, fell {100 * r['fell']:.1f} %, off course "
-            f"{100 * r['off_course']:.1f} %, pitch / roll var {r['pitch_var']:.1f} / {r['roll_var']:.1f} deg²"
+            f"{100 * r['goal']:.1f} %, fell before the goal {100 * r['fell_before_goal']:.1f} % (in all "
+            f"{100 * r['fell']:.1f} %), 3 m {100 * r['walk_3m']:.1f} %, off course {100 * r['off_course']:.1f} %, "
+            f"pitch / roll var {r['pitch_var']:.1f} / {r['roll_var']:.1f} deg²"
             for i, (c, r) in enumerate(zip(cands, results))]  # fmt: skip

@@ -99,8 +99,10 @@ def main(argv: list[str] | None = None) -> int:
     total = args.total_steps or base.agent.max_iterations * base.agent.num_steps_per_env * num_envs
     seed_everything(args.seed)
     set_seed(args.seed)
+    # skrl's critic reads the policy's observation: the critic group (ObsConfig.critic) would go unread
     cfg_env = dataclasses.replace(env_cfg, sim=dataclasses.replace(env_cfg.sim, num_envs=num_envs, device=device),
-                                  task=dataclasses.replace(env_cfg.task, seed=args.seed))  # fmt: skip
+                                  task=dataclasses.replace(env_cfg.task, seed=args.seed),
+                                  obs=dataclasses.replace(env_cfg.obs, critic=False))  # fmt: skip
     env = make_env(cfg_env, "cpg")
     run_dir = os.path.join(args.log_dir, args.experiment or f"hexnewton_{base.name}_{args.algo}",
                            datetime.datetime.now().strftime("%Y-%m-%d_%H-%M-%S"))  # fmt: skip

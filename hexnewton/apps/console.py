@@ -1,8 +1,8 @@
 """The console scripts ``pyproject.toml`` declares (``[project.scripts]``): ``hexnewton-train``, ``hexnewton-play``,
-``hexnewton-evaluate``, ``hexnewton-export`` and ``hexnewton-bench``. Each runs its command line's ``main`` through
-:func:`hexnewton.apps.cli.run` under the name its usage line shows, so it answers as ``python train.py``,
-``python play.py`` or ``python -m hexnewton.apps.<name>`` does: the same flags, the same one-line errors and the same
-exit status."""
+``hexnewton-evaluate``, ``hexnewton-export``, ``hexnewton-bench`` and ``hexnewton-ros``. Each runs its command line's
+``main`` through :func:`hexnewton.apps.cli.run` under the name its usage line shows, so it answers as ``python
+train.py``, ``python play.py`` or ``python -m hexnewton.apps.<name>`` does: the same flags, the same one-line errors
+and the same exit status."""
 
 from __future__ import annotations
 
@@ -42,3 +42,10 @@ def bench() -> int:
     from hexnewton.apps.bench import main
 
     return run(main, "python -m hexnewton.apps.bench")
+
+
+def ros() -> int:
+    """``hexnewton-ros``: ``python -m hexnewton.apps.ros``."""
+    from hexnewton.apps.ros import main
+
+    return run(main, "python -m hexnewton.apps.ros")

@@ -54,6 +54,10 @@ def controller_spec(env, checkpoint: str, action_std: list[float] | None) -> dic
             "target": "goal relative to the base in its heading frame (x forward, y left) [m]; z = goal ground - base z",
             "quat": "base orientation (x, y, z, w), w >= 0",
             "max_height": f"highest terrain within +-{H_HALF_EXTENT} m of the base minus the ground under it [m]",
+            **({"gyro": "base angular velocity in the body frame (x forward, y left, z up) [rad/s], the IMU's gyro"}
+               if cfg.obs.gyro else {}),
+            **({"last_action": "the actions the policy gave last, clamped to [-1, 1]; 0 after a reset"}
+               if cfg.obs.last_action else {}),
         },
         "param_names": list(cfg.cpg.param_names),
         # ours: the levelling reflex (CPGConfig.posture_reflex; 0 = none), its knee offsets clamped to +-tilt_max
@@ -146,6 +150,7 @@ def main(argv: list[str] | None = None) -> int:
         terrain=TerrainConfig(name="flat"),
         task=dataclasses.replace(cfg.task, seed=12345, reset_yaw=TaskConfig.reset_yaw),
         randomization=RandomizationConfig(),  # the check rollout is the nominal robot (no latency, no noise)
+        obs=dataclasses.replace(cfg.obs, critic=False),  # the policy's inputs only: the critic is not exported
     )
     env = make_env(cfg, "cpg")
     runner = load_runner(env, args.checkpoint, "cpg")

@@ -9,10 +9,11 @@
 The robot and the terrain are a MuJoCo model written from the project's descriptions (:mod:`hexnewton.deploy.mjcf`): MuJoCo's
 own collision detection and solver, every step. Per control step (``control_dt`` of the bundle) the loop does what
 the robot's computer does with :class:`hexnewton.deploy.runtime.Controller`:
-- reads the 18 joint encoders and velocities and the IMU quaternion (MuJoCo sensors), the base position (the free
-  joint's coordinates, as odometry gives it) for the goal in the heading frame (:func:`deploy.target_in_heading_frame`,
-  the goal's ground from the height scanner), and the terrain reading: the highest terrain within +-30 cm of the base
-  minus the ground under it, from vertical ray casts at the 1 cm cells of that window (:class:`HeightScanner`);
+- reads the 18 joint encoders and velocities and the IMU's quaternion and gyro (MuJoCo sensors), the base position
+  (the free joint's coordinates, as odometry gives it) for the goal in the heading frame
+  (:func:`deploy.target_in_heading_frame`, the goal's ground from the height scanner), and the terrain reading: the
+  highest terrain within +-30 cm of the base minus the ground under it, from vertical ray casts at the 1 cm cells of
+  that window (:class:`HeightScanner`);
 - ``observe`` -> ``act`` (policy.onnx) -> ``set_actions``; then every ``substep_dt`` ``Controller.substep`` with the
   IMU's latest quaternion, whose 18 joint targets the position servos track during the next MuJoCo step.
 

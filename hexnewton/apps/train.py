@@ -396,14 +396,15 @@ def main(argv: list[str] | None = None) -> int:
     seed_everything(cfg.task.seed)
     env = make_env(cfg, base.action_mode, build)
     if ckpt is not None:
-        from hexnewton.learning.checkpoint import check_compatible
+        from hexnewton.learning.checkpoint import check_compatible, check_critic
 
         check_compatible(ckpt, args.resume, env.num_obs, env.num_actions, base.action_mode)
+        check_critic(ckpt, args.resume, sum(g.shape[1] for g in env.get_observations().values()))
     meta = {"task": base.name, "action_mode": base.action_mode, "num_obs": env.num_obs,
             "num_actions": env.num_actions, "config": dataclasses.asdict(cfg), "agent": dataclasses.asdict(agent),
             "world_size": rank.world_size}  # fmt: skip
     agent = ranks_agent(agent, rank)  # checkpoints keep the unscaled one: a resumed run scales for its own ranks
-    run_dir = make_run_dir(args, meta, agent.to_rsl_rl(cfg.sim.num_envs), rank)
+    run_dir = make_run_dir(args, meta, agent.to_rsl_rl(cfg.sim.num_envs, env.obs_groups), rank)
     runner, views = make_runner(args, env, agent, meta, run_dir, rank, ckpt)
     where = f"rank {rank.rank} of {rank.world_size}, " if rank.world_size > 1 else ""
     print(f"training task {base.name}: {where}{cfg.sim.num_envs} envs on {cfg.sim.device}, {agent.max_iterations} "

@@ -5,8 +5,9 @@ the Newton articulation is built from (:func:`hexnewton.physics.robot.hexapod.bu
 model: a free torso box and per leg (R1, R2, R3, L1, L2, L3) the bodies coxa -> femur -> tibia on hinge joints hip ->
 knee -> ankle with the Newton robot's frames, axes, masses, inertias, limits and armature; collision capsules on femur
 and tibia, a foot sphere, the torso box (no self-collision). Each joint has a MuJoCo position actuator with Newton's
-PD drive: kp = ``joint_ke``, kv = ``joint_kd``, force clamped to ``effort_limit``. Sensors per robot: the torso's
-orientation (``framequat`` at an IMU site on the torso origin) and 18 ``jointpos`` / 18 ``jointvel`` encoders.
+PD drive: kp = ``joint_ke``, kv = ``joint_kd``, force clamped to ``effort_limit``. Sensors per robot
+(``SENSORS_PER_ROBOT`` values): the torso's orientation (``framequat`` at an IMU site on the torso origin), 18
+``jointpos`` / 18 ``jointvel`` encoders and the IMU's ``gyro`` (the torso's angular velocity in its own frame).
 
 The terrain comes from the height grid (:func:`hexnewton.physics.terrain.heightmap.build_height_grid`): every strip of constant
 height across the patch (run-ups, stair treads, landings) is one box (:func:`hexnewton.physics.terrain.parts.split_strips`),
@@ -46,6 +47,9 @@ from hexnewton.physics.terrain.parts import split_strips
 SCANNER_GROUP = 5
 _BASE_DEPTH = 0.1  # the terrain boxes reach this far below the lowest cell [m]
 _ROBOT = 'contype="1" conaffinity="0"'
+#: sensor values per robot, in :func:`robot_io_xml`'s order: quaternion (4), joint positions (18), joint velocities
+#: (18), gyro (3)
+SENSORS_PER_ROBOT = 4 + 18 + 18 + 3
 _TERRAIN = 'contype="0" conaffinity="1"'
 
 
@@ -105,14 +109,15 @@ def robot_xml(cfg: RobotConfig, prefix: str = "", pos=(0.0, 0.0, 0.15), yaw: flo
 
 def robot_io_xml(cfg: RobotConfig, prefix: str = "") -> tuple[str, str]:
     """(actuators, sensors) of one robot: 18 position servos (kp = joint_ke, kv = joint_kd, |force| <= effort_limit),
-    then the IMU quaternion, 18 joint encoders and 18 joint velocities, in that order."""
+    then the IMU quaternion, 18 joint encoders, 18 joint velocities and the IMU's gyro, in that order."""
     joints = [f"{prefix}{leg}_{kind}" for leg in LEG_NAMES for kind in ("hip", "knee", "ankle")]
     e = cfg.effort_limit
     act = "".join(f'<position name="{j}" joint="{j}" kp="{cfg.joint_ke:.9g}" kv="{cfg.joint_kd:.9g}" '
                   f'forcerange="{-e:.9g} {e:.9g}"/>' for j in joints)  # fmt: skip
     sens = (f'<framequat name="{prefix}imu" objtype="site" objname="{prefix}imu"/>'
             + "".join(f'<jointpos name="{j}_pos" joint="{j}"/>' for j in joints)
-            + "".join(f'<jointvel name="{j}_vel" joint="{j}"/>' for j in joints))  # fmt: skip
+            + "".join(f'<jointvel name="{j}_vel" joint="{j}"/>' for j in joints)
+            + f'<gyro name="{prefix}gyro" site="{prefix}imu"/>')  # fmt: skip
     return act, sens
 
 

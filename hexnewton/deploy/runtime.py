@@ -12,7 +12,13 @@ Per control step (``control_dt``, 20 ms by default) :meth:`Controller.step` take
 - joint positions and velocities (18 each, order R1..L3 x hip, knee, ankle);
 - the base orientation quaternion (x, y, z, w);
 - the goal relative to the robot in its heading frame (:func:`target_in_heading_frame`);
-- the highest terrain within ±30 cm minus the ground under the robot (0 without a terrain sensor).
+- the highest terrain within ±30 cm minus the ground under the robot (0 without a terrain sensor);
+- for a policy that observes it (``gyro`` in its layout: ``ObsConfig.gyro``), the base angular velocity in the body
+  frame, the IMU's gyro [rad/s].
+
+A policy whose layout holds ``last_action`` (``ObsConfig.last_action``) also observes its own last actions: the
+controller keeps those :meth:`Controller.set_actions` was given, clamped to [-1, 1], zeros after a reset, as the
+simulator does from an episode's start.
 
 It runs the policy's deterministic action (the mean of its Beta distribution, computed inside ``policy.onnx``;
 older Gaussian bundles can also sample, ``stochastic=True``, or take the expected clipped action,
@@ -129,6 +135,7 @@ class Controller:
         # the stuck response (CPGConfig.stuck_*; 0: none, older bundles)
         self.stuck = {k: spec.get(f"stuck_{k}", d) for k, d in (("lift", 0.0), ("window", 1), ("progress", 0.0),
                                                                  ("hold", 1))}  # fmt: skip
+        self.last_actions = np.zeros((self.n, int(spec["num_actions"])))  # the observation's ``last_action``
         self.reset()
 
     def reset(self, mask=None) -> None:
@@ -147,13 +154,18 @@ class Controller:
         self.state[m] = initial_cpg_state(self.cpg[1], self.cpg[3])
         self.dy[m] = 0.0
         self.stuck_count[m] = self.stuck_left[m] = 0
+        self.last_actions[m] = 0.0
 
-    def observe(self, joint_pos, joint_vel, base_quat, target, max_height=0.0) -> np.ndarray:
-        """The policy's observation (N, num_obs), laid out as in training (``controller.json``)."""
+    def observe(self, joint_pos, joint_vel, base_quat, target, max_height=0.0, gyro=None) -> np.ndarray:
+        """The policy's observation (N, num_obs), laid out as in training (``controller.json``). ``gyro`` (N, 3): the
+        base angular velocity in the body frame [rad/s], required by a policy that observes it (``gyro`` in the
+        layout)."""
         obs = np.zeros((self.n, self.num_obs))
         quat = np.asarray(base_quat, np.float64).reshape(self.n, 4)
         h = np.asarray(max_height, np.float64)
         h = h.reshape(self.n, 1) if h.size == self.n else np.full((self.n, 1), float(h))
+        if gyro is None and "gyro" in self.layout:
+            raise ValueError("this policy observes the base angular velocity: pass the IMU's gyro to observe()")
         parts = {
             "joint_pos": np.asarray(joint_pos, np.float64).reshape(self.n, 18),
             "joint_vel": np.asarray(joint_vel, np.float64).reshape(self.n, 18),
@@ -163,7 +175,10 @@ class Controller:
             "posture": self.params[:, 15:],
             "quat": quat * np.where(quat[:, 3:4] < 0, -1.0, 1.0),
             "max_height": h,
+            "last_action": self.last_actions,
         }
+        if gyro is not None:
+            parts["gyro"] = np.asarray(gyro, np.float64).reshape(self.n, 3)
         for name, (a, b) in self.layout.items():
             obs[:, a:b] = parts[name]
         return obs
@@ -183,7 +198,10 @@ class Controller:
     def set_actions(self, actions: np.ndarray, target=None) -> None:
         """The policy's actions (N, num_actions) in [-1, 1] as the parameters the CPG follows from now on. ``target``
         (N, 3): the goal relative to the robot that the policy observed, required by a controller with the stuck
-        response (``stuck_lift`` in controller.json), which lifts the knees of a robot that stops gaining ground."""
+        response (``stuck_lift`` in controller.json), which lifts the knees of a robot that stops gaining ground. The
+        actions, clamped to [-1, 1] (0 where not finite), are the next observation's ``last_action``."""
+        self.last_actions = np.clip(np.nan_to_num(np.asarray(actions, np.float64), nan=0.0, posinf=0.0, neginf=0.0),
+                                    -1.0, 1.0).reshape(self.n, -1)  # fmt: skip
         self.target = scale_actions_reference(actions, self.lower, self.upper)
         if self.stuck["lift"] > 0:
             if target is None:
@@ -216,10 +234,10 @@ class Controller:
             self.last_substep_targets[k] = self.substep(q[k] if q is not None and q.ndim == 3 else q)
         return self.last_substep_targets[-1].copy()
 
-    def step(self, joint_pos, joint_vel, base_quat, target, max_height=0.0) -> np.ndarray:
+    def step(self, joint_pos, joint_vel, base_quat, target, max_height=0.0, gyro=None) -> np.ndarray:
         """One control step: readings in, 18 joint position targets out (N, 18)."""
-        return self.advance(self.act(self.observe(joint_pos, joint_vel, base_quat, target, max_height)), base_quat,
-                            target)
+        obs = self.observe(joint_pos, joint_vel, base_quat, target, max_height, gyro)
+        return self.advance(self.act(obs), base_quat, target)
 
 
 def replay(bundle: str) -> dict:
@@ -234,7 +252,9 @@ def replay(bundle: str) -> dict:
     err_obs = err_q = 0.0
     for k in range(len(obs)):
         o = obs[k]
-        mine = ctrl.observe(sl(o, "joint_pos"), sl(o, "joint_vel"), sl(o, "quat"), sl(o, "target"), sl(o, "max_height"))
+        gyro = sl(o, "gyro") if "gyro" in lay else None
+        mine = ctrl.observe(sl(o, "joint_pos"), sl(o, "joint_vel"), sl(o, "quat"), sl(o, "target"), sl(o, "max_height"),
+                            gyro)  # fmt: skip
         err_obs = max(err_obs, float(np.abs(mine - o).max()))  # the CPG parameters were integrated here
         q = ctrl.advance(ctrl.act(mine), None if quats is None else quats[k], sl(o, "target"))
         err_q = max(err_q, float(np.abs(q - sim_targets[k]).max()))

@@ -241,8 +241,10 @@ class AgentConfig:
                           stages=tuple((start // k, changes) for start, changes in out.stages))  # fmt: skip
         return replace(out, algorithm=a)
 
-    def to_rsl_rl(self, num_envs: int) -> dict:
-        """rsl-rl-lib 5.5.1's ``OnPolicyRunner`` configuration for ``num_envs`` envs per process."""
+    def to_rsl_rl(self, num_envs: int, groups: tuple[str, ...] = ("policy",)) -> dict:
+        """rsl-rl-lib 5.5.1's ``OnPolicyRunner`` configuration for ``num_envs`` envs per process whose observations hold
+        the groups ``groups`` (``HexapodEnv.obs_groups``): the actor reads ``policy``, the critic every group (with
+        ``ObsConfig.critic``: ``["policy", "critic"]``, an asymmetric critic)."""
         a = asdict(self.algorithm)
         size = a.pop("mini_batch_size")
         if size:
@@ -258,7 +260,7 @@ class AgentConfig:
         return {
             "num_steps_per_env": self.num_steps_per_env,
             "save_interval": self.save_interval,
-            "obs_groups": {"actor": ["policy"], "critic": ["policy"]},
+            "obs_groups": {"actor": ["policy"], "critic": list(groups)},
             "logger": "tensorboard",
             # rsl-rl's NaN check costs three device-to-host syncs per env step; the env already guarantees finite
             # observations and rewards in-kernel (a blown-up env is reset and counted: mdp/terms/,

@@ -107,6 +107,15 @@ def check_compatible(ckpt: dict, path: str, num_obs: int, num_actions: int, acti
                          f"{num_actions}")  # fmt: skip
 
 
+def check_critic(ckpt: dict, path: str, num_inputs: int) -> None:
+    """A one-line error unless the checkpoint's critic reads ``num_inputs`` values (the env's groups together, a resumed
+    run's critic: ``ObsConfig.critic`` as it was trained)."""
+    weight = (ckpt.get("critic_state_dict") or {}).get("mlp.0.weight")
+    if weight is not None and weight.shape[1] != num_inputs:
+        raise ValueError(f"{path}'s critic reads {weight.shape[1]} values; this environment gives it {num_inputs} "
+                         "(--env.obs.critic as the checkpoint was trained)")
+
+
 def checkpoint_distribution(ckpt: dict | None) -> str:
     """The action distribution a checkpoint was trained with (those saved before the choice existed: Gaussian)."""
     return checkpoint_agent(ckpt).distribution.name

@@ -77,7 +77,9 @@ def policy_checkpoint(path: str) -> tuple[dict, str]:
 
 def load_runner(env, path: str, action_mode: str, ckpt: dict | None = None):
     """An rsl-rl runner holding the checkpoint's actor, after checking the checkpoint fits this environment; ``ckpt``:
-    the checkpoint at ``path`` already read (:func:`~hexnewton.learning.checkpoint.load_checkpoint`), else it is read here."""
+    the checkpoint at ``path`` already read (:func:`~hexnewton.learning.checkpoint.load_checkpoint`), else it is read here.
+    The critic reads the groups ``env`` emits (an evaluation's env has no ``critic`` group: the critic of a checkpoint
+    trained with one is neither built for it nor loaded)."""
     from rsl_rl.runners import OnPolicyRunner
 
     class PolicyRunner(OnPolicyRunner):
@@ -90,7 +92,7 @@ def load_runner(env, path: str, action_mode: str, ckpt: dict | None = None):
 
     ckpt = load_checkpoint(path) if ckpt is None else ckpt
     check_compatible(ckpt, path, env.num_obs, env.num_actions, action_mode)
-    tcfg = checkpoint_agent(ckpt).to_rsl_rl(env.num_envs)
+    tcfg = checkpoint_agent(ckpt).to_rsl_rl(env.num_envs, env.obs_groups)
     with contextlib.redirect_stdout(io.StringIO()):  # rsl-rl prints both networks in full
         runner = PolicyRunner(env, copy.deepcopy(tcfg), log_dir=None, device=str(env._obs_t.device))
     # the actor alone: full training checkpoints and actor-only policy files (results/policies) both load

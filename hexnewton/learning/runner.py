@@ -239,7 +239,8 @@ class HexRunner(RankedRunner):
     (``AgentConfig.stages``) and stops on ``max_minutes`` / ``target_success`` (:func:`stop_reason`)."""
 
     def __init__(self, env, agent, meta: dict, log_dir: str | None, device: str, rank: Rank = Rank()):
-        super().__init__(env, agent.to_rsl_rl(env.num_envs), log_dir=log_dir, device=device, rank=rank)
+        train_cfg = agent.to_rsl_rl(env.num_envs, env.obs_groups)  # the critic reads every group the env emits
+        super().__init__(env, train_cfg, log_dir=log_dir, device=device, rank=rank)
         # the run's git/ folder records hexnewton's commit and diff (rsl-rl's default looks for its own repo)
         self.logger.git_status_repos = [os.path.dirname(os.path.abspath(__file__))]
         self.agent, self.meta = agent, meta

@@ -11,7 +11,9 @@ five files:
     -> observations (mdp/terms/) [+ noise (mdp/events.py)]
 
 The bracketed parts run with ``RandomizationConfig.enabled`` and ``TerrainConfig.levels``; the per-env physical draws
-are ``events.randomize_physics``, once, when the env is built.
+are ``events.randomize_physics``, once, when the env is built. With ``ObsConfig.critic`` the observations also hold
+the critic's group (``mdp/terms/critic.py``): ``get_observations`` returns ``{"policy", "critic"}`` and
+:attr:`HexapodEnv.obs_groups` names both (rsl-rl's critic reads them, the actor ``policy`` alone).
 
 torch sees every buffer zero-copy (``wp.to_torch``), and nothing goes back to the host inside a step. What
 ``step`` and ``get_observations`` return are device copies of those buffers, made after the graph: rsl-rl keeps
@@ -65,19 +67,25 @@ from hexnewton.mdp.events import (
 )
 from hexnewton.mdp.status import NONFINITE, SUCCESS, TIMEOUT
 from hexnewton.mdp.terms import (
+    BASE_LAYOUTS,
+    CRITIC_DIM,
     LAYOUTS,
     OBS_DIM,
     TERMINATIONS,
+    CriticInputs,
     EndInputs,
     ObsInputs,
     RewardInputs,
+    critic_kernel,
     height_field_from_grid,
+    layout_name,
     make_rewards_kernel,
     make_status_kernel,
     make_struct,
     obs_span,
     observation_noise,
     observations_kernel,
+    physics_columns,
     reward_table,
     reward_weights,
 )
@@ -152,7 +160,8 @@ class HexapodEnv(VecEnv):
         self.decimation = control_decimation(task.control_dt, world.frame_dt)
         self.num_envs = world.num_envs
         posture = action_mode == "cpg" and cfg.cpg.posture
-        self.obs_layout = "cpg_posture" if posture else action_mode
+        self.base_layout = "cpg_posture" if posture else action_mode
+        self.obs_layout = layout_name(self.base_layout, cfg.obs)
         self.num_actions = cfg.cpg.num_params if action_mode == "cpg" else 18
         self.num_obs = OBS_DIM[self.obs_layout]
         self._target_col = obs_span(self.obs_layout, "target")[0]
@@ -165,6 +174,7 @@ class HexapodEnv(VecEnv):
         self._buffers()
         self._curriculum_buffers()
         self._randomization_buffers()
+        self._critic_buffers()
         self._reset(None)
         self._observe()
         wp.synchronize_device(self.device)
@@ -254,9 +264,18 @@ class HexapodEnv(VecEnv):
         self._observe()
         return self.get_observations()
 
+    @property
+    def obs_groups(self) -> tuple[str, ...]:
+        """The groups :meth:`get_observations` returns: ``policy``, and ``critic`` with ``ObsConfig.critic``."""
+        return ("policy", "critic") if self.critic_obs is not None else ("policy",)
+
     def get_observations(self) -> TensorDict:
-        """A copy of the current observations (device to device), which the next ``step`` leaves untouched."""
-        return TensorDict({"policy": self._obs_t.clone()}, batch_size=[self.num_envs], device=self._obs_t.device)
+        """A copy of the current observations (device to device), which the next ``step`` leaves untouched: the
+        ``policy`` group and, with ``ObsConfig.critic``, the ``critic`` group."""
+        groups = {"policy": self._obs_t.clone()}
+        if self.critic_obs is not None:
+            groups["critic"] = self._critic_t.clone()
+        return TensorDict(groups, batch_size=[self.num_envs], device=self._obs_t.device)
 
     def step(self, actions: torch.Tensor) -> tuple[TensorDict, torch.Tensor, torch.Tensor, dict]:
         """One control step of every env: ``actions`` copied into the step's buffer, then, in one captured graph
@@ -271,7 +290,7 @@ class HexapodEnv(VecEnv):
         7. the state at the end of the step kept for recording;
         8. the curriculum's lane changes (with a terrain curriculum);
         9. the resets of the finished envs;
-        10. observations (and their noise, with randomisation).
+        10. observations (and their noise, with randomisation; the critic's group, with ``ObsConfig.critic``).
 
         Returns copies of the observations, rewards and done flags, and the extras (time-outs, log)."""
         # torch writes the actions on its (legacy default) stream; Warp's own streams are blocking streams, so
@@ -320,6 +339,20 @@ class HexapodEnv(VecEnv):
         self._obs_noise = wp.array(observation_noise(self.obs_layout, rz), device=dev)
         self._push_steps = max(1, int(round(rz.push_interval / self.cfg.task.control_dt)))
 
+    def _critic_buffers(self) -> None:
+        """With ``ObsConfig.critic``: the critic group's buffer, the lower legs' contact forces (tracked by the world
+        from now on) and each env's randomised physics, uploaded once; ``critic_obs`` None otherwise."""
+        cfg, world, n, dev = self.cfg, self.world, self.num_envs, self.device
+        self.critic_obs = None
+        if not cfg.obs.critic:
+            return
+        self._leg_forces = world.track_leg_contacts()
+        self._lower_legs = wp.array(world.lower_legs, dtype=wp.int32, device=dev)
+        late = self._late.numpy() if self.randomized else None
+        self.physics = wp.array(physics_columns(self.physical_draws, late, cfg.robot, n), device=dev)
+        self.critic_obs = wp.zeros((n, CRITIC_DIM[self.base_layout]), dtype=wp.float32, device=dev)
+        self._critic_t = wp.to_torch(self.critic_obs)
+
     def _state_arrays(self) -> list[wp.array]:
         s = self.world.state_0
         arrays = [s.joint_q, s.joint_qd, s.body_q, s.body_qd, self.episode_steps, self.prev_x, self.start,
@@ -332,6 +365,8 @@ class HexapodEnv(VecEnv):
             arrays += [self.level, self._played, self.lane, self.lane_z]
         if self.randomized:
             arrays += [self._prev_actions]
+        if self.critic_obs is not None:
+            arrays += [self.critic_obs]
         return arrays
 
     def _control_step(self) -> None:
@@ -447,13 +482,22 @@ class HexapodEnv(VecEnv):
         w, ctrl = self.world, self.cpg
         params = ctrl.params if ctrl is not None else self.terms  # unread placeholder in joint mode
         inputs = make_struct(ObsInputs, joint_q=w.joint_q_wp, joint_qd=w.joint_qd_wp, params=params,
-                             start=self.start, hf=self.height_field, task=self.cfg.task)  # fmt: skip
+                             start=self.start, actions=self.prev_actions, episode_steps=self.episode_steps,
+                             hf=self.height_field, task=self.cfg.task)  # fmt: skip
         wp.launch(observations_kernel, dim=self.num_envs, inputs=[inputs, LAYOUTS.index(self.obs_layout)],
                   outputs=[self.obs], device=self.device)  # fmt: skip
         if self.randomized:
             wp.launch(observation_noise_kernel, dim=self.num_envs,
                       inputs=[self._obs_noise, self.cfg.task.seed + 15485863, self.counter], outputs=[self.obs],
                       device=self.device)  # fmt: skip
+        if self.critic_obs is not None:
+            critic = make_struct(CriticInputs, joint_q=w.joint_q_wp, joint_qd=w.joint_qd_wp, body_q=w.state_0.body_q,
+                                 lower_legs=self._lower_legs, foot=wp.vec3(0.0, 0.0, -self.cfg.robot.tibia_length),
+                                 forces=self._leg_forces, physics=self.physics,
+                                 cpg_state=ctrl.state if ctrl is not None else self.last_cpg_state,
+                                 episode_steps=self.episode_steps, hf=self.height_field)  # fmt: skip
+            wp.launch(critic_kernel, dim=self.num_envs, inputs=[critic, BASE_LAYOUTS.index(self.base_layout)],
+                      outputs=[self.critic_obs], device=self.device)  # fmt: skip
 
     # ------------------------------------------------------------------ logging
     def _log(self) -> dict[str, torch.Tensor]:

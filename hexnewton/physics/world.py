@@ -10,6 +10,8 @@ Tensors (torch, zero-copy over the Warp arrays; writes go straight into the simu
   ``joint_qd``     (N, 24)  base linear, base angular velocity, 18 joint velocities
   ``joint_target`` (N, 18)  PD position targets of the 18 joints (a view into ``control.joint_target_q``)
 
+Contact forces (``track_leg_contacts``, the critic's): Newton's ``SensorContact`` sums MuJoCo's on each lower leg.
+
 Contact capacity: every frame, a kernel folds MuJoCo's per-world overflow bitmask and the collision
 pipeline's triangle-pair / contact-reduction counters into sticky flags that ``check_contacts()`` reads and
 reports (warning or ``ContactOverflowError``); overflow never passes silently.
@@ -28,6 +30,7 @@ from dataclasses import dataclass, replace
 import newton
 import numpy as np
 import warp as wp
+from newton.sensors import SensorContact
 from newton.solvers import SolverMuJoCo
 
 from hexnewton import startup
@@ -350,28 +353,19 @@ class World:
         sim = self.cfg.sim
         precompile_solver(self.device)
         startup.mark("solver kernels")
-        self.solver = SolverMuJoCo(
-            self.model,
-            use_mujoco_contacts=False,
-            solver=sim.solver,
-            integrator=sim.integrator,
-            iterations=sim.iterations,
-            ls_iterations=sim.ls_iterations,
-            nconmax=contacts_per_world(sim, self.num_envs),
-            njmax=sim.constraints_per_env,
-        )
+        self.solver = SolverMuJoCo(self.model, use_mujoco_contacts=False, solver=sim.solver, integrator=sim.integrator,
+                                   iterations=sim.iterations, ls_iterations=sim.ls_iterations,
+                                   nconmax=contacts_per_world(sim, self.num_envs),
+                                   njmax=sim.constraints_per_env)  # fmt: skip
         # iteration-cap hits are reported by check_contacts(), not printed per world by mujoco_warp
         self.solver.mjw_model.opt.warn_overflow &= ~NOT_CONVERGED_BITS
         max_contacts = self.solver.get_max_contact_count()
         startup.mark("solver")
         self.box_pairs = self._terrain_box_pairs()
         self.pipeline = newton.CollisionPipeline(
-            self.model,
-            shape_pairs_filtered=None if self.box_pairs is None else self.box_pairs.pairs,
-            rigid_contact_max=max_contacts,
-            max_triangle_pairs=max(1_000_000, sim.triangle_pairs_per_env * self.num_envs),
-            speculative_contact_gap_max=sim.speculative_gap,
-        )
+            self.model, shape_pairs_filtered=None if self.box_pairs is None else self.box_pairs.pairs,
+            rigid_contact_max=max_contacts, speculative_contact_gap_max=sim.speculative_gap,
+            max_triangle_pairs=max(1_000_000, sim.triangle_pairs_per_env * self.num_envs))  # fmt: skip
         # speculative contacts need the time until the next detection: one frame
         self._collide_dt = sim.frame_dt if sim.speculative_gap is not None else None
         self.contacts = self.pipeline.contacts()
@@ -448,6 +442,24 @@ class World:
                                                                wp.vec3(*upper))  # fmt: skip
         self._bad = wp.zeros(n, dtype=wp.bool, device=self.device)
         self.nonfinite_resets = 0
+        self.leg_sensor = self._force_observables = self.lower_legs = None
+
+    def track_leg_contacts(self) -> wp.array:
+        """From now on, measure the contact force on each lower leg (the tibia body: shin capsule and foot sphere) at
+        each frame's last substep: Newton's ``SensorContact`` over MuJoCo's contact forces (the solver's ``CONTACT_F``
+        observable). Returns the (N, 6) forces [N, world frame] on the robot, legs in ``LEG_NAMES`` order, updated
+        every frame; sets ``lower_legs``, (N, 6) the tibia bodies' indices."""
+        if self.leg_sensor is None:
+            n = self.num_envs
+            tibia = [k for k, label in enumerate(self.model.body_label) if str(label).endswith("_tibia")]
+            if len(tibia) != 6 * n:
+                raise HexnewtonError(f"the model has {len(tibia)} lower legs ('*_tibia' bodies), not 6 per robot")
+            self.lower_legs = np.asarray(tibia, np.int32).reshape(n, 6)
+            self.leg_sensor = SensorContact(self.model, sensing_bodies=tibia, request_contact_attributes=False)
+            kinds = {SolverMuJoCo.ObservableKind.OVERFLOW, *SensorContact.solver_observable_kinds}
+            self._force_observables = self.solver.observables(kinds, contacts=self.contacts)
+            self.graph = None
+        return self.leg_sensor.total_force.reshape((self.num_envs, 6))
 
     def set_controller(self, controller: Callable[[World], None] | None) -> None:
         """Launch ``controller(world)`` before every physics substep (inside the captured graph)."""
@@ -487,22 +499,16 @@ class World:
             if self.controller is not None:
                 self.controller(self)
             self.state_0.clear_forces()
-            self.solver.step(
-                self.state_0, self.state_1, self.control, self.contacts, self.sim_dt, observables=self.observables
-            )
-            wp.launch(
-                _accumulate_overflow,
-                dim=self.num_envs,
-                inputs=[
-                    self.observables.overflow,
-                    self._triangle_pair_count(),
-                    self.pipeline.narrow_phase.max_triangle_pairs,
-                    self.contacts._reduction_overflow,
-                    self._overflow_world,
-                    self._overflow_global,
-                ],
-                device=self.device,
-            )
+            # the last substep also exports the contact forces where the legs' contacts are tracked
+            last = i == self.substeps - 1 and self.leg_sensor is not None
+            seen = self._force_observables if last else self.observables
+            self.solver.step(self.state_0, self.state_1, self.control, self.contacts, self.sim_dt, observables=seen)
+            if last:
+                self.leg_sensor.update(None, self.contacts, observables=seen)
+            wp.launch(_accumulate_overflow, dim=self.num_envs,
+                      inputs=[seen.overflow, self._triangle_pair_count(),
+                              self.pipeline.narrow_phase.max_triangle_pairs, self.contacts._reduction_overflow,
+                              self._overflow_world, self._overflow_global], device=self.device)  # fmt: skip
             if self.substeps % 2 == 1 and i == self.substeps - 1:
                 self.state_0.assign(self.state_1)
             else:
@@ -576,12 +582,8 @@ class World:
         if self.box_pairs is not None and self.box_pairs.overflow.numpy()[0]:
             bits |= OVERFLOW_BOX_PAIRS
             self.box_pairs.overflow.zero_()
-        report = OverflowReport(
-            worlds=int((capacity != 0).sum()),
-            bits=bits,
-            frames_checked=self._frames_since_check,
-            not_converged_worlds=int(((flags & NOT_CONVERGED_BITS) != 0).sum()),
-        )
+        report = OverflowReport(worlds=int((capacity != 0).sum()), bits=bits, frames_checked=self._frames_since_check,
+                                not_converged_worlds=int(((flags & NOT_CONVERGED_BITS) != 0).sum()))  # fmt: skip
         self._overflow_world.zero_()
         self._overflow_global.zero_()
         self._frames_since_check = 0

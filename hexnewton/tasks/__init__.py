@@ -19,7 +19,8 @@ start), domain randomisation, the 20 ms physics frame, a 0.1 s filter on the CPG
 (:data:`STABLE_SHAPING`). The complex course adds the body posture and the stable-gait curriculum
 (:data:`STABLE_STAGES`, 300 iterations: 172 s from process start to the exported policy on one H100,
 results/time_to_skill). ``paper`` is Table 1's reward and Table 2's PPO on the complex course, with
-none of that.
+none of that. The recipes observe :data:`RECIPE_OBSERVATION`; ``complex-asymmetric`` is the complex recipe with
+:data:`ASYMMETRIC_OBSERVATION` (docs/training.md, "Observations").
 """
 
 from __future__ import annotations
@@ -31,6 +32,7 @@ from hexnewton.config import (
     ACTION_MODES,
     CPGConfig,
     HexConfig,
+    ObsConfig,
     RandomizationConfig,
     RewardConfig,
     SimConfig,
@@ -77,6 +79,19 @@ MARGIN_LANES = dict(levels_past=3, hardest_step_rise=0.09, hardest_step_depth=0.
 #: and torque (the evaluation's motor_strength 0.5 lies inside the range, not at its edge).
 MARGIN_RANDOMIZATION = dict(friction=(0.25, 1.2), payload=(-0.2, 1.2), motor_strength=(0.45, 1.2),
                             kp_scale=(0.9, 1.1), effort_scale=(0.9, 1.1))
+
+
+#: The asymmetric actor-critic's observation: the actor (the policy group) gains the IMU's gyro and its last actions,
+#: the critic its own group of what the robot does not sense (hexnewton/mdp/terms/critic.py)
+ASYMMETRIC_OBSERVATION = ObsConfig(gyro=True, last_action=True, critic=True)
+#: The switch of what every terrain recipe observes (``_recipe``: rugged, stepped, the complex tasks, complex-joint
+#: and complex-joint-staged, and the skrl baselines, which train on those tasks' envs and read the policy group only):
+#: ``ObsConfig()``, the paper's observation for actor and critic; ``ASYMMETRIC_OBSERVATION`` gives all of them the
+#: gyro, the last actions and the critic's group (the golden rollout of the complex and complex-joint cases then
+#: changes: tests/mdp/test_golden.py says how to regenerate it).
+RECIPE_OBSERVATION = ObsConfig()
+#: §3.1's three courses, the ones the terrain recipes' result is chosen on
+PAPER_COURSES = ("rugged", "stepped", "complex")
 
 
 @dataclass
@@ -129,10 +144,12 @@ def course(terrain: str | TerrainConfig, trained: HexConfig | None = None, overr
     ``TerrainConfig``: that one) without curriculum lanes (nor lanes drawn past them), no randomisation, with the
     controller's own physics and CPG (``trained``: a checkpoint's config; the defaults for the fixed CPG) and
     ``TaskConfig`` with ``task_fields``; then ``overrides`` ({"terrain.step_rise": 0.07, ...}), ``num_envs`` robots
-    on ``device``, terrain seed ``terrain_seed`` and the patch long enough for the goal."""
+    on ``device``, terrain seed ``terrain_seed`` and the patch long enough for the goal. The controller observes what
+    it was trained to (``trained.obs``); the critic's group, which playing a policy never reads, is not built."""
     trained = trained or HexConfig()
     ground = TerrainConfig(name=terrain) if isinstance(terrain, str) else without_lanes(terrain)
-    cfg = HexConfig(sim=trained.sim, cpg=trained.cpg, task=replace(TaskConfig(), **task_fields), terrain=ground)
+    cfg = HexConfig(sim=trained.sim, cpg=trained.cpg, task=replace(TaskConfig(), **task_fields), terrain=ground,
+                    obs=replace(trained.obs, critic=False))
     cfg = apply_overrides(cfg, overrides or {})
     sim = cfg.sim if num_envs is None else replace(cfg.sim, num_envs=num_envs, device=device)
     return replace(cfg, sim=sim, terrain=terrain_for_goal(replace(cfg.terrain, seed=terrain_seed),
@@ -161,6 +178,7 @@ def _recipe(terrain: str, goal_distance: float = TaskConfig.goal_distance, postu
         task=TaskConfig(goal_distance=goal_distance, seed=1),
         reward=RewardConfig(**STABLE_SHAPING),
         randomization=RandomizationConfig(enabled=True),
+        obs=replace(RECIPE_OBSERVATION),
     )
 
 
@@ -173,17 +191,20 @@ def _margin_recipe() -> HexConfig:
                    reward=replace(cfg.reward, stability_tilt=0.8))
 
 
-#: the terrain recipes' deterministic validation (AgentConfig.validation_rounds): 256 rounds per candidate of the
-#: task's course, at most 60 s each
-TERRAIN_VALIDATION = dict(validation_rounds=256, validation_candidates=4, validation_steps=3000)
+#: the terrain recipes' deterministic validation (AgentConfig.validation_rounds): 256 rounds per candidate on each of
+#: §3.1's three courses, at most 60 s each (the step of one GPU's env costs about the same for 1024 robots as for 256:
+#: three courses took 64 s on an H100 against 26 s for one, results/time_to_skill/report.md)
+TERRAIN_VALIDATION = dict(validation_rounds=256, validation_candidates=4, validation_steps=3000,
+                          validation_terrains=PAPER_COURSES)
 #: flat ground's, sized for the CPU main job: 16 rounds per candidate, at most 12 s each (the goal takes ~9 s)
 FLAT_VALIDATION = dict(validation_rounds=16, validation_candidates=3, validation_steps=600)
 
 
-def _stable_agent(long: bool = False) -> AgentConfig:
+def _stable_agent(long: bool = False, **validation) -> AgentConfig:
+    v = {**TERRAIN_VALIDATION, **validation}
     if long:
-        return AgentConfig(max_iterations=LONG_STABLE_ITERATIONS, stages=LONG_STABLE_STAGES, **TERRAIN_VALIDATION)
-    return AgentConfig(max_iterations=STABLE_ITERATIONS, stages=STABLE_STAGES, **TERRAIN_VALIDATION)
+        return AgentConfig(max_iterations=LONG_STABLE_ITERATIONS, stages=LONG_STABLE_STAGES, **v)
+    return AgentConfig(max_iterations=STABLE_ITERATIONS, stages=STABLE_STAGES, **v)
 
 
 register(Task("flat", "flat ground, the plain MDP (Table 1 with our goal and off-course terms), 300 iterations",
@@ -199,10 +220,15 @@ register(Task("complex-5m", "the complex course walked 5 m (goal 5.5 m ahead) wi
 register(Task("stairs-8cm", "15 stairs of 8 cm rise walked 5 m with the complex recipe; the stability fine starts "
               "at 0.8 rad, climbing pitches the torso 19-25 deg",
               replace(_recipe("stepped", goal_distance=5.5, posture=True, step_rise=0.08),
-                      reward=RewardConfig(stability_tilt=0.8, **STABLE_SHAPING)), _stable_agent(long=True)))
+                      reward=RewardConfig(stability_tilt=0.8, **STABLE_SHAPING)),
+              _stable_agent(long=True, validation_terrains=())))  # validated on its own 8 cm course
 register(Task("complex-margin", "the complex recipe trained past its course: curriculum lanes up to 9 cm rises, 18 cm "
               "treads and 9 cm blocks, friction 0.25-1.2, motor strength 0.45-1.2, payload -0.2-1.2 kg; the stability "
-              "fine from 0.8 rad; validated on the complex course, 300 iterations", _margin_recipe(), _stable_agent()))
+              "fine from 0.8 rad; 300 iterations", _margin_recipe(), _stable_agent()))
+register(Task("complex-asymmetric", "the complex recipe with an asymmetric critic (its own group: base velocities, the "
+              "ground around the feet and ahead, leg contact forces, the randomised physics, the CPG's phases) and the "
+              "gyro and last actions in the actor's observation", replace(_recipe("complex", posture=True),
+                                                                         obs=ASYMMETRIC_OBSERVATION), _stable_agent()))
 register(Task("paper", "the complex course with Table 1's reward and Table 2's PPO exactly (no curriculum, posture, "
               "shaping or randomisation; the paper's 15 parameters)",
               HexConfig(terrain=TerrainConfig(name="complex"), task=TaskConfig(seed=1),
@@ -216,6 +242,7 @@ register(Task("complex-joint-staged", "pure DRL on the complex course as complex
               AgentConfig(stages=STABLE_REWARD_STAGES, **TERRAIN_VALIDATION), action_mode="joint"))
 
 
-__all__ = ["ACTION_MODES", "FLAT_VALIDATION", "FOOT_CONTACT_RANGES", "LONG_STABLE_STAGES", "MARGIN_LANES",
-           "MARGIN_RANDOMIZATION", "STABLE_REWARD_STAGES", "STABLE_SHAPING", "STABLE_STAGES", "TASKS",
-           "TERRAIN_VALIDATION", "Task", "course", "register", "task", "task_table"]
+__all__ = ["ACTION_MODES", "ASYMMETRIC_OBSERVATION", "FLAT_VALIDATION", "FOOT_CONTACT_RANGES", "LONG_STABLE_STAGES",
+           "MARGIN_LANES", "MARGIN_RANDOMIZATION", "PAPER_COURSES", "RECIPE_OBSERVATION", "STABLE_REWARD_STAGES",
+           "STABLE_SHAPING", "STABLE_STAGES", "TASKS", "TERRAIN_VALIDATION", "Task", "course", "register", "task",
+           "task_table"]

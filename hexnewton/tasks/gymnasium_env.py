@@ -11,7 +11,8 @@ episode ended on.
 
 ``gym.make`` takes config overrides as ``overrides={"sim.frame_dt": 0.01, "reward.w_tilt": 10.0}`` (paths into the
 task's :class:`~hexnewton.config.HexConfig`). rsl-rl trains on :class:`~hexnewton.mdp.env.HexapodEnv` directly
-(``env.unwrapped.vec_env``).
+(``env.unwrapped.vec_env``, whose ``obs_groups`` give ``AgentConfig.to_rsl_rl`` the groups its critic reads: with
+``ObsConfig.critic``, ``policy`` and ``critic``); ``reset`` and ``step`` return the ``policy`` group, the actor's.
 """
 
 from __future__ import annotations

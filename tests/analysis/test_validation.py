@@ -22,18 +22,25 @@ def test_candidates_are_the_last_stage_newest_first_and_the_kept_ones(tmp_path):
     assert [c.iteration for c in candidates(str(tmp_path), 250, last, Candidate(299, "b", "best"), 3)] == [250, 299]
 
 
-def test_choice_goal_first_then_3m_then_falls_then_the_later():
+def test_choice_goal_first_then_falls_before_the_goal_then_the_later():
+    """Goals first, then the falls before the goal line; falls past it (off the patch's end, a steering miss) and the
+    3 m walks do not weigh; total falls are reported beside."""
     cands = [Candidate(it, f"model_{it}.pt", "saved") for it in (100, 150, 200)]
     var = {"pitch_var": 20.0, "roll_var": 8.0}
-    r = [{"goal": 1.0, "walk_3m": 1.0, "fell": 0.0, "off_course": 0.0, **var},
-         {"goal": 0.0, "walk_3m": 1.0, "fell": 0.0, "off_course": 1.0, **var},  # walks 3 m, passes beside the goal
-         {"goal": 1.0, "walk_3m": 1.0, "fell": 0.0, "off_course": 0.0, **var}]  # fmt: skip
+    r = [{"goal": 1.0, "walk_3m": 1.0, "fell": 0.0, "fell_before_goal": 0.0, "off_course": 0.0, **var},
+         {"goal": 0.0, "walk_3m": 1.0, "fell": 0.0, "fell_before_goal": 0.0, "off_course": 1.0, **var},  # beside it
+         {"goal": 1.0, "walk_3m": 1.0, "fell": 0.0, "fell_before_goal": 0.0, "off_course": 0.0, **var}]  # fmt: skip
     assert choose(cands, r) == 2  # a tie goes to the later checkpoint
-    r[2] = dict(r[2], fell=0.1)
+    r[2] = dict(r[2], fell=0.3)  # falls past the goal line only
+    assert choose(cands, r) == 2
+    r[2] = dict(r[2], fell_before_goal=0.1)
+    assert choose(cands, r) == 0
+    r[0] = dict(r[0], walk_3m=0.5, fell=0.5)  # fewer 3 m walks and more falls, none before the goal line
     assert choose(cands, r) == 0
     assert choose(cands, [dict(x, pitch_var=99.0) if i == 0 else x for i, x in enumerate(r)]) == 0  # not weighed
-    lines = report_lines(cands, r, 0)
-    assert lines[0].startswith("  -> model_100.pt (saved, iteration 100): goal 100.0 %") and "off course 100.0 %" in lines[1]
+    lines = report_lines(cands, r, 2)
+    assert lines[2].startswith("  -> model_200.pt (saved, iteration 200): goal 100.0 %, fell before the goal 10.0 % "
+                               "(in all 30.0 %), 3 m 100.0 %") and "off course 100.0 %" in lines[1]
     assert lines[0].endswith("off course 0.0 %, pitch / roll var 20.0 / 8.0 deg²")
 
 
@@ -64,11 +71,14 @@ def test_validation_on_several_courses_averages_each_candidates_shares(monkeypat
     from hexnewton.tasks import task
 
     var = {"pitch_var": 20.0, "roll_var": 8.0}
-    per = {"rugged": [{"goal": 0.9, "walk_3m": 1.0, "fell": 0.1, "off_course": 0.0, **var, "rounds": 8},
-                      {"goal": 1.0, "walk_3m": 1.0, "fell": 0.0, "off_course": 0.0, **var, "rounds": 8}],
-           "complex": [{"goal": 1.0, "walk_3m": 1.0, "fell": 0.0, "off_course": 0.0, "pitch_var": 30.0,
-                        "roll_var": 10.0, "rounds": 8},
-                       {"goal": 0.8, "walk_3m": 0.9, "fell": 0.0, "off_course": 0.2, **var, "rounds": 8}]}  # fmt: skip
+    per = {"rugged": [{"goal": 0.9, "walk_3m": 1.0, "fell": 0.1, "fell_before_goal": 0.1, "off_course": 0.0, **var,
+                       "rounds": 8},
+                      {"goal": 1.0, "walk_3m": 1.0, "fell": 0.0, "fell_before_goal": 0.0, "off_course": 0.0, **var,
+                       "rounds": 8}],
+           "complex": [{"goal": 1.0, "walk_3m": 1.0, "fell": 0.0, "fell_before_goal": 0.0, "off_course": 0.0,
+                        "pitch_var": 30.0, "roll_var": 10.0, "rounds": 8},
+                       {"goal": 0.8, "walk_3m": 0.9, "fell": 0.0, "fell_before_goal": 0.0, "off_course": 0.2, **var,
+                        "rounds": 8}]}  # fmt: skip
     seen = []
 
     def fake(cands, controller, terrain, rounds, device, max_steps, goal_distance=None):
@@ -81,8 +91,8 @@ def test_validation_on_several_courses_averages_each_candidates_shares(monkeypat
     mean, got = validation.combine_courses(cands, terrains, validation.validate_share(cands, "cpg_rl", terrains, 8,
                                                                                       "cpu", 30))  # fmt: skip
     assert seen == ["rugged", "complex"] and got == per
-    assert mean[0] == {"goal": 0.95, "walk_3m": 1.0, "fell": 0.05, "off_course": 0.0, "pitch_var": 25.0,
-                       "roll_var": 9.0, "rounds": 16}
+    assert mean[0] == {"goal": 0.95, "walk_3m": 1.0, "fell": 0.05, "fell_before_goal": 0.05, "off_course": 0.0,
+                       "pitch_var": 25.0, "roll_var": 9.0, "rounds": 16}
     assert mean[1]["goal"] == 0.9 and choose(cands, mean) == 0
     assert validation.course_names(["complex"]) == "the complex course"
     assert validation.course_names(["rugged", "stepped", "complex"]) == "the rugged, stepped and complex courses"
@@ -119,8 +129,9 @@ def test_shared_validation_gives_what_one_process_gives(monkeypatch):
     from hexnewton.analysis import validation
 
     def fake(cands, controller, terrain, rounds, device, max_steps, goal_distance=None):
-        return [{"goal": 0.1 * c.iteration + (terrain == "rugged"), "walk_3m": 1.0, "fell": 0.0, "off_course": 0.0,
-                 "pitch_var": 1.0, "roll_var": 2.0, "rounds": rounds} for c in cands]  # fmt: skip
+        return [{"goal": 0.1 * c.iteration + (terrain == "rugged"), "walk_3m": 1.0, "fell": 0.0,
+                 "fell_before_goal": 0.0, "off_course": 0.0, "pitch_var": 1.0, "roll_var": 2.0, "rounds": rounds}
+                for c in cands]  # fmt: skip
 
     monkeypatch.setattr(validation, "validate", fake)
     cands = [Candidate(it, f"model_{it}.pt", "saved") for it in (1, 2, 3, 4)]

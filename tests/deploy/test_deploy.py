@@ -289,3 +289,90 @@ def test_every_shipped_bundle_deploys(name):
     committed with it) within the default tolerance."""
     proc = _run(["-m", "hexnewton.apps.deploy", os.path.join(ROOT, "results", "controllers", name)])
     assert proc.returncode == 0 and "(ok," in proc.stdout, proc.stdout + proc.stderr
+
+
+def test_runtime_observes_the_gyro_and_last_actions_as_the_env_does():
+    """A policy observing the gyro and its last actions (``ObsConfig.gyro``, ``last_action``): the env's gyro is the
+    body's rate in its own frame (the quaternion's change in free flight), and the runtime, given the robots' readings
+    (an ideal IMU's gyro) and the same actions step by step, assembles the env's observation column for column; the
+    last actions are clamped on both sides and 0 after a reset (episodes of 10 steps), and an observation without the
+    gyro is refused with one clear error."""
+    import torch
+
+    from hexnewton.analysis.sim2sim import fixed_cpg_spec
+    from hexnewton.config import HexConfig, ObsConfig, SimConfig, TaskConfig, TerrainConfig
+    from hexnewton.deploy.runtime import Controller
+    from hexnewton.mdp.env import make_env
+    from hexnewton.mdp.terms import OBS_LAYOUT
+    from hexnewton.physics.reference import quat_rotate_inv_np
+
+    cfg = HexConfig(sim=SimConfig(num_envs=2, device="cpu", use_graph=False), terrain=TerrainConfig(name="stepped"),
+                    task=TaskConfig(max_episode_steps=10), obs=ObsConfig(gyro=True, last_action=True))  # fmt: skip
+    env = make_env(cfg)
+    assert env.obs_layout == "cpg+gyro+last_action" and env.num_obs == 59 + 3 + 15 and env.obs_groups == ("policy",)
+    w, lay = env.world, {name: (a, b) for name, a, b in OBS_LAYOUT[env.obs_layout]}
+    # free flight, turned and spinning: the gyro is the body-frame rate the quaternion turns at
+    q, qd, spin = w.joint_q_wp.numpy().copy(), w.joint_qd_wp.numpy().copy(), np.array([0.5, 2.0, -0.3])
+    q[:, 2], q[:, 3:7], qd[:, 3:6] = 1.0, [0.0, 0.0, np.sin(0.45), np.cos(0.45)], spin
+    w.joint_q_wp.assign(q)
+    w.joint_qd_wp.assign(qd)
+    env._observe()
+    gyro = env.obs.numpy()[:, lay["gyro"][0]:lay["gyro"][1]]
+    q0 = w.joint_q_wp.numpy()[:, 3:7].copy()
+    w.set_controller(None)  # the legs held still: a rigid body's rate
+    w.step(1)
+    w.set_controller(env.cpg)
+    q1 = w.joint_q_wp.numpy()[:, 3:7]
+    x, y, z, s = np.moveaxis(0.5 * (q0 + q1), -1, 0)  # body rate = 2 conj(q) dq/dt
+    dx, dy, dz, ds = np.moveaxis((q1 - q0) / w.frame_dt, -1, 0)
+    rate = 2 * np.stack([s * dx - x * ds - y * dz + z * dy, s * dy - y * ds - z * dx + x * dz,
+                         s * dz - z * ds - x * dy + y * dx], axis=1)  # fmt: skip
+    np.testing.assert_allclose(gyro, rate, rtol=0.02, atol=0.01)
+    np.testing.assert_allclose(gyro, quat_rotate_inv_np(q0, np.tile(spin, (2, 1))), atol=1e-5)
+    # the runtime beside the env, step by step
+    obs = env.reset()["policy"].numpy()
+    spec = dict(fixed_cpg_spec(cfg.cpg, cfg.robot, cfg.task.control_dt, cfg.sim.frame_dt / cfg.sim.substeps),
+                num_obs=env.num_obs, obs_layout=[list(row) for row in OBS_LAYOUT[env.obs_layout]])  # fmt: skip
+    ctrl = Controller(spec, num_robots=2)
+    rng = np.random.default_rng(0)
+    last = slice(*lay["last_action"])
+    for k in range(25):
+        q, qd = w.joint_q_wp.numpy().copy(), w.joint_qd_wp.numpy().copy()
+        parts = [obs[:, slice(*lay[name])] for name in ("target", "max_height")]
+        mine = ctrl.observe(q[:, 7:], qd[:, 6:], q[:, 3:7], *parts, gyro=quat_rotate_inv_np(q[:, 3:7], qd[:, 3:6]))
+        np.testing.assert_allclose(mine, obs, atol=2e-5, err_msg=f"step {k}")
+        actions = rng.uniform(-1.3, 1.3, (2, 15))
+        out, _, done, _ = env.step(torch.tensor(actions, dtype=torch.float32))
+        ctrl.advance(actions)
+        obs = out["policy"].numpy()
+        ended, asked = done.numpy().astype(bool), ctrl.target.copy()
+        ctrl.reset(ended)
+        ctrl.params[ended] = asked[ended]  # the simulator restarts a CPG at the parameters it was asked for last
+        np.testing.assert_allclose(obs[~ended, last], np.clip(actions[~ended], -1, 1), atol=1e-6)
+        assert (obs[ended, last] == 0).all() and (ctrl.last_actions[ended] == 0).all()
+    assert k == 24 and env.episode_stats()["episodes"] >= 4  # the episodes ended and restarted on both sides
+    with pytest.raises(ValueError, match="pass the IMU's gyro"):
+        ctrl.observe(q[:, 7:], qd[:, 6:], q[:, 3:7], *parts)
+
+
+def test_a_checkpoint_from_before_the_switches_loads_evaluates_and_exports(tmp_path):
+    """The shipped complex policy, trained before ``ObsConfig`` existed: it rebuilds the paper's observation with the
+    posture (62 inputs, no critic group), evaluation's rounds run it, and its bundle's layout is the one it always had
+    (the export itself: test_reflex_bundle_reads_the_attitude_at_every_substep)."""
+    from hexnewton.analysis.rollout import run_rounds
+    from hexnewton.config import ObsConfig
+    from hexnewton.learning.checkpoint import checkpoint_agent, load_checkpoint, trained_config
+    from hexnewton.learning.policy import load_runner
+    from hexnewton.mdp.env import make_env
+    from hexnewton.tasks import course
+
+    ckpt = load_checkpoint(REFLEX_POLICY)
+    trained = trained_config(ckpt)
+    assert trained.obs == ObsConfig() and "obs" not in ckpt["infos"]["hexnewton"]["config"]
+    env = make_env(course("stepped", trained, None, 2, "cpu"), "cpg")
+    assert env.obs_layout == "cpg_posture" and env.num_obs == 62 and env.obs_groups == ("policy",)
+    runner = load_runner(env, REFLEX_POLICY, "cpg", ckpt)
+    assert runner.alg.actor.obs_groups == ["policy"] and runner.alg.critic.obs_groups == ["policy"]
+    assert checkpoint_agent(ckpt).to_rsl_rl(2, env.obs_groups)["obs_groups"]["critic"] == ["policy"]
+    ep = run_rounds("cpg_rl", REFLEX_POLICY, "stepped", 2, "cpu", 60, False)
+    assert ep.pos.shape[1] == 2 and np.isfinite(ep.pos[-1]).all() and (ep.pos[-1, :, 0] > 0.05).all()

@@ -14,7 +14,7 @@ mujoco = pytest.importorskip("mujoco")
 from hexnewton.analysis.sim2sim import HeightScanner, Rounds, fixed_cpg_spec, join_parts, measure  # noqa: E402
 from hexnewton.apps.sim2sim import HEADLINE, PROG, main  # noqa: E402
 from hexnewton.config import JOINT_NAMES, RobotConfig, TerrainConfig  # noqa: E402
-from hexnewton.deploy.mjcf import build_model, robot_xml  # noqa: E402
+from hexnewton.deploy.mjcf import SENSORS_PER_ROBOT, build_model, robot_xml  # noqa: E402
 from hexnewton.mdp.status import RUNNING, SUCCESS  # noqa: E402
 from hexnewton.physics.terrain.heightmap import build_height_grid  # noqa: E402
 
@@ -72,7 +72,13 @@ def test_servos_and_sensors_follow_the_robot_config():
     cfg = RobotConfig()
     m = build_model(cfg, None, [(0.0, 0.0, 0.2, 0.0)], 0.005)
     nm, _ = _newton_robot(cfg, np.r_[0, 0, 0.2, 0, 0, 0, 1, np.tile(cfg.stand_pose, 6)])
-    assert m.nu == 18 and m.nsensordata == 4 + 36
+    assert m.nu == 18 and m.nsensordata == 4 + 36 + 3 == SENSORS_PER_ROBOT
+    # the gyro (last) reads the torso's angular velocity in its own frame: a free joint's qvel[3:6] in MuJoCo
+    d = mujoco.MjData(m)
+    d.qpos[3:7] = [np.cos(0.4), np.sin(0.4), 0.0, 0.0]
+    d.qvel[:6] = [0.1, -0.2, 0.3, 0.7, -1.1, 0.4]
+    mujoco.mj_forward(m, d)
+    np.testing.assert_allclose(d.sensordata[40:43], d.qvel[3:6], atol=1e-12)
     np.testing.assert_allclose(m.actuator_gainprm[:, 0], nm.joint_target_ke.numpy()[6:], rtol=1e-6)
     bias = np.c_[-nm.joint_target_ke.numpy()[6:], -nm.joint_target_kd.numpy()[6:]]
     np.testing.assert_allclose(m.actuator_biasprm[:, 1:3], bias, rtol=1e-6)

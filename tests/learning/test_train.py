@@ -238,7 +238,8 @@ def test_curriculum_stages_change_reflex_and_weights_in_one_run(tmp_path, capsys
     assert train.main(["--task", "complex", "--num_envs", "8", "--agent.num_steps_per_env", "4", "--max_iterations",
                        "3", "--device", "cpu", "--log_dir", str(tmp_path), "--agent.stages", stages,
                        "--agent.save_interval", "1", "--agent.validation_rounds", "2", "--agent.validation_steps",
-                       "8", "--agent.algorithm.schedule", "fixed", "--no-build_beside_imports"]) == 0  # fmt: skip
+                       "8", "--agent.validation_terrains", "complex", "--agent.algorithm.schedule", "fixed",
+                       "--no-build_beside_imports"]) == 0  # fmt: skip
     out = capsys.readouterr().out
     # the terrain and the model built after the imports, each a phase of its own
     line = next(x for x in out.splitlines() if x.startswith("start-up "))

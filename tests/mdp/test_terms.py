@@ -11,10 +11,19 @@ import pytest
 import torch
 import warp as wp
 
-from hexnewton.config import HexConfig, RandomizationConfig, RewardConfig, SimConfig, TaskConfig, TerrainConfig
+from hexnewton.config import (
+    HexConfig,
+    ObsConfig,
+    RandomizationConfig,
+    RewardConfig,
+    SimConfig,
+    TaskConfig,
+    TerrainConfig,
+)
 from hexnewton.mdp.env import make_env
 from hexnewton.mdp.status import FELL, OFF_COURSE, STATUS_NAMES, SUCCESS
 from hexnewton.mdp.terms import (
+    BASE_LAYOUTS,
     LAYOUTS,
     OBS_DIM,
     OBS_LAYOUT,
@@ -30,6 +39,8 @@ from hexnewton.mdp.terms import (
     TaskParams,
     config_params,
     height_field_from_grid,
+    layout_name,
+    layout_parts,
     make_rewards_kernel,
     make_struct,
     observation_noise,
@@ -39,6 +50,7 @@ from hexnewton.mdp.terms import (
     rewards_kernel,
     rewards_reference,
 )
+from hexnewton.mdp.terms.observations import LAYOUT_ACTIONS
 from hexnewton.physics.terrain import make_terrain, max_terrain_height_np, terrain_height_np
 
 DEV = "cpu"
@@ -291,12 +303,23 @@ def test_termination_table_covers_every_status_once():
 
 
 def test_observation_layout_covers_59_62_and_44():
-    assert OBS_DIM == {"cpg": 59, "cpg_posture": 62, "joint": 44}
+    """The base layouts (the paper's 59, with the posture 62, pure DRL 44) and each with ObsConfig's switches: the gyro
+    (3) and the last actions (one per action) appended, the other columns where they were."""
+    assert {base: OBS_DIM[base] for base in BASE_LAYOUTS} == {"cpg": 59, "cpg_posture": 62, "joint": 44}
+    assert set(OBS_DIM) == set(LAYOUTS) and LAYOUTS[:3] == BASE_LAYOUTS and len(LAYOUTS) == 3 * 4
+    for base, actions in (("cpg", 15), ("cpg_posture", 18), ("joint", 18)):
+        assert OBS_DIM[base + "+gyro"] == OBS_DIM[base] + 3
+        assert OBS_DIM[base + "+last_action"] == OBS_DIM[base] + actions
+        both = layout_name(base, ObsConfig(gyro=True, last_action=True, critic=True))
+        assert both == base + "+gyro+last_action" and OBS_DIM[both] == OBS_DIM[base] + 3 + actions
+        assert OBS_LAYOUT[both][: len(OBS_LAYOUT[base])] == OBS_LAYOUT[base]
+        assert [name for name, _, _ in OBS_LAYOUT[both][-2:]] == ["gyro", "last_action"]
+        assert layout_name(base, ObsConfig()) == base and layout_parts(both) == (base, ("gyro", "last_action"))
     for mode, dim in OBS_DIM.items():
         spans = OBS_LAYOUT[mode]
         assert spans[0][1] == 0 and spans[-1][2] == dim
         assert all(a[2] == b[1] for a, b in zip(spans, spans[1:]))
-        assert [name for name, _, _ in spans] == [t.name for t in OBS_TERMS if mode in t.layouts]
+        assert [name for name, _, _ in spans] == [t.name for t in OBS_TERMS if t.carried_by(mode)]
     # the layout documented in the module docstring is the table's
     import hexnewton.mdp.terms.observations as obs_module
 
@@ -306,7 +329,7 @@ def test_observation_layout_covers_59_62_and_44():
 def test_observation_noise_follows_the_table():
     rz = RandomizationConfig(enabled=True)
     amp = {"joint_pos": rz.noise_joint_pos, "joint_vel": rz.noise_joint_vel, "target": rz.noise_target,
-           "quat": rz.noise_quat, "max_height": rz.noise_height}  # fmt: skip
+           "quat": rz.noise_quat, "max_height": rz.noise_height, "gyro": rz.noise_gyro}  # fmt: skip
     for layout in LAYOUTS:
         want = np.zeros(OBS_DIM[layout], np.float32)
         for name, a, b in OBS_LAYOUT[layout]:
@@ -328,20 +351,26 @@ def test_observation_kernel_matches_reference():
     qd = rng.normal(size=(n, 24)).astype(np.float32)
     params = rng.uniform(0, 10, (n, 18)).astype(np.float32)
     start = rng.uniform(-0.2, 0.2, (n, 2)).astype(np.float32)
+    steps = rng.integers(0, 3, n).astype(np.int32)  # some envs at their episode's first step: no last actions yet
     hf = height_field_from_grid(grid, DEV)
 
     def ground_at(x, y):
         return terrain_height_np(grid, x, y)
 
     ground_at.max = lambda x, y, h: max_terrain_height_np(grid, x, y, h)
-    for layout, npar in (("cpg", 15), ("cpg_posture", 18), ("joint", 10)):  # the paper's, with the posture, joint
+    # every layout: the paper's, with the posture, joint, each with the gyro and the last actions
+    for layout in LAYOUTS:
+        npar = {"cpg": 15, "cpg_posture": 18, "joint": 10}[layout_parts(layout)[0]]  # joint: unread
         p = np.ascontiguousarray(params[:, :npar])
+        actions = rng.uniform(-1, 1, (n, LAYOUT_ACTIONS[layout_parts(layout)[0]])).astype(np.float32)
         out = wp.zeros((n, OBS_DIM[layout]), dtype=wp.float32, device=DEV)
         inputs = make_struct(ObsInputs, joint_q=wp.array(q, device=DEV), joint_qd=wp.array(qd, device=DEV),
-                             params=wp.array(p, device=DEV), start=wp.array(start, dtype=wp.vec2, device=DEV), hf=hf,
+                             params=wp.array(p, device=DEV), start=wp.array(start, dtype=wp.vec2, device=DEV),
+                             actions=wp.array(actions, device=DEV), episode_steps=wp.array(steps, device=DEV), hf=hf,
                              task=TASK)  # fmt: skip
         wp.launch(observations_kernel, dim=n, inputs=[inputs, LAYOUTS.index(layout)], outputs=[out], device=DEV)
-        ns = SimpleNamespace(joint_q=q, joint_qd=qd, params=p, start=start, ground_at=ground_at, task=TASK)
+        ns = SimpleNamespace(joint_q=q, joint_qd=qd, params=p, start=start, actions=actions, episode_steps=steps,
+                             ground_at=ground_at, task=TASK)  # fmt: skip
         ref = observations_reference(ns, layout)
         assert ref.shape == (n, OBS_DIM[layout])
         np.testing.assert_allclose(out.numpy(), ref, atol=2e-4, rtol=1e-4)

@@ -26,8 +26,13 @@ def test_tasks_hold_the_recipes():
     f = task("flat")
     assert (f.env.terrain.levels, f.env.randomization.enabled, f.env.sim.frame_dt) == (0, False, 0.01)
     assert f.env.reward == RewardConfig() and f.agent == AgentConfig(**FLAT_VALIDATION)
-    # every task chooses its result on deterministic validation, except the paper's own setting
-    assert all(task(n).agent.validation_rounds == 256 for n in ("rugged", "stepped", "complex", "complex-joint"))
+    # every task chooses its result on deterministic validation, except the paper's own setting; the terrain recipes
+    # on §3.1's three courses, stairs-8cm on its own
+    terrain_tasks = ("rugged", "stepped", "complex", "complex-5m", "complex-margin", "complex-asymmetric",
+                     "complex-joint", "complex-joint-staged")  # fmt: skip
+    assert all(task(n).agent.validation_rounds == 256 for n in terrain_tasks)
+    assert all(task(n).agent.validation_terrains == ("rugged", "stepped", "complex") for n in terrain_tasks)
+    assert task("stairs-8cm").agent.validation_terrains == () and task("flat").agent.validation_terrains == ()
     p = task("paper")
     assert f.agent.validation_rounds == 16 and p.agent.validation_rounds == 0
     assert p.env.reward == RewardConfig().paper_reward() and p.env.reward.goal_bonus == 0 and p.env.reward.w_tilt == 0
@@ -44,6 +49,24 @@ def test_tasks_hold_the_recipes():
     assert len({t.gym_id for t in TASKS.values()}) == len(TASKS) and TASKS["complex-5m"].gym_id == "Hexnewton-Complex-5m-v0"
     with pytest.raises(ValueError, match="unknown task 'moon'"):
         task("moon")
+
+
+def test_observation_switches():
+    """The recipes observe ``RECIPE_OBSERVATION`` (the paper's observation: no gyro, last actions or critic group);
+    ``complex-asymmetric`` is the complex task with ``ASYMMETRIC_OBSERVATION``, and each switch is a flag."""
+    import dataclasses
+
+    from hexnewton.apps.train import configs, parser
+    from hexnewton.config import ObsConfig
+    from hexnewton.tasks import ASYMMETRIC_OBSERVATION, RECIPE_OBSERVATION
+
+    assert RECIPE_OBSERVATION == ObsConfig() and ASYMMETRIC_OBSERVATION == ObsConfig(True, True, True)
+    assert all(t.env.obs == ObsConfig() for name, t in TASKS.items() if name != "complex-asymmetric")
+    a, c = task("complex-asymmetric"), task("complex")
+    assert a.env == dataclasses.replace(c.env, obs=ASYMMETRIC_OBSERVATION) and a.agent == c.agent
+    args = parser(c, False).parse_args(["--task", "complex", "--env.obs.gyro", "true", "--env.obs.last_action",
+                                        "true", "--env.obs.critic", "true"])  # fmt: skip
+    assert configs(args, c, None)[0] == a.env
 
 
 def test_config_overrides_are_generated_from_the_dataclasses():

@@ -9,8 +9,21 @@ terms (:func:`make_rewards_kernel`), then, after the resets of the finished envs
 one env, a float64 NumPy function for all envs): ``TERMINATIONS``, ``REWARD_TERMS``, ``OBS_TERMS``. The fused kernel
 (the rows unrolled with ``wp.static``, one launch), the log names and the float64 reference follow from the table. A
 task chooses its rows: ``TaskConfig.terminations``, ``RewardConfig.terms`` and the observation layout of its action
-mode (``LAYOUTS``). ``docs/internals.md`` ("The MDP") gives every term's reasons and how to add one."""
+mode (``LAYOUTS``, with the rows ``ObsConfig`` switches on). With ``ObsConfig.critic`` the critic's own group
+(``critic``: ``CRITIC_TERMS``, :func:`critic_kernel`) follows the observations. ``docs/internals.md`` ("The MDP")
+gives every term's reasons and how to add one."""
 
+from hexnewton.mdp.terms.critic import (
+    CRITIC_DIM,
+    CRITIC_LAYOUT,
+    CRITIC_TERMS,
+    PHYSICS,
+    CriticInputs,
+    CriticTerm,
+    critic_kernel,
+    critic_reference,
+    physics_columns,
+)
 from hexnewton.mdp.terms.ground import (
     HeightField,
     height_field_from_grid,
@@ -19,13 +32,17 @@ from hexnewton.mdp.terms.ground import (
     terrain_height,
 )
 from hexnewton.mdp.terms.observations import (
+    BASE_LAYOUTS,
     H_HALF_EXTENT,
     LAYOUTS,
     OBS_DIM,
     OBS_LAYOUT,
     OBS_TERMS,
+    SWITCHES,
     ObsInputs,
     ObsTerm,
+    layout_name,
+    layout_parts,
     obs_span,
     observation_noise,
     observations_kernel,
@@ -53,10 +70,12 @@ from hexnewton.mdp.terms.terminations import (
     make_status_kernel,
 )
 
-__all__ = ["H_HALF_EXTENT", "LAYOUTS", "OBS_DIM", "OBS_LAYOUT", "OBS_TERMS", "REWARD_NAMES", "REWARD_TERMS",
-           "TERMINATIONS", "EndInputs", "HeightField", "ObsInputs", "ObsTerm", "RewardFrame", "RewardInputs",
-           "RewardParams", "RewardTerm", "TaskParams", "Termination", "config_params", "episode_status_kernel",
-           "episode_status_np", "height_field_from_grid", "make_rewards_kernel", "make_status_kernel", "make_struct",
-           "max_terrain_height", "obs_span", "observation_noise", "observations_kernel", "observations_reference",
+__all__ = ["BASE_LAYOUTS", "CRITIC_DIM", "CRITIC_LAYOUT", "CRITIC_TERMS", "H_HALF_EXTENT", "LAYOUTS", "OBS_DIM",
+           "OBS_LAYOUT", "OBS_TERMS", "PHYSICS", "REWARD_NAMES", "REWARD_TERMS", "SWITCHES", "TERMINATIONS",
+           "CriticInputs", "CriticTerm", "EndInputs", "HeightField", "ObsInputs", "ObsTerm", "RewardFrame",
+           "RewardInputs", "RewardParams", "RewardTerm", "TaskParams", "Termination", "config_params", "critic_kernel",
+           "critic_reference", "episode_status_kernel", "episode_status_np", "height_field_from_grid", "layout_name",
+           "layout_parts", "make_rewards_kernel", "make_status_kernel", "make_struct", "max_terrain_height",
+           "obs_span", "observation_noise", "observations_kernel", "observations_reference", "physics_columns",
            "reward_table", "reward_weights", "rewards_kernel", "rewards_reference", "sample_heights",
            "terrain_height"]

@@ -7,25 +7,50 @@ the 14 amplitudes A1[2], A2[6], A3[6], the maximum terrain height h); we add ome
 quaternion. ``hexnewton.deploy.runtime`` assembles the same parts from the robot's sensors by name;
 ``docs/internals.md`` ("The MDP") says how to add a part.
 
-Layouts (from the table):
+A layout is its action mode's (``BASE_LAYOUTS``) with the rows that ``ObsConfig``'s switches (``SWITCHES``) turn on
+appended, named ``base+switch+...`` (:func:`layout_name`: ``cpg_posture+gyro+last_action``). Base layouts (from the
+table):
 """
 
 from dataclasses import dataclass
+from itertools import combinations
 from typing import Callable
 
 import numpy as np
 import warp as wp
 
+from hexnewton.config import JOINT_NAMES, PARAM_NAMES, POSTURE_NAMES
 from hexnewton.mdp.terms.ground import HeightField, max_terrain_height, terrain_height
 from hexnewton.mdp.terms.structs import TaskParams
 from hexnewton.physics.cpg import quat_to_rpy
-from hexnewton.physics.reference import quat_to_rpy_np
+from hexnewton.physics.reference import quat_rotate_inv_np, quat_to_rpy_np
 
 H_HALF_EXTENT = 0.3  # ours: the square that "max height h" looks at: +-30 cm, about the legs' reach [m]
 #: ``cpg``: the paper's (15 CPG parameters); ``cpg_posture``: with the body posture (18); ``joint``: the pure-DRL
 #: comparison (no CPG parameters)
-LAYOUTS = ("cpg", "cpg_posture", "joint")
+BASE_LAYOUTS = ("cpg", "cpg_posture", "joint")
 CPG = ("cpg", "cpg_posture")
+#: the policy's actions per base layout (the columns of ``last_action``)
+LAYOUT_ACTIONS = {"cpg": len(PARAM_NAMES), "cpg_posture": len(PARAM_NAMES) + len(POSTURE_NAMES),
+                  "joint": len(JOINT_NAMES)}
+#: the ``ObsConfig`` fields that add rows to the policy's observation, in the order a layout's name lists them
+SWITCHES = ("gyro", "last_action")
+
+
+def layout_name(base: str, obs=None) -> str:
+    """The layout of base layout ``base`` with the rows ``obs`` (an ``ObsConfig``; None: none) switches on."""
+    return "+".join((base, *(name for name in SWITCHES if obs is not None and getattr(obs, name))))
+
+
+def layout_parts(layout: str) -> tuple[str, tuple[str, ...]]:
+    """(base layout, switches on) of a layout's name."""
+    base, *switches = layout.split("+")
+    return base, tuple(switches)
+
+
+#: every layout: the base layouts first (their indices are those of ``BASE_LAYOUTS``), then with each set of switches
+LAYOUTS = tuple("+".join((base, *on)) for k in range(len(SWITCHES) + 1) for on in combinations(SWITCHES, k)
+                for base in BASE_LAYOUTS)
 
 
 @wp.struct
@@ -36,6 +61,8 @@ class ObsInputs:
     joint_qd: wp.array2d[wp.float32]  # base linear and angular velocity, 18 joint velocities
     params: wp.array2d[wp.float32]  # the CPG parameters the controller runs with (filtered); unread in ``joint``
     start: wp.array[wp.vec2]  # the episode's start; the goal lies task.goal_distance ahead of it along +x
+    actions: wp.array2d[wp.float32]  # the policy's last actions, as the rewards kernel kept them (clamped)
+    episode_steps: wp.array[wp.int32]  # control steps of the episode so far (0: it has just begun)
     hf: HeightField
     task: TaskParams
 
@@ -144,6 +171,35 @@ def max_height_np(inputs):
     return (inputs.ground_at.max(jq[:, 0], jq[:, 1], H_HALF_EXTENT) - inputs.ground_at(jq[:, 0], jq[:, 1]))[:, None]
 
 
+@wp.func
+def gyro(inputs: ObsInputs, env: int, obs: wp.array2d[wp.float32], col: int):
+    q = wp.normalize(wp.quat(inputs.joint_q[env, 3], inputs.joint_q[env, 4], inputs.joint_q[env, 5],
+                             inputs.joint_q[env, 6]))  # fmt: skip
+    w = wp.quat_rotate_inv(q, wp.vec3(inputs.joint_qd[env, 3], inputs.joint_qd[env, 4], inputs.joint_qd[env, 5]))
+    for j in range(3):
+        obs[env, col + j] = w[j]
+
+
+def gyro_np(inputs):
+    return quat_rotate_inv_np(np.asarray(inputs.joint_q, np.float64)[:, 3:7],
+                              np.asarray(inputs.joint_qd, np.float64)[:, 3:6])  # fmt: skip
+
+
+@wp.func
+def last_action(inputs: ObsInputs, env: int, obs: wp.array2d[wp.float32], col: int):
+    begun = inputs.episode_steps[env] > 0
+    for j in range(inputs.actions.shape[1]):
+        a = float(0.0)
+        if begun:
+            a = inputs.actions[env, j]
+        obs[env, col + j] = a
+
+
+def last_action_np(inputs):
+    begun = np.asarray(inputs.episode_steps)[:, None] > 0
+    return np.where(begun, np.asarray(inputs.actions, np.float64), 0.0)
+
+
 # ----------------------------------------------------------------------------------------------------
 # the table
 # ----------------------------------------------------------------------------------------------------
@@ -151,20 +207,30 @@ def max_height_np(inputs):
 
 @dataclass(frozen=True)
 class ObsTerm:
-    """One part of the observation: ``size`` values in the layouts that carry it, in table order."""
+    """One part of the observation: ``size`` values (None: one per action, ``LAYOUT_ACTIONS``) in the layouts that
+    carry it, in table order: those whose base layout is in ``layouts`` and, for a row with a ``switch`` (an
+    ``ObsConfig`` field), that have it on."""
 
     name: str
-    size: int
+    size: int | None
     doc: str
     noise: str | None  # the RandomizationConfig field of its uniform noise amplitude (None: exact)
     func: wp.Function  # (ObsInputs, env, obs, first column) writes the part's values
     reference: Callable  # float64 NumPy (inputs namespace) -> (N, size)
-    layouts: tuple[str, ...] = LAYOUTS
+    layouts: tuple[str, ...] = BASE_LAYOUTS
+    switch: str | None = None
+
+    def carried_by(self, layout: str) -> bool:
+        base, on = layout_parts(layout)
+        return base in self.layouts and (self.switch is None or self.switch in on)
+
+    def size_in(self, layout: str) -> int:
+        return LAYOUT_ACTIONS[layout_parts(layout)[0]] if self.size is None else self.size
 
     @property
     def mask(self) -> int:
         """Bit ``LAYOUTS.index(layout)`` set for each layout that carries it."""
-        return sum(1 << LAYOUTS.index(name) for name in self.layouts)
+        return sum(1 << k for k, name in enumerate(LAYOUTS) if self.carried_by(name))
 
 
 OBS_TERMS = (
@@ -183,15 +249,20 @@ OBS_TERMS = (
             quat_np),
     ObsTerm("max_height", 1, "h: highest terrain within +-H_HALF_EXTENT of the base, minus the terrain under the "
             "base [m]", "noise_height", max_height, max_height_np),
+    # ours, ObsConfig's switches (off: the paper's observation)
+    ObsTerm("gyro", 3, "base angular velocity in the body frame (x forward, y left, z up) [rad/s], an IMU's gyro",
+            "noise_gyro", gyro, gyro_np, switch="gyro"),
+    ObsTerm("last_action", None, "the policy's last actions, clamped to [-1, 1]; 0 before the episode's first",
+            None, last_action, last_action_np, switch="last_action"),
 )  # fmt: skip
 
 
 def _layout(layout: str) -> tuple[tuple[str, int, int], ...]:
     spans, k = [], 0
     for t in OBS_TERMS:
-        if layout in t.layouts:
-            spans.append((t.name, k, k + t.size))
-            k += t.size
+        if t.carried_by(layout):
+            spans.append((t.name, k, k + t.size_in(layout)))
+            k += t.size_in(layout)
     return tuple(spans)
 
 
@@ -207,8 +278,15 @@ def _describe(layout: str) -> str:
     return f"``{layout}`` ({OBS_DIM[layout]}):\n" + "\n".join(rows)
 
 
+def _describe_switches() -> str:
+    doc = {t.name: (t.switch, t.doc, t.size) for t in OBS_TERMS if t.switch}
+    rows = [f"    {name} ({size or 'one per action'}, ``ObsConfig.{switch}``): {text}"
+            for name, (switch, text, size) in doc.items()]  # fmt: skip
+    return "Appended by the switches, in this order:\n" + "\n".join(rows)
+
+
 if __doc__:  # None under python -OO
-    __doc__ += "\n" + "\n\n".join(_describe(layout) for layout in LAYOUTS) + "\n"
+    __doc__ += "\n" + "\n\n".join([*(_describe(layout) for layout in BASE_LAYOUTS), _describe_switches()]) + "\n"
 
 
 def obs_span(layout: str, name: str) -> tuple[int, int]:
@@ -221,7 +299,7 @@ def observation_noise(layout: str, randomization) -> np.ndarray:
     """Uniform noise amplitude per column of ``layout`` from a ``RandomizationConfig`` (0 where exact)."""
     noise = np.zeros(OBS_DIM[layout], np.float32)
     for t in OBS_TERMS:
-        if t.noise is not None and layout in t.layouts:
+        if t.noise is not None and t.carried_by(layout):
             a, b = obs_span(layout, t.name)
             noise[a:b] = getattr(randomization, t.noise)
     return noise
@@ -236,7 +314,10 @@ def observations_kernel(inputs: ObsInputs, layout: int, obs: wp.array2d[wp.float
     for row in range(wp.static(len(OBS_TERMS))):
         if (wp.static(OBS_TERMS[row].mask) >> layout) & 1 != 0:
             wp.static(OBS_TERMS[row].func)(inputs, env, obs, col)
-            col += wp.static(OBS_TERMS[row].size)
+            if wp.static(OBS_TERMS[row].size is None):  # one column per action
+                col += inputs.actions.shape[1]
+            else:
+                col += wp.static(OBS_TERMS[row].size or 0)
 
 
 def observations_reference(inputs, layout: str) -> np.ndarray:
@@ -244,4 +325,4 @@ def observations_reference(inputs, layout: str) -> np.ndarray:
     ``task`` a ``TaskConfig`` and, in place of ``hf``, ``ground_at(x, y)`` returning terrain heights and
     ``ground_at.max(x, y, half_extent)`` the max over a square (both vectorised), e.g. ``terrain_height_np`` /
     ``max_terrain_height_np`` bound to a grid."""
-    return np.concatenate([t.reference(inputs) for t in OBS_TERMS if layout in t.layouts], axis=1)
+    return np.concatenate([t.reference(inputs) for t in OBS_TERMS if t.carried_by(layout)], axis=1)

@@ -1,0 +1,599 @@
+"""The controller bundle as a ROS 2 node (``hexnewton-ros node BUNDLE``; the command line: ``hexnewton.apps.ros``).
+
+The node runs :class:`hexnewton.deploy.runtime.Controller` on a robot's own messages:
+
+- in: ``sensor_msgs/JointState`` (the bundle's 18 joints by name, any order; position and velocity),
+  ``sensor_msgs/Imu`` (orientation x y z w; one CPG substep per message: the levelling reflex reads it every
+  substep), ``nav_msgs/Odometry`` (the base's pose in the odometry frame, for the goal in the heading frame),
+  ``geometry_msgs/PointStamped`` (the terrain reading the bundle observes as ``point.z``: the highest terrain within
+  +-30 cm of the base minus the ground under it [m]; x and y: where it was taken) and ``geometry_msgs/PoseStamped``
+  (the goal in the odometry frame; its z: the ground height at the goal). A new goal replaces the current one.
+- out: the 18 joint position targets as ``std_msgs/Float64MultiArray`` (ros2_control's forward position controller,
+  reliable), optionally as a one-point ``trajectory_msgs/JointTrajectory`` stamped with the IMU message it answers,
+  and its state as ``diagnostic_msgs/DiagnosticArray`` (on every change and periodically).
+
+Per IMU message (``trigger`` imu) or per timer tick at the bundle's substep (``trigger`` timer) it runs one CPG
+substep; every ``substeps_per_control`` substeps first the policy, on readings stamped within ``sync_tolerance`` of
+that IMU message (it waits for them until the next IMU message). Faults: a reading missing or older than
+``sensor_timeout``, no goal, or the goal reached: it moves to the standing pose at ``stand_speed`` and holds it, says
+so once in the log and in diagnostics, and walks again, with a fresh CPG, when all is back. A malformed message
+(wrong joint names or count, NaN, a goal in another frame than the odometry's) is refused with one log line (then
+one per 5 s per topic, with the count) and counted. :class:`ControlLoop` is this logic without ROS; rclpy is
+imported only by :class:`ControllerNode`.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import time
+from collections import deque
+
+import numpy as np
+
+from hexnewton.config import JOINT_NAMES
+from hexnewton.deploy.runtime import Controller, load_spec, target_in_heading_frame
+
+#: the node's ROS parameters: name -> (default, what it is); a period of 0 means the bundle's own
+PARAMETERS = {
+    "bundle": ("", "the controller bundle's folder (python -m hexnewton.apps.export)"),
+    "joint_states_topic": ("joint_states", "sensor_msgs/JointState in"),
+    "imu_topic": ("imu", "sensor_msgs/Imu in"),
+    "odom_topic": ("odom", "nav_msgs/Odometry in"),
+    "terrain_topic": ("terrain_height", "geometry_msgs/PointStamped in, the terrain reading as z [m] ('': none, 0)"),
+    "goal_topic": ("goal_pose", "geometry_msgs/PoseStamped in, in the odometry frame"),
+    "commands_topic": ("forward_position_controller/commands", "std_msgs/Float64MultiArray out"),
+    "trajectory_topic": ("", "trajectory_msgs/JointTrajectory out ('': off)"),
+    "diagnostics_topic": ("/diagnostics", "diagnostic_msgs/DiagnosticArray out"),
+    "sensor_reliability": ("best_effort", "the sensors' subscriptions: best_effort or reliable"),
+    "sensor_depth": (10, "the sensors' queue depth"),
+    "command_reliability": ("reliable", "the targets' publishers: reliable or best_effort"),
+    "goal_durability": ("volatile", "the goal's subscription: volatile or transient_local"),
+    "trigger": ("imu", "a CPG substep per IMU message (imu) or per timer tick at substep_period (timer)"),
+    "substep_period": (0.0, "the CPG substep [s] (0: the bundle's; another value is refused)"),
+    "control_period": (0.0, "the policy's period [s] (0: the bundle's; another value is refused)"),
+    "sensor_timeout": (0.1, "a reading older than this [s] holds the standing pose"),
+    "sync_tolerance": (0.0025, "the policy's readings within this of the IMU stamp [s] (negative: the latest)"),
+    "goal_tolerance": (0.5, "the goal is reached within this distance [m] (0: never)"),
+    "stand_speed": (1.0, "how fast a joint moves to the standing pose when holding [rad/s]"),
+    "watchdog_period": (0.02, "how often the readings' age is checked while no IMU message comes [s]"),
+    "diagnostics_period": (1.0, "the diagnostics' period [s]"),
+}
+CHOICES = {"sensor_reliability": ("best_effort", "reliable"), "command_reliability": ("reliable", "best_effort"),
+           "goal_durability": ("volatile", "transient_local"), "trigger": ("imu", "timer")}  # fmt: skip
+INSTALL = "pip install -e '.[ros]' (or source a ROS 2 installation)"
+#: refusals of one topic are logged the first time, then at most once per this many seconds
+REFUSAL_LOG_PERIOD = 5.0
+
+
+def _typed(default, value):
+    """``value`` as the type of ``default`` (an int for an int, a number for a float, a string for a string), or
+    None where it is not one."""
+    if isinstance(default, str):
+        return value if isinstance(value, str) else None
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        return None
+    if isinstance(default, int):
+        return int(value) if float(value).is_integer() else None
+    return float(value) if math.isfinite(value) else None
+
+
+def check_parameters(values: dict) -> dict:
+    """The node's parameters (defaults filled in), each of its type and range; ValueError names the first bad one."""
+    unknown = sorted(set(values) - set(PARAMETERS))
+    if unknown:
+        raise ValueError(f"unknown parameter {unknown[0]!r} (the node's: {', '.join(PARAMETERS)})")
+    out = {}
+    for name, (default, _) in PARAMETERS.items():
+        v = _typed(default, values.get(name, default))
+        if v is None:
+            raise ValueError(f"parameter {name}: expected {type(default).__name__}, got {values.get(name)!r}")
+        if name in CHOICES and v not in CHOICES[name]:
+            raise ValueError(f"parameter {name}: {v!r} is not one of {', '.join(CHOICES[name])}")
+        positive = name in ("sensor_depth", "sensor_timeout", "stand_speed", "watchdog_period", "diagnostics_period")
+        if (positive and v <= 0) or (name.endswith("_period") and v < 0) or (name == "goal_tolerance" and v < 0):
+            raise ValueError(f"parameter {name}: must be {'positive' if positive else '>= 0'}, got {v}")
+        out[name] = v
+    if not out["bundle"]:
+        raise ValueError("no bundle: give its folder (the parameter bundle)")
+    spec = load_spec(out["bundle"])
+    for name, key in (("substep_period", "substep_dt"), ("control_period", "control_dt")):
+        if out[name] and abs(out[name] - spec[key]) > 1e-9:
+            raise ValueError(f"parameter {name}: {out[name]} s, but the bundle's policy runs at {key} = "
+                             f"{spec[key]} s")  # fmt: skip
+    return out
+
+
+def stamp_ns(stamp) -> int:
+    """A ``builtin_interfaces/Time`` in nanoseconds."""
+    return int(stamp.sec) * 1_000_000_000 + int(stamp.nanosec)
+
+
+def percentiles_ms(samples) -> dict:
+    """p50 / p90 / p99 / p99.9 / max of latencies in milliseconds (None without samples)."""
+    a = np.asarray(samples, np.float64)
+    keys = ("p50", "p90", "p99", "p999", "max")
+    if a.size == 0:
+        return dict.fromkeys(keys)
+    return dict(zip(keys, [round(float(v), 4) for v in np.percentile(a, [50, 90, 99, 99.9, 100])]))
+
+
+def single_threaded(bundle: str) -> Controller:
+    """The bundle's :class:`Controller` for one robot, its policy in an onnxruntime session of one thread that does
+    not spin: onnxruntime's default pool spins its threads after each run, which on a robot's few cores takes the CPU
+    from every other callback. The same model, the same input."""
+    import onnxruntime as ort
+
+    ctrl = Controller(bundle, num_robots=1)
+    opts = ort.SessionOptions()
+    opts.intra_op_num_threads = opts.inter_op_num_threads = 1
+    opts.add_session_config_entry("session.intra_op.allow_spinning", "0")
+    ctrl.session = ort.InferenceSession(os.path.join(bundle, "policy.onnx"), sess_options=opts,
+                                        providers=ctrl.session.get_providers())  # fmt: skip
+    return ctrl
+
+
+class Reading:
+    """The latest message of one input: its values, its stamp [ns] and when it arrived [ns, wall clock]."""
+
+    __slots__ = ("value", "stamp", "received")
+
+    def __init__(self, value, stamp: int, received: int):
+        self.value, self.stamp, self.received = value, stamp, received
+
+
+class ControlLoop:
+    """The node's logic without ROS: readings in (each checked; a refusal is a reason string), joint targets out.
+
+    ``p``: :func:`check_parameters`'s dict; ``log(text)``: one line for the log. Times are nanoseconds, stamps those of
+    the messages, ``now`` the wall clock. :meth:`on_imu` / :meth:`on_reading` / :meth:`on_timer` / :meth:`on_watchdog`
+    return the targets to publish, ``[(stamp of the IMU message they answer or None, targets (18,))]``."""
+
+    def __init__(self, p: dict, log=print):
+        self.p, self.log = p, log
+        self.ctrl = single_threaded(p["bundle"])
+        spec = self.spec = self.ctrl.spec
+        self.joints = tuple(spec.get("obs_notes", {}).get("joint order", JOINT_NAMES))
+        self.order = {name: i for i, name in enumerate(self.joints)}
+        self.substeps, self.dt = int(spec["substeps_per_control"]), float(spec["substep_dt"])
+        self.stand = np.tile(np.asarray(spec["stand_pose"], np.float64), 6)
+        terrain = bool(p["terrain_topic"]) and "max_height" in self.ctrl.layout
+        self.required = ("joint_states", "imu", "odom") + (("terrain",) if terrain else ())
+        self.latest: dict[str, Reading] = {}
+        self.goal = self.goal_frame = None
+        self.pending = None  # the stamp of an IMU message whose substep waits for the policy's readings
+        self.pending_since = 0
+        self.sub, self.walking, self.reached, self.reason = 0, False, False, "no readings yet"
+        self.last, self.last_time = None, 0
+        self.counts = {k: 0 for k in ("substeps", "control_steps", "holds", "unmatched_control_steps")}
+        self.received = dict.fromkeys(("joint_states", "imu", "odom", "terrain", "goal"), 0)
+        self.refused = dict.fromkeys(self.received, 0)
+        self._refusal_logged: dict[str, float] = {}
+        self.latencies: list[float] = []  # stamp to publish [ms], every substep's
+        self.recent = deque(maxlen=2000)
+        self.changed = True  # the state changed since the diagnostics last said it
+
+    # --- readings ------------------------------------------------------------------------------------------------
+    def refuse(self, topic: str, why: str, now: int) -> str:
+        """Count a malformed message and log it (the first, then once per REFUSAL_LOG_PERIOD per topic)."""
+        self.refused[topic] += 1
+        t = now * 1e-9
+        if t - self._refusal_logged.get(topic, -math.inf) >= REFUSAL_LOG_PERIOD:
+            self._refusal_logged[topic] = t
+            self.log(f"refused a {topic} message: {why} ({self.refused[topic]} refused so far)")
+        return why
+
+    def _store(self, topic: str, value, stamp: int, now: int) -> None:
+        self.received[topic] += 1
+        self.latest[topic] = Reading(value, stamp, now)
+
+    def joint_state(self, names, position, velocity, stamp: int, now: int) -> str | None:
+        """The 18 joints' positions and velocities, by name; None, or why the message was refused."""
+        names = list(names)
+        if len(names) != 18 or set(names) != set(self.joints):
+            extra = sorted(set(names) - set(self.joints))[:3]
+            return self.refuse("joint_states", f"{len(names)} joints{f' ({extra} unknown)' if extra else ''}, "
+                               f"expected the bundle's 18: {', '.join(self.joints[:3])}, ...", now)  # fmt: skip
+        pos, vel = np.asarray(position, np.float64), np.asarray(velocity, np.float64)
+        if pos.shape != (18,) or vel.shape != (18,):
+            return self.refuse("joint_states", f"{pos.size} positions and {vel.size} velocities for 18 joints", now)
+        if not (np.isfinite(pos).all() and np.isfinite(vel).all()):
+            return self.refuse("joint_states", "a position or velocity is not finite", now)
+        idx = [names.index(j) for j in self.joints] if names != list(self.joints) else slice(None)
+        self._store("joint_states", (pos[idx], vel[idx]), stamp, now)
+        return None
+
+    def imu(self, quat, gyro, stamp: int, now: int) -> str | None:
+        """The body's attitude (x, y, z, w) and angular velocity [rad/s]."""
+        q, w = np.asarray(quat, np.float64), np.asarray(gyro, np.float64)
+        if not (np.isfinite(q).all() and np.isfinite(w).all()):
+            return self.refuse("imu", "the orientation or angular velocity is not finite", now)
+        if abs(np.linalg.norm(q) - 1.0) > 0.01:
+            return self.refuse("imu", f"the orientation's norm is {np.linalg.norm(q):.3f}, not 1", now)
+        self._store("imu", (q, w), stamp, now)
+        return None
+
+    def odometry(self, frame: str, position, quat, stamp: int, now: int) -> str | None:
+        """The base's pose in the odometry frame ``frame``."""
+        p, q = np.asarray(position, np.float64), np.asarray(quat, np.float64)
+        if not (np.isfinite(p).all() and np.isfinite(q).all()) or np.linalg.norm(q) < 0.5:
+            return self.refuse("odom", "the pose is not finite or its orientation not a unit quaternion", now)
+        if self.goal_frame is not None and frame != self.goal_frame:
+            return self.refuse("odom", f"frame {frame!r}, but the goal is in {self.goal_frame!r}", now)
+        self._store("odom", (frame, p, q), stamp, now)
+        return None
+
+    def terrain(self, value: float, stamp: int, now: int) -> str | None:
+        """The terrain reading [m]."""
+        if not math.isfinite(value):
+            return self.refuse("terrain", f"reading {value}", now)
+        self._store("terrain", float(value), stamp, now)
+        return None
+
+    def set_goal(self, frame: str, position, now: int) -> str | None:
+        """A goal (x, y, ground z) in the odometry frame; it replaces the current one."""
+        g = np.asarray(position, np.float64)
+        if not np.isfinite(g).all():
+            return self.refuse("goal", "the position is not finite", now)
+        odom = self.latest.get("odom")
+        known = odom.value[0] if odom is not None else self.goal_frame
+        if not frame or (known is not None and frame != known):
+            return self.refuse("goal", f"frame {frame!r} is not the odometry's ({known!r})", now)
+        self.received["goal"] += 1
+        self.goal, self.goal_frame, self.reached, self.changed = g, frame, False, True
+        self.log(f"goal ({g[0]:.3f}, {g[1]:.3f}) in {frame!r}")
+        return None
+
+    # --- substeps ------------------------------------------------------------------------------------------------
+    def hold_reason(self, now: int) -> str | None:
+        """Why the robot must stand now (None: it may walk)."""
+        for topic in self.required:
+            r = self.latest.get(topic)
+            if r is None:
+                return f"no {topic} message yet"
+            if (now - r.received) * 1e-9 > self.p["sensor_timeout"]:
+                return f"{topic} stale (none for {self.p['sensor_timeout']:g} s)"
+        if self.goal is None:
+            return "waiting for a goal"
+        return "goal reached" if self.reached else None
+
+    def _synced(self, stamp: int) -> bool:
+        tol = self.p["sync_tolerance"]
+        if tol < 0:
+            return True
+        return all(t in self.latest and abs(self.latest[t].stamp - stamp) <= tol * 1e9
+                   for t in self.required if t != "imu")  # fmt: skip
+
+    def on_imu(self, quat, gyro, stamp: int, now: int) -> list:
+        """An IMU message (``trigger`` imu): its substep, now or once the policy's readings of its stamp are here."""
+        if self.imu(quat, gyro, stamp, now) is not None:
+            return []
+        out = []
+        if self.pending is not None:  # superseded while waiting: the latest readings serve it
+            self.counts["unmatched_control_steps"] += 1
+            out.append(self._substep(now))
+        self.pending, self.pending_since = stamp, now
+        return out + self._try(now)
+
+    def on_reading(self, now: int) -> list:
+        """After a joint state or odometry: the substep waiting for it, if it was the last one missing."""
+        return self._try(now) if self.pending is not None else []
+
+    def on_timer(self, now: int) -> list:
+        """A timer tick (``trigger`` timer): one substep on the latest readings."""
+        self.pending = self.latest["imu"].stamp if "imu" in self.latest else None
+        return [self._substep(now)]
+
+    def on_watchdog(self, now: int) -> list:
+        """While no IMU message comes: hold the standing pose (saying why once); a substep that waited longer than
+        ``sensor_timeout`` for its readings runs on the latest."""
+        if self.pending is not None and now - self.pending_since > self.p["sensor_timeout"] * 1e9:
+            self.counts["unmatched_control_steps"] += 1
+            return [self._substep(now)]
+        reason = self.hold_reason(now)
+        imu = self.latest.get("imu")
+        if reason is None or (imu is not None and now - imu.received < self.p["sensor_timeout"] * 1e9):
+            return []  # walking, or the IMU's own substeps hold the pose
+        return [(None, self._hold(reason, now))]
+
+    def _try(self, now: int) -> list:
+        if self.sub == 0 and not self._synced(self.pending):
+            return []
+        return [self._substep(now)]
+
+    def _substep(self, now: int):
+        stamp, self.pending = self.pending, None
+        reason = self.hold_reason(now)
+        if reason is None and self.sub == 0 and self._reached():
+            reason = "goal reached"
+        if reason is None and not self.walking and self.p["trigger"] == "imu" and not self._synced(stamp):
+            reason = self.reason  # walking starts on a policy substep: readings of the IMU message's instant
+        if reason is not None:
+            return stamp, self._hold(reason, now)
+        if not self.walking:
+            self.walking, self.changed, self.reason = True, True, None
+            self.log(f"walking to ({self.goal[0]:.3f}, {self.goal[1]:.3f})")
+        imu = self.latest["imu"].value
+        if self.sub == 0:
+            self._policy(imu[0], imu[1])
+        q = self.ctrl.substep(imu[0])[0]
+        self.sub = (self.sub + 1) % self.substeps
+        self.counts["substeps"] += 1
+        self.last, self.last_time = q, now
+        return stamp, q
+
+    def _reached(self) -> bool:
+        tol = self.p["goal_tolerance"]
+        pos = self.latest["odom"].value[1]
+        self.reached = tol > 0 and math.hypot(self.goal[0] - pos[0], self.goal[1] - pos[1]) < tol
+        return self.reached
+
+    def _policy(self, quat, gyro) -> None:
+        """The policy's step on the latest readings (the runtime's observe, act, set_actions; the IMU's angular
+        velocity is the gyro a policy may observe)."""
+        joint_pos, joint_vel = self.latest["joint_states"].value
+        _, pos, base_quat = self.latest["odom"].value
+        goal = np.r_[self.goal[:2], 0.0]
+        target = target_in_heading_frame(pos, base_quat, goal, self.goal[2])
+        height = self.latest["terrain"].value if "terrain" in self.required else 0.0
+        obs = self.ctrl.observe(joint_pos, joint_vel, quat, target, height, gyro)
+        self.ctrl.set_actions(self.ctrl.act(obs), target)
+        self.counts["control_steps"] += 1
+
+    def _hold(self, reason: str, now: int) -> np.ndarray | None:
+        """Move to the standing pose at ``stand_speed`` from the last targets (or the measured joints; None before
+        the first joint state)."""
+        if self.walking or reason != self.reason:
+            if self.walking:
+                self.counts["holds"] += 1
+                self.ctrl = Controller(self.p["bundle"], num_robots=1)  # a fresh CPG when it walks again
+            self.walking, self.sub, self.reason, self.changed = False, 0, reason, True
+            self.log(f"holding the standing pose: {reason}")
+        if self.last is None:  # from the measured joints; nothing before the first joint state
+            js = self.latest.get("joint_states")
+            if js is None:
+                return None
+            self.last, self.last_time = js.value[0].copy(), now
+        step = self.p["stand_speed"] * min((now - self.last_time) * 1e-9, 0.1)
+        self.last = self.last + np.clip(self.stand - self.last, -step, step)
+        self.last_time = now
+        return self.last
+
+    def published(self, stamp: int | None, now: int) -> None:
+        """Record the latency of targets published at ``now`` for the IMU message stamped ``stamp``."""
+        if stamp is not None:
+            ms = (now - stamp) * 1e-6
+            self.latencies.append(ms)
+            self.recent.append(ms)
+
+    def status(self) -> tuple[str, dict]:
+        """(state, values) for the diagnostics: the state in words and the counters, as strings."""
+        state = "walking" if self.walking else f"holding: {self.reason}"
+        lat = percentiles_ms(self.recent)
+        values = {"state": "walking" if self.walking else "holding", "reason": self.reason or "",
+                  "goal_frame": self.goal_frame or ""}  # fmt: skip
+        for k, v in zip("xyz", self.goal if self.goal is not None else ("", "", "")):
+            values[f"goal_{k}"] = repr(float(v)) if v != "" else ""
+        values.update({k: str(v) for k, v in self.counts.items()})
+        values.update({f"received_{k}": str(v) for k, v in self.received.items()})
+        values.update({f"refused_{k}": str(v) for k, v in self.refused.items()})
+        values.update({f"latency_{k}_ms": "" if v is None else f"{v:.3f}" for k, v in lat.items()})
+        return state, values
+
+    def stats(self) -> dict:
+        """Everything counted, and every latency, for a stats file."""
+        return {"counts": dict(self.counts), "received": dict(self.received), "refused": dict(self.refused),
+                "latency_ms": percentiles_ms(self.latencies), "latency_samples_ms": self.latencies}  # fmt: skip
+
+
+# --- the ROS 2 side ----------------------------------------------------------------------------------------------
+
+
+def import_rclpy():
+    """rclpy, or ValueError in one line saying how to install it."""
+    try:
+        import rclpy
+    except Exception as exc:  # noqa: BLE001 - no rclpy, or one without a middleware (RMW)
+        raise ValueError(f"ROS 2's rclpy cannot be imported ({type(exc).__name__}: {exc}); {INSTALL}") from None
+    return rclpy
+
+
+def qos(reliability: str, depth: int, durability: str = "volatile"):
+    """A keep-last QoS profile."""
+    from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+
+    return QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=int(depth),
+                      reliability=getattr(ReliabilityPolicy, reliability.upper()),
+                      durability=getattr(DurabilityPolicy, durability.upper()))  # fmt: skip
+
+
+def ros_time(ns: int):
+    """Nanoseconds as a ``builtin_interfaces/Time``."""
+    from builtin_interfaces.msg import Time
+
+    return Time(sec=ns // 1_000_000_000, nanosec=ns % 1_000_000_000)
+
+
+def parameter_names(ros_args: list[str]) -> list[str]:
+    """The parameter names that ``-p NAME:=VALUE`` of ROS arguments sets (its long spelling and ``node:NAME`` too)."""
+    names = []
+    for flag, value in zip(ros_args, ros_args[1:]):
+        if flag in ("-p", "--param") and ":=" in value:
+            names.append(value.split(":=", 1)[0].rsplit(":", 1)[-1])
+    return names
+
+
+class ControllerNode:
+    """:class:`ControlLoop` as the rclpy node ``name``: its parameters declared (``PARAMETERS``, the ``bundle``
+    parameter defaulting to ``bundle``), subscriptions, publishers and timers. ``self.node`` is the rclpy node."""
+
+    def __init__(self, bundle: str = "", name: str = "hexnewton_controller", context=None, cli_args=None):
+        import_rclpy()
+        from diagnostic_msgs.msg import DiagnosticArray
+        from geometry_msgs.msg import PointStamped, PoseStamped
+        from nav_msgs.msg import Odometry
+        from rcl_interfaces.msg import ParameterDescriptor
+        from rclpy.node import Node
+        from sensor_msgs.msg import Imu, JointState
+        from std_msgs.msg import Float64MultiArray
+        from trajectory_msgs.msg import JointTrajectory
+
+        self.node = node = Node(name, context=context, cli_args=cli_args)
+        try:
+            for key, (default, text) in PARAMETERS.items():
+                node.declare_parameter(key, bundle if key == "bundle" else default,
+                                       ParameterDescriptor(description=text, dynamic_typing=True))  # fmt: skip
+            self.p = p = check_parameters({k: node.get_parameter(k).value for k in PARAMETERS})
+            self.log = node.get_logger()
+            self.loop = ControlLoop(p, log=self.log.info)
+        except BaseException:
+            node.destroy_node()
+            raise
+        sensors = qos(p["sensor_reliability"], p["sensor_depth"])
+        sub = node.create_subscription
+        sub(JointState, p["joint_states_topic"], self._joint_states, sensors)
+        sub(Imu, p["imu_topic"], self._imu, sensors)
+        sub(Odometry, p["odom_topic"], self._odom, sensors)
+        if p["terrain_topic"]:
+            sub(PointStamped, p["terrain_topic"], self._terrain, sensors)
+        sub(PoseStamped, p["goal_topic"], self._goal, qos("reliable", 10, p["goal_durability"]))
+        self.cmd = node.create_publisher(Float64MultiArray, p["commands_topic"], qos(p["command_reliability"], 10))
+        self.cmd_msg = Float64MultiArray()
+        self.traj = None
+        if p["trajectory_topic"]:
+            self.traj = node.create_publisher(JointTrajectory, p["trajectory_topic"], qos(p["command_reliability"], 10))
+            self.traj_msg = self._trajectory_message()
+        self.diag = node.create_publisher(DiagnosticArray, p["diagnostics_topic"], qos("reliable", 10))
+        self.loop.log(f"{p['bundle']}: {len(self.loop.joints)} joints, substep {self.loop.dt * 1e3:g} ms, policy "
+                      f"every {self.loop.substeps} substeps, trigger {p['trigger']}")  # fmt: skip
+        node.create_timer(p["watchdog_period"], lambda: self._publish(self.loop.on_watchdog(time.time_ns())))
+        node.create_timer(p["diagnostics_period"], self.publish_diagnostics)
+        if p["trigger"] == "timer":
+            node.create_timer(self.loop.dt, lambda: self._publish(self.loop.on_timer(time.time_ns())))
+        self.publish_diagnostics()
+
+    def _trajectory_message(self):
+        from builtin_interfaces.msg import Duration
+        from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
+
+        msg = JointTrajectory(joint_names=list(self.loop.joints))
+        msg.points = [JointTrajectoryPoint(time_from_start=Duration(nanosec=int(round(self.loop.dt * 1e9))))]
+        return msg
+
+    # --- callbacks ---------------------------------------------------------------------------------------------
+    def _joint_states(self, msg) -> None:
+        now = time.time_ns()
+        if self.loop.joint_state(msg.name, msg.position, msg.velocity, stamp_ns(msg.header.stamp), now) is None:
+            self._publish(self.loop.on_reading(now))
+
+    def _imu(self, msg) -> None:
+        o, w = msg.orientation, msg.angular_velocity
+        args = ((o.x, o.y, o.z, o.w), (w.x, w.y, w.z), stamp_ns(msg.header.stamp), time.time_ns())
+        if self.p["trigger"] == "imu":
+            self._publish(self.loop.on_imu(*args))
+        else:  # the timer runs the substeps
+            self.loop.imu(*args)
+
+    def _odom(self, msg) -> None:
+        now, pose = time.time_ns(), msg.pose.pose
+        p, o = pose.position, pose.orientation
+        if self.loop.odometry(msg.header.frame_id, (p.x, p.y, p.z), (o.x, o.y, o.z, o.w), stamp_ns(msg.header.stamp),
+                              now) is None:  # fmt: skip
+            self._publish(self.loop.on_reading(now))
+
+    def _terrain(self, msg) -> None:
+        now = time.time_ns()
+        if self.loop.terrain(msg.point.z, stamp_ns(msg.header.stamp), now) is None:
+            self._publish(self.loop.on_reading(now))
+
+    def _goal(self, msg) -> None:
+        p = msg.pose.position
+        self.loop.set_goal(msg.header.frame_id, (p.x, p.y, p.z), time.time_ns())
+        self.publish_diagnostics()
+
+    # --- out -----------------------------------------------------------------------------------------------------
+    def _publish(self, items: list) -> None:
+        for stamp, q in items:
+            if q is None:
+                continue
+            self.cmd_msg.data = q.tolist()
+            self.cmd.publish(self.cmd_msg)
+            if self.traj is not None:
+                self.traj_msg.header.stamp = ros_time(stamp if stamp is not None else time.time_ns())
+                self.traj_msg.points[0].positions = self.cmd_msg.data
+                self.traj.publish(self.traj_msg)
+            self.loop.published(stamp, time.time_ns())
+        if self.loop.changed:
+            self.publish_diagnostics()
+
+    def publish_diagnostics(self) -> None:
+        """The node's state as one ``DiagnosticStatus``: OK walking or holding for a goal, WARN holding for data."""
+        from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+
+        state, values = self.loop.status()
+        data_fault = not self.loop.walking and self.loop.reason not in ("waiting for a goal", "goal reached")
+        st = DiagnosticStatus(level=DiagnosticStatus.WARN if data_fault else DiagnosticStatus.OK,
+                              name=f"{self.node.get_name()}: controller", message=state,
+                              hardware_id=self.p["bundle"],
+                              values=[KeyValue(key=k, value=v) for k, v in values.items()])  # fmt: skip
+        self.diag.publish(DiagnosticArray(header=self._header(), status=[st]))
+        self.loop.changed = False
+
+    def _header(self):
+        from std_msgs.msg import Header
+
+        return Header(stamp=ros_time(time.time_ns()))
+
+
+def realtime_priority(priority: int) -> None:
+    """This process, and the threads it starts from now on, under the real-time FIFO scheduler at ``priority``
+    (1..99; 0: leave it), as a robot runs its control loop; ValueError where the system does not allow it."""
+    if not 0 <= priority <= 99:
+        raise ValueError(f"--priority must be 0 (the normal scheduler) or 1..99, got {priority}")
+    if priority:
+        try:
+            os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(priority))
+        except (OSError, AttributeError) as exc:
+            raise ValueError(f"real-time priority {priority}: {exc} (it needs CAP_SYS_NICE or an rtprio "
+                             "limit)") from None
+
+
+def run_node(bundle: str, ros_args: list[str], stats: str | None = None, priority: int = 0) -> int:
+    """``hexnewton-ros node``: the node spun until Ctrl-C (SIGINT or SIGTERM), then its counters (and every latency,
+    in ``stats``, a JSON file) and a clean exit. ``priority`` > 0: the process (and the middleware's threads it
+    starts) under the real-time FIFO scheduler at that priority, as a robot runs its control loop."""
+    import json
+
+    unknown = sorted(set(parameter_names(ros_args)) - set(PARAMETERS) - {"use_sim_time"})
+    if unknown:
+        raise ValueError(f"unknown parameter {unknown[0]!r} (the node's: {', '.join(PARAMETERS)})")
+    realtime_priority(priority)
+    rclpy = import_rclpy()
+    from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+
+    try:
+        rclpy.init(args=["hexnewton_ros", "--ros-args", *ros_args] if ros_args else None)
+    except Exception as exc:  # noqa: BLE001 - rcl's parse error
+        raise ValueError(f"bad ROS arguments {' '.join(ros_args)!r}: {str(exc).splitlines()[0]}") from None
+    node = None
+    try:
+        node = ControllerNode(bundle, cli_args=None)
+        spinner = SingleThreadedExecutor()  # (rclpy 9.1.2's EventsExecutor fires no timers: no watchdog)
+        spinner.add_node(node.node)
+        try:
+            spinner.spin()
+        except (KeyboardInterrupt, ExternalShutdownException):
+            pass
+        s = node.loop.stats()
+        lat = s["latency_ms"]
+        print(f"stopped after {s['counts']['substeps']} substeps ({s['counts']['control_steps']} policy steps)"
+              + (f"; latency p50 {lat['p50']} ms, p99 {lat['p99']} ms" if lat["p50"] is not None else ""),
+              flush=True)  # fmt: skip
+        if stats:
+            with open(stats, "w") as f:
+                json.dump(s, f)
+        return 0
+    finally:
+        if node is not None:
+            node.node.destroy_node()
+        rclpy.try_shutdown()

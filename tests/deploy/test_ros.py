@@ -1,0 +1,343 @@
+"""The bundle as a ROS 2 node (hexnewton.deploy.ros, hexnewton-ros): its logic without ROS (parameters, refusals, the
+standing pose on stale data, the runtime's targets), then over real topics: the node and the MuJoCo robot as two
+processes in lockstep, the faults and Ctrl-C. The ROS tests need rclpy (the ros extra); each has its own
+ROS_DOMAIN_ID, discovery on this machine only."""
+
+from __future__ import annotations
+
+import itertools
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+
+import numpy as np
+import pytest
+
+from hexnewton.config import JOINT_NAMES
+from hexnewton.deploy.ros import PARAMETERS, ControlLoop, check_parameters, parameter_names
+from hexnewton.deploy.runtime import Controller, target_in_heading_frame
+
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+BUNDLE = os.path.join(ROOT, "results", "controllers", "cpg_rl_complex")
+MS = 1_000_000
+_domains = itertools.count()
+
+
+def _loop(**params):
+    lines = []
+    loop = ControlLoop(check_parameters({"bundle": BUNDLE, **params}), log=lines.append)
+    return loop, lines
+
+
+def _readings(loop, t: int, pos=(0.0, 0.0, 0.15), q=(0.0, 0.0, 0.0, 1.0), joints=None, stamp=None):
+    """The policy substep's readings of one instant (stamp ``stamp`` or ``t``), delivered at ``t``; then the IMU's
+    substep: its targets."""
+    stamp = t if stamp is None else stamp
+    joints = np.tile([0.0, 0.15, -0.15], 6) if joints is None else joints
+    assert loop.joint_state(JOINT_NAMES, joints, np.zeros(18), stamp, t) is None
+    assert loop.odometry("odom", pos, q, stamp, t) is None
+    assert loop.terrain(0.0, stamp, t) is None
+    return loop.on_imu(q, (0.0, 0.0, 0.0), stamp, t)
+
+
+def test_parameters_are_checked():
+    p = check_parameters({"bundle": BUNDLE})
+    assert p["sensor_timeout"] == PARAMETERS["sensor_timeout"][0] and p["trigger"] == "imu"
+    assert check_parameters({"bundle": BUNDLE, "sensor_timeout": 1})["sensor_timeout"] == 1.0  # an int for a float
+    for bad, words in [({"sensor_timeout": "fast"}, "expected float"), ({"trigger": "clock"}, "not one of"),
+                       ({"sensor_timeout": 0.0}, "positive"), ({"substep_period": 0.0025}, "bundle's policy"),
+                       ({"no_such": 1}, "unknown parameter"), ({"sensor_depth": 2.5}, "expected int")]:  # fmt: skip
+        with pytest.raises(ValueError, match=words):
+            check_parameters({"bundle": BUNDLE, **bad})
+    with pytest.raises(ValueError, match="no bundle"):
+        check_parameters({})
+    assert parameter_names(["-p", "a:=1", "--param", "node:b:=x", "-r", "c:=d"]) == ["a", "b"]
+
+
+def test_malformed_messages_are_refused_with_one_log_line_each_and_counted():
+    loop, lines = _loop()
+    names = list(JOINT_NAMES)
+    assert "17 joints" in loop.joint_state(names[:17], np.zeros(17), np.zeros(17), 0, 0)
+    assert "unknown" in loop.joint_state(names[:17] + ["tail"], np.zeros(18), np.zeros(18), 1, 1)
+    assert "not finite" in loop.joint_state(names, np.full(18, np.nan), np.zeros(18), 2, 2)
+    assert "norm" in loop.imu((0, 0, 0, 2.0), (0, 0, 0), 3, 3)
+    assert "not finite" in loop.imu((0, 0, 0, np.nan), (0, 0, 0), 3, 3)
+    assert loop.odometry("odom", (0, 0, 0.15), (0, 0, 0, 1), 4, 4) is None
+    assert "not the odometry's" in loop.set_goal("map", (1.0, 0.0, 0.0), 5)
+    assert loop.set_goal("odom", (1.0, 0.0, 0.0), 6) is None and loop.goal_frame == "odom"
+    assert loop.refused == {"joint_states": 3, "imu": 2, "odom": 0, "terrain": 0, "goal": 1}
+    refusals = [line for line in lines if line.startswith("refused")]
+    assert len(refusals) == 3 and all("\n" not in line for line in refusals)  # the first of each topic
+    # a joint state in another order is taken, by name
+    order = names[::-1]
+    pos = np.arange(18.0)
+    assert loop.joint_state(order, pos, -pos, 7, 7) is None
+    np.testing.assert_array_equal(loop.latest["joint_states"].value[0], pos[::-1])
+
+
+def test_the_loop_runs_the_runtime_and_waits_for_the_policys_readings():
+    """Its targets are the runtime's on the same readings; a policy substep waits for readings of its IMU stamp."""
+    loop, _ = _loop(sync_tolerance=0.0)
+    ctrl = Controller(BUNDLE, num_robots=1)
+    loop.set_goal("odom", (3.0, 0.5, 0.0), 0)
+    rng = np.random.default_rng(0)
+    for step in range(3):
+        t = (step + 1) * 20 * MS
+        joints = np.tile([0.0, 0.15, -0.15], 6) + rng.normal(0, 0.05, 18)
+        pos = (0.1 * step, 0.0, 0.15)
+        # the IMU message of the instant comes first: its policy substep waits for the joints and odometry
+        q = (0.0, 0.0, np.sin(0.05), np.cos(0.05))
+        assert loop.on_imu(q, (0, 0, 0), t, t) == []
+        assert loop.joint_state(JOINT_NAMES, joints, np.zeros(18), t, t) is None and loop.on_reading(t) == []
+        assert loop.terrain(0.01, t, t) is None and loop.on_reading(t) == []
+        assert loop.odometry("odom", pos, q, t, t) is None
+        (stamp, got), = loop.on_reading(t)
+        assert stamp == t
+        target = target_in_heading_frame(pos, q, (3.0, 0.5, 0.0), 0.0)
+        ctrl.set_actions(ctrl.act(ctrl.observe(joints, np.zeros(18), q, target, 0.01)), target)
+        np.testing.assert_array_equal(got, ctrl.substep(q)[0])
+        for k in range(1, 4):  # the other substeps: one per IMU message, no wait
+            (_, got), = loop.on_imu(q, (0, 0, 0), t + k * 5 * MS, t + k * 5 * MS)
+            np.testing.assert_array_equal(got, ctrl.substep(q)[0])
+    assert loop.walking and loop.counts["control_steps"] == 3 and loop.counts["substeps"] == 12
+
+
+def test_stale_data_holds_the_standing_pose_says_so_once_and_resumes():
+    loop, lines = _loop()
+    assert loop.on_watchdog(0) == [] or loop.on_watchdog(0)[0][1] is None  # nothing before the first joint state
+    loop.set_goal("odom", (3.0, 0.0, 0.0), 0)
+    (_, q0), = _readings(loop, 1 * MS)
+    assert loop.walking and "walking" in lines[-1]
+    walked_at = len(lines)
+    # the joints stop: the IMU's substeps and the watchdog hold the standing pose, moving at stand_speed
+    t, last = 1 * MS, q0
+    for k in range(1, 80):
+        t = 1 * MS + k * 5 * MS
+        walked = loop.walking
+        # (a policy substep waits for its readings until the next IMU message, which then serves it)
+        for _, q in loop.on_imu((0, 0, 0, 1.0), (0, 0, 0), t, t):
+            if not walked:  # the CPG's substeps until the joints are stale, then the standing pose's ramp
+                assert np.abs(q - last).max() <= PARAMETERS["stand_speed"][0] * 0.005 + 1e-12
+            last = q
+    assert not loop.walking and "joint_states stale" in loop.reason
+    assert sum("holding" in line for line in lines[walked_at:]) == 1 and loop.counts["holds"] == 1
+    state, values = loop.status()
+    assert state.startswith("holding: joint_states stale") and values["holds"] == "1"
+    # everything stops: the watchdog keeps publishing the pose, which reaches the standing one
+    held = [q for k in range(1, 200) for _, q in loop.on_watchdog(t + k * 20 * MS)]
+    assert len(held) >= 190  # (not while the IMU is fresh: its own substeps hold the pose)
+    np.testing.assert_allclose(held[-1], loop.stand)
+    # data again: it walks with a fresh CPG, the runtime's first targets
+    t += 200 * 20 * MS
+    q1 = _readings(loop, t)[-1][1]  # (after the earlier pending substep, served now)
+    assert loop.walking and "walking" in lines[-1]
+    np.testing.assert_array_equal(q1, q0)  # the same readings as at the start: the same first targets
+
+
+def test_goal_reached_and_no_goal_hold_the_pose():
+    loop, _ = _loop()
+    _readings(loop, 1 * MS)
+    assert loop.reason == "waiting for a goal" and not loop.walking
+    loop.set_goal("odom", (0.2, 0.0, 0.0), 2 * MS)  # within goal_tolerance of the base
+    _readings(loop, 3 * MS)
+    assert loop.reason == "goal reached" and not loop.walking
+    loop.set_goal("odom", (3.0, 0.0, 0.0), 4 * MS)
+    _readings(loop, 5 * MS)
+    assert loop.walking
+
+
+def test_the_node_module_loads_neither_warp_newton_nor_torch_and_asks_for_rclpy():
+    """``hexnewton.deploy.ros`` and its loop run on NumPy and onnxruntime; without rclpy the command says in one line
+    how to install it."""
+    code = ("import json, sys\n"
+            "from hexnewton.deploy.ros import ControlLoop, check_parameters\n"
+            f"ControlLoop(check_parameters({{'bundle': {BUNDLE!r}}}))\n"
+            "print(json.dumps([m for m in ('warp', 'newton', 'torch', 'rclpy') if m in sys.modules]))\n")  # fmt: skip
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120, cwd=ROOT)
+    assert proc.returncode == 0 and json.loads(proc.stdout.strip().splitlines()[-1]) == [], proc.stderr
+    code = ("import sys\nsys.modules['rclpy'] = None\n"
+            "from hexnewton.apps.cli import run\nfrom hexnewton.apps.ros import main\n"
+            f"sys.exit(run(main, 'hexnewton-ros', ['node', {BUNDLE!r}]))\n")  # fmt: skip
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120, cwd=ROOT)
+    lines = proc.stderr.strip().splitlines()
+    assert proc.returncode == 2 and len(lines) == 1 and "pip install -e '.[ros]'" in lines[0], proc.stderr
+
+
+def test_bad_command_lines_are_one_error_line():
+    from hexnewton.apps.cli import run
+    from hexnewton.apps.ros import main
+
+    for argv, words in [(["node", BUNDLE, "--ros-args", "-p", "no_such:=1"], "unknown parameter 'no_such'"),
+                        (["robot", "no_bundle"], "not a controller bundle"),
+                        (["robot", BUNDLE, "--rounds", "2", "--only", "5"], "--only"),
+                        (["replay", "no_bag"], "not a rosbag2 folder")]:  # fmt: skip
+        assert run(main, "hexnewton-ros", argv) == 2, argv
+
+
+# --- over ROS 2 ------------------------------------------------------------------------------------------------------
+
+
+@pytest.fixture
+def ros_env():
+    """An environment of its own: a ROS_DOMAIN_ID per test (per pytest worker and test), this machine only."""
+    pytest.importorskip("rclpy")
+    worker = int(os.environ.get("PYTEST_XDIST_WORKER", "gw0")[2:] or 0)
+    domain = 20 + (worker * 10 + next(_domains)) % 80
+    return dict(os.environ, ROS_DOMAIN_ID=str(domain), ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST")
+
+
+def _node(env, *params, stats=None):
+    cmd = [sys.executable, "-m", "hexnewton.apps.ros", "node", BUNDLE] + (["--stats", stats] if stats else [])
+    return subprocess.Popen(cmd + (["--ros-args", *params] if params else []), cwd=ROOT, env=env, text=True,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE)  # fmt: skip
+
+
+def _value(status, key: str) -> str:
+    return next((kv.value for kv in status.values if kv.key == key), "")
+
+
+def _stop(proc) -> tuple[str, str]:
+    proc.send_signal(signal.SIGINT)  # Ctrl-C
+    out, err = proc.communicate(timeout=30)
+    assert proc.returncode == 0 and "Traceback" not in err, err[-3000:]
+    assert "stopped after" in out
+    return out, err
+
+
+def test_node_and_mujoco_robot_walk_in_lockstep_as_in_process(ros_env, tmp_path):
+    """Two processes on loopback: the node and C MuJoCo as its robot, lockstep on flat ground, the run recorded as
+    a rosbag2 file; the robot walks past 1 m, exactly as the in-process sim2sim's round does."""
+    pytest.importorskip("rosbags")
+    from hexnewton.analysis.ros_robot import LOCKSTEP_NODE_PARAMETERS, round_summary
+    from hexnewton.analysis.sim2sim import run_part
+
+    params = [w for k, v in LOCKSTEP_NODE_PARAMETERS.items() for w in ("-p", f"{k}:={v}")]
+    node = _node(ros_env, *params, stats=str(tmp_path / "node.json"))
+    try:
+        out, bag = tmp_path / "robot.json", tmp_path / "bag"
+        proc = subprocess.run([sys.executable, "-m", "hexnewton.apps.ros", "robot", BUNDLE, "--terrain", "flat",
+                               "--rounds", "3", "--only", "1", "--max_steps", "300", "--out", str(out), "--bag",
+                               str(bag)], cwd=ROOT, env=ros_env, capture_output=True, text=True,
+                              timeout=180)  # fmt: skip
+        assert proc.returncode == 0, proc.stderr[-3000:]
+    finally:
+        _stop(node)
+    res = json.loads(out.read_text())
+    (row,) = res["rounds"]
+    assert row["x"] >= 1.0 and row["status"] == "running" and row["steps"] == 300, row
+    ref = round_summary(run_part(BUNDLE, "flat", 3, 1000, 300, robots=[1]))
+    assert (row["x"], row["y"]) == (ref["x"], ref["y"])
+    stats = json.loads((tmp_path / "node.json").read_text())
+    assert stats["counts"]["substeps"] == 1200 and stats["received"]["imu"] == res["sent"]["imu"] == 1200
+    from rosbags.rosbag2 import Reader
+
+    with Reader(bag) as reader:
+        counts = {c.topic: c.msgcount for c in reader.connections}
+        assert reader.connections[0].digest is not None
+    assert counts["imu"] == 1200 and counts["joint_states"] == 300 and counts["joint_trajectory"] >= 1200
+    assert os.path.isfile(bag / "metadata.yaml") and list(bag.glob("*.mcap"))
+
+
+def test_node_faults_over_ros(ros_env):
+    """Stale data holds the standing pose (WARN in the diagnostics) and walking resumes; a malformed message is refused
+    with one log line; a bad parameter is one error line; Ctrl-C stops the node cleanly."""
+    import rclpy
+    from diagnostic_msgs.msg import DiagnosticArray
+    from geometry_msgs.msg import PointStamped, PoseStamped
+    from nav_msgs.msg import Odometry
+    from rclpy.executors import SingleThreadedExecutor
+    from sensor_msgs.msg import Imu, JointState
+    from std_msgs.msg import Float64MultiArray
+
+    from hexnewton.deploy.ros import qos, ros_time
+
+    bad = subprocess.run([sys.executable, "-m", "hexnewton.apps.ros", "node", BUNDLE, "--ros-args", "-p",
+                          "trigger:=clock"], cwd=ROOT, env=ros_env, capture_output=True, text=True, timeout=60)
+    assert bad.returncode == 2 and len(bad.stderr.strip().splitlines()) == 1 and "trigger" in bad.stderr, bad.stderr
+    node = _node(ros_env, "-p", "sensor_timeout:=0.1")
+    ctx = rclpy.Context()
+    rclpy.init(context=ctx, domain_id=int(ros_env["ROS_DOMAIN_ID"]))
+    try:
+        me = rclpy.create_node("fault_test", context=ctx)
+        ex = SingleThreadedExecutor(context=ctx)
+        ex.add_node(me)
+        pubs = {k: me.create_publisher(t, k, qos("reliable", 10)) for k, t in (
+            ("joint_states", JointState), ("imu", Imu), ("odom", Odometry), ("terrain_height", PointStamped),
+            ("goal_pose", PoseStamped))}  # fmt: skip
+        seen, commands = [], []
+        me.create_subscription(DiagnosticArray, "/diagnostics", lambda m: seen.append(m.status[0]), 10)
+        me.create_subscription(Float64MultiArray, "forward_position_controller/commands",
+                               lambda m: commands.append(np.asarray(m.data)), 10)  # fmt: skip
+
+        def spin(seconds: float, publish: bool = True, names=JOINT_NAMES):
+            end = time.monotonic() + seconds
+            while time.monotonic() < end:
+                stamp = ros_time(time.time_ns())
+                if publish:
+                    js = JointState(name=list(names), position=[0.0, 0.15, -0.15] * 6, velocity=[0.0] * 18)
+                    od, imu, tr = Odometry(), Imu(), PointStamped()
+                    od.header.frame_id = tr.header.frame_id = "odom"
+                    od.pose.pose.orientation.w = imu.orientation.w = 1.0
+                    for m in (js, od, tr, imu):
+                        m.header.stamp = stamp
+                    for k, m in (("joint_states", js), ("odom", od), ("terrain_height", tr), ("imu", imu)):
+                        pubs[k].publish(m)
+                ex.spin_once(timeout_sec=0.005)
+
+        def state() -> str:
+            return seen[-1].message if seen else ""
+
+        def until(cond, publish: bool = True, names=JOINT_NAMES, timeout: float = 20.0) -> None:
+            end = time.monotonic() + timeout
+            while not cond() and time.monotonic() < end:
+                spin(0.02, publish, names)
+            assert cond(), [s.message for s in seen[-5:]]
+
+        until(lambda: pubs["goal_pose"].get_subscription_count() > 0, publish=False)
+        goal = PoseStamped()
+        goal.header.frame_id, goal.pose.position.x = "odom", 3.0
+        pubs["goal_pose"].publish(goal)
+        until(lambda: state() == "walking" and len(commands) > 10)
+        until(lambda: "stale" in state(), publish=False)  # the readings stop
+        assert state().startswith("holding: ") and seen[-1].level == b"\x01", state()
+        goal.header.frame_id = "map"
+        pubs["goal_pose"].publish(goal)  # a goal in another frame
+        wrong = list(JOINT_NAMES[:17]) + ["tail"]
+        until(lambda: "stale" in state() and _value(seen[-1], "refused_goal") == "1"
+              and _value(seen[-1], "refused_joint_states") not in ("", "0"), names=wrong)  # refused, still stale
+        until(lambda: state() == "walking")
+        values = {kv.key: kv.value for kv in seen[-1].values}
+        assert int(values["refused_joint_states"]) > 0 and values["refused_goal"] == "1" and values["holds"] == "1"
+        me.destroy_node()
+    finally:
+        rclpy.try_shutdown(context=ctx)
+        out, err = _stop(node)
+    log = err + out
+    # one line for the first refusal of a topic, then at most one per 5 s
+    assert 1 <= log.count("refused a joint_states message") <= 2 and log.count("refused a goal message") == 1, log
+    assert log.count("holding the standing pose: ") >= 2  # no data yet, then the stale readings: once each
+
+
+def test_timer_trigger_runs_a_substep_per_tick_on_the_latest_readings():
+    loop, _ = _loop(trigger="timer")
+    loop.set_goal("odom", (3.0, 0.0, 0.0), 0)
+    ctrl = Controller(BUNDLE, num_robots=1)
+    q = (0.0, 0.0, 0.0, 1.0)
+    joints = np.tile([0.0, 0.15, -0.15], 6)
+    for t in (1 * MS, 2 * MS):  # the readings come at their own pace; only the timer runs substeps
+        assert loop.joint_state(JOINT_NAMES, joints, np.zeros(18), t, t) is None
+        assert loop.odometry("odom", (0.0, 0.0, 0.15), q, t, t) is None and loop.terrain(0.0, t, t) is None
+        assert loop.imu(q, (0.0, 0.0, 0.0), t, t) is None
+    assert loop.counts["substeps"] == 0
+    target = target_in_heading_frame((0.0, 0.0, 0.15), q, (3.0, 0.0, 0.0), 0.0)
+    ctrl.set_actions(ctrl.act(ctrl.observe(joints, np.zeros(18), q, target, 0.0)), target)
+    for k in range(5):
+        (stamp, got), = loop.on_timer(3 * MS + k * 5 * MS)
+        assert stamp == 2 * MS
+        np.testing.assert_array_equal(got, ctrl.substep(q)[0])
+        if k == 3:
+            ctrl.set_actions(ctrl.act(ctrl.observe(joints, np.zeros(18), q, target, 0.0)), target)
+    assert loop.counts["control_steps"] == 2
