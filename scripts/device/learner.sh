@@ -20,7 +20,7 @@ if [ "${1:-}" = collect ]; then   # everything the queue wrote, in 9 MB parts (a
   tar czf - -C "$PWD/out" $(cd out && ls run_*.tgz) -C "$EVALS" . -C "$QUEUE" . | split -b 9M -d - "$out/learner.tgz."
   ls -la "$out"; exit 0
 fi
-ARMS=${ARMS:-critic actor recipe} SEEDS=${SEEDS:-1 2} VAL_ROUNDS=${VAL_ROUNDS:-500}
+ARMS=${ARMS:-critic recipe actor} SEEDS=${SEEDS:-1 2} VAL_ROUNDS=${VAL_ROUNDS:-500}
 flags() {
   case $1 in
     recipe) echo "--task complex" ;;
