@@ -132,7 +132,7 @@ class TerrainConfig:
     hardest_block_height_max: float | None = None
     # ours: when a robot on a lane past the course moves down one lane: "half", as on the others, after an episode that
     # walked less than half the way; "miss", after any episode that missed the goal. "miss" keeps robots near the
-    # course's lane unless they master the lanes past it (results/capability/report.md, 1062 iterations).
+    # course's lane unless they master the lanes past it (studies/capability/report.md, 1062 iterations).
     past_down: str = field(default="half", metadata={"choices": ("half", "miss")})
     # ours: the share of episodes played on a lane past the course drawn at random (evenly among the ``levels_past``
     # lanes), whatever the robot's level; such an episode leaves the level as it is. Every robot then meets the

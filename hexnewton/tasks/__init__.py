@@ -70,7 +70,7 @@ LONG_STABLE_STAGES = ((382, dict(posture_reflex=2.0, w_tilt=15.0, w_ang_vel=0.1)
 LONG_STABLE_ITERATIONS = 1062
 #: ``complex-margin``'s curriculum lanes: the complex recipe's 10 lanes with the last 3 past the course (lane 6 is the
 #: course), up to 9 cm rises on 18 cm treads and 9 cm blocks (lanes 7-9: 7 / 8 / 9 cm rises and blocks on 23 / 20 /
-#: 18 cm treads), within the robot's and the CPG's reach (results/capability/ceiling/report.md). The lane count, so the
+#: 18 cm treads), within the robot's and the CPG's reach (studies/capability/ceiling/report.md). The lane count, so the
 #: robots' climb to the top lane, is the complex recipe's.
 MARGIN_LANES = dict(levels_past=3, hardest_step_rise=0.09, hardest_step_depth=0.18, hardest_block_height_max=0.09)
 #: ``complex-margin``'s randomisation, wider than the recipe's (friction 0.4-1.2, payload -0.2-0.6 kg, gains and effort
@@ -185,7 +185,7 @@ def _recipe(terrain: str, goal_distance: float = TaskConfig.goal_distance, postu
 def _margin_recipe() -> HexConfig:
     """The complex recipe with :data:`MARGIN_LANES`, :data:`MARGIN_RANDOMIZATION` and the stability fine from 0.8 rad
     (as ``stairs-8cm``: standing on 8 and 9 cm stairs pitches the torso up to 24.6 and 27.3 deg,
-    results/capability/ceiling/report.md, "Stairs": within a few degrees of the pi/6 fine)."""
+    studies/capability/ceiling/report.md, "Stairs": within a few degrees of the pi/6 fine)."""
     cfg = _recipe("complex", posture=True, **MARGIN_LANES)
     return replace(cfg, randomization=replace(cfg.randomization, **MARGIN_RANDOMIZATION),
                    reward=replace(cfg.reward, stability_tilt=0.8))

@@ -1,5 +1,5 @@
 #!/bin/bash
-# Capability curves (results/capability, docs/evaluation.md "Capability curves"): one policy's curves and the issue's
+# Capability curves (studies/capability, docs/evaluation.md "Capability curves"): one policy's curves and the issue's
 # named points, each an evaluate job of its own in the background on this call's GPU (CUDA_VISIBLE_DEVICES), outputs
 # in $RUNS/extra/NAME_<what>/ (a job cut off keeps the others), logs beside them; after the wheel chunks and
 # `gpu.sh install` (scripts/device/README.md, "Capability curves"):
@@ -14,7 +14,7 @@
 #   bash scripts/device/capability.sh curves4        # on one host of 4 GPUs, detached from the call and run from a
 #        # copy of the tree ($RUNS/code): GPU 0 the shipped policy's curves with the fixed CPG beside; GPU 1 the README
 #        # command (`train.py --task complex`), then its result's curves (NAME readme); GPU 2 the margin seeds 1 and 3
-#        # (results/capability/policies), GPU 3 seed 2, one after another; poll with `wait SECONDS shipped readme
+#        # (studies/capability/policies), GPU 3 seed 2, one after another; poll with `wait SECONDS shipped readme
 #        # seed1 seed2 seed3`; $SKIP: job names not to run (curves already complete)
 #   bash scripts/device/capability.sh margin         # on one host of 4 GPUs, in the background: the one-command gate
 #        # (time_to_skill.sh gate) of $TASK (complex-margin): seeds 1-3 on GPUs 0-2, each result's curves and named
@@ -90,7 +90,7 @@ wait)
 curves4)
   code=$RUNS/code; rm -rf "$code"; mkdir -p "$code"
   tar --exclude='./.dw*' --exclude=./runs --exclude=./.git -cf - . | tar -xf - -C "$code"
-  here=scripts/device/capability.sh P=results/capability/policies
+  here=scripts/device/capability.sh P=studies/capability/policies
   queues=("bash $here curves shipped results/policies/cpg_rl_complex.pt cpg cpg_rl" "$(readme_queue)"
           "bash $here curves seed1 $P/complex_margin_seed1.pt; bash $here curves seed3 $P/complex_margin_seed3.pt"
           "bash $here curves seed2 $P/complex_margin_seed2.pt")

@@ -1,8 +1,8 @@
 """Measured capability: the curves and named points that ``scripts/device/capability.sh`` evaluated, gathered per
 policy into one report.
 
-    python -m hexnewton.apps.capability_runs LEASE/extra --policy shipped=shipped \\
-        --policy complex-margin=seed1,seed2,seed3 --out results/capability/margin
+    python studies/capability/capability_runs.py LEASE/extra --policy shipped=shipped \\
+        --policy complex-margin=seed1,seed2,seed3 --out studies/capability/margin
 
 ``FOLDER`` holds one evaluation per job, named ``<prefix>_<curve>`` (``evaluate --sweep CURVE --no-nominal``, the
 curves of ``hexnewton.analysis.rollout.DEFAULT_SWEEPS``) and ``<prefix>_at_<point>`` (the named points,
@@ -177,7 +177,7 @@ def _policies(specs: list[str] | None) -> dict[str, list[str]]:
 
 
 def main(argv: list[str] | None = None) -> int:
-    p = ArgumentParser(prog="python -m hexnewton.apps.capability_runs", description=__doc__.splitlines()[0])
+    p = ArgumentParser(prog="python studies/capability/capability_runs.py", description=__doc__.splitlines()[0])
     p.add_argument("folder", help="the evaluations of scripts/device/capability.sh (RUNS/extra)")
     p.add_argument("--policy", action="append", required=True, metavar="LABEL=PREFIX[,PREFIX...]",
                    help="a policy's jobs by name prefix; several prefixes: its seeds (median over them)")
@@ -191,7 +191,7 @@ def main(argv: list[str] | None = None) -> int:
     if not res["points"] and not any(job["points"] for c in res["curves"].values()
                                      for by in c["policies"].values() for job in by.values()):
         raise ValueError(f"{args.folder} holds no evaluation of these policies")
-    res["meta"] = {"command": "python -m hexnewton.apps.capability_runs " + " ".join(argv if argv is not None
+    res["meta"] = {"command": "python studies/capability/capability_runs.py " + " ".join(argv if argv is not None
                                                                                        else sys.argv[1:]),
                    "folder": args.folder, "policies": policies, "target_success_3m": TARGET}  # fmt: skip
     os.makedirs(args.out)
@@ -207,4 +207,4 @@ def main(argv: list[str] | None = None) -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(run(main, "python -m hexnewton.apps.capability_runs"))
+    sys.exit(run(main, "python studies/capability/capability_runs.py"))

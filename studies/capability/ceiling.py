@@ -1,10 +1,10 @@
 """The capability ceiling: what the robot, its CPG, the task and the terrain generator allow on stairs and blocks.
 
-    python -m hexnewton.apps.capability --out results/capability/ceiling
-    python -m hexnewton.apps.capability --task stairs-8cm --out ceiling_stairs8 --margin 0.005
+    python studies/capability/ceiling.py --out studies/capability/ceiling
+    python studies/capability/ceiling.py --task stairs-8cm --out ceiling_stairs8 --margin 0.005
 
 Reads the configuration a controller trained with (``--checkpoint``, default the shipped all-terrain policy, or a
-registered ``--task``) and computes in float64 NumPy, without Warp or a simulation (``hexnewton.analysis.capability``
+registered ``--task``) and computes in float64 NumPy, without Warp or a simulation (``ceiling_model``
 defines every quantity): the robot's geometry and reach, the CPG's foot lift and stride over the parameter ranges the
 policy may choose, the pitch stairs and blocks impose on the standing robot against the task's tilt limits, and what
 the terrain generator builds. ``--out`` (which must not exist) receives ``report.md`` and ``results.json``; both
@@ -128,7 +128,7 @@ def report_markdown(res: dict) -> str:
     lines = ["# Capability ceiling: stairs and blocks", "", "```bash", meta["command"], "```", "",
              f"Controller config: {meta['source']}; git {meta['git_rev']}; {meta['wall_s']:.0f} s on the CPU. "
              "Kinematic and quasi-static: joint angles are the CPG's targets, the body a rigid frame over its "
-             "standing feet (`hexnewton/analysis/capability.py` defines every quantity).", "", "## Ceilings", ""]
+             "standing feet (`studies/capability/ceiling_model.py` defines every quantity).", "", "## Ceilings", ""]
     lines += _table(["quantity", "value", "how computed", "what it bounds"], [list(r) for r in summary_rows(res)])
     lines += ["", "## Verdicts (the issue's targets: >= 95 % at 8 cm rise, 20 cm treads, 8 cm blocks)", ""]
     lines += [f"- {v['line']}" for v in res["verdicts"]]
@@ -149,7 +149,7 @@ def _config(args):
 
 
 def main(argv: list[str] | None = None) -> int:
-    p = ArgumentParser(prog="python -m hexnewton.apps.capability", description=__doc__.split("\n")[0])
+    p = ArgumentParser(prog="python studies/capability/ceiling.py", description=__doc__.split("\n")[0])
     p.add_argument("--out", required=True, help="output directory (must not exist)")
     p.add_argument("--checkpoint", default="results/policies/cpg_rl_complex.pt",
                    help="the controller whose config is read (default: the shipped all-terrain policy)")
@@ -159,13 +159,13 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--dt", type=float, default=0.002, help="CPG step of the gait cycles [s] (default 0.002)")
     args = p.parse_args(argv)
     check_new_dir(args.out)
-    from hexnewton.analysis.capability import ceilings
+    from ceiling_model import ceilings
     from hexnewton.analysis.report import git_rev
 
     t0 = time.perf_counter()
     cfg, source = _config(args)
     res = ceilings(cfg, margin=args.margin, n=args.grid, dt=args.dt)
-    res["meta"] = {"command": "python -m hexnewton.apps.capability " + " ".join(argv if argv is not None
+    res["meta"] = {"command": "python studies/capability/ceiling.py " + " ".join(argv if argv is not None
                                                                                   else sys.argv[1:]),
                    "source": source, "git_rev": git_rev(), "wall_s": round(time.perf_counter() - t0, 1)}
     os.makedirs(args.out)
@@ -180,4 +180,4 @@ def main(argv: list[str] | None = None) -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(run(main, "python -m hexnewton.apps.capability"))
+    sys.exit(run(main, "python studies/capability/ceiling.py"))

@@ -1,5 +1,5 @@
 """What the robot can do at all on stairs and blocks: the limits set by its geometry, by the CPG's reach, by the task's
-tilt limits and by the terrain generator, in float64 NumPy (``python -m hexnewton.apps.capability``).
+tilt limits and by the terrain generator, in float64 NumPy (``python studies/capability/ceiling.py``).
 
 Everything here is kinematic: joint angles are the CPG's joint targets (the PD drives are taken to track them), the
 body is a rigid frame over its feet, and the ground is the terrain generator's own height grid.

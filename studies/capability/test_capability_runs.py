@@ -1,4 +1,4 @@
-"""``python -m hexnewton.apps.capability_runs``: a lease's capability jobs gathered per policy, finished ones from their
+"""``python studies/capability/capability_runs.py``: a lease's capability jobs gathered per policy, finished ones from their
 results.json, cut-off curves from their console lines (marked partial), the named points' medians against the target."""
 
 import json
@@ -25,7 +25,7 @@ def _job(folder, name, sweep, field, terrain, curves):
 
 
 def test_gathers_complete_partial_and_points(tmp_path):
-    from hexnewton.apps.capability_runs import main
+    from capability_runs import main
 
     ev = tmp_path / "extra"
     ev.mkdir()
@@ -54,7 +54,7 @@ def test_gathers_complete_partial_and_points(tmp_path):
     assert friction["median_success_3m"] == 0.96 and friction["target_met"]
     assert not res["points"]["rise8"]["margin"]["target_met"]  # one seed of three: no median to meet the target
     report = (out / "report.md").read_text()
-    assert "python -m hexnewton.apps.capability_runs" in report and "| friction 0.3 (complex) | margin |" in report
+    assert "python studies/capability/capability_runs.py" in report and "| friction 0.3 (complex) | margin |" in report
     assert "shipped (shipped, partial)" in report
     assert "Named points: 200 rounds each." in report  # the rounds the points' results name
     assert (out / "fig_sweep_tread_depth.png").stat().st_size > 2000 and not (out / "fig_sweep_push.png").exists()
@@ -64,7 +64,7 @@ def test_bad_input_is_one_line(tmp_path):
     for args, message in (([str(tmp_path / "none"), "--policy", "a=b"], "no such folder"),
                           ([str(tmp_path), "--policy", "a"], "LABEL=PREFIX"),
                           ([str(tmp_path), "--policy", "a=b"], "holds no evaluation")):  # fmt: skip
-        cmd = [sys.executable, "-m", "hexnewton.apps.capability_runs", *args, "--out", str(tmp_path / "o")]
+        cmd = [sys.executable, "studies/capability/capability_runs.py", *args, "--out", str(tmp_path / "o")]
         p = subprocess.run(cmd, capture_output=True, text=True, timeout=120, cwd=ROOT)
         err = [line for line in p.stderr.splitlines() if line.strip()]
         assert p.returncode == 2 and len(err) == 1 and message in err[0], p.stderr

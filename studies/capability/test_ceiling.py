@@ -8,7 +8,7 @@ import math
 import numpy as np
 import pytest
 
-from hexnewton.analysis import capability as cap
+import ceiling_model as cap
 from hexnewton.apps.cli import run
 from hexnewton.config import CPGConfig, HexConfig, RobotConfig, gait_params
 from hexnewton.physics.robot import BASE_Q, stand_height
@@ -148,26 +148,26 @@ def test_tread_limits_follow_the_span():
 
 
 def test_command_line_writes_the_report(tmp_path, monkeypatch, small):
-    from hexnewton.apps import capability
+    import ceiling as capability
 
-    monkeypatch.setattr("hexnewton.analysis.capability.ceilings", lambda cfg, **kw: dict(small))
+    monkeypatch.setattr("ceiling_model.ceilings", lambda cfg, **kw: dict(small))
     out = tmp_path / "ceiling"
-    assert run(capability.main, "python -m hexnewton.apps.capability", ["--out", str(out), "--task", "complex"]) == 0
+    assert run(capability.main, "python studies/capability/ceiling.py", ["--out", str(out), "--task", "complex"]) == 0
     res = json.loads((out / "results.json").read_text())
     report = (out / "report.md").read_text()
-    assert res["meta"]["command"].startswith("python -m hexnewton.apps.capability --out")
+    assert res["meta"]["command"].startswith("python studies/capability/ceiling.py --out")
     assert res["meta"]["command"] in report
     assert all(v["line"] in report for v in res["verdicts"]) and all(n in report for n in res["notes"])
 
 
 def test_bad_input_is_one_clear_error(tmp_path, capsys):
-    from hexnewton.apps import capability
+    import ceiling as capability
 
-    assert run(capability.main, "python -m hexnewton.apps.capability",
+    assert run(capability.main, "python studies/capability/ceiling.py",
                ["--out", str(tmp_path / "a"), "--task", "complex", "--grid", "1"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "n in [2, 9]" in err[0]
-    assert run(capability.main, "python -m hexnewton.apps.capability", ["--out", str(tmp_path / "b"), "--task",
+    assert run(capability.main, "python studies/capability/ceiling.py", ["--out", str(tmp_path / "b"), "--task",
                                                                         "nope"]) == 2  # fmt: skip
     assert "unknown task 'nope'" in capsys.readouterr().err
     with pytest.raises(ValueError, match="margin"):
