@@ -296,7 +296,7 @@ class CPGConfig:
 
     def fixed_params(self, gait: str = "default") -> list[float]:
         """A fixed baseline's 15 parameters in PARAM_NAMES order: ``default`` (the ``fixed_*`` fields) or a gait of
-        ``FIXED_GAITS`` (``swept``: the best of the documented sweep, ``hexnewton.apps.cpg_sweep``)."""
+        ``FIXED_GAITS`` (``swept``: the best of the documented sweep, ``studies/cpg_sweep/sweep.py``)."""
         omega, a1, a2, a3 = (self.fixed_omega, self.fixed_a1, self.fixed_a2, self.fixed_a3) if gait == "default" \
             else FIXED_GAITS[gait]
         return self.with_posture(gait_params(omega, a1, a2, a3)).tolist()
@@ -332,7 +332,7 @@ def gait_params(omega: float, a1: float, a2: float, a3: float) -> list[float]:
 
 
 #: Fixed CPG gaits (omega [rad/s], A1, A2, A3 [rad]) besides ``CPGConfig.fixed_*``: ``swept`` is the best gait of the
-#: sweep in results/cpg_sweep (``python -m hexnewton.apps.cpg_sweep``; highest mean success at 3 m over rugged, stepped and
+#: sweep in studies/cpg_sweep (``python studies/cpg_sweep/sweep.py``; highest mean success at 3 m over rugged, stepped and
 #: complex ground, then the lowest pitch + roll variance), the fair fixed baseline.
 FIXED_GAITS = {"swept": (2.0 * math.pi, 0.2, 0.9, 0.3)}
 

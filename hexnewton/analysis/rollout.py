@@ -287,7 +287,7 @@ def run_rounds(controller: str, checkpoint: str | None, terrain: str, rounds: in
     perturbation is such a dict). ``seed`` is the terrain seed; the start poses (and sampled actions) use ``seed +
     START_SEED_OFFSET``. ``stochastic``: a learnt policy samples its actions as in training; ``expected``: the
     expected clipped action of its Gaussian. ``fixed_params`` (N, 15) gives a fixed controller one gait per round
-    (``hexnewton.apps.cpg_sweep``). ``cpg.posture_reflex`` in ``overrides`` gives a fixed gait the body posture at its
+    (``studies/cpg_sweep/sweep.py``). ``cpg.posture_reflex`` in ``overrides`` gives a fixed gait the body posture at its
     neutral values with that reflex; a policy needs its own posture for it."""
     from hexnewton.learning.checkpoint import trained_config
     from hexnewton.mdp.env import make_env

@@ -162,7 +162,7 @@ def parser() -> ArgumentParser:
     p.add_argument("--distances", nargs="+", type=float, default=list(DISTANCES),
                    help="success distances [m] (Table 3: 0.5 1 2 3)")
     p.add_argument("--swept_gait", type=float, nargs=4, metavar=("OMEGA", "A1", "A2", "A3"), default=None,
-                   help="the cpg_swept controller's gait (default config.FIXED_GAITS['swept'], from hexnewton.apps.cpg_sweep)")
+                   help="the cpg_swept controller's gait (default config.FIXED_GAITS['swept'], from studies/cpg_sweep/sweep.py)")
     p.add_argument("--sweep", nargs="+", action="append", metavar="FIELD V",
                    help="capability curve: every controller on --terrains at each value of FIELD (a config field, "
                         "e.g. terrain.step_rise 0.06 0.08 0.10; randomization.* fields apply to every robot; "

@@ -1,6 +1,6 @@
 """The fair fixed baseline: a sweep of fixed CPG gaits, so that CPG_RL is compared with the best fixed gait.
 
-    python -m hexnewton.apps.cpg_sweep --terrains rugged stepped complex --rounds 32 --out results/cpg_sweep \\
+    python studies/cpg_sweep/sweep.py --terrains rugged stepped complex --rounds 32 --out DIR \\
         --env.sim.frame_dt 0.02 --env.sim.substeps 4
 
 Every gait of the grid (omega x A1 x A2 x A3, the same amplitude on every leg) walks ``--rounds`` rounds on each
@@ -51,8 +51,8 @@ def choose(rows: list[dict], tie: float) -> dict:
 
 
 def parser() -> ArgumentParser:
-    """The command line of ``python -m hexnewton.apps.cpg_sweep``."""
-    p = ArgumentParser(prog="python -m hexnewton.apps.cpg_sweep", description=__doc__.split("\n")[0])
+    """The command line of ``python studies/cpg_sweep/sweep.py``."""
+    p = ArgumentParser(prog="python studies/cpg_sweep/sweep.py", description=__doc__.split("\n")[0])
     p.add_argument("--terrains", nargs="+", type=terrain_name, default=["rugged", "stepped", "complex"])
     p.add_argument("--rounds", type=positive_int, default=16, help="rounds per gait and terrain")
     for key, values in GRID.items():
@@ -165,7 +165,7 @@ def main(argv: list[str] | None = None) -> int:
     wall = time.perf_counter() - t0
     meta = {"device": device, "gaits": n, "rounds": r, "terrains": args.terrains, "grid": {k: getattr(args, k) for k in
             GRID}, "max_steps": args.max_steps, "tie": args.tie, "overrides": overrides, "terrain_seed": seed,
-            "wall_s": round(wall, 1), "command": "python -m hexnewton.apps.cpg_sweep " + " ".join(argv or sys.argv[1:])}
+            "wall_s": round(wall, 1), "command": "python studies/cpg_sweep/sweep.py " + " ".join(argv or sys.argv[1:])}
     with open(os.path.join(args.out, "results.json"), "w") as f:
         json.dump({"meta": meta, "best": best, "default": default, "gaits": table}, f, indent=1)
     with open(os.path.join(args.out, "report.md"), "w") as f:
@@ -176,4 +176,4 @@ def main(argv: list[str] | None = None) -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(run(main, "python -m hexnewton.apps.cpg_sweep"))
+    sys.exit(run(main, "python studies/cpg_sweep/sweep.py"))
