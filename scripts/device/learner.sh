@@ -1,51 +1,94 @@
 #!/bin/bash
-# A queue (`bash scripts/device/gpu.sh queue scripts/device/learner.sh`) for one H200: the learner's changes one at a
-# time against the complex recipe (studies/learner), beside the paper comparison's pure-DRL seed 3
-# (fair_comparison.sh with JOBS=joint_staged:3):
-# - arms ($ARMS): recipe (`--task complex`), critic (`--env.obs.critic true`: the asymmetric critic), actor
-#   (`--env.obs.gyro true --env.obs.last_action true`: the gyro and the last actions in the actor's observation);
-# - two lanes, one per seed of $SEEDS (1 2), each training its arms one after another (candidates.sh: train.py with
-#   its own validation, the run packed to out/run_NAME.tgz, its result on $VAL_ROUNDS validation rounds per course,
-#   seed 3000, deterministic action), so that the arms' twins share the GPU alike;
-# - the shipped policy and the fixed CPG (on the shipped policy's physics) on the same validation rounds.
-# Then, from the next call: `bash scripts/device/gpu.sh poll 560`, `bash scripts/device/gpu.sh collect` (the
-# comparison) and `bash scripts/device/learner.sh collect` (the learner's runs and evaluations -> $OUT/learner.tgz.NN).
+# A queue (`bash scripts/device/gpu.sh queue scripts/device/learner.sh`) for one H200: the learner study
+# (studies/learner, its README). In order:
+# 1. the arms still missing ($ARMS, default actor) on $SEEDS (1 2), one lane per seed, each training its arms one
+#    after another (candidates.sh: train.py with its own validation, the run packed to $RUNS_OUT/run_NAME.tgz, its
+#    result on $VAL_ROUNDS validation rounds per course, seed 3000, deterministic action); beside them the study's
+#    kept results that lack those rounds ($KEPT, default recipe_s1 recipe_s2: studies/learner/runs/NAME/policy.pt);
+#    with SHIPPED=1 also the shipped policy and the fixed CPG on the same rounds; with FAIR_JOBS set, the paper
+#    comparison's runs it names (fair_comparison.sh);
+# 2. the choice: `studies/learner/build.py --choose` over the study and this lease's runs names the changes that paid
+#    (their train.py flags), unless $GATE_FLAGS is given;
+# 3. with GATE=1, the gate: `python train.py --task complex --seed N FLAGS` for N in 1 2 3, one after another and
+#    alone on the GPU (the time counts), then every result, the shipped policy and the fixed CPG on 1000 test rounds
+#    per terrain (the evaluate default seed), all at once.
+# Then, from the next calls: `bash scripts/device/gpu.sh poll 560` and `bash scripts/device/learner.sh collect`
+# (everything in 9 MB parts, $OUT/learner.tgz.NN; here: `cat learner.tgz.* | tar xzf - -C LEASE` and
+# `python studies/learner/build.py --add LEASE`).
 set -u
 cd "$(dirname "$0")/../.."
 export PYTHONPATH=/opt/site${PYTHONPATH:+:$PYTHONPATH} PYTHONUNBUFFERED=1
-EVALS=${EVALS:-/root/evals} QUEUE=${QUEUE:-/root/queue}
-export EVALS
-if [ "${1:-}" = collect ]; then   # everything the queue wrote, in 9 MB parts (a call brings back 8 files)
+EVALS=${EVALS:-/root/evals} QUEUE=${QUEUE:-/root/queue} RUNS=${RUNS:-/root/runs} KEEP=${KEEP:-/root/keep}
+RUNS_OUT=${RUNS_OUT:-/root/learner_out}   # where candidates.sh packs (not the call's $OUT: it is emptied per call)
+export EVALS RUNS KEEP
+mkdir -p "$EVALS" "$RUNS" "$KEEP" "$RUNS_OUT"
+if [ "${1:-}" = collect ]; then   # logs, configs, timings, results (not the other checkpoints), evaluations
   out=${OUT:-out}; mkdir -p "$out"
-  tar czf - -C "$PWD/out" $(cd out && ls run_*.tgz) -C "$EVALS" . -C "$QUEUE" . | split -b 9M -d - "$out/learner.tgz."
+  stage=/root/learner_stage; rm -rf "$stage"; mkdir -p "$stage" && ln -s "$RUNS" "$stage/runs" && ln -s "$EVALS" "$stage/evals"
+  files=$(cd "$stage" && ls runs/*.log runs/*/*/config.json runs/*/*/timing.json runs/*/*/model_result.pt \
+    evals/*/results.json evals/*/report.md evals/*.log 2>/dev/null)
+  tar czhf - -C "$stage" $files | split -b 9M -d - "$out/learner.tgz."
   ls -la "$out"; exit 0
 fi
-ARMS=${ARMS:-critic recipe actor} SEEDS=${SEEDS:-1 2} VAL_ROUNDS=${VAL_ROUNDS:-500}
+ARMS=${ARMS:-actor} SEEDS=${SEEDS:-1 2} VAL_ROUNDS=${VAL_ROUNDS:-500} KEPT=${KEPT-recipe_s1 recipe_s2}
 flags() {
   case $1 in
-    recipe) echo "--task complex" ;;
-    critic) echo "--task complex --env.obs.critic true" ;;
-    actor) echo "--task complex --env.obs.gyro true --env.obs.last_action true" ;;
+    recipe) echo "" ;;
+    critic) echo "--env.obs.critic true" ;;
+    actor) echo "--env.obs.gyro true --env.obs.last_action true" ;;
     *) echo "learner.sh: no arm $1" >&2; return 1 ;;
   esac
 }
-JOBS=${FAIR_JOBS:-joint_staged:3} PER_GPU=4 bash scripts/device/fair_comparison.sh > "$QUEUE/fair.log" 2>&1 &
-mkdir -p "$EVALS"
-for t in complex rugged stepped; do
-  ( python -m hexnewton.apps.evaluate --controllers cpg cpg_rl --checkpoint cpg_rl=results/policies/cpg_rl_complex.pt \
-      --terrains "$t" --rounds "$VAL_ROUNDS" --seed 3000 --out "$EVALS/shipped_$t" --no-progress \
-      > "$EVALS/shipped_$t.log" 2>&1; echo "exit $?" >> "$EVALS/shipped_$t.log" ) &
+evaluate() {   # NAME TERRAIN ROUNDS CHECKPOINT [MORE evaluate FLAGS]
+  local name=$1 t=$2 rounds=$3 ckpt=$4; shift 4
+  python -m hexnewton.apps.evaluate --controllers cpg_rl --checkpoint "cpg_rl=$ckpt" --terrains "$t" \
+    --rounds "$rounds" --out "$EVALS/${name}_$t" --no-progress "$@" > "$EVALS/${name}_$t.log" 2>&1
+  echo "exit $?" >> "$EVALS/${name}_$t.log"
+}
+echo "$(date +%T) the learner's queue: arms '$ARMS' on seeds '$SEEDS', kept results '$KEPT'"
+[ -n "${FAIR_JOBS:-}" ] && { JOBS=$FAIR_JOBS PER_GPU=4 bash scripts/device/fair_comparison.sh > "$QUEUE/fair.log" 2>&1 & }
+for name in $KEPT; do
+  for t in complex rugged stepped; do
+    evaluate "$name" "$t" "$VAL_ROUNDS" "studies/learner/runs/$name/policy.pt" --seed 3000 &
+  done
 done
+if [ "${SHIPPED:-0}" = 1 ]; then
+  for t in complex rugged stepped; do
+    evaluate shipped "$t" "$VAL_ROUNDS" results/policies/cpg_rl_complex.pt --seed 3000 --controllers cpg cpg_rl &
+  done
+fi
 for seed in $SEEDS; do
+  [ -n "$ARMS" ] || break
   (
     for arm in $ARMS; do
       f=$(flags "$arm") || continue
       # shellcheck disable=SC2086
-      LIMIT=${ARM_LIMIT:-1200} VAL_ROUNDS=$VAL_ROUNDS bash scripts/device/candidates.sh "${arm}_s$seed@0:$f --seed $seed"
+      OUT=$RUNS_OUT LIMIT=${ARM_LIMIT:-1200} VAL_ROUNDS=$VAL_ROUNDS bash scripts/device/candidates.sh \
+        "${arm}_s$seed@0:--task complex --seed $seed $f"
       echo "$(date +%T) ${arm}_s$seed ended"
     done
   ) &
   sleep 20
+done
+wait
+echo "$(date +%T) the arms and their evaluations ended"
+[ "${GATE:-0}" = 1 ] || exit 0
+if [ -z "${GATE_FLAGS+x}" ]; then
+  GATE_FLAGS=$(python studies/learner/build.py --choose --runs "$RUNS") || exit 1
+fi
+echo "$(date +%T) the gate: python train.py --task complex --seed N $GATE_FLAGS"
+for seed in 1 2 3; do
+  # shellcheck disable=SC2086
+  python train.py --task complex --seed "$seed" $GATE_FLAGS --log_dir "$RUNS" --experiment "gate_s$seed" \
+    > "$RUNS/gate_s$seed.log" 2>&1
+  echo "$(date +%T) gate_s$seed: train exit $?"
+  OUT=$RUNS_OUT bash scripts/device/gpu.sh pack "gate_s$seed"
+done
+for t in complex rugged stepped; do
+  evaluate gate_shipped "$t" 1000 results/policies/cpg_rl_complex.pt --controllers cpg cpg_rl &
+  for seed in 1 2 3; do
+    [ -f "$KEEP/gate_s$seed.pt" ] && evaluate "gate_s$seed" "$t" 1000 "$KEEP/gate_s$seed.pt" &
+  done
 done
 wait
 echo "$(date +%T) the learner's queue ended"

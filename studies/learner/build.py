@@ -1,0 +1,357 @@
+"""The learner study (studies/learner): the complex recipe's learner changes one at a time, each arm on two seeds in
+the same lease, judged on validation rounds (seed 3000) by the deterministic action.
+
+    python studies/learner/build.py --add LEASE       # a lease's runs and evaluations into the study, then the report
+    python studies/learner/build.py                   # results.json and report.md from what the study holds
+
+LEASE holds what ``scripts/device/learner.sh collect`` brings back (``cat learner.tgz.* | tar xzf - -C LEASE``):
+``runs/NAME.log`` with its run folder (``runs/NAME/<date_time>/{config.json,timing.json,model_result.pt}``, or
+``runs/<date_time>/`` as ``gpu.sh pack`` writes it) and ``evals/JOB/results.json`` (``JOB``: ``NAME_TERRAIN`` for a
+run's result, ``shipped_TERRAIN`` / ``gate_shipped_TERRAIN`` for the shipped policy beside the fixed CPG on the
+validation / test rounds). The gate's runs are ``gate_s1`` ... ``gate_s3``. The study keeps
+per run its console log, config, timing and the result's actor (``runs/NAME/``), and per evaluation its report.
+"""
+
+from __future__ import annotations
+
+import argparse
+import glob
+import json
+import os
+import re
+import shutil
+import sys
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+ARMS = {"recipe": "the complex recipe (`--task complex`)",
+        "critic": "+ the asymmetric critic (`--env.obs.critic true`)",
+        "actor": "+ the gyro and the last actions in the actor's observation (`--env.obs.gyro true "
+                 "--env.obs.last_action true`)"}
+TERRAINS = ("rugged", "stepped", "complex")
+METRICS = ("success_3m", "fall_rate", "fall_rate_before_goal", "pitch_var_deg2", "roll_var_deg2")
+#: the gate's lines (1000 test rounds per terrain, deterministic action)
+GATE = {"success_3m_min": 0.975, "fall_rate_before_goal_max": 0.005, "rugged_var_vs_fixed_cpg": 0.8, "wall_s_max": 240}
+CANDIDATE = re.compile(r"^\s*(->)?\s*(model_\w+\.pt) \((\w+), iteration (\d+)\): goal ([\d.]+) %, fell before the goal "
+                       r"([\d.]+) % \(in all ([\d.]+) %\), 3 m ([\d.]+) %, off course ([\d.]+) %, pitch / roll var "
+                       r"([\d.]+) / ([\d.]+) deg")
+
+
+def parse_log(text: str) -> dict:
+    """A train.py console log: its validation candidates (shares averaged over the courses), the choice, the times."""
+    out: dict = {"candidates": []}
+    for line in text.splitlines():
+        m = CANDIDATE.match(line)
+        if m:
+            out["candidates"].append({"file": m[2], "kind": m[3], "iteration": int(m[4]), "chosen": bool(m[1]),
+                                      "goal": float(m[5]) / 100, "fell_before_goal": float(m[6]) / 100,
+                                      "fell": float(m[7]) / 100, "walk_3m": float(m[8]) / 100,
+                                      "off_course": float(m[9]) / 100, "pitch_var": float(m[10]),
+                                      "roll_var": float(m[11])})  # fmt: skip
+        elif m := re.match(r"finished at iteration \d+ after (\d+) s \((\d+) iterations\)", line):
+            out["train_s"], out["iterations"] = float(m[1]), int(m[2])
+        elif m := re.match(r"(\d+) s from process start to the exported result", line):
+            out["wall_s"] = float(m[1])
+        elif m := re.match(r"start-up ([\d.]+) s from process start", line):
+            out["startup_s"] = float(m[1])
+        elif m := re.match(r"deterministic validation, (\d+) rounds of the (.+) courses .* per candidate, (\d+) s", line):
+            out["validation_rounds"], out["validation_s"] = int(m[1]), float(m[3])
+        elif m := re.match(r"training task (\S+): (\d+) envs on (\S+), .* logs in (\S+)", line):
+            out["task"], out["num_envs"], out["run_dir"] = m[1], int(m[2]), m[4]
+    return out
+
+
+def actor_only(src: str, dst: str) -> None:
+    """The result's actor, normaliser and metadata (what evaluation, play and export load), as results/policies."""
+    import torch
+
+    ckpt = torch.load(src, map_location="cpu", weights_only=False)
+    torch.save({k: ckpt[k] for k in ("actor_state_dict", "iter", "infos")}, dst)
+
+
+def add(lease: str) -> list[str]:
+    """Copy a lease's runs and evaluations into the study; returns the run names added."""
+    added = []
+    for log in sorted(glob.glob(os.path.join(lease, "runs", "*.log"))):
+        name = os.path.basename(log)[:-4]
+        text = open(log).read()
+        info = parse_log(text)
+        if not info.get("candidates"):
+            print(f"{name}: no validation in its log, skipped", file=sys.stderr)
+            continue
+        date = os.path.basename(info["run_dir"])  # gpu.sh pack: runs/DATE; learner.sh collect: runs/NAME/DATE
+        run = next((d for d in (os.path.join(lease, "runs", name, date), os.path.join(lease, "runs", date))
+                    if os.path.isdir(d)), os.path.join(lease, "runs", date))
+        dst = os.path.join(HERE, "runs", name)
+        os.makedirs(dst, exist_ok=True)
+        shutil.copy(log, os.path.join(dst, "train.log"))
+        for f in ("config.json", "timing.json"):
+            if os.path.exists(os.path.join(run, f)):
+                shutil.copy(os.path.join(run, f), os.path.join(dst, f))
+        if os.path.exists(os.path.join(run, "model_result.pt")):
+            actor_only(os.path.join(run, "model_result.pt"), os.path.join(dst, "policy.pt"))
+        added.append(name)
+    for res in sorted(glob.glob(os.path.join(lease, "evals", "*", "results.json"))):
+        job = os.path.dirname(res)
+        dst = os.path.join(HERE, "evals", os.path.basename(job))
+        os.makedirs(dst, exist_ok=True)
+        for f in ("results.json", "report.md"):
+            shutil.copy(os.path.join(job, f), os.path.join(dst, f))
+    return added
+
+
+def _metrics(s: dict) -> dict:
+    return {k: s.get(k) for k in METRICS}
+
+
+def run_entry(name: str, log: str, timing: str, lease: dict) -> dict:
+    """One run's numbers from its console log (and its timing.json where kept)."""
+    arm, seed = name.rsplit("_s", 1)
+    info = parse_log(open(log).read())
+    per_course = json.load(open(timing)).get("validation", {}).get("courses") if os.path.exists(timing) else None
+    goals = [c["goal"] for c in info["candidates"]] or [0.0]
+    chosen = next((c["file"] for c in info["candidates"] if c["chosen"]), None)
+    return {"arm": arm, "seed": int(seed), "device": lease.get("device"), "wall_s": info.get("wall_s"),
+           "train_s": info.get("train_s"), "startup_s": info.get("startup_s"),
+           "s_per_iteration": round(info["train_s"] / info["iterations"], 3) if "train_s" in info else None,
+           "gpu_shared_with": lease.get("runs_beside", {}).get(name),
+           "validation": {"rounds_per_course": info.get("validation_rounds"),
+                          "seconds": info.get("validation_s"), "candidates": info["candidates"],
+                          "per_course": per_course,
+                          "goal_spread": round(max(goals) - min(goals), 4), "chosen": chosen},
+           "result_on_validation": {}, "result_on_test": {}}  # fmt: skip
+
+
+def collect() -> dict:
+    leases = json.load(open(os.path.join(HERE, "leases.json")))
+    runs: dict = {}
+    for log in sorted(glob.glob(os.path.join(HERE, "runs", "*", "train.log"))):
+        name = os.path.basename(os.path.dirname(log))
+        lease = next((le for le in leases if name in le["runs"]), {})
+        runs[name] = run_entry(name, log, os.path.join(os.path.dirname(log), "timing.json"), lease)
+    fixed: dict = {k: {"shipped": {}, "fixed_cpg": {}} for k in ("validation", "test")}
+    for res in sorted(glob.glob(os.path.join(HERE, "evals", "*", "results.json"))):
+        job = os.path.basename(os.path.dirname(res))
+        d = json.load(open(res))
+        name, terrain = job.rsplit("_", 1)
+        rows, rounds = d["results"][terrain], d["meta"]["rounds"]
+        test = d["meta"]["terrain_seed"] != 3000  # validation rounds: seed 3000; the rest are test rounds
+        if name in ("shipped", "gate_shipped"):
+            ref = fixed["test" if test else "validation"]
+            ref["shipped"][terrain] = {**_metrics(rows["cpg_rl"]), "rounds": rounds}
+            ref["fixed_cpg"][terrain] = {**_metrics(rows["cpg"]), "rounds": rounds,
+                                         "physics": d["meta"]["fixed_cpg_physics"]}
+        elif name in runs:
+            runs[name]["result_on_test" if test else "result_on_validation"][terrain] = {**_metrics(rows["cpg_rl"]),
+                                                                                     "rounds": rounds}
+    arms = summarise(runs)
+    return {"meta": {"task": "complex", "validation_seed": 3000, "actions": "deterministic (mean)",
+                     "arms": ARMS, "leases": leases, "gate_lines": GATE}, "runs": runs, "arms": arms,
+            "same_rounds": fixed, "gate": gate(runs, fixed["test"])}
+
+
+def summarise(runs: dict) -> dict:
+    """Per arm: its seeds, the chosen candidates' goal share and falls before the goal line, the candidates' spread."""
+    arms = {}
+    for arm in ARMS:
+        mine = [r for r in runs.values() if r["arm"] == arm]
+        if not mine:
+            continue
+        chosen = [next(c for c in r["validation"]["candidates"] if c["chosen"]) for r in mine]
+        arms[arm] = {"label": ARMS[arm], "seeds": sorted(r["seed"] for r in mine),
+                     "chosen_goal": [c["goal"] for c in chosen],
+                     "chosen_fell_before_goal": [c["fell_before_goal"] for c in chosen],
+                     "goal_spread": [r["validation"]["goal_spread"] for r in mine],
+                     "mean_chosen_goal": round(sum(c["goal"] for c in chosen) / len(chosen), 4),
+                     "mean_chosen_fell_before_goal": round(sum(c["fell_before_goal"] for c in chosen) / len(chosen),
+                                                           4)}  # fmt: skip
+    return arms
+
+
+def pays(arm: dict, base: dict) -> bool:
+    """A change pays when its chosen candidates reach the goal more often and fall before the goal line no more."""
+    return arm["mean_chosen_goal"] > base["mean_chosen_goal"] and (
+        arm["mean_chosen_fell_before_goal"] <= base["mean_chosen_fell_before_goal"])
+
+
+def gate(runs: dict, test: dict) -> dict | None:
+    """The gate's lines over the gate runs (``gate_sN``) on the test rounds, against the shipped policy and the fixed
+    CPG on the same rounds; None before any gate run was evaluated."""
+    seeds = {r["seed"]: r for r in runs.values() if r["arm"] == "gate" and r["result_on_test"]}
+    if not seeds:
+        return None
+    lines = {}
+    for t in TERRAINS:
+        got = [r["result_on_test"].get(t, {}).get("success_3m") for r in seeds.values()]
+        falls = [r["result_on_test"].get(t, {}).get("fall_rate_before_goal") for r in seeds.values()]
+        shipped = test["shipped"].get(t, {}).get("success_3m")
+        ok = [g for g in got if g is not None]
+        median = sorted(ok)[len(ok) // 2] if len(ok) == 3 else None
+        lines[f"every seed >= 97.5 % at 3 m, {t}"] = len(ok) == 3 and min(ok) >= GATE["success_3m_min"]
+        lines[f"median >= the shipped policy's, {t}"] = median is not None and shipped is not None and median >= shipped
+        lines[f"falls before the goal <= 0.5 %, {t}"] = None not in falls and len(falls) == 3 and max(
+            falls) <= GATE["fall_rate_before_goal_max"]
+    cpg = test["fixed_cpg"].get("rugged", {})
+    for v in ("pitch_var_deg2", "roll_var_deg2"):
+        vals = [r["result_on_test"].get("rugged", {}).get(v) for r in seeds.values()]
+        lines[f"rugged {v[:-5]} variance < 0.8x the fixed CPG's"] = cpg.get(v) is not None and None not in vals and all(
+            x < GATE["rugged_var_vs_fixed_cpg"] * cpg[v] for x in vals)
+    lines["<= 240 s from process start, validation included"] = all(
+        (r["wall_s"] or 1e9) <= GATE["wall_s_max"] for r in seeds.values())
+    return {"seeds": sorted(seeds), "lines": lines, "holds": all(lines.values())}
+
+
+def choose(run_dirs: list[str]) -> str:
+    """The train.py flags of the changes that paid: the study's runs and those of ``run_dirs`` (NAME.log each)."""
+    runs = {}
+    for log in sorted(glob.glob(os.path.join(HERE, "runs", "*", "train.log"))):
+        runs[os.path.basename(os.path.dirname(log))] = run_entry(os.path.basename(os.path.dirname(log)), log, "", {})
+    for d in run_dirs:
+        for log in sorted(glob.glob(os.path.join(d, "*_s[0-9].log"))):
+            name = os.path.basename(log)[:-4]
+            if name.rsplit("_s", 1)[0] in ARMS and parse_log(open(log).read())["candidates"]:
+                runs[name] = run_entry(name, log, "", {})
+    arms = summarise(runs)
+    if "recipe" not in arms:
+        raise ValueError("the study holds no recipe runs to compare with")
+    flags = {"critic": "--env.obs.critic true", "actor": "--env.obs.gyro true --env.obs.last_action true"}
+    return " ".join(flags[a] for a in flags if a in arms and pays(arms[a], arms["recipe"]))
+
+
+def pct(x) -> str:
+    return "—" if x is None else f"{100 * x:.1f} %"
+
+
+def report(res: dict) -> str:
+    runs, arms, fixed = res["runs"], res["arms"], res["same_rounds"]
+    lines = ["# The learner, one change at a time", "",
+             "Generated by `python studies/learner/build.py` from `results.json`. Task `complex` (300 iterations at "
+             "4096 envs, its stable-gait stages), each arm on seeds 1 and 2 in the same lease; train.py's own "
+             "validation (deterministic action, seed 3000, the rugged, stepped and complex courses, candidates ranked "
+             "by goal reached, then falls before the goal line) chooses each run's result. "
+             "The arms:", ""]
+    lines += [f"- `{a}`: {label}" for a, label in ARMS.items()]
+    lines += ["", "## Validation candidates (train.py, shares averaged over the three courses)", "",
+              "| run | candidate | goal | fell before the goal (in all) | 3 m | off course | pitch / roll var [deg²] |",
+              "|---|---|---:|---:|---:|---:|---:|"]
+    for name, r in runs.items():
+        for c in r["validation"]["candidates"]:
+            lines.append(f"| {name} | {'**' if c['chosen'] else ''}{c['file']}{'**' if c['chosen'] else ''} | "
+                         f"{pct(c['goal'])} | {pct(c['fell_before_goal'])} ({pct(c['fell'])}) | {pct(c['walk_3m'])} | "
+                         f"{pct(c['off_course'])} | {c['pitch_var']:.1f} / {c['roll_var']:.1f} |")
+    lines += ["", "Per arm: the chosen candidates' goal share and the spread of goal over each run's candidates:", "",
+              "| arm | seeds | chosen: goal | chosen: fell before the goal | spread of goal over candidates |",
+              "|---|---|---|---|---|"]
+    for a, s in arms.items():
+        lines.append(f"| {a} | {', '.join(map(str, s['seeds']))} | {' / '.join(pct(g) for g in s['chosen_goal'])} "
+                     f"(mean {pct(s['mean_chosen_goal'])}) | {' / '.join(pct(g) for g in s['chosen_fell_before_goal'])}"
+                     f" | {' / '.join(pct(g) for g in s['goal_spread'])} |")
+    lines += ["", "## The results on validation rounds, per course", "",
+              "Deterministic action, seed 3000, `python -m hexnewton.apps.evaluate --controllers cpg_rl --checkpoint "
+              "cpg_rl=RESULT --terrains T --rounds 500 --seed 3000`; the shipped policy and the fixed CPG (on the "
+              "shipped policy's physics: 20 ms frame, 4 substeps) on the same rounds.", "",
+              "| policy | terrain | rounds | 3 m | falls before the goal | falls | pitch / roll var [deg²] |",
+              "|---|---|---:|---:|---:|---:|---:|"]
+    val = fixed["validation"]
+    rows = [(n, r["result_on_validation"]) for n, r in runs.items() if r["arm"] in ARMS] + [
+        ("shipped `cpg_rl_complex`", val["shipped"]), ("fixed CPG", val["fixed_cpg"])]
+    for name, per in rows:
+        for t in TERRAINS:
+            s = per.get(t)
+            if s is None:
+                lines.append(f"| {name} | {t} | — | not run | | | |")
+                continue
+            lines.append(f"| {name} | {t} | {s['rounds']} | {pct(s['success_3m'])} | {pct(s['fall_rate_before_goal'])}"
+                         f" | {pct(s['fall_rate'])} | {s['pitch_var_deg2']:.1f} / {s['roll_var_deg2']:.1f} |")
+    if res["gate"]:
+        test = fixed["test"]
+        lines += ["", "## The gate", "", "`python train.py --task complex --seed N` (with the flags of the changes that "
+                  "paid: see each run's config), one after another and alone on the GPU; 1000 test rounds per terrain "
+                  "(the evaluate default seed), deterministic action, the shipped policy and the fixed CPG on the "
+                  "same rounds.", "",
+                  "| policy | terrain | 3 m | falls before the goal | falls | pitch / roll var [deg²] |",
+                  "|---|---|---:|---:|---:|---:|"]
+        rows = [(n, r["result_on_test"]) for n, r in runs.items() if r["arm"] == "gate"] + [
+            ("shipped `cpg_rl_complex`", test["shipped"]), ("fixed CPG", test["fixed_cpg"])]
+        for name, per in rows:
+            for t in TERRAINS:
+                s = per.get(t)
+                if s:
+                    lines.append(f"| {name} | {t} | {pct(s['success_3m'])} | {pct(s['fall_rate_before_goal'])} | "
+                                 f"{pct(s['fall_rate'])} | {s['pitch_var_deg2']:.1f} / {s['roll_var_deg2']:.1f} |")
+        lines += ["", "| line | holds |", "|---|---|"] + [
+            f"| {k} | {'yes' if v else '**no**'} |" for k, v in res["gate"]["lines"].items()]
+    lines += ["", "## Time", "",
+              "| run | device | GPU shared with | start-up [s] | train [s] | s / iteration | validation [s] | "
+              "process start to result [s] |", "|---|---|---|---:|---:|---:|---:|---:|"]
+    for name, r in runs.items():
+        lines.append(f"| {name} | {r['device']} | {r['gpu_shared_with'] or 'nothing'} | {r['startup_s']} | "
+                     f"{r['train_s']} | {r['s_per_iteration']} | {r['validation']['seconds']} | {r['wall_s']} |")
+    lines += ["", "## Leases", ""]
+    for le in res["meta"]["leases"]:
+        lines += [f"- {le['date']}, {le['device']}: {le['ran']}", f"  - commands: " + "; ".join(
+            f"`{c}`" for c in le["commands"]), f"  - {le['notes']}"]
+    return "\n".join(lines[:2] + verdict(res) + lines[2:]) + "\n"
+
+
+def verdict(res: dict) -> list[str]:
+    """Each change against the recipe, from results.json: the chosen candidates' goal share (the validation's first
+    key), their falls before the goal line (its second) and the candidates' spread; what the study still lacks."""
+    runs, arms = res["runs"], res["arms"]
+    out = ["## Verdict", "", "Written by `build.py` from `results.json` (`arms`, `runs`):", ""]
+    base = arms.get("recipe")
+    for arm, s in arms.items():
+        if arm == "recipe" or base is None:
+            continue
+        goal = s["mean_chosen_goal"] - base["mean_chosen_goal"]
+        falls = sum(s["chosen_fell_before_goal"]) / len(s["seeds"]) - sum(base["chosen_fell_before_goal"]) / len(
+            base["seeds"])
+        spread = sum(s["goal_spread"]) / len(s["seeds"]) - sum(base["goal_spread"]) / len(base["seeds"])
+        word = "pays" if goal > 0 and falls <= 0 else "does not pay" if goal < 0 else "is even"
+        out.append(f"- **`{arm}` {word} on validation** (seeds {', '.join(map(str, s['seeds']))}): the chosen "
+                   f"candidates reach the goal in {pct(s['mean_chosen_goal'])} of the validation rounds against the "
+                   f"recipe's {pct(base['mean_chosen_goal'])} ({100 * goal:+.1f} points), fall before the goal line "
+                   f"{100 * falls:+.1f} points against it, and its candidates spread {100 * spread:+.1f} points more "
+                   f"in goal share within a run.")
+    if res["gate"]:
+        failed = [k for k, v in res["gate"]["lines"].items() if not v]
+        out.append("- **The gate " + ("holds**." if not failed else "does not hold**: " + "; ".join(failed) + "."))
+    missing = [a for a in ARMS if a not in arms or len(arms[a]["seeds"]) < 2]
+    unevaluated = [n for n, r in runs.items() if r["arm"] in ARMS and len(r["result_on_validation"]) < len(TERRAINS)]
+    if missing or unevaluated:
+        out.append("- **Partial**: " + "; ".join(
+            ([f"arms without two seeds: {', '.join(missing)}"] if missing else [])
+            + ([f"results not yet on 500 validation rounds per course: {', '.join(unevaluated)}"] if unevaluated
+               else [])) + "." + ("" if res["gate"] else " The 3-seed gate waits for the chosen recipe."))
+    return out + [""]
+
+
+def main(argv: list[str] | None = None) -> int:
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    p.add_argument("--add", metavar="LEASE", help="a lease's folder (runs/, evals/) to copy into the study first")
+    p.add_argument("--choose", action="store_true", help="print the train.py flags of the changes that paid, and stop")
+    p.add_argument("--runs", nargs="*", default=[], metavar="DIR", help="with --choose: more runs (NAME.log each)")
+    args = p.parse_args(argv)
+    if args.choose:
+        try:
+            print(choose(args.runs))
+        except ValueError as e:
+            print(f"build.py: {e}", file=sys.stderr)
+            return 2
+        return 0
+    if args.add:
+        if not os.path.isdir(os.path.join(args.add, "runs")):
+            print(f"build.py: {args.add} has no runs/ folder", file=sys.stderr)
+            return 2
+        print("added:", ", ".join(add(args.add)) or "nothing")
+    res = collect()
+    with open(os.path.join(HERE, "results.json"), "w") as f:
+        json.dump(res, f, indent=1)
+        f.write("\n")
+    with open(os.path.join(HERE, "report.md"), "w") as f:
+        f.write(report(res))
+    print(f"{HERE}/report.md, results.json: {len(res['runs'])} runs, arms {', '.join(res['arms'])}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,64 @@
+"""The learner study's build: the report and results.json regenerate from the kept runs, the log parser reads
+train.py's validation block, the choice names only changes that paid, and the gate's lines read the test rounds."""
+
+import json
+import os
+import sys
+
+import pytest
+
+pytestmark = pytest.mark.slow  # a study's test: the CI line of its own (python -m pytest -q -m slow)
+sys.path.insert(0, os.path.dirname(__file__))
+import build  # noqa: E402
+
+LOG = """training task complex: 4096 envs on cuda:0, 300 iterations, logs in /root/runs/x_s1/2026-01-01_00-00-00
+start-up 40.0 s from process start: python and imports 17.4
+finished at iteration 299 after 150 s (300 iterations)
+deterministic validation, 256 rounds of the rugged, stepped and complex courses (seed 3000) per candidate, 40 s (x):
+     model_200.pt (saved, iteration 200): goal 83.9 %, fell before the goal 0.9 % (in all 8.7 %), 3 m 95.1 %, off course 3.3 %, pitch / roll var 35.4 / 12.4 deg²
+  -> model_250.pt (saved, iteration 250): goal 92.3 %, fell before the goal 0.4 % (in all 0.9 %), 3 m 94.9 %, off course 0.8 %, pitch / roll var 26.2 / 9.3 deg²
+230 s from process start to the exported result
+"""
+
+
+def test_parse_log_reads_the_validation_block():
+    info = build.parse_log(LOG)
+    assert [c["file"] for c in info["candidates"]] == ["model_200.pt", "model_250.pt"]
+    assert [c["chosen"] for c in info["candidates"]] == [False, True]
+    assert info["candidates"][1]["goal"] == pytest.approx(0.923) and info["candidates"][1]["pitch_var"] == 26.2
+    assert (info["train_s"], info["iterations"], info["wall_s"], info["startup_s"]) == (150.0, 300, 230.0, 40.0)
+    assert info["validation_rounds"] == 256 and info["run_dir"].endswith("2026-01-01_00-00-00")
+
+
+def test_the_report_regenerates_from_the_kept_runs(tmp_path):
+    res = build.collect()
+    kept = json.load(open(os.path.join(build.HERE, "results.json")))
+    assert res == kept, "results.json is stale: python studies/learner/build.py"
+    assert open(os.path.join(build.HERE, "report.md")).read() == build.report(res)
+    for name, r in res["runs"].items():
+        chosen = [c for c in r["validation"]["candidates"] if c["chosen"]]
+        assert len(chosen) == 1 and chosen[0]["file"] == r["validation"]["chosen"], name
+
+
+def test_a_change_pays_only_with_more_goals_and_no_more_falls():
+    base = {"mean_chosen_goal": 0.94, "mean_chosen_fell_before_goal": 0.008}
+    assert build.pays({"mean_chosen_goal": 0.95, "mean_chosen_fell_before_goal": 0.008}, base)
+    assert not build.pays({"mean_chosen_goal": 0.95, "mean_chosen_fell_before_goal": 0.01}, base)
+    assert not build.pays({"mean_chosen_goal": 0.92, "mean_chosen_fell_before_goal": 0.0}, base)
+    assert build.choose([]) == "" or set(build.choose([]).split()) <= {
+        "--env.obs.critic", "--env.obs.gyro", "--env.obs.last_action", "true"}
+
+
+def test_the_gate_lines_read_the_test_rounds():
+    def per(s, f, pv=10.0):
+        return {t: {"success_3m": s, "fall_rate_before_goal": f, "pitch_var_deg2": pv, "roll_var_deg2": pv}
+                for t in build.TERRAINS}
+
+    runs = {f"gate_s{k}": {"arm": "gate", "seed": k, "wall_s": 230.0, "result_on_test": per(0.98, 0.0)}
+            for k in (1, 2, 3)}
+    test = {"shipped": per(0.979, 0.0), "fixed_cpg": per(0.4, 0.03, pv=30.0)}
+    assert build.gate(runs, test)["holds"]
+    runs["gate_s2"]["result_on_test"]["rugged"]["fall_rate_before_goal"] = 0.006
+    g = build.gate(runs, test)
+    assert not g["holds"] and [k for k, v in g["lines"].items() if not v] == ["falls before the goal <= 0.5 %, rugged"]
+    assert build.gate({}, test) is None
