@@ -2,8 +2,8 @@
 sim2sim, real-time rounds, latency (sensor stamp to the targets' publish) and misses. Writes report.md and
 results.json beside this file (or in --out).
 
-    python studies/ros_node/measure.py                        # 40 lockstep rounds on flat and rugged, 25 real-time
-    python studies/ros_node/measure.py --rounds 2 --realtime_rounds 1 --out /tmp/ros_node   # a quick look
+    python studies/ros2/measure.py                        # 40 lockstep rounds on flat and rugged, 25 real-time
+    python studies/ros2/measure.py --rounds 2 --realtime_rounds 1 --out /tmp/ros2   # a quick look
 
 Each part runs the node (``python -m hexnewton.apps.ros node``) and the robot (``... robot``) as two processes on
 loopback, on one ROS_DOMAIN_ID, discovery on this machine only:
