@@ -140,7 +140,7 @@ class TerrainConfig:
     past_share: float = 0.0
     # ours: lanes a robot moves up after reaching its goal. A robot climbs once per episode (~50 iterations of 24 steps
     # on the complex course), so a run of fewer iterations, e.g. one iteration count split over torchrun ranks, ends on
-    # lower lanes (results/scale_out/report.md: lane 3.3 of 9 after 150 iterations, 5.9 after 300); 2 climbs as fast
+    # lower lanes (studies/scale_out/report.md: lane 3.3 of 9 after 150 iterations, 5.9 after 300); 2 climbs as fast
     # per iteration at half the iterations.
     climb: int = 1
     # robots start evenly spread over levels 0 .. start_levels - 1 (legged_gym: max_init_terrain_level)
@@ -351,7 +351,7 @@ class TaskConfig:
     # §2.4.4 (1): fallen below this torso height above the terrain [m], or |roll| / |pitch| beyond pi/3
     min_height: float = 0.05
     max_tilt: float = math.pi / 3
-    # §2.4.4 (2): off course beyond |y - y_start| [m]; time out after this many control steps
+    # §2.4.4 (2): off course beyond |y - y_start| [m] (from the start-to-goal line); time out after this many steps
     max_abs_y: float = 1.5
     max_episode_steps: int = 7000
     # ours: a state is "blown up" (status nonfinite: reset and counted) when any coordinate or velocity is
@@ -370,6 +370,18 @@ class TaskConfig:
     # the episode ends this task checks, rows of mdp/terms/terminations.py's TERMINATIONS in their order (nonfinite
     # always)
     terminations: tuple[str, ...] = ("nonfinite", "fell", "off_course", "success", "timeout")
+    # ours: goals in every direction (the navigate tasks; mdp/terms/goals.py). Off: the paper's one goal, goal_distance
+    # ahead of the start along +x. On: each goal at a bearing uniform in +-goal_bearing [rad] from the robot's heading
+    # when it is set, goal_distance_min..max [m] away, inside +-goal_area [m] of the start along x and y (mirrored
+    # back into that square); reaching one sets the next and the episode goes on
+    random_goals: bool = False
+    goal_bearing: float = math.pi
+    goal_distance_min: float = 1.0
+    goal_distance_max: float = 4.0
+    goal_area: float = 4.0
+    # ours: a waypoint course ((x, y), ...) [m] in each robot's start frame (x along its start heading), the goals in
+    # turn; reaching the last ends the episode (play.py --waypoints); empty: none
+    waypoints: tuple[tuple[float, float], ...] = ()
 
 
 #: Table 1's terms (Eq. 5), the reward of the paper's task

@@ -12,7 +12,7 @@
 Under torchrun each rank measures on its own GPU (``cuda:LOCAL_RANK``; ``--device cpu``: Gloo on the CPU), every timed
 window starting together (a barrier), train mode averaging the ranks' gradients as ``train.py`` does; rank 0 gathers
 the ranks' rates and writes the tables: the total (their sum) and, with ``--baseline`` (a 1-GPU run's ``--json``), the
-scaling efficiency, total / (GPUs x the 1-GPU rate) (:mod:`hexnewton.analysis.scale_out`).
+scaling efficiency, total / (GPUs x the 1-GPU rate) (:mod:`hexnewton.analysis.scaling`).
 
 Three measurements, each in robot-seconds simulated per wall second (robot-s/s) so they compare directly:
 - ``sim``: the physics world alone. Every robot walks under the CPG controller (Eq. 3 + Eq. 4 kernels at
@@ -47,7 +47,7 @@ from hexnewton.analysis.bench import (
     largest_that_fits,
 )
 from hexnewton.analysis.report import git_rev
-from hexnewton.analysis.scale_out import rate_rows, scaling_markdown, scaling_rows, with_ranks
+from hexnewton.analysis.scaling import rate_rows, scaling_markdown, scaling_rows, with_ranks
 from hexnewton.apps.cli import ArgumentParser, add_config_args, config_overrides, positive_int, run, terrain_name
 from hexnewton.config import TERRAINS, SimConfig, TerrainConfig, apply_overrides
 from hexnewton.learning.agent import AgentConfig

@@ -156,7 +156,7 @@ class AgentConfig:
     #: mini-batch summed over the ranks stays one process's, K times the optimizer steps per iteration);
     #: ``iterations``: max_iterations, save_interval and the stages' first iterations divided by K (one process's
     #: env-steps and reward stages per env-step; the terrain lanes still climb per goal reached, so each robot climbs
-    #: K times fewer: results/scale_out); ``learning_rate``: K times the learning rate (fixed schedule only: the
+    #: K times fewer: studies/scale_out); ``learning_rate``: K times the learning rate (fixed schedule only: the
     #: adaptive one sets it from the ranks' mean KL). Empty: every rank runs this config as it is (rsl-rl's way)
     scale_with_ranks: tuple[str, ...] = field(default=(), metadata={"choices": RANK_SCALINGS})
     distribution: DistributionConfig = field(default_factory=DistributionConfig)

@@ -1,5 +1,5 @@
 #!/bin/bash
-# The scale-out measurements (results/scale_out: `python -m hexnewton.apps.scale_out`), on one host of 4 GPUs
+# The scale-out measurements (studies/scale_out: `python studies/scale_out/scale_out.py`), on one host of 4 GPUs
 # (nvidia-h100-x4), one subcommand per device call, after the wheel chunks and `gpu.sh install`
 # (scripts/device/README.md, "Scale-out"):
 #

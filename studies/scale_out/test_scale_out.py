@@ -1,4 +1,4 @@
-"""The scale-out report (hexnewton/analysis/scale_out.py, ``python -m hexnewton.apps.scale_out``) from fixture outputs
+"""The scale-out report (``python studies/scale_out/scale_out.py``) from fixture outputs
 of a lease: bench JSONs at 1, 2 and 4 GPUs, train.py runs and their evaluations."""
 
 import json
@@ -6,10 +6,9 @@ import os
 
 import pytest
 
-from hexnewton.analysis.scale_out import rate_rows, scaling_rows, with_ranks
-from hexnewton.analysis.bench import BenchResult, PipelineResult
 from hexnewton.apps.cli import run
-from hexnewton.apps.scale_out import main
+
+from scale_out import main  # this study's module (pytest puts the study's folder on sys.path)
 
 pytestmark = pytest.mark.slow  # a study's test: the CI line of its own (python -m pytest -q -m slow)
 
@@ -60,7 +59,7 @@ def lease(tmp_path):
 
 def test_report_from_a_lease(lease, tmp_path, capsys):
     out = tmp_path / "report"
-    assert run(main, "python -m hexnewton.apps.scale_out", [str(lease), "--out", str(out)]) == 0
+    assert run(main, "python studies/scale_out/scale_out.py", [str(lease), "--out", str(out)]) == 0
     res = json.load(open(out / "results.json"))
     eff = {(r["envs_per_gpu"], r["gpus"]): r["efficiency"] for r in res["bench"]}
     assert eff[(4096, 1)] == pytest.approx(1.0) and eff[(4096, 2)] == pytest.approx(0.95)
@@ -91,27 +90,12 @@ def test_report_from_a_lease(lease, tmp_path, capsys):
                           ([str(tmp_path / "report"), "--out", str(tmp_path / "r2")], "nothing to report"),
                           ([str(tmp_path / "none"), "--out", str(tmp_path / "r3")], "is not a folder")):  # fmt: skip
         capsys.readouterr()
-        assert run(main, "python -m hexnewton.apps.scale_out", argv) == 2
+        assert run(main, "python studies/scale_out/scale_out.py", argv) == 2
         err = capsys.readouterr().err.strip().splitlines()
         assert len(err) == 1 and message in err[0], err
     os.remove(lease / "runs" / "g2x2048" / "timing.json")
-    assert run(main, "python -m hexnewton.apps.scale_out", [str(lease), "--out", str(tmp_path / "r4")]) == 2
+    assert run(main, "python studies/scale_out/scale_out.py", [str(lease), "--out", str(tmp_path / "r4")]) == 2
     assert "holds no timing.json" in capsys.readouterr().err
-
-
-def test_rate_rows_line_up_with_the_ranks():
-    """Each rank's rows in one order (sim, then env and train per pipeline result, unmeasured modes left out); the
-    gathered rates give the total; one run of one GPU is its own baseline."""
-    sim = [BenchResult("complex", 64, "cpu", 10, 1.0, 50.0, 2500.0, 0.0, 0.0, "none", 0, 0.1, 1.0)]
-    pipe = [PipelineResult("complex", 64, env_steps_per_s=300.0, train_steps_per_s=200.0),
-            PipelineResult("flat", 64, env_steps_per_s=400.0)]
-    rows = rate_rows(sim, pipe)
-    assert [(r["measure"], r["terrain"], r["rate"]) for r in rows] == [
-        ("sim", "complex", 50.0), ("env", "complex", 300.0), ("train", "complex", 200.0), ("env", "flat", 400.0)]
-    gathered = with_ranks(rows, [[r["rate"] for r in rows], [49.0, 310.0, 190.0, 390.0]])
-    assert gathered[2]["per_rank"] == [200.0, 190.0] and gathered[2]["total"] == 390.0
-    one = scaling_rows([{"world_size": 1, "ranks": with_ranks(rows, [[r["rate"] for r in rows]])}])
-    assert all(r["efficiency"] == pytest.approx(1.0) for r in one)
 
 
 def test_report_joins_leases(lease, tmp_path):
@@ -122,13 +106,13 @@ def test_report_joins_leases(lease, tmp_path):
         p.rename(benches / p.name)
     (benches / "commands.txt").write_text("torchrun --standalone --nproc_per_node=4 -m hexnewton.apps.bench\n")
     out = tmp_path / "joined"
-    assert run(main, "python -m hexnewton.apps.scale_out", [str(benches), str(lease), "--out", str(out)]) == 0
+    assert run(main, "python studies/scale_out/scale_out.py", [str(benches), str(lease), "--out", str(out)]) == 0
     res = json.load(open(out / "results.json"))
     assert len(res["bench"]) == 6 and len(res["runs"]) == 4
     assert res["commands"][0].startswith("torchrun") and res["commands"][1].startswith("CUDA_VISIBLE_DEVICES=0")
-    assert f"scale_out {benches} {lease} --out {out}`" in open(out / "report.md").read()
-    assert run(main, "python -m hexnewton.apps.scale_out", [str(lease), str(lease), "--out", str(tmp_path / "x")]) == 2
+    assert f"scale_out.py {benches} {lease} --out {out}`" in open(out / "report.md").read()
+    assert run(main, "python studies/scale_out/scale_out.py", [str(lease), str(lease), "--out", str(tmp_path / "x")]) == 2
     # the leases' own folder may hold the report, once
     argv = [str(benches), str(lease), "--out", str(tmp_path)]
-    assert run(main, "python -m hexnewton.apps.scale_out", argv) == 0 and (tmp_path / "report.md").is_file()
-    assert run(main, "python -m hexnewton.apps.scale_out", argv) == 2
+    assert run(main, "python studies/scale_out/scale_out.py", argv) == 0 and (tmp_path / "report.md").is_file()
+    assert run(main, "python studies/scale_out/scale_out.py", argv) == 2

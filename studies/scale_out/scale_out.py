@@ -1,11 +1,13 @@
-"""Scale-out over GPUs of one host: the throughput of ``hexnewton-bench`` under torchrun at 1, 2, 4 ... GPUs
-(:func:`rate_rows`, :func:`scaling_rows`) and the time from process start to the result of ``train.py`` runs at
-those GPU counts with their evaluations (:func:`run_summary`), joined into ``report.md`` and ``results.json``
-(:func:`build_report`; the command line: ``python -m hexnewton.apps.scale_out``).
+"""Scale-out report: throughput and time to the result at 1, 2, 4 ... GPUs of one host, from a lease's outputs.
 
-A bench run's rates are per rank (each rank one GPU, ``cuda:LOCAL_RANK``); the total is their sum, and the scaling
-efficiency at K GPUs is ``total / (K x the 1-GPU rate)`` at the same envs per GPU. A training run's rate is its
-env-steps (all ranks) over its training seconds.
+    python studies/scale_out/scale_out.py LEASE [LEASE ...] --out DIR
+
+LEASE (one or more, joined: e.g. the benches of one lease and the runs of another) is what
+``bash scripts/device/scale_out.sh pack`` brings back, unpacked: ``bench_<K>gpu.json`` (``hexnewton-bench --json``
+under torchrun at K GPUs), ``runs/<name>/`` (a ``train.py`` run's ``timing.json`` and ``config.json``, its
+console log and ``wall.txt``), ``evals/<name>_<terrain>/`` (``python -m hexnewton.apps.evaluate --out`` of the run's
+result) and ``commands.txt`` (the calls, quoted in the report). Writes ``report.md`` and ``results.json``:
+per GPU count the device, envs per GPU, env-steps/s, the scaling efficiency (``hexnewton.analysis.scaling``), the seconds from process start to the result and, per terrain, the result's success at 3 m and fall rate.
 """
 
 from __future__ import annotations
@@ -13,66 +15,10 @@ from __future__ import annotations
 import glob
 import json
 import os
+import sys
 
-#: what each bench measure counts per second
-UNITS = {"sim": "robot-s/s", "env": "env-steps/s", "train": "env-steps/s"}
-#: the throughput scaling the issue asks for
-TARGET_EFFICIENCY = 0.90
-
-
-def rate_rows(sim: list, pipeline: list) -> list[dict]:
-    """One row per measurement of this process (``BenchResult`` / ``PipelineResult`` objects): measure, terrain, envs
-    on this rank and its rate (``UNITS``), in a fixed order so that every rank's rows line up."""
-    rows = [{"measure": "sim", "terrain": r.terrain, "num_envs": r.num_envs, "rate": r.robot_s_per_s} for r in sim]
-    for r in pipeline:
-        for measure, rate in (("env", r.env_steps_per_s), ("train", r.train_steps_per_s)):
-            if rate == rate:  # measured (NaN: that mode was not asked for)
-                rows.append({"measure": measure, "terrain": r.terrain, "num_envs": r.num_envs, "rate": rate})
-    return rows
-
-
-def with_ranks(rows: list[dict], per_rank: list[list[float]]) -> list[dict]:
-    """``rows`` (rank 0's) with every rank's rate (``per_rank[rank][row]``, :func:`~hexnewton.learning.runner.
-    gather_floats`) and their sum."""
-    out = []
-    for k, row in enumerate(rows):
-        rates = [float(ranks[k]) for ranks in per_rank]
-        out.append({**{key: row[key] for key in ("measure", "terrain", "num_envs")}, "per_rank": rates,
-                    "total": sum(rates)})  # fmt: skip
-    return out
-
-
-def scaling_rows(runs: list[dict]) -> list[dict]:
-    """Rows over bench runs (each ``hexnewton-bench --json`` output with ``world_size`` and ``ranks``): per measure,
-    terrain, envs per GPU and GPU count, the total and per-GPU rate and the efficiency against the 1-GPU run's rate
-    at the same envs per GPU (None without one)."""
-    single = {}
-    for run in runs:
-        if run["world_size"] == 1:
-            for r in run["ranks"]:
-                single[(r["measure"], r["terrain"], r["num_envs"])] = r["total"]
-    rows = []
-    for run in sorted(runs, key=lambda r: r["world_size"]):
-        k = run["world_size"]
-        for r in run["ranks"]:
-            base = single.get((r["measure"], r["terrain"], r["num_envs"]))
-            rows.append({"measure": r["measure"], "terrain": r["terrain"], "envs_per_gpu": r["num_envs"], "gpus": k,
-                         "device_name": run.get("device_name", "?"), "total": r["total"], "per_gpu": r["total"] / k,
-                         "per_rank": r["per_rank"], "efficiency": r["total"] / (k * base) if base else None})  # fmt: skip
-    return sorted(rows, key=lambda r: (r["measure"], r["terrain"], r["envs_per_gpu"], r["gpus"]))
-
-
-def scaling_markdown(rows: list[dict]) -> str:
-    """The table of :func:`scaling_rows`, the efficiency marked against ``TARGET_EFFICIENCY``."""
-    md = ("| measure | terrain | envs per GPU | GPUs | total | per GPU | slowest / fastest rank | efficiency |\n"
-          "|---|---|---:|---:|---:|---:|---:|---:|\n")  # fmt: skip
-    for r in rows:
-        eff = _pct(r["efficiency"]) + ("" if r["efficiency"] is None or r["gpus"] == 1 or
-                                       r["efficiency"] >= TARGET_EFFICIENCY else " (below 90 %)")  # fmt: skip
-        spread = min(r["per_rank"]) / max(r["per_rank"]) if max(r["per_rank"]) else None
-        md += (f"| {r['measure']} | {r['terrain']} | {r['envs_per_gpu']} | {r['gpus']} | {r['total']:,.0f} "
-               f"{UNITS[r['measure']]} | {r['per_gpu']:,.0f} | {_pct(spread)} | {eff} |\n")  # fmt: skip
-    return md
+from hexnewton.analysis.scaling import TARGET_EFFICIENCY, percent, scaling_markdown, scaling_rows
+from hexnewton.apps.cli import ArgumentParser, check_new_dir, run
 
 
 def _load(path: str) -> dict:
@@ -125,10 +71,6 @@ def with_training_efficiency(runs: dict[str, dict]) -> dict[str, dict]:
     return runs
 
 
-def _pct(v: float | None) -> str:
-    return "—" if v is None else f"{100 * v:.1f} %"
-
-
 def runs_markdown(runs: dict[str, dict]) -> str:
     """One row per training run: GPUs, envs, training rate and efficiency, seconds to the result, per terrain."""
     terrains = list(dict.fromkeys(t for r in runs.values() for t in r["terrains"]))
@@ -137,12 +79,12 @@ def runs_markdown(runs: dict[str, dict]) -> str:
           + " | ".join(f"{t} 3 m / falls" for t in terrains) + " |\n|---|---|" + "---:|" * 3 + "---|" + "---:|" * 7
           + "---|" + "---:|" * len(terrains) + "\n")
     for name, r in sorted(runs.items(), key=lambda kv: (kv[1]["total_envs"], kv[1]["gpus"])):
-        cells = [f"{_pct(r['terrains'][t]['success_3m'])} / {_pct(r['terrains'][t]['fall_rate'])}"
+        cells = [f"{percent(r['terrains'][t]['success_3m'])} / {percent(r['terrains'][t]['fall_rate'])}"
                  if t in r["terrains"] else "—" for t in terrains]  # fmt: skip
         speedup = "—" if r["speedup"] is None else f"{r['speedup']:.2f}x"
         md += (f"| {name} | {r['device_name']} | {r['gpus']} | {r['envs_per_gpu']} | {r['total_envs']} | "
                f"{' '.join(r['scale_with_ranks']) or 'no'} | {r['iterations']} | "
-               f"{r['env_steps_per_s']:,.0f} | {_pct(r['efficiency'])} | "
+               f"{r['env_steps_per_s']:,.0f} | {percent(r['efficiency'])} | "
                f"{r['first_iteration_s']:.1f} | {r['train_s']:.1f} | {r['wall_s_to_result']:.1f} | {speedup} | "
                f"{', '.join(r['beside']) or 'alone'} | "
                + " | ".join(cells) + " |\n")  # fmt: skip
@@ -197,7 +139,7 @@ def build_report(folders: list[str], out: str, commands: list[str]) -> dict:
     results = {"devices": devices, "target_efficiency": TARGET_EFFICIENCY, "by_gpus": by_gpu_count(rows, runs),
                "bench": rows, "runs": runs,
                "bench_commands": sorted({b.get("command", "?") for b in benches}), "commands": commands}  # fmt: skip
-    md = [f"# Scale-out on one host: {', '.join(devices)}", "", "Made by `python -m hexnewton.apps.scale_out "
+    md = [f"# Scale-out on one host: {', '.join(devices)}", "", "Made by `python studies/scale_out/scale_out.py "
           f"{' '.join(folders)} --out {out}` from the outputs of these calls (`scripts/device/scale_out.sh`):", "",
           "```bash",
           *commands, "```", ""]  # fmt: skip
@@ -223,3 +165,34 @@ def build_report(folders: list[str], out: str, commands: list[str]) -> dict:
     with open(os.path.join(out, "report.md"), "w") as f:
         f.write("\n".join(md))
     return results
+
+
+
+def parser() -> ArgumentParser:
+    """The command line of ``python studies/scale_out/scale_out.py``."""
+    p = ArgumentParser(prog="python studies/scale_out/scale_out.py", description=__doc__.split("\n")[0])
+    p.add_argument("lease", nargs="+", help="the unpacked outputs of scripts/device/scale_out.sh pack (one or more "
+                   "folders, joined)")
+    p.add_argument("--out", required=True, help="the folder for report.md and results.json: a new one, or one that "
+                   "holds neither (e.g. the folder of the leases' outputs); nothing is overwritten")
+    return p
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = parser().parse_args(argv)
+    for folder in args.lease:
+        if not os.path.isdir(folder):
+            raise ValueError(f"{folder} is not a folder")
+    check_new_dir(args.out, files=("report.md", "results.json"))
+    commands = []
+    for folder in args.lease:
+        path = os.path.join(folder, "commands.txt")
+        commands += open(path).read().splitlines() if os.path.isfile(path) else []
+    results = build_report(args.lease, args.out, commands)
+    print(f"{len(results['bench'])} throughput rows, {len(results['runs'])} runs -> {args.out}/ (report.md, "
+          "results.json)")  # fmt: skip
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(run(main, "python studies/scale_out/scale_out.py"))
