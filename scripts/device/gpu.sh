@@ -30,10 +30,10 @@
 #        # runs finishing meanwhile are taken too: the queue ends when nothing is left and no `methods` queue runs
 #        # (both queues look for free slots and finished runs every $POLL_S seconds: 5, 2 and 10 by default)
 #   bash scripts/device/gpu.sh study DIR                        # a kept study's finished runs and evaluations into
-#        # $RUNS (results/paper_comparison): the queues skip what is finished
+#        # $RUNS (studies/paper_comparison): the queues skip what is finished
 #   bash scripts/device/gpu.sh collect                          # every finished run (policy, config, events, log)
 #        # -> $OUT/methods_runs.tgz.NN (15 MB parts) and the evaluations -> $OUT/method_evals.tgz
-#   bash scripts/device/gpu.sh report WHAT                      # Fig. 5a + Table 3 over seeds (hexnewton.apps.compare)
+#   bash scripts/device/gpu.sh report WHAT                      # Fig. 5a + Table 3 over seeds (studies/paper_comparison/compare.py)
 #                                                                # -> $OUT/WHAT/{report.md,results.json,fig5a.*}
 #   bash scripts/device/gpu.sh busy                             # exit 0 while `methods` or `evals` jobs run
 #   bash scripts/device/gpu.sh queue FILE                       # FILE (bash) in the background, detached (setsid),
@@ -47,12 +47,12 @@
 #   bash scripts/device/gpu.sh wait 570 complex;  bash scripts/device/gpu.sh pack complex
 #   bash scripts/device/gpu.sh eval 560 "rugged:--controllers cpg cpg_rl --checkpoint cpg_rl=/root/keep/complex.pt \
 #       --terrains rugged --rounds 1000" ...
-# Example (the paper's comparison, kept in results/paper_comparison across leases: scripts/device/README.md):
-#   bash scripts/device/gpu.sh study results/paper_comparison
+# Example (the paper's comparison, kept in studies/paper_comparison across leases: scripts/device/README.md):
+#   bash scripts/device/gpu.sh study studies/paper_comparison
 #   DEADLINE=$(( $(date +%s) + 840 )) JOBS="sac_cpg:1 td3_cpg:1" \
 #       bash scripts/device/gpu.sh methods complex 20 60000000 4096 "" "0 1"
 #   bash scripts/device/gpu.sh wait 590 _methods     # as often as needed, then
-#   bash scripts/device/gpu.sh collect               # here: python -m hexnewton.apps.compare --study ... --add ...
+#   bash scripts/device/gpu.sh collect               # here: python studies/paper_comparison/compare.py --study ... --add ...
 set -u
 export PYTHONPATH=/opt/site${PYTHONPATH:+:$PYTHONPATH} PYTHONUNBUFFERED=1
 export NCCL_NVLS_ENABLE=0 TORCH_SYMM_MEM_DISABLE_MULTICAST=1 NVSHMEM_DISABLE_NVLS=1   # device docs: no NVLink multicast
@@ -211,7 +211,7 @@ _methods)   # the queue behind `methods`
   wait
   echo "$(date +%T) all runs ended"
   ;;
-study)   # a study kept on main (results/paper_comparison): its finished runs and evaluations into $RUNS, so that the
+study)   # a study kept on main (studies/paper_comparison): its finished runs and evaluations into $RUNS, so that the
          # queues skip them and evaluate the runs' stored policies
   dir=${1:?usage: gpu.sh study DIR}
   mkdir -p "$RUNS/methods" "$RUNS/method_evals"
@@ -303,7 +303,7 @@ _evals)   # the queue behind `evals`
   ;;
 report)
   what=$1
-  python -m hexnewton.apps.compare --runs "$RUNS/methods" --evals "$RUNS/method_evals" --out "$OUT/$what" \
+  PYTHONPATH=$PWD:$PYTHONPATH python studies/paper_comparison/compare.py --runs "$RUNS/methods" --evals "$RUNS/method_evals" --out "$OUT/$what" \
     && tail -n +1 "$OUT/$what/report.md" | head -60
   ;;
 busy)

@@ -1,7 +1,7 @@
 #!/bin/bash
 # Re-split the wheel chunks (.dw0/part0, .dw1/part1, ... from ../shared/device/pack.sh) so that each device call,
 # one chunk plus the working tree, stays under the call's 64 MiB: chunk = 64 MiB - the tree - 2 MiB. The tree grows
-# with the kept study (results/paper_comparison), so run this at the start of every lease, from the repository root:
+# with the kept study (studies/paper_comparison), so run this at the start of every lease, from the repository root:
 #
 #   bash ../shared/device/pack.sh ...    # once per machine, when no .dw* folders exist
 #   bash scripts/device/rechunk.sh       # then the device calls it prints

@@ -1,8 +1,8 @@
 """The methods compared at equal budgets: Fig. 5a over seeds and Table 3 over seeds, one report.
 
-    python -m hexnewton.apps.compare --study results/paper_comparison                   # report from a kept study
-    python -m hexnewton.apps.compare --study results/paper_comparison --add LEASE/methods LEASE/method_evals
-    python -m hexnewton.apps.compare --runs RUNS --evals EVALS --out report_dir          # report from loose folders
+    python studies/paper_comparison/compare.py --study studies/paper_comparison                   # report from a kept study
+    python studies/paper_comparison/compare.py --study studies/paper_comparison --add LEASE/methods LEASE/method_evals
+    python studies/paper_comparison/compare.py --runs RUNS --evals EVALS --out report_dir          # report from loose folders
 
 ``--runs`` holds one experiment folder per training run, named ``<method>_s<seed>`` (``cpg_rl``, ``paper``, ``joint``
 from ``train.py --task complex / paper / complex-joint``; ``sac_cpg``, ``td3_cpg``, ``a2c_cpg`` from
@@ -12,7 +12,7 @@ GPU and process time ``scripts/device/gpu.sh`` records when the run ends). ``--e
 ``<method>_s<seed>_<terrain>_sampled`` (``--stochastic``) and ``cpg_s0_<terrain>`` (the fixed CPG). ``gpu.sh methods``
 and ``gpu.sh evals`` lay them out so.
 
-``--study DIR`` is a study kept across GPU leases (:mod:`hexnewton.analysis.study`): ``--add`` first copies a lease's
+``--study DIR`` is a study kept across GPU leases (``store.py``): ``--add`` first copies a lease's
 finished runs (policy-only checkpoints, Fig. 5a's scalars) and evaluations into it, skipping those it holds; the
 report is then written into DIR itself. Writes: ``report.md`` (what is still missing, when anything is; the GPU
 leases; the budget each run used; Table 3 for the deterministic and the sampled action; Fig. 5a), ``results.json``
@@ -28,7 +28,7 @@ import os
 import re
 import sys
 
-from hexnewton.analysis.verdict import VERDICT_LEVELS, claims, paper_table3
+from verdict import VERDICT_LEVELS, claims, paper_table3
 from hexnewton.apps.cli import ArgumentParser, positive_int, run
 
 METHODS = ("cpg_rl", "paper", "sac_cpg", "td3_cpg", "a2c_cpg", "joint", "joint_staged")
@@ -225,7 +225,7 @@ def _run_notes(leases: list[dict]) -> dict[str, str]:
 def report_markdown(res: dict, figs: dict[str, list[str]], discussion: str | None) -> str:
     """The study's report.md, from its ``results.json`` (``res``); ``figs``: {"env_steps": [png], "wall_time": [png
     per GPU kind]}; ``discussion``: the study's ``discussion.md`` (prose on the baselines against the paper's rows)."""
-    from hexnewton.analysis.verdict import verdict_markdown
+    from verdict import verdict_markdown
 
     meta, gaps, leases, budgets = res["meta"], res["missing"], res["leases"], res["budgets"]
     distances, tables = tuple(meta.get("distances", ())), res["table3"]
@@ -304,7 +304,7 @@ def _resolve_folders(args) -> list[dict]:
             raise ValueError("--study replaces --runs, --evals and --out")
         if args.add is not None and len(args.add) > 2:
             raise ValueError("--add takes a runs folder and, optionally, an evaluations folder")
-        from hexnewton.analysis.study import read_leases, store
+        from store import read_leases, store
 
         if args.add:
             for d in args.add:
@@ -327,7 +327,7 @@ def _resolve_folders(args) -> list[dict]:
 
 
 def main(argv: list[str] | None = None) -> int:
-    p = ArgumentParser(prog="python -m hexnewton.apps.compare", description=__doc__.split("\n")[0])
+    p = ArgumentParser(prog="python studies/paper_comparison/compare.py", description=__doc__.split("\n")[0])
     p.add_argument("--study", default=None, help="a study folder kept across leases (runs/, evals/, leases.json); the "
                                                  "report is written into it")  # fmt: skip
     p.add_argument("--add", nargs="+", metavar="DIR", default=None,
@@ -343,7 +343,7 @@ def main(argv: list[str] | None = None) -> int:
     leases = _resolve_folders(args)
     if args.evals is not None and not os.path.isdir(args.evals):
         raise ValueError(f"not a folder: {args.evals}")
-    from hexnewton.analysis.study import read_done
+    from store import read_done
 
     runs = find_runs(args.runs)
     budgets = {}
@@ -436,4 +436,4 @@ def fig5a_figures(out: str, runs: dict, budgets: dict, excluded: dict, leases: l
 
 
 if __name__ == "__main__":
-    sys.exit(run(main, "python -m hexnewton.apps.compare"))
+    sys.exit(run(main, "python studies/paper_comparison/compare.py"))

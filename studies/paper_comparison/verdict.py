@@ -1,4 +1,4 @@
-"""The verdict of the methods' comparison (``python -m hexnewton.apps.compare``), claim by claim, written from the
+"""The verdict of the methods' comparison (``python studies/paper_comparison/compare.py``), claim by claim, written from the
 study's ``results.json`` alone: every number a claim cites is read from it (Table 3 over seeds, Fig. 5a's numbers,
 the paper's Table 3, the levels below), and each claim is worded by its numbers: "holds", "holds in part" or "does
 not hold".
@@ -234,6 +234,6 @@ def claims(res: dict, label) -> list[dict]:
 
 def verdict_markdown(verdict: list[dict]) -> list[str]:
     """The report's verdict section."""
-    lines = ["## Verdict", "", "Written by `hexnewton.apps.compare` from `results.json` (`verdict`, and the numbers it "
+    lines = ["## Verdict", "", "Written by `studies/paper_comparison/compare.py` from `results.json` (`verdict`, and the numbers it "
              "reads: `table3`, `fig5a`, `paper_table3`, `verdict_levels`), claim by claim:", ""]  # fmt: skip
     return lines + [f"- **{v['claim']}: {v['verdict']}.** {v['text']}" for v in verdict]

@@ -23,7 +23,7 @@ import shutil
 
 from hexnewton.analysis.curves import TAGS
 
-#: The scalars a stored run keeps: the learning curves and the loop's time (``hexnewton.apps.compare``'s budget).
+#: The scalars a stored run keeps: the learning curves and the loop's time (``studies/paper_comparison/compare.py``'s budget).
 STORED_TAGS = (*TAGS, "Perf/wall_time_s", "Perf/collection_time", "Perf/learning_time")
 
 

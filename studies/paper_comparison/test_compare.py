@@ -9,6 +9,8 @@ import torch
 
 from hexnewton.apps.cli import run
 
+from compare import cut_short, main, without  # this study's module (pytest puts the study's folder on sys.path)
+
 pytestmark = pytest.mark.slow  # a study's test: the CI line of its own (python -m pytest -q -m slow)
 
 
@@ -46,7 +48,6 @@ def _lease(tmp_path):
 
 
 def test_study_of_two_methods_is_stored_and_reported(tmp_path, capsys):
-    from hexnewton.apps.compare import main
     from hexnewton.learning.checkpoint import read_checkpoint
 
     methods, evals = _lease(tmp_path)
@@ -146,7 +147,6 @@ def test_crossings_first_sustained_and_the_dip():
 
 
 def test_a_cut_short_run_is_left_out_of_the_means():
-    from hexnewton.apps.compare import cut_short, without
 
     budgets = {"sac_cpg": {1: {"env_steps": 60_000_000, "wall_min": 11.9}, 2: {"env_steps": 35_400_000, "wall_min": 20.0}},
                "paper": {1: {"env_steps": 9_100_000, "wall_min": 20.2}}}  # fmt: skip
@@ -159,7 +159,6 @@ def test_a_cut_short_run_is_left_out_of_the_means():
 
 
 def test_compare_arguments_give_one_line(tmp_path, capsys):
-    from hexnewton.apps.compare import main
 
     for argv, msg in ((["--study", str(tmp_path), "--out", str(tmp_path / "x")], "--study replaces"),
                       (["--runs", str(tmp_path)], "give --study DIR, or --runs and --out"),
@@ -168,3 +167,41 @@ def test_compare_arguments_give_one_line(tmp_path, capsys):
         assert run(main, "compare", argv) == 2
         err = capsys.readouterr().err
         assert msg in err and "Traceback" not in err and len(err.strip().splitlines()) == 1
+
+
+def _events(run, points, config):
+    from torch.utils.tensorboard import SummaryWriter
+
+    run.mkdir(parents=True)
+    (run / "config.json").write_text(json.dumps(config))
+    w = SummaryWriter(str(run))
+    for step, reward, success in points:
+        w.add_scalar("Train/mean_reward", reward, step)
+        w.add_scalar("Episode/success_rate", success, step)
+    w.close()
+
+
+def test_fig5a_and_table3_over_seeds(tmp_path, capsys):
+    """The comparison on synthetic runs: a PPO run (iterations) and two skrl runs (env-steps) become one band per
+    method; two seeds' evaluations one Table 3 row with their mean and range."""
+    ppo = {"hexnewton": {"config": {"sim": {"num_envs": 8}}}, "train": {"num_steps_per_env": 24}}
+    _events(tmp_path / "runs" / "cpg_rl_s1" / "r", [(0, 1.0, 0.0), (1, 2.0, 0.5), (2, 3.0, 1.0)], ppo)
+    for seed, top in ((1, 0.4), (2, 0.6)):
+        _events(tmp_path / "runs" / f"sac_cpg_s{seed}" / "r", [(192, 0.0, 0.0), (576, 1.0, top)],
+                {"hexnewton": {"algo": "sac"}})
+        ev = tmp_path / "evals" / f"sac_cpg_s{seed}_complex"
+        ev.mkdir(parents=True)
+        summary = {"rounds": 4, "success_0.5m": top, "success_3m": top / 2, "fall_rate": 0.25}
+        (ev / "results.json").write_text(json.dumps({"meta": {"distances": [0.5, 3]},
+                                                     "results": {"complex": {"sac_cpg": summary}}}))
+    out = tmp_path / "report"
+    assert main(["--runs", str(tmp_path / "runs"), "--evals", str(tmp_path / "evals"), "--out", str(out)]) == 0
+    report = (out / "report.md").read_text()
+    assert "| complex | SAC-CPG | 2 | 4 | 50.0% (40-60) | 25.0% (20-30) | 25.0% (25-25) | — | — | — | — | — |" in report
+    res = json.loads((out / "results.json").read_text())
+    assert res["budgets"]["cpg_rl"]["1"]["env_steps"] == 3 * 8 * 24 and res["budgets"]["sac_cpg"]["2"]["env_steps"] == 576
+    ends = [seed["end"]["value"] for seed in res["fig5a"]["success"]["sac_cpg"]["per_seed"]]
+    assert ends == pytest.approx([0.4, 0.6])
+    # runs with no recorded GPU (no .done beside them) share one wall-time figure
+    assert (out / "fig5a_env_steps.png").stat().st_size > 10000
+    assert (out / "fig5a_wall_time_unrecorded.png").stat().st_size > 10000
