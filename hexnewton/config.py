@@ -153,7 +153,7 @@ class TerrainConfig:
     # on an H100 (BENCHMARKS.md, "Terrain contact"; results/time_to_skill). "boxes": every rectangle of equal-height
     # cells one static box, each 2 cm rugged block one (~50,000 on rugged, the whole patch, as in the C MuJoCo
     # model), each robot shape paired only with the boxes under it (physics/terrain/box_pairs.py): the box edges
-    # MuJoCo's feet meet (results/sim2sim/wedge/report.md).
+    # MuJoCo's feet meet (studies/sim2sim/wedge/report.md).
     collision: str = field(default="mesh_boxes", metadata={"choices": TERRAIN_COLLISIONS})
     # ours: terrain meshes without T-junctions (physics/terrain/mesh.py): every quad edge split at the vertices on it,
     # so each edge lies in exactly two triangles and Newton's finalize skips its mesh-boundary pass (complex task,
@@ -208,7 +208,7 @@ class SimConfig:
     # range) or "actuator" (the controller bundle's MJCF: the actuator's force range). Under the implicitfast
     # integrator they differ: a joint clamp keeps the servo's damping in the implicit update at the limit, an
     # actuator clamp drops it, so a servo at its limit moves faster; C MuJoCo with the joint clamp wedges feet on the
-    # rugged blocks as rarely as Newton (results/sim2sim/wedge/report.md, "Which MuJoCo setting wedges")
+    # rugged blocks as rarely as Newton (studies/sim2sim/wedge/report.md, "Which MuJoCo setting wedges")
     effort_clamp: str = field(default="joint", metadata={"choices": ("joint", "actuator")})
     # ours: which Warp modules a World compiles in parallel before its first step (hexnewton/physics/precompile.py):
     # "imported" those defined at import time, "generated" also the kernels mujoco_warp generates for the model
@@ -280,7 +280,7 @@ class CPGConfig:
     # ours: levelling reflex gain [rad of knee per rad of body tilt] on the posture's tilt terms, at every substep
     # (physics/cpg.py); 0 = off. Only with ``posture``.
     posture_reflex: float = 0.0
-    # ours: a way out for a caught foot (physics/cpg.py, "Stuck response"; results/sim2sim/wedge/report.md): a robot
+    # ours: a way out for a caught foot (physics/cpg.py, "Stuck response"; studies/sim2sim/wedge/report.md): a robot
     # whose goal distance, read from the policy's own target observation, fell by less than stuck_progress [m] over
     # the last stuck_window control steps walks the next stuck_hold control steps with stuck_lift [rad] more knee
     # amplitude A2 on every leg; then, and while it still gains no ground, again. 0 = off.

@@ -1,7 +1,7 @@
 """Sim2sim: a controller bundle walks in C MuJoCo, closed loop through the robot runtime, on the paper's terrains.
 
     python -m hexnewton.apps.sim2sim results/controllers/cpg_rl_complex --terrains rugged stepped complex --rounds 100 \\
-        --out results/sim2sim
+        --out DIR
     python -m hexnewton.apps.sim2sim BUNDLE --terrains rugged --rounds 300 --workers 0 --out /tmp/s2s  # every core
     python -m hexnewton.apps.sim2sim BUNDLE --terrains rugged --rounds 1 --video walk.mp4 --out /tmp/s2s  # one round filmed
     python -m hexnewton.apps.sim2sim BUNDLE --terrains complex --rounds 1 --viewer --out /tmp/s2s         # MuJoCo's viewer
@@ -80,7 +80,7 @@ MODEL_DIFFERENCES = (
     "joint limits: MuJoCo's default limit constraint (solref 0.02 s, ratio 1); training: Newton's 1000 N m/rad, "
     "10 N m s/rad limit spring as solref ~(0.021 s, 0.49); the CPG's targets stay inside the limits",
     "solver: Newton solver and implicitfast at 5 ms on both sides; MuJoCo's 100-iteration cap against training's 10 "
-    "does not bind (MuJoCo converges in ~2 iterations per step, scripts/sim2sim_side_by_side.py)",
+    "does not bind (MuJoCo converges in ~2 iterations per step, studies/sim2sim/sim2sim_side_by_side.py)",
     "sensing: encoders, IMU quaternion and odometry are MuJoCo's exact values (as training's noise-free evaluation); "
     "the terrain reading comes from ray casts, equal to training's grid query at the same cells",
     "starts: the same lanes, offsets, yaw and joint noise ranges, drawn by NumPy from the start seed where Newton "

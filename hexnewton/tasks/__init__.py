@@ -51,7 +51,7 @@ STABLE_SHAPING = dict(w_tilt=5.0, w_ang_vel=0.05, w_action_rate=0.1)
 #: contact randomisation, off in the recipe: feet of 10-14 mm radius (nominal 12) and contact time constants of 10-30
 #: ms (nominal 20), so that training meets feet that fit between the 2 cm blocks and sink deeper into them
 #: (``--env.randomization.foot_radius 0.010 0.014 --env.randomization.contact_timeconst 0.010 0.030``; what it does
-#: in Newton and in C MuJoCo: results/sim2sim/contact_randomisation)
+#: in Newton and in C MuJoCo: studies/sim2sim/contact_randomisation)
 FOOT_CONTACT_RANGES = dict(foot_radius=(0.010, 0.014), contact_timeconst=(0.010, 0.030))
 
 #: The stable-gait curriculum of the complex recipe (RESULTS.md, "Stable gaits"; results/time_to_skill): (first
