@@ -98,7 +98,7 @@ class TerrainConfig:
     # ours: metres of rugged blocks on the complex terrain's landing after its steps (block_height_max high, on the
     # landing's height, from the block lattice's first edge after the last step, up to x_max); 0: the flat landing of
     # §3.1. Training with them shows a policy blocks near its
-    # goal, as the rugged course has them (results/time_to_skill/recipes/kl_choice).
+    # goal, as the rugged course has them (studies/time_to_skill/recipes/kl_choice).
     complex_landing_blocks: float = 0.0
     # ours: where the steps begin on the stepped terrain (flat run-up so the robot starts on level ground)
     stepped_start_x: float = 0.5
@@ -150,7 +150,7 @@ class TerrainConfig:
     # treads, landings, flat ground beyond the blocks -- as one static box, the rugged blocks as one triangle mesh,
     # all down to one common bottom; the same surface as "mesh", one closed triangle mesh of the whole grid, with
     # fewer mesh lookups per robot (none on stepped): 5 % more robot-s/s on complex, 36 % on stepped at 16384 envs
-    # on an H100 (BENCHMARKS.md, "Terrain contact"; results/time_to_skill). "boxes": every rectangle of equal-height
+    # on an H100 (BENCHMARKS.md, "Terrain contact"; studies/time_to_skill). "boxes": every rectangle of equal-height
     # cells one static box, each 2 cm rugged block one (~50,000 on rugged, the whole patch, as in the C MuJoCo
     # model), each robot shape paired only with the boxes under it (physics/terrain/box_pairs.py): the box edges
     # MuJoCo's feet meet (studies/sim2sim/wedge/report.md).
@@ -216,7 +216,7 @@ class SimConfig:
     # kernel cache empty (the CUDA driver's JIT cache warm) train.py --task complex reached its first iteration 88 s
     # from process start with "auto", the first step 8.5 s; on a fresh machine 272-308 s with "auto" (260 s with
     # "imported"), the first step compiling the module variants the precompile leaves to it (timing.json lists
-    # them); on the 2-core CPU a cold build took 149 s against 60 s (results/time_to_skill/report.md)
+    # them); on the 2-core CPU a cold build took 149 s against 60 s (studies/time_to_skill/report.md)
     precompile: str = field(default="auto", metadata={"choices": ("auto", "imported", "generated")})
     # ours: env i starts at (0, y_i), y_i evenly spread over [-spread, spread] [m], so robots meet different
     # rugged blocks; goal and off-course limit (TaskConfig) are relative to each env's start
@@ -426,7 +426,7 @@ class RewardConfig:
     # ours: lateral offset from the start-to-goal line, -w_lateral (y - y_start)^2 [m^2] per 20 ms step; 0 = off. The
     # direction term alone barely minds a drift far from the goal (0.4 m at 3 m: 1 - cos 7.6 deg = 0.009) and turns
     # the robot hard near it; rugged rounds that end badly past 3 m grow with the drift
-    # (results/time_to_skill/recipes/kl_choice).
+    # (studies/time_to_skill/recipes/kl_choice).
     w_lateral: float = 0.0
     # the terms this task pays, rows of mdp/terms/rewards.py's REWARD_TERMS (logged as Reward/<name>, summed in table
     # order)

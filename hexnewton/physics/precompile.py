@@ -63,7 +63,7 @@ log = logging.getLogger("hexnewton")
 # sizes on CUDA (NarrowPhase's block_dim, split_convex_block_dim, mesh_triangle_block_dim and the contact reducer's
 # export size), and of the import-time modules the contact reduction (CONTACT_REDUCTION; at the narrow phase's block
 # size and Warp's default; the import-time narrow phase itself only at the default): on a fresh H100 the first step
-# compiled those variants one after another (146.8 s, results/time_to_skill/report.md, "What a fresh machine
+# compiled those variants one after another (146.8 s, studies/time_to_skill/report.md, "What a fresh machine
 # compiles"). Their names are the packages' private module paths: hexnewton/physics/private_api.py holds them.
 
 # Generated kernels that mujoco_warp launches with a block size of its model's ``block_dim`` settings (the field

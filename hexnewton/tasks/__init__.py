@@ -18,7 +18,7 @@ rising difficulty, robots start on the first 3), a knee-lift floor (A2 in 0.9-1.
 start), domain randomisation, the 20 ms physics frame, a 0.1 s filter on the CPG parameters and the stability shaping
 (:data:`STABLE_SHAPING`). The complex course adds the body posture and the stable-gait curriculum
 (:data:`STABLE_STAGES`, 300 iterations: 172 s from process start to the exported policy on one H100,
-results/time_to_skill). ``paper`` is Table 1's reward and Table 2's PPO on the complex course, with
+studies/time_to_skill). ``paper`` is Table 1's reward and Table 2's PPO on the complex course, with
 none of that. The recipes observe :data:`RECIPE_OBSERVATION`; ``complex-asymmetric`` is the complex recipe with
 :data:`ASYMMETRIC_OBSERVATION` (docs/training.md, "Observations").
 """
@@ -54,7 +54,7 @@ STABLE_SHAPING = dict(w_tilt=5.0, w_ang_vel=0.05, w_action_rate=0.1)
 #: in Newton and in C MuJoCo: studies/sim2sim/contact_randomisation)
 FOOT_CONTACT_RANGES = dict(foot_radius=(0.010, 0.014), contact_timeconst=(0.010, 0.030))
 
-#: The stable-gait curriculum of the complex recipe (RESULTS.md, "Stable gaits"; results/time_to_skill): (first
+#: The stable-gait curriculum of the complex recipe (RESULTS.md, "Stable gaits"; studies/time_to_skill): (first
 #: iteration, changes) of the reflex gain (``posture_reflex``) and the reward weights, applied from that iteration on;
 #: the run ends after 300 iterations (29.5 M env-steps at 4096 envs).
 STABLE_STAGES = ((100, dict(posture_reflex=2.0, w_tilt=15.0, w_ang_vel=0.1)), (200, dict(w_tilt=40.0, w_ang_vel=0.3)))
@@ -193,7 +193,7 @@ def _margin_recipe() -> HexConfig:
 
 #: the terrain recipes' deterministic validation (AgentConfig.validation_rounds): 256 rounds per candidate on each of
 #: §3.1's three courses, at most 60 s each (the step of one GPU's env costs about the same for 1024 robots as for 256:
-#: three courses took 64 s on an H100 against 26 s for one, results/time_to_skill/report.md)
+#: three courses took 64 s on an H100 against 26 s for one, studies/time_to_skill/report.md)
 TERRAIN_VALIDATION = dict(validation_rounds=256, validation_candidates=4, validation_steps=3000,
                           validation_terrains=PAPER_COURSES)
 #: flat ground's, sized for the CPU main job: 16 rounds per candidate, at most 12 s each (the goal takes ~9 s)

@@ -1,5 +1,5 @@
 #!/bin/bash
-# The time-to-skill measurements (results/time_to_skill/, BENCHMARKS.md "Start-up" and "Terrain contact"), one
+# The time-to-skill measurements (studies/time_to_skill/, BENCHMARKS.md "Start-up" and "Terrain contact"), one
 # subcommand per device call, after the wheel chunks and `gpu.sh install` (scripts/device/README.md):
 #
 #   bash scripts/device/time_to_skill.sh startup [ARGS...]   # `train.py --task complex ARGS` to its first

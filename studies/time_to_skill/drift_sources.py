@@ -2,7 +2,7 @@
 evaluation's courses and start draws, deterministic action), each round's start yaw against its lateral offset from
 its start line and its yaw when it has walked 1, 2 and 3 m.
 
-    python scripts/drift_sources.py --checkpoint results/policies/cpg_rl_complex.pt --rounds 64 --device cpu \\
+    python studies/time_to_skill/drift_sources.py --checkpoint results/policies/cpg_rl_complex.pt --rounds 64 --device cpu \\
         --out drift_sources.json
 
 A drift that follows the start yaw (correlation near 1, the offset growing as the yaw times the distance) is a heading
@@ -63,7 +63,7 @@ def summarize(pos: np.ndarray, rpy: np.ndarray) -> dict:
 
 
 def main(argv: list[str] | None = None) -> int:
-    p = argparse.ArgumentParser(prog="python scripts/drift_sources.py", description=__doc__.split("\n\n")[0])
+    p = argparse.ArgumentParser(prog="python studies/time_to_skill/drift_sources.py", description=__doc__.split("\n\n")[0])
     p.add_argument("--checkpoint", required=True)
     p.add_argument("--terrain", default="rugged")
     p.add_argument("--rounds", type=int, default=64)
@@ -79,7 +79,7 @@ def main(argv: list[str] | None = None) -> int:
 
     ep = run_rounds("cpg_rl", args.checkpoint, args.terrain, args.rounds, args.device, TaskConfig.max_episode_steps,
                     progress=False, seed=args.seed)  # fmt: skip
-    res = {"command": "python scripts/drift_sources.py " + " ".join(sys.argv[1:] if argv is None else argv),
+    res = {"command": "python studies/time_to_skill/drift_sources.py " + " ".join(sys.argv[1:] if argv is None else argv),
            "checkpoint": args.checkpoint, "terrain": args.terrain, "seed": args.seed, **summarize(ep.pos, ep.rpy)}
     with open(args.out, "w") as f:
         json.dump(res, f, indent=1)

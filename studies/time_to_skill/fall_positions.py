@@ -2,7 +2,7 @@
 (relative to its start), and whether it had walked 3 m. A fall at x ~ 5 m is a fall off the course patch's far end
 (``TerrainConfig.x_max``), 1.5 m past a goal it passed without reaching it.
 
-    python scripts/fall_positions.py --checkpoint CKPT --terrain rugged --rounds 256 --seed 3000 --device cpu
+    python studies/time_to_skill/fall_positions.py --checkpoint CKPT --terrain rugged --rounds 256 --seed 3000 --device cpu
 """
 
 import argparse

@@ -1,4 +1,4 @@
-"""scripts/drift_sources.py's arithmetic on made-up rounds: the lateral offset and yaw where each round has walked
+"""studies/time_to_skill/drift_sources.py's arithmetic on made-up rounds: the lateral offset and yaw where each round has walked
 1, 2 and 3 m, and the start yaw's share in the drift; a missing checkpoint gets one line and a non-zero exit."""
 
 import importlib.util
@@ -12,7 +12,7 @@ import pytest
 pytestmark = pytest.mark.slow  # a study's test: the CI line of its own (python -m pytest -q -m slow)
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
-SCRIPT = os.path.join(ROOT, "scripts", "drift_sources.py")
+SCRIPT = os.path.join(ROOT, "studies", "time_to_skill", "drift_sources.py")
 spec = importlib.util.spec_from_file_location("drift_sources", SCRIPT)
 ds = importlib.util.module_from_spec(spec)
 spec.loader.exec_module(ds)

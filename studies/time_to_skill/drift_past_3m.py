@@ -1,12 +1,12 @@
 """Rugged rounds that end badly after walking 3 m against the mean lateral drift, over every committed evaluation.
 
-Every ``results/**/results.json`` of ``python -m hexnewton.apps.evaluate`` with a learnt CPG policy (``cpg_rl``) on the
+Every ``studies/**/results.json`` of ``python -m hexnewton.apps.evaluate`` with a learnt CPG policy (``cpg_rl``) on the
 rugged course, at least 300 rounds, deterministic action. A round that never walked 3 m ended badly (fell, left the
 course, timed out), so the bad endings of the rounds that did are (fell + off course + time-outs) / rounds - (1 - 3 m
 success) (a report that carries ``ended_past_3m`` gives the same directly). Prints one line per evaluation and the
 correlation with ``y_dev_mean_m``; ``--out`` writes them as JSON.
 
-    python scripts/drift_past_3m.py --out results/time_to_skill/recipes/kl_choice/drift.json
+    python studies/time_to_skill/drift_past_3m.py --out studies/time_to_skill/recipes/kl_choice/drift.json
 """
 
 import argparse
@@ -17,7 +17,7 @@ import sys
 import numpy as np
 
 
-def rows(root: str = "results") -> list[dict]:
+def rows(root: str = "studies") -> list[dict]:
     out = []
     for path in sorted(glob.glob(f"{root}/**/results.json", recursive=True)):
         if "sampled" in path:
@@ -43,7 +43,7 @@ def rows(root: str = "results") -> list[dict]:
 
 def main() -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    p.add_argument("--root", default="results")
+    p.add_argument("--root", default="studies")
     p.add_argument("--out", default=None, help="write the rows and the correlation as JSON")
     a = p.parse_args()
     r = rows(a.root)
@@ -68,7 +68,7 @@ def main() -> int:
     if a.out:
         try:
             with open(a.out, "w") as f:
-                json.dump({"command": f"python scripts/drift_past_3m.py --out {a.out}", "evaluations": len(r),
+                json.dump({"command": f"python studies/time_to_skill/drift_past_3m.py --out {a.out}", "evaluations": len(r),
                            "correlation": round(corr, 3), "bins": bins, "rows": r}, f, indent=1)
         except OSError as err:
             print(f"drift_past_3m.py: cannot write {a.out}: {err.strerror}", file=sys.stderr)

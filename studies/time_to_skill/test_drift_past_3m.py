@@ -1,4 +1,4 @@
-"""scripts/drift_past_3m.py on made-up evaluation reports: the bad endings past 3 m per evaluation, their correlation
+"""studies/time_to_skill/drift_past_3m.py on made-up evaluation reports: the bad endings past 3 m per evaluation, their correlation
 with the drift, the evaluations it leaves out; bad arguments get one line and a non-zero exit."""
 
 import json
@@ -11,7 +11,7 @@ import pytest
 pytestmark = pytest.mark.slow  # a study's test: the CI line of its own (python -m pytest -q -m slow)
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
-SCRIPT = os.path.join(ROOT, "scripts", "drift_past_3m.py")
+SCRIPT = os.path.join(ROOT, "studies", "time_to_skill", "drift_past_3m.py")
 
 
 def _report(path, drift, success_3m, fell, off, timeout, rounds=1000, controller="cpg_rl",
