@@ -78,7 +78,7 @@ def fixed_cpg_spec(cpg: CPGConfig | None = None, robot: RobotConfig | None = Non
                    substep_dt: float = 0.005) -> dict:
     """A controller.json-shaped spec of the fixed CPG (§3.3): no policy, the CPG at ``cpg.fixed_params()``, for
     :class:`deploy.Controller`. The default 5 ms substep is the shipped policy's physics, with which the committed
-    Newton numbers of the fixed CPG were measured (results/stable_gait)."""
+    Newton numbers of the fixed CPG were measured (studies/stable_gait)."""
     cpg, robot = cpg or CPGConfig(), robot or RobotConfig()
     lo, hi = cpg.param_ranges()
     lower, upper = leg_bounds(robot)

@@ -48,12 +48,12 @@ from hexnewton.deploy.runtime import load_spec
 PROG = "python -m hexnewton.apps.sim2sim"
 #: the keys results.json carries per terrain (hexnewton.analysis.metrics' names)
 HEADLINE = ("rounds", "success_3m", "fall_rate", "pitch_var_deg2", "roll_var_deg2", "pitch_p999_deg", "roll_p999_deg")
-NEWTON_REFERENCE = "results/stable_gait/results.json"
+NEWTON_REFERENCE = "studies/stable_gait/results.json"
 
 
 def newton_reference(path: str | None) -> dict:
     """The committed Newton numbers ``{"cpg_rl" | "cpg": {terrain: summary}}`` of an evaluation: ``evaluate``'s own
-    results.json (its ``results``) or a study's (its ``test`` section, as results/stable_gait's), with the file and
+    results.json (its ``results``) or a study's (its ``test`` section, as studies/stable_gait's), with the file and
     the policy they were measured for."""
     if not path:
         return {}
