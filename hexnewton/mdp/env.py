@@ -6,7 +6,7 @@ five files:
 
     [latency, pushes (mdp/events.py)] -> actions to CPG parameters (physics/cpg.py)
     -> [CPG + mapping (physics/cpg.py) + physics (physics/world.py)] x frames x substeps
-    -> episode ends, rewards (mdp/terms/) -> done flags and the episode ring (here)
+    -> episode ends, rewards, the goal switch (mdp/terms/) -> done flags and the episode ring (here)
     -> [curriculum lane change (mdp/events.py)] -> resets of finished envs (mdp/events.py, physics/world.py)
     -> observations (mdp/terms/) [+ noise (mdp/events.py)]
 
@@ -22,8 +22,8 @@ the observation an action was computed from until after the next ``step`` (its s
 one step late, and the adaptive learning rate would sit at its 1e-5 floor).
 Finished envs auto-reset. ``extras["time_outs"]`` marks time-limit ends. ``extras["log"]`` carries:
 - the mean of each reward term;
-- success, fall, off-course, timeout and non-finite rates, with distance and length, over the last 1024
-  finished episodes;
+- success, fall, off-course, timeout and non-finite rates, with distance (along the goal's course), length and the
+  goals reached, over the last 1024 finished episodes;
 - ``Episode/nonfinite_resets_total``: how many blown-up envs (NaN/Inf or runaway state, ``mdp/terms/terminations.py``)
   were reset since the env was built. Their reward stays finite (0 if the position itself is not) and their
   observation comes from the fresh start, so training never sees a NaN;
@@ -54,7 +54,13 @@ from hexnewton import startup
 from hexnewton.config import ACTION_MODES, HexConfig, control_decimation
 from hexnewton.errors import HexnewtonError
 from hexnewton.mdp.events import (
+    DISTANCE,
+    ENDS,
+    GOALS,
+    LENGTH,
+    LEVEL,
     advance_counter_kernel,
+    bookkeeping_kernel,
     curriculum_kernel,
     delay_actions_kernel,
     observation_noise_kernel,
@@ -65,18 +71,23 @@ from hexnewton.mdp.events import (
     start_levels,
     strict_from,
 )
-from hexnewton.mdp.status import NONFINITE, SUCCESS, TIMEOUT
+from hexnewton.mdp.status import SUCCESS
 from hexnewton.mdp.terms import (
     BASE_LAYOUTS,
     CRITIC_DIM,
     LAYOUTS,
     OBS_DIM,
-    TERMINATIONS,
+    SWITCH_SEED,
     CriticInputs,
     EndInputs,
+    GoalBuffers,
     ObsInputs,
     RewardInputs,
+    TaskParams,
+    check_goals,
+    config_params,
     critic_kernel,
+    goal_switch_kernel,
     height_field_from_grid,
     layout_name,
     make_rewards_kernel,
@@ -96,53 +107,6 @@ from hexnewton.physics.robot import BASE_Q
 from hexnewton.physics.world import ModelBuild, World
 
 RING = 1024  # finished episodes the logged rates average over
-# the ring's columns: one per episode end (its status code - 1), then distance, length and the curriculum lane played
-ENDS = sorted(TERMINATIONS, key=lambda end: end.code)
-DISTANCE, LENGTH, LEVEL = len(ENDS), len(ENDS) + 1, len(ENDS) + 2
-
-
-@wp.kernel
-def _bookkeeping(
-    status: wp.array[wp.int32],
-    joint_q: wp.array2d[wp.float32],
-    start: wp.array[wp.vec2],
-    level: wp.array[wp.int32],
-    steps: wp.array[wp.int32],
-    done: wp.array[wp.bool],
-    done_u8: wp.array[wp.uint8],
-    time_out: wp.array[wp.uint8],
-    cursor: wp.array[wp.int32],
-    ring: wp.array2d[wp.float32],
-    nonfinite_total: wp.array[wp.int32],
-):
-    """Done flags and step counters; each finished episode writes (status one-hot, distance, length, curriculum
-    level) to the ring; blown-up envs are counted in ``nonfinite_total``."""
-    e = wp.tid()
-    st = status[e]
-    d = st != 0
-    done[e] = d
-    done_u8[e] = wp.uint8(0)
-    time_out[e] = wp.uint8(0)
-    if st == TIMEOUT:
-        time_out[e] = wp.uint8(1)
-    if st == NONFINITE:
-        wp.atomic_add(nonfinite_total, 0, 1)
-    if d:
-        done_u8[e] = wp.uint8(1)
-        slot = wp.atomic_add(cursor, 0, 1) % ring.shape[0]
-        for k in range(wp.static(len(ENDS))):
-            ring[slot, k] = 0.0
-        ring[slot, st - 1] = 1.0  # status 1..5 -> columns fell, off_course, success, timeout, nonfinite
-        dist = float(0.0)
-        if wp.isfinite(joint_q[e, 0]):
-            dist = joint_q[e, 0] - start[e][0]
-        ring[slot, DISTANCE] = dist
-        ring[slot, LENGTH] = float(steps[e] + 1)
-        ring[slot, LEVEL] = float(level[e])
-        steps[e] = 0
-    else:
-        steps[e] = steps[e] + 1
-
 
 class HexapodEnv(VecEnv):
     """N hexapods, one terrain, the paper's observation, action, reward and terminations. ``build``: the world's
@@ -192,6 +156,7 @@ class HexapodEnv(VecEnv):
         self.lane = wp.array(world.spawn_xy.astype(np.float32), dtype=wp.vec2, device=dev)
         self.lane_z = wp.array(np.asarray(world.spawn_z, np.float32), device=dev)
         self.start = wp.clone(self.lane)
+        self.goals = GoalBuffers(task, self.start, n, dev)  # each env's goal (mdp/terms/goals.py)
         self.counter = wp.zeros(1, dtype=wp.int32, device=dev)
         self._all = wp.ones(n, dtype=wp.bool, device=dev)
 
@@ -207,7 +172,7 @@ class HexapodEnv(VecEnv):
         # both are generated for this task after the World's precompile: compiled now, in parallel, not by the
         # first step
         compile_modules(dev, [(self.status_kernel.module, None), (self.rewards_kernel.module, None)])
-        self.reward, self.terms, self.prev_x = z(n), z(n, len(self.reward_terms)), z(n)
+        self.reward, self.terms, self.prev_xy = z(n), z(n, len(self.reward_terms)), z(n, dtype=wp.vec2)
         self.obs = z(n, self.num_obs)
         # the state at the end of the last step, before finished envs were reset (play.py records these)
         self.last_q, self.last_start = z(n, 7 + 18), wp.zeros(n, dtype=wp.vec2, device=dev)
@@ -216,8 +181,8 @@ class HexapodEnv(VecEnv):
         self.prev_actions = z(n, self.num_actions)  # the policy's last actions (action-rate term)
         self._cursor = z(1, dtype=wp.int32)
         self._nonfinite_total = z(1, dtype=wp.int32)  # blown-up envs reset since the env was built
-        # finished episodes: status one-hot (5), distance, length, curriculum level
-        self._ring = wp.full((RING, LEVEL + 1), float("nan"), dtype=wp.float32, device=dev)
+        # finished episodes: status one-hot (5), distance, length, curriculum level, goals reached
+        self._ring = wp.full((RING, GOALS + 1), float("nan"), dtype=wp.float32, device=dev)
         self._no_level = z(n, dtype=wp.int32)
 
         # torch views (zero-copy)
@@ -286,11 +251,12 @@ class HexapodEnv(VecEnv):
         3. the physics frames;
         4. episode ends: each env's status;
         5. rewards;
-        6. done flags, step counters and the finished episodes' ring;
-        7. the state at the end of the step kept for recording;
-        8. the curriculum's lane changes (with a terrain curriculum);
-        9. the resets of the finished envs;
-        10. observations (and their noise, with randomisation; the critic's group, with ``ObsConfig.critic``).
+        6. the goal switch: a robot still running that reached a goal which is not its last gets the next;
+        7. done flags, step counters and the finished episodes' ring;
+        8. the state at the end of the step kept for recording;
+        9. the curriculum's lane changes (with a terrain curriculum);
+        10. the resets of the finished envs (each with its episode's first goal);
+        11. observations (and their noise, with randomisation; the critic's group, with ``ObsConfig.critic``).
 
         Returns copies of the observations, rewards and done flags, and the extras (time-outs, log)."""
         # torch writes the actions on its (legacy default) stream; Warp's own streams are blocking streams, so
@@ -355,8 +321,8 @@ class HexapodEnv(VecEnv):
 
     def _state_arrays(self) -> list[wp.array]:
         s = self.world.state_0
-        arrays = [s.joint_q, s.joint_qd, s.body_q, s.body_qd, self.episode_steps, self.prev_x, self.start,
-                  self._ring, self._cursor, self.obs, self.reward, self.done_u8, self.time_out]  # fmt: skip
+        arrays = [s.joint_q, s.joint_qd, s.body_q, s.body_qd, self.episode_steps, self.prev_xy, self.start,
+                  self._ring, self._cursor, self.obs, self.reward, self.done_u8, self.time_out, *self.goals.arrays()]
         # (the draw counter stays where the trial run leaves it: the draws need only differ from step to step)
         arrays.append(self.prev_actions)
         if self.cpg is not None:
@@ -376,6 +342,7 @@ class HexapodEnv(VecEnv):
         self._simulate()
         self._end_episodes()
         self._pay_rewards()
+        self._switch_goals()
         self._count_episodes()
         self._keep_last_state()
         self._change_lanes()
@@ -418,27 +385,34 @@ class HexapodEnv(VecEnv):
         """Each env's episode status (the task's ``TERMINATIONS`` rows) and its roll, pitch, yaw."""
         w = self.world
         ends = make_struct(EndInputs, joint_q=w.joint_q_wp, joint_qd=w.joint_qd_wp, episode_steps=self.episode_steps,
-                           start=self.start, hf=self.height_field, task=self.cfg.task)  # fmt: skip
+                           goals=self.goals.struct(), hf=self.height_field, task=self.cfg.task)  # fmt: skip
         wp.launch(self.status_kernel, dim=self.num_envs, inputs=[ends], outputs=[self.status, self.rpy],
                   device=self.device)  # fmt: skip
 
     def _pay_rewards(self) -> None:
-        """Each env's reward and reward terms (the task's ``REWARD_TERMS`` rows); ``prev_x`` and ``prev_actions``
+        """Each env's reward and reward terms (the task's ``REWARD_TERMS`` rows); ``prev_xy`` and ``prev_actions``
         for the next step."""
         w, t, r = self.world, self.cfg.task, self.cfg.reward
         rewards = make_struct(RewardInputs, joint_q=w.joint_q_wp, joint_qd=w.joint_qd_wp, rpy=self.rpy,
                               status=self.status, episode_steps=self.episode_steps, actions=self.actions,
-                              start=self.start, hf=self.height_field, prev_x=self.prev_x,
+                              goals=self.goals.struct(), hf=self.height_field, prev_xy=self.prev_xy,
                               prev_actions=self.prev_actions, task=t, reward=r)  # fmt: skip
         wp.launch(self.rewards_kernel, dim=self.num_envs, inputs=[rewards, reward_weights(r, self.reward_terms)],
                   outputs=[self.reward, self.terms], device=self.device)  # fmt: skip
+
+    def _switch_goals(self) -> None:
+        """A robot still running that reached a goal which is not its last gets the next (``mdp/terms/goals.py``)."""
+        t = self.cfg.task
+        wp.launch(goal_switch_kernel, dim=self.num_envs, inputs=[self.status, self.world.joint_q_wp, self.goals.struct(),
+                  config_params(TaskParams, t), t.seed + SWITCH_SEED, self.counter], device=self.device)  # fmt: skip
 
     def _count_episodes(self) -> None:
         """Done flags and step counters; the finished episodes into the ring."""
         w = self.world
         wp.launch(
-            _bookkeeping, dim=self.num_envs,
-            inputs=[self.status, w.joint_q_wp, self.start, self._no_level if self.level is None else self._played],
+            bookkeeping_kernel, dim=self.num_envs,
+            inputs=[self.status, w.joint_q_wp, self.start, self.goals.course, self.goals.reached,
+                    self._no_level if self.level is None else self._played],
             outputs=[self.episode_steps, self.done, self.done_u8, self.time_out, self._cursor, self._ring,
                      self._nonfinite_total], device=self.device,
         )  # fmt: skip
@@ -460,7 +434,8 @@ class HexapodEnv(VecEnv):
         w, t, tc = self.world, self.cfg.task, self.cfg.terrain
         wp.launch(
             curriculum_kernel, dim=self.num_envs,
-            inputs=[self.status, w.joint_q_wp, self.start, t.goal_distance, tc.levels, tc.climb, strict_from(tc),
+            inputs=[self.status, w.joint_q_wp, self.start, self.goals.course, t.goal_distance, tc.levels, tc.climb,
+                    strict_from(tc),
                     tc.lane_width, self._lane_offset, self.height_field, w.footprint, w.spawn_clearance,
                     tc.levels_past, tc.past_share, t.seed + 7919, self.counter],
             outputs=[self.level, self._played, self.lane, self.lane_z], device=self.device,
@@ -470,9 +445,9 @@ class HexapodEnv(VecEnv):
         t, w, m = self.cfg.task, self.world, mask if mask is not None else self._all
         wp.launch(reset_envs_kernel, dim=self.num_envs,
                   inputs=[m, self.lane, self.lane_z, w.stand_pose, w.joint_lower, w.joint_upper, t.reset_lateral,
-                          t.reset_yaw, t.reset_joint_noise, t.seed, self.counter],
-                  outputs=[w.joint_q_wp, w.joint_qd_wp, w.joint_target_wp, self.start, self.prev_x],
-                  device=self.device)  # fmt: skip
+                          t.reset_yaw, t.reset_joint_noise, t.seed, self.counter, config_params(TaskParams, t),
+                          self.goals.struct()],
+                  outputs=[w.joint_q_wp, w.joint_qd_wp, w.joint_target_wp, self.prev_xy], device=self.device)
         wp.launch(advance_counter_kernel, dim=1, inputs=[self.counter], device=self.device)
         w.restart(m)
         if self.cpg is not None:
@@ -482,7 +457,7 @@ class HexapodEnv(VecEnv):
         w, ctrl = self.world, self.cpg
         params = ctrl.params if ctrl is not None else self.terms  # unread placeholder in joint mode
         inputs = make_struct(ObsInputs, joint_q=w.joint_q_wp, joint_qd=w.joint_qd_wp, params=params,
-                             start=self.start, actions=self.prev_actions, episode_steps=self.episode_steps,
+                             goals=self.goals.struct(), actions=self.prev_actions, episode_steps=self.episode_steps,
                              hf=self.height_field, task=self.cfg.task)  # fmt: skip
         wp.launch(observations_kernel, dim=self.num_envs, inputs=[inputs, LAYOUTS.index(self.obs_layout)],
                   outputs=[self.obs], device=self.device)  # fmt: skip
@@ -508,6 +483,7 @@ class HexapodEnv(VecEnv):
             log[f"Episode/{end.name}_rate"] = rates[end.code - 1]
         log["Episode/distance_m"] = rates[DISTANCE]
         log["Episode/length_steps"] = rates[LENGTH]
+        log["Episode/goals_reached"] = rates[GOALS]
         log["Episode/nonfinite_resets_total"] = self._nonfinite_t[0].float()
         log["Episode/contact_overflow_frames"] = self._overflow_frames_t
         if self.level is not None:
@@ -527,7 +503,7 @@ class HexapodEnv(VecEnv):
         """Host copy of the logged episode rates (syncs; for reports, not for the training loop)."""
         rates = torch.nanmean(self._ring_t, dim=0).cpu().numpy()
         out = {f"{end.name}_rate": float(rates[end.code - 1]) for end in ENDS}
-        out.update(distance_m=float(rates[DISTANCE]), length_steps=float(rates[LENGTH]),
+        out.update(distance_m=float(rates[DISTANCE]), length_steps=float(rates[LENGTH]), goals_reached=float(rates[GOALS]),
                    episodes=int(min(int(self._cursor.numpy()[0]), RING)), window=RING,
                    nonfinite_resets_total=int(self._nonfinite_total.numpy()[0]),
                    contact_overflow_frames=int(self.world.overflow_frames))  # fmt: skip
@@ -536,6 +512,12 @@ class HexapodEnv(VecEnv):
             out.update(mean_level=float(self.level.numpy().mean()), top_level_success_rate=float(rate),
                        top_level_episodes=int(count))  # fmt: skip
         return out
+
+    def set_waypoints(self, points) -> None:
+        """Each env's waypoint course in its start frame [m] from the next reset on (``reset()``: now), in place of
+        the task's goals: (K, 2) for every env or (N, K, 2), one course per env; K = 0: the task's own goals again."""
+        self.goals.set_waypoints(points)
+        self.graph = None
 
     def set_shaping(self, reward, posture_reflex: float) -> None:
         """New reward weights (``RewardConfig``) and levelling reflex gain between iterations (a training curriculum,
@@ -567,6 +549,7 @@ def make_env(cfg: HexConfig, action_mode: str = "cpg", build: ModelBuild | None 
     ``ValueError`` with one line."""
     if not math.isfinite(cfg.task.goal_distance) or cfg.task.goal_distance <= cfg.task.goal_radius:
         raise HexnewtonError("task.goal_distance must exceed task.goal_radius")
+    check_goals(cfg.task)
     knee = cfg.robot.knee_limit[1] - cfg.robot.stand_pose[1]  # the knee lift the standing pose leaves
     lo, hi = cfg.cpg.a2_range
     if not 0 <= lo < hi <= knee:

@@ -25,7 +25,8 @@ When an env's episode ends (status != 0), before it is reset (:func:`curriculum_
 - success (the goal reached, i.e. ``goal_distance - goal_radius`` walked): ``TerrainConfig.climb`` levels up (1 by
   default); an env that solves the last level goes to a random level, so every level keeps being visited (as
   legged_gym does);
-- fell, off course or timed out having walked less than half of ``goal_distance`` along x: one level down
+- fell, off course or timed out having walked less than half of ``goal_distance`` along the goal's course (x on the
+  straight tasks): one level down
   (never below 0); otherwise the level stays; on the lanes past the course with ``TerrainConfig.past_down`` "miss"
   (levels from ``strict_from`` on), any of these: one level down;
 - nonfinite (blown-up physics): the level stays;
@@ -43,9 +44,17 @@ For every env selected by ``mask``, back to the env's start lane with the random
 - the base goes to (lane_x, lane_y + U(-lateral, lateral)) at height ``spawn_z``, with yaw U(-yaw, yaw);
 - the joints go to the standing pose + U(-joint, joint), clipped to the limits, at rest;
 - the joint targets are set to that pose;
-- ``start`` receives the new base (x, y), which the goal and the off-course check are measured from;
-- ``prev_x`` receives the new base x, for the forward reward.
+- ``start`` receives the new base (x, y) and the goals' ``start_yaw`` its heading: the episode's start, the frame of a
+  waypoint course;
+- the episode's first goal (``mdp/terms/goals.py``, ``set_goal``; two more draws, which only random goals read);
+- ``prev_xy`` receives the new base (x, y), for the forward reward.
 The world then makes its physics consistent with the new joint state (``World.restart``).
+
+Episode bookkeeping (:func:`bookkeeping_kernel`)
+------------------------------------------------
+After the rewards and the goal switch: the done flags and step counters, and for each finished episode a row of the
+env's ring of the last episodes (status one-hot, distance walked along the goal's course, length, curriculum lane,
+goals reached), which the env's log averages.
 
 Random numbers come from Warp's counter-based generator, ``wp.rand_init(seed, env + N * counter)``, with ``counter``
 the env's control-step counter, advanced once per step by :func:`advance_counter_kernel` (a launch of its own, so
@@ -58,8 +67,8 @@ import newton
 import numpy as np
 import warp as wp
 
-from hexnewton.mdp.status import NONFINITE, SUCCESS
-from hexnewton.mdp.terms import HeightField, max_terrain_height
+from hexnewton.mdp.status import NONFINITE, SUCCESS, TIMEOUT
+from hexnewton.mdp.terms import TERMINATIONS, Goals, HeightField, TaskParams, max_terrain_height, set_goal
 from hexnewton.physics.robot import BASE_QD
 from hexnewton.physics.world import World
 
@@ -221,6 +230,7 @@ def curriculum_kernel(
     status: wp.array[wp.int32],
     joint_q: wp.array2d[wp.float32],
     start: wp.array[wp.vec2],
+    course: wp.array[wp.vec2],
     goal_distance: float,
     levels: int,
     climb: int,
@@ -252,7 +262,7 @@ def curriculum_kernel(
             lv = wp.min(int(wp.randf(rng) * float(levels)), levels - 1)
         else:
             lv = wp.min(lv + climb, levels - 1)
-    elif lv >= strict_from or joint_q[e, 0] - start[e][0] < 0.5 * goal_distance:
+    elif lv >= strict_from or walked(joint_q, start, course, e) < 0.5 * goal_distance:
         lv = wp.max(lv - 1, 0)
     level[e] = lv
     play = lv
@@ -262,6 +272,13 @@ def curriculum_kernel(
     p = _place(hf, play, levels, lane_width, offset_y[e], footprint, spawn_height)
     lane[e] = wp.vec2(p[0], p[1])
     spawn_z[e] = p[2]
+
+
+@wp.func
+def walked(joint_q: wp.array2d[wp.float32], start: wp.array[wp.vec2], course: wp.array[wp.vec2], e: int) -> float:
+    """How far env ``e`` walked from its episode's start along its goal's course (x - x_start on the straight tasks)."""
+    c = course[e]
+    return (joint_q[e, 0] - start[e][0]) * c[0] + (joint_q[e, 1] - start[e][1]) * c[1]
 
 
 @wp.kernel
@@ -295,7 +312,8 @@ def strict_from(cfg) -> int:
 
 def curriculum_reference(status, walked, level, goal_distance, levels, random_level, strict_from=None, climb=1,
                          played=None):
-    """Float64 reference of :func:`curriculum_kernel`'s level update (``walked`` = x - start x; ``random_level``
+    """Float64 reference of :func:`curriculum_kernel`'s level update (``walked`` along the goal's course from the
+    start: x - start x on the straight tasks; ``random_level``
     (N,) stands in for the kernel's draw where an env solves the last level; ``strict_from`` and ``climb`` as the
     kernel's, None: ``levels``; ``played`` (N,): the lane each episode was played on, None: its level; one drawn
     past the course leaves the level as it is). Returns the new levels."""
@@ -327,11 +345,12 @@ def reset_envs_kernel(
     joint_noise: float,
     seed: int,
     counter: wp.array[wp.int32],
+    task: TaskParams,
+    goals: Goals,
     joint_q: wp.array2d[wp.float32],
     joint_qd: wp.array2d[wp.float32],
     joint_target: wp.array2d[wp.float32],
-    start: wp.array[wp.vec2],
-    prev_x: wp.array[wp.float32],
+    prev_xy: wp.array[wp.vec2],
 ):
     e = wp.tid()
     if not mask[e]:
@@ -355,8 +374,13 @@ def reset_envs_kernel(
             joint_target[e, 7 + 3 * leg + k] = q
     for i in range(joint_qd.shape[1]):
         joint_qd[e, i] = 0.0
-    start[e] = wp.vec2(x, y)
-    prev_x[e] = x
+    goals.start[e] = wp.vec2(x, y)
+    goals.start_yaw[e] = a
+    goals.reached[e] = 0
+    u_bearing = wp.randf(rng)
+    u_distance = wp.randf(rng)
+    set_goal(goals, task, e, 0, x, y, a, u_bearing, u_distance)
+    prev_xy[e] = wp.vec2(x, y)
 
 
 @wp.kernel
@@ -376,3 +400,62 @@ def reset_bounds_reference(lane, spawn_z, stand, lower, upper, lateral, yaw, joi
     ok &= np.all(joints >= np.asarray(lower) - 1e-6) & np.all(joints <= np.asarray(upper) + 1e-6)
     ok &= np.all(np.abs(joints - np.asarray(stand)) <= joint_noise + 1e-6)
     return bool(ok)
+
+
+# ====================================================================================================
+# episode bookkeeping
+# ====================================================================================================
+
+# the ring's columns: one per episode end (its status code - 1), then distance, length, the curriculum lane played and
+# the goals reached
+ENDS = sorted(TERMINATIONS, key=lambda end: end.code)
+DISTANCE, LENGTH, LEVEL, GOALS = len(ENDS), len(ENDS) + 1, len(ENDS) + 2, len(ENDS) + 3
+
+
+@wp.kernel
+def bookkeeping_kernel(
+    status: wp.array[wp.int32],
+    joint_q: wp.array2d[wp.float32],
+    start: wp.array[wp.vec2],
+    course: wp.array[wp.vec2],
+    reached: wp.array[wp.int32],
+    level: wp.array[wp.int32],
+    steps: wp.array[wp.int32],
+    done: wp.array[wp.bool],
+    done_u8: wp.array[wp.uint8],
+    time_out: wp.array[wp.uint8],
+    cursor: wp.array[wp.int32],
+    ring: wp.array2d[wp.float32],
+    nonfinite_total: wp.array[wp.int32],
+):
+    """Done flags and step counters; each finished episode writes (status one-hot, distance along the goal's course,
+    length, curriculum level, goals reached) to the ring; blown-up envs are counted in ``nonfinite_total``."""
+    e = wp.tid()
+    st = status[e]
+    d = st != 0
+    done[e] = d
+    done_u8[e] = wp.uint8(0)
+    time_out[e] = wp.uint8(0)
+    if st == TIMEOUT:
+        time_out[e] = wp.uint8(1)
+    if st == NONFINITE:
+        wp.atomic_add(nonfinite_total, 0, 1)
+    if d:
+        done_u8[e] = wp.uint8(1)
+        slot = wp.atomic_add(cursor, 0, 1) % ring.shape[0]
+        for k in range(wp.static(len(ENDS))):
+            ring[slot, k] = 0.0
+        ring[slot, st - 1] = 1.0  # status 1..5 -> columns fell, off_course, success, timeout, nonfinite
+        dist = float(0.0)
+        if wp.isfinite(joint_q[e, 0]) and wp.isfinite(joint_q[e, 1]):
+            dist = walked(joint_q, start, course, e)
+        ring[slot, DISTANCE] = dist
+        ring[slot, LENGTH] = float(steps[e] + 1)
+        ring[slot, LEVEL] = float(level[e])
+        goals = reached[e]
+        if st == SUCCESS:  # the last goal, whose reaching ended the episode
+            goals = goals + 1
+        ring[slot, GOALS] = float(goals)
+        steps[e] = 0
+    else:
+        steps[e] = steps[e] + 1

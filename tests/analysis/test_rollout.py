@@ -21,6 +21,7 @@ from hexnewton.mdp.terms import (
     EndInputs,
     episode_status_kernel,
     episode_status_np,
+    goals_from_host,
     height_field_from_grid,
     make_struct,
 )
@@ -54,6 +55,16 @@ def test_episode_status_kernel_matches_reference(seed):
     q[:, 2] = ground + rng.uniform(0.0, 0.2, n)
     q[:, 3:7] = _random_quats(rng, n, 1.6)
     start = np.stack([rng.uniform(-0.2, 0.2, n), rng.uniform(-0.5, 0.5, n)], axis=1).astype(np.float32)
+    # half the goals the paper's, 3.5 m ahead of the start (the last); half in every direction, 0-4 m from the
+    # robot, each with the course from a point behind it, the last or not (mdp/terms/goals.py)
+    bearing, r = rng.uniform(-math.pi, math.pi, n), rng.uniform(0.0, 4.0, n)
+    goal = np.stack([q[:, 0] + r * np.cos(bearing), q[:, 1] + r * np.sin(bearing)], axis=1)
+    course = np.stack([np.cos(bearing + rng.uniform(-0.5, 0.5, n)), np.sin(bearing + rng.uniform(-0.5, 0.5, n))], 1)
+    course /= np.linalg.norm(course, axis=1, keepdims=True)
+    left = rng.choice([0, -1, 2], n)
+    ahead = np.arange(n) % 2 == 0
+    goal[ahead], course[ahead], left[ahead] = start[ahead] + [TASK.goal_distance, 0.0], (1.0, 0.0), 0
+    goal, course = goal.astype(np.float32), course.astype(np.float32)
     q[: n // 16, rng.integers(0, 25)] = np.nan
     qd = rng.normal(0.0, 1.0, (n, 24))
     qd[n // 16: n // 8, rng.integers(0, 24)] = np.inf  # non-finite velocities
@@ -64,10 +75,11 @@ def test_episode_status_kernel_matches_reference(seed):
     rpy = wp.zeros((n, 3), dtype=wp.float32, device="cpu")
     f32 = lambda a: wp.array(a.astype(np.float32), device="cpu")  # noqa: E731
     inputs = make_struct(EndInputs, joint_q=f32(q), joint_qd=f32(qd), episode_steps=wp.array(steps, device="cpu"),
-                         start=wp.array(start, dtype=wp.vec2, device="cpu"), hf=hf, task=TASK)  # fmt: skip
+                         goals=goals_from_host("cpu", goal, course, left), hf=hf, task=TASK)  # fmt: skip
     wp.launch(episode_status_kernel, dim=n, inputs=[inputs], outputs=[status, rpy], device="cpu")
     ns = SimpleNamespace(joint_q=q.astype(np.float32), joint_qd=qd.astype(np.float32), episode_steps=steps,
-                         start=start, ground=ground, task=TASK)  # fmt: skip
+                         goals=SimpleNamespace(goal=goal, course=course, left=left), ground=ground,
+                         task=TASK)  # fmt: skip
     ref_status, ref_rpy = episode_status_np(ns)
     assert (ref_status[: n // 8 + 8] == NONFINITE).all()
     # thresholds compared in float32 vs float64 can differ right at the boundary: allow a handful

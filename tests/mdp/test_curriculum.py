@@ -121,8 +121,14 @@ def test_curriculum_kernel_matches_reference(strict, climb, share):
     level = rng.integers(0, levels, n).astype(np.int32)
     walked = rng.uniform(-0.5, 3.5, n)
     start = np.stack([rng.uniform(-0.2, 0.2, n), rng.uniform(-2, 2, n)], axis=1).astype(np.float32)
+    # the distance walked counts along the goal's course (+x on the straight tasks; here in every direction), the
+    # offset across it not
+    other = np.random.default_rng(1)  # (its own draws: the others' stay as they were)
+    angle = other.uniform(-np.pi, np.pi, n)
+    course = np.stack([np.cos(angle), np.sin(angle)], axis=1).astype(np.float32)
+    across = other.uniform(-1.0, 1.0, n)
     q = np.zeros((n, 25), np.float32)
-    q[:, 0] = start[:, 0] + walked
+    q[:, :2] = start + walked[:, None] * course + across[:, None] * np.stack([-course[:, 1], course[:, 0]], axis=1)
     offset = rng.uniform(-0.3, 0.3, n).astype(np.float32)
     lane_in = np.full((n, 2), 9.0, np.float32)
     arr = lambda a, dt=None: wp.array(a, dtype=dt, device=DEV) if dt else wp.array(a, device=DEV)  # noqa: E731
@@ -131,15 +137,16 @@ def test_curriculum_kernel_matches_reference(strict, climb, share):
     level_wp, lane_wp, z_wp = arr(level), arr(lane_in, wp.vec2), arr(np.full(n, 9.0, np.float32))
     played_wp = arr(played)
     wp.launch(curriculum_kernel, dim=n,
-              inputs=[arr(status), arr(q), arr(start, wp.vec2), goal, levels, climb, levels if strict is None else strict,
+              inputs=[arr(status), arr(q), arr(start, wp.vec2), arr(course, wp.vec2), goal, levels, climb,
+                      levels if strict is None else strict,
                       cfg.lane_width, arr(offset), hf, footprint, clearance, past, share, 3,
                       arr(np.array([5], np.int32))],
               outputs=[level_wp, played_wp, lane_wp, z_wp], device=DEV)  # fmt: skip
     got, played_next = level_wp.numpy(), played_wp.numpy()
     top = (status == SUCCESS) & (level == levels - 1) & (played == level)
     assert top.any() and np.all((got[top] >= 0) & (got[top] < levels))
-    want = curriculum_reference(status, q[:, 0].astype(np.float64) - start[:, 0], level, goal, levels, got, strict,
-                                climb, played)
+    walked_along = ((q[:, :2].astype(np.float64) - start) * course).sum(axis=1)
+    want = curriculum_reference(status, walked_along, level, goal, levels, got, strict, climb, played)
     np.testing.assert_array_equal(got, want)
     moved = (status != 0) & (status != NONFINITE)
     # the next episode: on a lane past the course drawn with probability share, else on the level's lane

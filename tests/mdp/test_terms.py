@@ -38,6 +38,7 @@ from hexnewton.mdp.terms import (
     RewardTerm,
     TaskParams,
     config_params,
+    goals_from_host,
     height_field_from_grid,
     layout_name,
     layout_parts,
@@ -60,25 +61,35 @@ TASK, REW = TaskConfig(), RewardConfig()
 # ------------------------------------------------------------------ rewards (Table 1, Eq. 5, shaping)
 
 
-def _reward_arrays(n, q=None, **given):
-    """Reward inputs as float32 / int32 NumPy arrays: upright, at rest, no actions, unless given."""
+def _reward_arrays(n, q=None, start=None, **given):
+    """Reward inputs as float32 / int32 NumPy arrays: upright, at rest, no actions, unless given; the goal
+    ``TASK.goal_distance`` ahead of ``start`` (zeros) along +x, the last, unless ``goal``, ``course``, ``left`` are
+    given (``mdp/terms/goals.py``)."""
     q = np.zeros((n, 25)) if q is None else q
     if not np.any(q[:, 3:7]):
         q[:, 6] = 1.0
+    start = np.zeros((n, 2)) if start is None else np.asarray(start, np.float32)
     arrays = dict(joint_q=q, joint_qd=np.zeros((n, 24)), rpy=np.zeros((n, 3)), status=np.zeros(n),
-                  episode_steps=np.full(n, 5), actions=np.zeros((n, 15)), start=np.zeros((n, 2)),
-                  prev_x=q[:, 0].copy(), prev_actions=np.zeros((n, 15)))  # fmt: skip
+                  episode_steps=np.full(n, 5), actions=np.zeros((n, 15)),
+                  goal=(start + np.float32([TASK.goal_distance, 0.0])).astype(np.float32),
+                  course=np.tile([1.0, 0.0], (n, 1)), left=np.zeros(n), prev_xy=q[:, :2].copy(),
+                  prev_actions=np.zeros((n, 15)))  # fmt: skip
     arrays.update(given)
-    ints = ("status", "episode_steps")
+    ints = ("status", "episode_steps", "left")
     return {k: np.asarray(v, np.int32 if k in ints else np.float32) for k, v in arrays.items()}
 
 
+GOAL_KEYS = ("goal", "course", "left")
+
+
 def _run_rewards(grid, arrays, task=TASK, reward=REW, table=None):
-    """The kernel's (reward, terms, prev_x, prev_actions) and the float64 reference's, on ``grid``."""
+    """The kernel's (reward, terms, prev_xy, prev_actions) and the float64 reference's, on ``grid``."""
     n = len(arrays["joint_q"])
-    dev = {k: wp.array(v, dtype=wp.vec2, device=DEV) if k == "start" else wp.array(v, device=DEV)
-           for k, v in arrays.items()}  # fmt: skip
-    inputs = make_struct(RewardInputs, hf=height_field_from_grid(grid, DEV), task=task, reward=reward, **dev)
+    dev = {k: wp.array(v, dtype=wp.vec2, device=DEV) if k == "prev_xy" else wp.array(v, device=DEV)
+           for k, v in arrays.items() if k not in GOAL_KEYS}  # fmt: skip
+    goals = goals_from_host(DEV, *(arrays[k] for k in GOAL_KEYS))
+    inputs = make_struct(RewardInputs, hf=height_field_from_grid(grid, DEV), task=task, reward=reward, goals=goals,
+                         **dev)  # fmt: skip
     cols = len(table or REWARD_TERMS)
     rew, terms = wp.zeros(n, device=DEV), wp.zeros((n, cols), device=DEV)
     kernel = rewards_kernel if table is None else make_rewards_kernel(table)
@@ -87,9 +98,10 @@ def _run_rewards(grid, arrays, task=TASK, reward=REW, table=None):
     q = arrays["joint_q"]
     with np.errstate(invalid="ignore"):
         ground = terrain_height_np(grid, np.nan_to_num(q[:, 0]), np.nan_to_num(q[:, 1]))
-    ns = SimpleNamespace(**arrays, ground=ground, task=task, reward=reward)
+    ns = SimpleNamespace(**{k: v for k, v in arrays.items() if k not in GOAL_KEYS}, ground=ground, task=task,
+                         reward=reward, goals=SimpleNamespace(**{k: arrays[k] for k in GOAL_KEYS}))  # fmt: skip
     ref = rewards_reference(ns) if table is None else rewards_reference(ns, table)
-    return (rew.numpy(), terms.numpy(), dev["prev_x"].numpy(), dev["prev_actions"].numpy()), ref
+    return (rew.numpy(), terms.numpy(), dev["prev_xy"].numpy(), dev["prev_actions"].numpy()), ref
 
 
 def _random_reward_arrays(rng, n, grid):
@@ -104,13 +116,13 @@ def _random_reward_arrays(rng, n, grid):
     return _reward_arrays(n, q, joint_qd=rng.normal(0.0, 2.0, (n, 24)), rpy=rng.uniform(-1.2, 1.2, (n, 3)),
                           status=rng.integers(0, 5, n), episode_steps=rng.integers(0, 3, n),
                           actions=rng.uniform(-1.3, 1.3, (n, 15)), start=rng.uniform(-0.2, 0.2, (n, 2)),
-                          prev_x=q[:, 0] - rng.uniform(-0.01, 0.01, n),
+                          prev_xy=q[:, :2] - rng.uniform(-0.01, 0.01, (n, 2)),
                           prev_actions=rng.uniform(-1.0, 1.0, (n, 15)))  # fmt: skip
 
 
 def test_reward_kernel_matches_reference_on_random_states():
     """Every column of the fused kernel against its row's float64 NumPy function, the reward against their sum,
-    and the state kept for the next step (prev_x, clamped actions)."""
+    and the state kept for the next step (prev_xy, clamped actions)."""
     rng = np.random.default_rng(1)
     n = 256
     grid = make_terrain(TerrainConfig(name="complex")).grid
@@ -141,10 +153,10 @@ def test_reward_terms_on_hand_made_states():
     q[:, 0] = [0.5, 0.5, 3.2, 0.5, 0.5]
     rpy = np.array([[0, 0, 0], [0.7, 0, 0], [0, 0, 0], [0, 0, math.pi], [0, 0, 0]])
     status = np.array([0, FELL, SUCCESS, 0, OFF_COURSE])
-    prev_x = q[:, 0] - np.array([0.01, 0.0, 0.01, 0.01, 0.0])
+    prev_xy = q[:, :2] - np.array([[0.01, 0.0], [0.0, 0.0], [0.01, 0.0], [0.01, 0.0], [0.0, 0.0]])
 
     def terms(reward=REW):
-        (_, t, _, _), _ = _run_rewards(grid, _reward_arrays(5, q.copy(), rpy=rpy, status=status, prev_x=prev_x),
+        (_, t, _, _), _ = _run_rewards(grid, _reward_arrays(5, q.copy(), rpy=rpy, status=status, prev_xy=prev_xy),
                                        reward=reward)  # fmt: skip
         return dict(zip(REWARD_NAMES, t.T))
 
@@ -171,7 +183,7 @@ def test_reward_terms_on_hand_made_states():
     # 1 m to the side of the start, 2 m short of the goal: facing +x is the paper's ideal heading; ours asks
     # for the bearing to the goal, atan2(-1, 2)
     q[0, :2], bearing = (1.5, 1.0), math.atan2(-1.0, 2.0)
-    prev_x[0] = 1.49
+    prev_xy[0] = (1.49, 1.0)
     for yaw, to_goal, expect in ((0.0, False, 0.0), (0.0, True, math.cos(bearing) - 1), (bearing, True, 0.0)):
         rpy[0, 2] = yaw
         got = terms(dataclasses.replace(REW, direction_to_goal=to_goal))["direction"][0]
@@ -223,10 +235,10 @@ def test_reward_table_drives_kernel_reference_and_log():
 
     @wp.func
     def lateral(inputs: RewardInputs, frame: RewardFrame) -> float:
-        return wp.abs(frame.py - inputs.start[frame.env][1])
+        return wp.abs(frame.py - inputs.goals.goal[frame.env][1])
 
     table = tuple(reversed(REWARD_TERMS)) + (
-        RewardTerm("lateral", "w_height", lateral, lambda inputs, frame: np.abs(frame.py - inputs.start[:, 1]),
+        RewardTerm("lateral", "w_height", lateral, lambda inputs, frame: np.abs(frame.py - inputs.goals.goal[:, 1]),
                    cost=True),
     )
     grid = make_terrain(TerrainConfig(name="rugged")).grid
@@ -237,7 +249,7 @@ def test_reward_table_drives_kernel_reference_and_log():
     assert terms.shape == (128, len(REWARD_TERMS) + 1)
     np.testing.assert_array_equal(terms[:, : len(REWARD_TERMS)], base_terms[:, ::-1])  # same values, table order
     np.testing.assert_allclose(terms, ref_terms, rtol=1e-4, atol=1e-4)
-    np.testing.assert_allclose(terms[:, -1], -2.0 * np.abs(arrays["joint_q"][:, 1] - arrays["start"][:, 1])
+    np.testing.assert_allclose(terms[:, -1], -2.0 * np.abs(arrays["joint_q"][:, 1] - arrays["goal"][:, 1])
                                * np.isfinite(arrays["joint_q"][:, :3]).all(axis=1), rtol=1e-5, atol=1e-6)  # fmt: skip
     np.testing.assert_allclose(rew, ref_rew, rtol=1e-4, atol=1e-3)
     np.testing.assert_allclose(rew, terms.sum(axis=1), rtol=1e-5, atol=1e-4)
@@ -350,7 +362,10 @@ def test_observation_kernel_matches_reference():
     q[:, 7:] = rng.uniform(-1, 1, (n, 18))
     qd = rng.normal(size=(n, 24)).astype(np.float32)
     params = rng.uniform(0, 10, (n, 18)).astype(np.float32)
-    start = rng.uniform(-0.2, 0.2, (n, 2)).astype(np.float32)
+    # goals in every direction, on the stepped course's patch
+    goal = np.stack([rng.uniform(-0.8, 4.8, n), rng.uniform(-2.4, 2.4, n)], axis=1).astype(np.float32)
+    goal = ((np.floor(goal / 0.01) + 0.5) * 0.01).astype(np.float32)  # off 1 cm cell edges
+    course = np.tile([1.0, 0.0], (n, 1))  # (the observation reads the goal alone)
     steps = rng.integers(0, 3, n).astype(np.int32)  # some envs at their episode's first step: no last actions yet
     hf = height_field_from_grid(grid, DEV)
 
@@ -365,12 +380,12 @@ def test_observation_kernel_matches_reference():
         actions = rng.uniform(-1, 1, (n, LAYOUT_ACTIONS[layout_parts(layout)[0]])).astype(np.float32)
         out = wp.zeros((n, OBS_DIM[layout]), dtype=wp.float32, device=DEV)
         inputs = make_struct(ObsInputs, joint_q=wp.array(q, device=DEV), joint_qd=wp.array(qd, device=DEV),
-                             params=wp.array(p, device=DEV), start=wp.array(start, dtype=wp.vec2, device=DEV),
+                             params=wp.array(p, device=DEV), goals=goals_from_host(DEV, goal, course, np.zeros(n)),
                              actions=wp.array(actions, device=DEV), episode_steps=wp.array(steps, device=DEV), hf=hf,
                              task=TASK)  # fmt: skip
         wp.launch(observations_kernel, dim=n, inputs=[inputs, LAYOUTS.index(layout)], outputs=[out], device=DEV)
-        ns = SimpleNamespace(joint_q=q, joint_qd=qd, params=p, start=start, actions=actions, episode_steps=steps,
-                             ground_at=ground_at, task=TASK)  # fmt: skip
+        ns = SimpleNamespace(joint_q=q, joint_qd=qd, params=p, goals=SimpleNamespace(goal=goal), actions=actions,
+                             episode_steps=steps, ground_at=ground_at, task=TASK)  # fmt: skip
         ref = observations_reference(ns, layout)
         assert ref.shape == (n, OBS_DIM[layout])
         np.testing.assert_allclose(out.numpy(), ref, atol=2e-4, rtol=1e-4)

@@ -1,6 +1,7 @@
 """The MDP's terms (Huang et al. 2025, §2.4), by kind: episode ends (``terminations``), rewards (``rewards``) and
 observations (``observations``), one table of rows and one fused Warp kernel each, on the ground as the terms see it
-(``ground``) and the configuration structs the tables share (``structs``).
+(``ground``), each env's goal, which they all read (``goals``), and the configuration structs the tables share
+(``structs``).
 
 After the physics frames of a control step the env (``hexnewton/mdp/env.py``) launches, in this order, the episode
 status kernel (:func:`make_status_kernel`: which envs' episodes end, and why), the rewards kernel of the task's reward
@@ -23,6 +24,19 @@ from hexnewton.mdp.terms.critic import (
     critic_kernel,
     critic_reference,
     physics_columns,
+)
+from hexnewton.mdp.terms.goals import (
+    SWITCH_SEED,
+    GoalBuffers,
+    Goals,
+    check_goals,
+    goal_from_draws,
+    goal_from_draws_np,
+    goal_switch_kernel,
+    goal_switch_reference,
+    goals_from_host,
+    set_goal,
+    set_goal_np,
 )
 from hexnewton.mdp.terms.ground import (
     HeightField,
@@ -71,11 +85,13 @@ from hexnewton.mdp.terms.terminations import (
 )
 
 __all__ = ["BASE_LAYOUTS", "CRITIC_DIM", "CRITIC_LAYOUT", "CRITIC_TERMS", "H_HALF_EXTENT", "LAYOUTS", "OBS_DIM",
-           "OBS_LAYOUT", "OBS_TERMS", "PHYSICS", "REWARD_NAMES", "REWARD_TERMS", "SWITCHES", "TERMINATIONS",
-           "CriticInputs", "CriticTerm", "EndInputs", "HeightField", "ObsInputs", "ObsTerm", "RewardFrame",
-           "RewardInputs", "RewardParams", "RewardTerm", "TaskParams", "Termination", "config_params", "critic_kernel",
-           "critic_reference", "episode_status_kernel", "episode_status_np", "height_field_from_grid", "layout_name",
+           "OBS_LAYOUT", "OBS_TERMS", "PHYSICS", "REWARD_NAMES", "REWARD_TERMS", "SWITCHES", "SWITCH_SEED",
+           "TERMINATIONS", "CriticInputs", "CriticTerm", "EndInputs", "GoalBuffers", "Goals", "HeightField", "ObsInputs", "ObsTerm", "RewardFrame",
+           "RewardInputs", "RewardParams", "RewardTerm", "TaskParams", "Termination", "check_goals", "config_params",
+           "critic_kernel",
+           "critic_reference", "episode_status_kernel", "episode_status_np", "goal_from_draws", "goal_from_draws_np",
+           "goal_switch_kernel", "goal_switch_reference", "goals_from_host", "height_field_from_grid", "layout_name",
            "layout_parts", "make_rewards_kernel", "make_status_kernel", "make_struct", "max_terrain_height",
            "obs_span", "observation_noise", "observations_kernel", "observations_reference", "physics_columns",
-           "reward_table", "reward_weights", "rewards_kernel", "rewards_reference", "sample_heights",
-           "terrain_height"]
+           "reward_table", "reward_weights", "rewards_kernel", "rewards_reference", "sample_heights", "set_goal",
+           "set_goal_np", "terrain_height"]

@@ -20,6 +20,7 @@ import numpy as np
 import warp as wp
 
 from hexnewton.config import JOINT_NAMES, PARAM_NAMES, POSTURE_NAMES
+from hexnewton.mdp.terms.goals import Goals
 from hexnewton.mdp.terms.ground import HeightField, max_terrain_height, terrain_height
 from hexnewton.mdp.terms.structs import TaskParams
 from hexnewton.physics.cpg import quat_to_rpy
@@ -60,7 +61,7 @@ class ObsInputs:
     joint_q: wp.array2d[wp.float32]  # base position (3), quaternion (x, y, z, w), 18 joint angles
     joint_qd: wp.array2d[wp.float32]  # base linear and angular velocity, 18 joint velocities
     params: wp.array2d[wp.float32]  # the CPG parameters the controller runs with (filtered); unread in ``joint``
-    start: wp.array[wp.vec2]  # the episode's start; the goal lies task.goal_distance ahead of it along +x
+    goals: Goals  # each env's goal (goals.py)
     actions: wp.array2d[wp.float32]  # the policy's last actions, as the rewards kernel kept them (clamped)
     episode_steps: wp.array[wp.int32]  # control steps of the episode so far (0: it has just begun)
     hf: HeightField
@@ -94,8 +95,8 @@ def joint_vel_np(inputs):
 
 @wp.func
 def target(inputs: ObsInputs, env: int, obs: wp.array2d[wp.float32], col: int):
-    gx = inputs.start[env][0] + inputs.task.goal_distance
-    gy = inputs.start[env][1]
+    gx = inputs.goals.goal[env][0]
+    gy = inputs.goals.goal[env][1]
     dx = gx - inputs.joint_q[env, 0]
     dy = gy - inputs.joint_q[env, 1]
     yaw = quat_to_rpy(wp.normalize(wp.quat(inputs.joint_q[env, 3], inputs.joint_q[env, 4], inputs.joint_q[env, 5],
@@ -108,8 +109,8 @@ def target(inputs: ObsInputs, env: int, obs: wp.array2d[wp.float32], col: int):
 
 
 def target_np(inputs):
-    jq, start = np.asarray(inputs.joint_q, np.float64), np.asarray(inputs.start, np.float64)
-    gx, gy = start[:, 0] + inputs.task.goal_distance, start[:, 1]
+    jq, goal = np.asarray(inputs.joint_q, np.float64), np.asarray(inputs.goals.goal, np.float64)
+    gx, gy = goal[:, 0], goal[:, 1]
     dx, dy = gx - jq[:, 0], gy - jq[:, 1]
     yaw = quat_to_rpy_np(jq[:, 3:7])[:, 2]
     c, s = np.cos(yaw), np.sin(yaw)

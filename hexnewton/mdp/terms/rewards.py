@@ -9,12 +9,14 @@ order (each function's docstring gives its value):
 - ``direction``: r_theta, the heading error beyond a dead band, toward the goal (or, the paper's, along +x);
 - ``distance``: r_d, exp(-(d_n - d_t)), 1 on the goal circle;
 - ``stability``: r_s, -100 per step while low, tilted beyond ``stability_tilt`` or fallen;
-- ``forward``: r_f, -0.3 per step below ``FORWARD_MIN_SPEED`` along +x;
-- ``goal``: r_goal, +300 once on reaching the goal (ours);
+- ``forward``: r_f, -0.3 per step below ``FORWARD_MIN_SPEED`` along the goal's course (+x on the straight tasks);
+- ``goal``: r_goal, +300 once on reaching a goal (ours);
 - ``off_course``: r_off, -100 once on leaving the course (ours);
 - ``fall``: r_fall, -``fall_penalty`` once on falling (ours; 0: off);
 - ``tilt``, ``ang_vel``, ``action_rate``: the stability shaping's costs (ours; weight 0: off);
 - ``lateral``: the squared offset from the start-to-goal line, a cost (ours; weight 0: off).
+
+The goal, its course (the start-to-goal direction D) and whether it is the episode's last come from ``goals.py``.
 
 ``docs/internals.md`` ("The MDP") gives the paper's wording, our reading of it, the weights and how to add a term."""
 
@@ -25,7 +27,8 @@ from typing import Callable
 import numpy as np
 import warp as wp
 
-from hexnewton.mdp.status import FELL, OFF_COURSE, SUCCESS
+from hexnewton.mdp.status import FELL, OFF_COURSE, RUNNING, SUCCESS
+from hexnewton.mdp.terms.goals import Goals, along_course, off_line, off_line_np
 from hexnewton.mdp.terms.ground import HeightField, terrain_height
 from hexnewton.mdp.terms.structs import RewardParams, TaskParams, choose
 from hexnewton.physics.reference import quat_rotate_inv_np
@@ -37,7 +40,7 @@ FORWARD_MIN_SPEED = 0.1
 
 @wp.struct
 class RewardInputs:
-    """What the reward terms read, one row per env. The kernel also writes ``prev_x`` and ``prev_actions`` for the
+    """What the reward terms read, one row per env. The kernel also writes ``prev_xy`` and ``prev_actions`` for the
     next step."""
 
     joint_q: wp.array2d[wp.float32]  # base position (3), quaternion (x, y, z, w), 18 joint angles
@@ -46,9 +49,9 @@ class RewardInputs:
     status: wp.array[wp.int32]  # this step's episode status (a status code)
     episode_steps: wp.array[wp.int32]  # the episode's steps before this one
     actions: wp.array2d[wp.float32]  # the policy's actions
-    start: wp.array[wp.vec2]  # the episode's start; the goal lies task.goal_distance ahead of it along +x
+    goals: Goals  # each env's goal and its course (goals.py)
     hf: HeightField
-    prev_x: wp.array[wp.float32]  # base x at the last step
+    prev_xy: wp.array[wp.vec2]  # base x, y at the last step
     prev_actions: wp.array2d[wp.float32]  # the last step's actions, clamped to [-1, 1]
     task: TaskParams
     reward: RewardParams
@@ -75,7 +78,7 @@ def reward_frame(inputs: RewardInputs, env: int) -> RewardFrame:
     frame.px = inputs.joint_q[env, 0]
     frame.py = inputs.joint_q[env, 1]
     frame.z = inputs.joint_q[env, 2] - terrain_height(inputs.hf, frame.px, frame.py)
-    frame.to_goal = inputs.start[env] + wp.vec2(inputs.task.goal_distance, 0.0) - wp.vec2(frame.px, frame.py)
+    frame.to_goal = inputs.goals.goal[env] - wp.vec2(frame.px, frame.py)
     frame.scale = inputs.task.control_dt / REF_DT
     frame.ok = wp.isfinite(frame.px) and wp.isfinite(frame.py) and wp.isfinite(frame.z)
     return frame
@@ -98,8 +101,7 @@ def reward_frame_np(inputs) -> FrameNp:
     jq = np.asarray(inputs.joint_q, np.float64)
     px, py = jq[:, 0], jq[:, 1]
     z = jq[:, 2] - np.asarray(inputs.ground, np.float64)
-    start = np.asarray(inputs.start, np.float64)
-    to_goal = np.stack([start[:, 0] + inputs.task.goal_distance - px, start[:, 1] - py], axis=1)
+    to_goal = np.asarray(inputs.goals.goal, np.float64) - np.stack([px, py], axis=1)
     ok = np.isfinite(px) & np.isfinite(py) & np.isfinite(z)
     return FrameNp(px=px, py=py, z=z, to_goal=to_goal, scale=inputs.task.control_dt / REF_DT, ok=ok)
 
@@ -124,16 +126,21 @@ def height_np(inputs, frame):
 
 @wp.func
 def direction(inputs: RewardInputs, frame: RewardFrame) -> float:
-    """r_theta: min(0, cos(heading error) - cos(dead band)), toward the goal (ours) or along +x."""
-    # the start-to-goal direction D is +x, so (cos θ, sin θ) . D / |D| = cos(yaw); ours: D from the robot
-    bearing = float(0.0)
+    """r_theta: min(0, cos(heading error) - cos(dead band)), toward the goal (ours) or along the goal's course."""
+    # the start-to-goal direction D is the goal's course (+x on the straight tasks: (cos θ, sin θ) . D / |D| =
+    # cos(yaw)); ours: D from the robot
+    c = inputs.goals.course[frame.env]
+    bearing = wp.atan2(c[1], c[0])
     if inputs.reward.direction_to_goal:
         bearing = wp.atan2(frame.to_goal[1], frame.to_goal[0])
     return wp.min(0.0, wp.cos(inputs.rpy[frame.env, 2] - bearing) - wp.cos(inputs.reward.direction_deadband))
 
 
 def direction_np(inputs, frame):
-    bearing = np.arctan2(frame.to_goal[:, 1], frame.to_goal[:, 0]) if inputs.reward.direction_to_goal else 0.0
+    course = np.asarray(inputs.goals.course, np.float64)
+    bearing = np.arctan2(course[:, 1], course[:, 0])
+    if inputs.reward.direction_to_goal:
+        bearing = np.arctan2(frame.to_goal[:, 1], frame.to_goal[:, 0])
     yaw = np.asarray(inputs.rpy, np.float64)[:, 2]
     return np.minimum(0.0, np.cos(yaw - bearing) - np.cos(inputs.reward.direction_deadband))
 
@@ -167,15 +174,18 @@ def stability_np(inputs, frame):
 
 @wp.func
 def forward(inputs: RewardInputs, frame: RewardFrame) -> float:
-    """-1 below FORWARD_MIN_SPEED along +x (r_f = forward_penalty x this)."""
+    """-1 below FORWARD_MIN_SPEED along the goal's course, +x on the straight tasks (r_f = forward_penalty x this)."""
+    prev = inputs.prev_xy[frame.env]
     r = float(0.0)
-    if frame.px - inputs.prev_x[frame.env] < FORWARD_MIN_SPEED * inputs.task.control_dt:
+    if along_course(inputs.goals, frame.env, frame.px - prev[0], frame.py - prev[1]) < \
+            FORWARD_MIN_SPEED * inputs.task.control_dt:
         r = -1.0
     return r
 
 
 def forward_np(inputs, frame):
-    step = frame.px - np.asarray(inputs.prev_x, np.float64)
+    prev, course = np.asarray(inputs.prev_xy, np.float64), np.asarray(inputs.goals.course, np.float64)
+    step = (frame.px - prev[:, 0]) * course[:, 0] + (frame.py - prev[:, 1]) * course[:, 1]
     return np.where(step < FORWARD_MIN_SPEED * inputs.task.control_dt, -1.0, 0.0)
 
 
@@ -194,12 +204,19 @@ def ended_as_np(inputs, code):
 
 @wp.func
 def goal(inputs: RewardInputs, frame: RewardFrame) -> float:
-    """1 on reaching the goal (ours: r_goal = goal_bonus x this)."""
-    return ended_as(inputs, frame, SUCCESS)
+    """1 on reaching a goal: the episode's last (status success) or, still running, one that sets the next (ours:
+    r_goal = goal_bonus x this)."""
+    r = ended_as(inputs, frame, SUCCESS)
+    running = inputs.status[frame.env] == RUNNING and inputs.goals.left[frame.env] != 0
+    if running and wp.length(frame.to_goal) < inputs.task.goal_radius:
+        r = 1.0
+    return r
 
 
 def goal_np(inputs, frame):
-    return ended_as_np(inputs, SUCCESS)
+    near = np.hypot(frame.to_goal[:, 0], frame.to_goal[:, 1]) < inputs.task.goal_radius
+    running = (np.asarray(inputs.status) == RUNNING) & (np.asarray(inputs.goals.left) != 0)
+    return np.where(running & near, 1.0, ended_as_np(inputs, SUCCESS))
 
 
 @wp.func
@@ -235,12 +252,14 @@ def tilt_np(inputs, frame):
 
 @wp.func
 def lateral(inputs: RewardInputs, frame: RewardFrame) -> float:
-    """(y - y_start)² [m²], the offset from the start-to-goal line, a cost: r_lateral = -w_lateral x this."""
-    return frame.to_goal[1] * frame.to_goal[1]
+    """The squared offset from the start-to-goal line [m²] ((y - y_start)² on the straight tasks), a cost:
+    r_lateral = -w_lateral x this."""
+    d = off_line(inputs.goals, frame.env, frame.px, frame.py)
+    return d * d
 
 
 def lateral_np(inputs, frame):
-    return frame.to_goal[:, 1] ** 2
+    return off_line_np(inputs.goals, frame.px, frame.py) ** 2
 
 
 @wp.func
@@ -359,7 +378,7 @@ def make_rewards_kernel(table: tuple = REWARD_TERMS) -> wp.Kernel:
         terms: wp.array2d[wp.float32],
     ):
         """Every term of the table (weighted) into ``terms[env, k]`` and their sum, in table order, into
-        ``reward[env]``; then this step's base x and clamped actions become ``prev_x`` and ``prev_actions``. Runs after
+        ``reward[env]``; then this step's base x, y and clamped actions become ``prev_xy`` and ``prev_actions``. Runs after
         the episode status, before the episode counters advance."""
         env = wp.tid()
         frame = reward_frame(inputs, env)
@@ -382,10 +401,10 @@ def make_rewards_kernel(table: tuple = REWARD_TERMS) -> wp.Kernel:
             else:
                 total = total + t
         reward[env] = total
-        px = float(0.0)
+        here = wp.vec2(0.0, 0.0)
         if frame.ok:
-            px = frame.px
-        inputs.prev_x[env] = px
+            here = wp.vec2(frame.px, frame.py)
+        inputs.prev_xy[env] = here
         for k in range(inputs.actions.shape[1]):
             inputs.prev_actions[env, k] = clamped_action(inputs, env, k)
 
@@ -398,7 +417,8 @@ rewards_kernel = make_rewards_kernel(REWARD_TERMS)
 def rewards_reference(inputs, table=REWARD_TERMS):
     """Float64 reference of :func:`make_rewards_kernel`'s kernel. ``inputs`` has :class:`RewardInputs`' fields as NumPy
     arrays, with ``ground`` (N,), the terrain under each base, in place of ``hf``, and ``task`` / ``reward`` a
-    ``TaskConfig`` / ``RewardConfig``. Returns (reward (N,), terms (N, len(table)), prev_x (N,), prev_actions (N, A)).
+    ``TaskConfig`` / ``RewardConfig``, ``goals`` :class:`Goals`' fields as NumPy arrays. Returns (reward (N,), terms
+    (N, len(table)), prev_xy (N, 2), prev_actions (N, A)).
     """
     with np.errstate(invalid="ignore", over="ignore"):
         frame = reward_frame_np(inputs)
@@ -411,4 +431,5 @@ def rewards_reference(inputs, table=REWARD_TERMS):
                 t = np.where(frame.ok, t, 0.0)
             cols.append(np.where(np.isfinite(t), t, 0.0))
     terms = np.stack(cols, axis=1)
-    return terms.sum(axis=1), terms, np.where(frame.ok, frame.px, 0.0), clamped_actions_np(inputs.actions)
+    prev_xy = np.where(frame.ok[:, None], np.stack([frame.px, frame.py], axis=1), 0.0)
+    return terms.sum(axis=1), terms, prev_xy, clamped_actions_np(inputs.actions)

@@ -6,8 +6,10 @@ The status codes and their names live in ``hexnewton/mdp/status.py``. The rows, 
 
 - ``nonfinite``: the physics blew up (NaN/Inf in the state, or a base or joint speed above its limit);
 - ``fell``: the torso is below ``min_height`` above the terrain, or |roll| or |pitch| exceeds ``max_tilt``;
-- ``off_course``: |y - y_start| > ``max_abs_y``;
-- ``success``: within ``goal_radius`` of the goal, ``goal_distance`` ahead of the start;
+- ``off_course``: more than ``max_abs_y`` from the line to the goal (the start-to-goal line: |y - y_start| on the
+  straight tasks);
+- ``success``: within ``goal_radius`` of the episode's last goal (``goals.py``: on the straight tasks the one goal,
+  ``goal_distance`` ahead of the start);
 - ``timeout``: this step is the episode's ``max_episode_steps``-th.
 
 The kernel also writes roll, pitch and yaw (0 for a blown-up env) for the rewards, logging and recording.
@@ -21,6 +23,7 @@ import numpy as np
 import warp as wp
 
 from hexnewton.mdp.status import FELL, NONFINITE, OFF_COURSE, RUNNING, STATUS_NAMES, SUCCESS, TIMEOUT
+from hexnewton.mdp.terms.goals import Goals, goal_reached, off_line, off_line_np
 from hexnewton.mdp.terms.ground import HeightField, terrain_height
 from hexnewton.mdp.terms.structs import TaskParams, choose
 from hexnewton.physics.cpg import quat_to_rpy
@@ -34,7 +37,7 @@ class EndInputs:
     joint_q: wp.array2d[wp.float32]  # base position (3), quaternion (x, y, z, w), 18 joint angles
     joint_qd: wp.array2d[wp.float32]  # base linear and angular velocity, 18 joint velocities
     episode_steps: wp.array[wp.int32]  # the episode's steps before this one
-    start: wp.array[wp.vec2]  # the episode's start
+    goals: Goals  # each env's goal (goals.py)
     hf: HeightField
     task: TaskParams
 
@@ -131,25 +134,25 @@ def fell_np(inputs, frame):
 
 @wp.func
 def left_course(inputs: EndInputs, frame: EndFrame) -> bool:
-    """|y - y_start| above ``max_abs_y``."""
-    return wp.abs(frame.py - inputs.start[frame.env][1]) > inputs.task.max_abs_y
+    """More than ``max_abs_y`` from the line through the goal along its course (|y - y_start| going along +x)."""
+    return wp.abs(off_line(inputs.goals, frame.env, frame.px, frame.py)) > inputs.task.max_abs_y
 
 
 def left_course_np(inputs, frame):
-    return np.abs(frame.py - np.asarray(inputs.start, np.float64)[:, 1]) > inputs.task.max_abs_y
+    return np.abs(off_line_np(inputs.goals, frame.px, frame.py)) > inputs.task.max_abs_y
 
 
 @wp.func
 def success(inputs: EndInputs, frame: EndFrame) -> bool:
-    """Within ``goal_radius`` of the goal, ``goal_distance`` ahead of the start along +x."""
-    to_goal = wp.vec2(frame.px, frame.py) - inputs.start[frame.env] - wp.vec2(inputs.task.goal_distance, 0.0)
-    return wp.length(to_goal) < inputs.task.goal_radius
+    """Within ``goal_radius`` of the episode's last goal (``goals.left`` 0)."""
+    last = inputs.goals.left[frame.env] == 0
+    return last and goal_reached(inputs.goals, frame.env, frame.px, frame.py, inputs.task.goal_radius)
 
 
 def success_np(inputs, frame):
-    start = np.asarray(inputs.start, np.float64)
-    to_goal = np.hypot(frame.px - start[:, 0] - inputs.task.goal_distance, frame.py - start[:, 1])
-    return to_goal < inputs.task.goal_radius
+    goal = np.asarray(inputs.goals.goal, np.float64)
+    near = np.hypot(goal[:, 0] - frame.px, goal[:, 1] - frame.py) < inputs.task.goal_radius
+    return near & (np.asarray(inputs.goals.left) == 0)
 
 
 @wp.func
