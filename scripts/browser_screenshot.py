@@ -2,7 +2,7 @@
 viewer (``--viewer viser``): its committed screenshot and its test (tests/apps/test_browser_viewer.py).
 
     python play.py --checkpoint results/policies/cpg_rl_complex.pt --num_envs 3 --steps 6000 --viewer viser &
-    python scripts/browser_screenshot.py http://127.0.0.1:8080 results/viewer/viser_play.png --wait 40
+    python scripts/browser_screenshot.py http://127.0.0.1:8080 studies/viewer/viser_play.png --wait 40
 """
 
 from __future__ import annotations

@@ -7,7 +7,7 @@ the goal most often, then falls least before the goal line (``fell_before_goal``
 end missed its steering, not its footing), then the later one. All falls (``fell``) are reported beside.
 
 Training success counts sampled actions on the training levels; a policy's deterministic action can walk past the
-goal where its samples reach it (results/cpu_main_job), so the result is chosen on what is shipped and evaluated.
+goal where its samples reach it (studies/cpu_main_job), so the result is chosen on what is shipped and evaluated.
 """
 
 from __future__ import annotations

@@ -1,6 +1,6 @@
 """Trained CPG_RL policies (trained at the default physics) rolled out under each candidate SimConfig (CPU).
 
-    python scripts/physics_screen/policy_check.py A C ...
+    python studies/physics_screen/policy_check.py A C ...
 flat policy on flat (16 robots x 2 seeds, 15 s), rugged policy on rugged (16 robots x 2 seeds, 30 s);
 reset_yaw 0.2 as in training, first episodes only.
 """
@@ -16,7 +16,7 @@ from hexnewton.learning.checkpoint import load_checkpoint, trained_config
 from hexnewton.learning.policy import load_policy
 from hexnewton.mdp.env import make_env
 
-sys.path.insert(0, "scripts/physics_screen")
+sys.path.insert(0, "studies/physics_screen")
 from candidates import CANDIDATES  # noqa: E402
 
 POL = {"flat": ("results/policies/cpg_rl_flat.pt", 15.0), "rugged": ("results/policies/cpg_rl_rugged.pt", 30.0)}

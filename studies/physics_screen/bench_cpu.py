@@ -1,7 +1,7 @@
 """CPU sim-only throughput per candidate: hexnewton.analysis.bench.bench_one with the candidate's SimConfig
 (so rigid_gap works too). 16 envs, flat + complex, best of `reps` runs.
 
-    python scripts/physics_screen/bench_cpu.py A B C ... [--json out]
+    python studies/physics_screen/bench_cpu.py A B C ... [--json out]
 """
 import json
 import sys
@@ -11,7 +11,7 @@ from dataclasses import replace
 from hexnewton.analysis.bench import bench_one
 from hexnewton.config import SimConfig
 
-sys.path.insert(0, "scripts/physics_screen")
+sys.path.insert(0, "studies/physics_screen")
 from candidates import CANDIDATES  # noqa: E402
 
 args = sys.argv[1:]

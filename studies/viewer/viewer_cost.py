@@ -1,10 +1,10 @@
 """What one frame of the browser viewer costs a CPU control step, with headless Chromium connected to the page:
 
-    taskset -c 0 python scripts/viewer_cost.py --num_envs 64 --port 8093
+    taskset -c 0 python studies/viewer/viewer_cost.py --num_envs 64 --port 8093
 
 Prints the mean time [ms] of a control step (flat task, zero actions) without a client, then with Chromium on the
 page (moved to the cores this process is not pinned to): a drawn frame in the caller's thread (``RolloutViewer.render``), a control step, and a control step with a frame
-drawn every step (the difference holds viser's server thread too). results/viewer/report.md."""
+drawn every step (the difference holds viser's server thread too). studies/viewer/report.md."""
 
 from __future__ import annotations
 
@@ -14,7 +14,7 @@ import os
 import sys
 import time
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))), "scripts"))
 
 
 def mean_ms(fn, n: int = 20) -> float:

@@ -1,6 +1,6 @@
 """Stability + dynamics-similarity checks of physics-setting candidates (CPU, small worlds).
 
-    python scripts/physics_screen/candidates.py A B C ... [--json out.json]
+    python studies/physics_screen/candidates.py A B C ... [--json out.json]
 
 Per candidate SimConfig:
   stand    : test_world.test_stands_two_seconds on every terrain (4 envs, 2 s), plus penetration/overflow
