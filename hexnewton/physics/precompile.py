@@ -23,7 +23,7 @@ whatever is not loaded.
 
 Ahead of time: ``hexnewton/physics/aot/warp-<version>-sm<arch>.tar.xz`` holds the step's modules compiled for one GPU
 architecture (sm_90: H100, H200), each a module folder of Warp's kernel cache (its ``.meta`` and cubin), built with
-``scripts/device/precompile.py`` (its ship mode) from Warp's NVRTC without a GPU and from a GPU machine's cache.
+``scripts/precompile.py`` (its ship mode) from Warp's NVRTC without a GPU and from a GPU machine's cache.
 :func:`install_shipped_modules` (each World, before any module loads) copies the folders Warp's cache lacks into it,
 so that a fresh machine of that architecture compiles only what changed since (a module's folder name holds the hash
 of its source and options: a stale one is never loaded, the module compiles as without the archive).

@@ -1,6 +1,6 @@
 """The modules compiled ahead of time (hexnewton/physics/aot/): installing an archive into Warp's cache, and the shipped
 archive holding the current version of every module of hexnewton's that the complex task's step loads (after a kernel
-change: ``python scripts/device/precompile.py --ship``)."""
+change: ``python scripts/precompile.py --ship``)."""
 
 import dataclasses
 import io
@@ -52,7 +52,7 @@ def test_the_shipped_archive_is_current():
     from hexnewton.tasks import task
 
     archive = SHIPPED_DIR / shipped_archive_name(90)
-    assert archive.is_file(), f"{archive} is missing: python scripts/device/precompile.py --ship"
+    assert archive.is_file(), f"{archive} is missing: python scripts/precompile.py --ship"
     with tarfile.open(archive) as tar:
         shipped = {m.name.split("/", 1)[0] for m in tar.getmembers()}
     t = task("complex")
@@ -69,4 +69,4 @@ def test_the_shipped_archive_is_current():
     stale = [m.get_module_identifier(block_dim=m.options["block_dim"]) for m in own + generated]
     stale = [ident for ident in stale if ident not in shipped]
     if stale:
-        pytest.fail(f"the shipped modules lack {', '.join(stale)}: python scripts/device/precompile.py --ship")
+        pytest.fail(f"the shipped modules lack {', '.join(stale)}: python scripts/precompile.py --ship")

@@ -5,9 +5,9 @@ driver, and a module's cache name does not depend on the machine, so this script
 (training, the fixed-CPG rollout, the benchmark's sim-only loop), then compiles every module that was loaded for
 `--arch` (default 90: H100, H200), skipping those already there:
 
-    python scripts/device/precompile.py --ship                    # hexnewton/physics/aot/warp-<version>-sm90.tar.xz
-    python scripts/device/precompile.py --ship --add DIR_OR_TGZ   # first merge a GPU machine's Warp cache into it
-    python scripts/device/precompile.py --cache runs/warpcache.tgz    # a kernel-cache archive to unpack by hand
+    python scripts/precompile.py --ship                    # hexnewton/physics/aot/warp-<version>-sm90.tar.xz
+    python scripts/precompile.py --ship --add DIR_OR_TGZ   # first merge a GPU machine's Warp cache into it
+    python scripts/precompile.py --cache runs/warpcache.tgz    # a kernel-cache archive to unpack by hand
 
 `--ship` updates the archive the package carries (hexnewton.physics.precompile.install_shipped_modules puts its
 modules into Warp's cache on each GPU start): module folders with only their `.meta` and cubin, older versions of
