@@ -1,9 +1,10 @@
 """Every command line the documents show parses with the current code.
 
-Documents: ``README.md``, ``RESULTS.md``, ``BENCHMARKS.md`` and ``docs/*.md``, and for their commands also the
-reports under ``results/`` that they cite (a result's provenance: the report named, or the one beside a named file or
+Documents: ``README.md``, ``RESULTS.md``, ``BENCHMARKS.md``, ``docs/*.md``, ``results/README.md`` (the shipped
+artefacts) and each study's ``studies/<name>/README.md``, and for their commands also the reports under ``results/``
+and ``studies/`` that they cite (a result's provenance: the report named, or the one beside a named file or
 in a named folder). Commands: the lines of fenced code blocks and the inline ``code`` spans that start with
-``python``, ``python3``, ``torchrun`` or ``bash scripts/`` (after ``VAR=value`` prefixes; a fenced line joined with
+``python``, ``python3``, ``torchrun``, ``bash scripts/`` or ``bash studies/`` (after ``VAR=value`` prefixes; a fenced line joined with
 its ``\\`` continuations, cut at ``&&``, ``||``, ``;`` and `` | `` (a pipe between spaces: ``{a|b}`` is one word),
 its ``# comment`` and a trailing `` &`` dropped; an inline span may wrap over lines). Each is
 checked without running it:
@@ -14,7 +15,8 @@ checked without running it:
   ``hexnewton.apps.X.main``: the entry point's own argument parser parses
   ARGS in-process (``argparse.ArgumentParser.parse_args`` is patched to stop right after a successful parse), so a
   flag that does not exist, a wrong value or a missing argument fails with the parser's one-line message;
-- ``python scripts/....py``: the file exists; ``bash scripts/....sh SUB``: the file exists and SUB is one of its
+- ``python scripts/....py`` and ``python studies/....py``: the file exists; ``bash scripts/....sh SUB`` and
+  ``bash studies/....sh SUB``: the file exists and SUB is one of its
   top-level ``case`` labels;
 - ``python -m pytest``, ``python -c``, ``pip``, ``git``, ``tensorboard`` and other tools: not checked.
 
@@ -27,9 +29,11 @@ in a document         parsed as
 ``BUNDLE``            ``results/controllers/cpg_rl_complex`` (an exported bundle)
 ``DIR``               ``out`` (an output directory)
 ``N``                 ``2``
+``T``                 ``rugged`` (a terrain)
 ``<word>``            ``word`` (a part of a path: ``logs/hexnewton_rugged/<run>/model_299.pt``)
 ``{a|b|c}``           each alternative in turn (``--task {rugged|stepped}`` is two commands)
 ``...``               nothing (more of the same flags)
+``ARGS``, ``[FLAGS]``  nothing (a command's flags)
 ====================  ===============================================================================
 
 ``--resume PATH`` reads the checkpoint before the parser is built (the parser takes the checkpoint's task), so the
@@ -65,8 +69,9 @@ from dataclasses import dataclass
 import pytest
 
 ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), ".."))
-DOCUMENTS = ["README.md", "RESULTS.md", "BENCHMARKS.md"] + sorted(
-    os.path.relpath(p, ROOT) for p in glob.glob(os.path.join(ROOT, "docs", "*.md"))
+DOCUMENTS = ["README.md", "RESULTS.md", "BENCHMARKS.md", "results/README.md"] + sorted(
+    os.path.relpath(p, ROOT) for pattern in (("docs", "*.md"), ("studies", "*", "README.md"))
+    for p in glob.glob(os.path.join(ROOT, *pattern))
 )
 
 
@@ -88,9 +93,9 @@ def _cited_reports() -> list[str]:
 
 REPORTS = _cited_reports()
 PLACEHOLDERS = {"CKPT": "results/policies/cpg_rl_complex.pt", "BUNDLE": "results/controllers/cpg_rl_complex",
-                "DIR": "out", "N": "2"}  # fmt: skip
+                "DIR": "out", "N": "2", "T": "rugged"}  # fmt: skip
 MARK = re.compile(r"\(at\s+([0-9a-f]{7,40})\)")
-STARTS = ("python ", "python3 ", "torchrun ", "bash scripts/")
+STARTS = ("python ", "python3 ", "torchrun ", "bash scripts/", "bash studies/")
 #: torchrun's flags that take no value
 TORCHRUN_SWITCHES = ("--standalone", "--no-python", "--no_python", "--run-path", "--run_path")
 #: fewer commands than this means the extractor is broken, not that the documents have none
@@ -189,7 +194,7 @@ def expand(text: str) -> list[str]:
     if m:
         return [v for alt in m.group(1).split("|") for v in expand(text[: m.start()] + alt + text[m.end() :])]
     text = re.sub(r"<([^<>\s]+)>", r"\1", text)
-    words = [w for w in shlex.split(text) if w not in ("...", "…")]
+    words = [w for w in shlex.split(text) if w not in ("...", "…", "ARGS", "[FLAGS]")]
     return [" ".join(shlex.quote(PLACEHOLDERS.get(w, w)) for w in words)]
 
 

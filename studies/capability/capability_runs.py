@@ -1,4 +1,4 @@
-"""Measured capability: the curves and named points that ``scripts/device/capability.sh`` evaluated, gathered per
+"""Measured capability: the curves and named points that ``studies/device/capability.sh`` evaluated, gathered per
 policy into one report.
 
     python studies/capability/capability_runs.py LEASE/extra --policy shipped=shipped \\
@@ -178,7 +178,7 @@ def _policies(specs: list[str] | None) -> dict[str, list[str]]:
 
 def main(argv: list[str] | None = None) -> int:
     p = ArgumentParser(prog="python studies/capability/capability_runs.py", description=__doc__.splitlines()[0])
-    p.add_argument("folder", help="the evaluations of scripts/device/capability.sh (RUNS/extra)")
+    p.add_argument("folder", help="the evaluations of studies/device/capability.sh (RUNS/extra)")
     p.add_argument("--policy", action="append", required=True, metavar="LABEL=PREFIX[,PREFIX...]",
                    help="a policy's jobs by name prefix; several prefixes: its seeds (median over them)")
     p.add_argument("--out", required=True)

@@ -4,7 +4,7 @@ the same lease, judged on validation rounds (seed 3000) by the deterministic act
     python studies/learner/build.py --add LEASE       # a lease's runs and evaluations into the study, then the report
     python studies/learner/build.py                   # results.json and report.md from what the study holds
 
-LEASE holds what ``scripts/device/learner.sh collect`` brings back (``cat learner.tgz.* | tar xzf - -C LEASE``):
+LEASE holds what ``studies/device/learner.sh collect`` brings back (``cat learner.tgz.* | tar xzf - -C LEASE``):
 ``runs/NAME.log`` with its run folder (``runs/NAME/<date_time>/{config.json,timing.json,model_result.pt}``, or
 ``runs/<date_time>/`` as ``gpu.sh pack`` writes it) and ``evals/JOB/results.json`` (``JOB``: ``NAME_TERRAIN`` for a
 run's result, ``shipped_TERRAIN`` / ``gate_shipped_TERRAIN`` for the shipped policy beside the fixed CPG on the

@@ -7,7 +7,7 @@
 ``--runs`` holds one experiment folder per training run, named ``<method>_s<seed>`` (``cpg_rl``, ``paper``, ``joint``
 from ``train.py --task complex / paper / complex-joint``; ``sac_cpg``, ``td3_cpg``, ``a2c_cpg`` from
 ``python -m hexnewton.apps.baselines``), each with its run folder, and beside it ``<method>_s<seed>.done`` (the command,
-GPU and process time ``scripts/device/gpu.sh`` records when the run ends). ``--evals`` holds one
+GPU and process time ``studies/device/gpu.sh`` records when the run ends). ``--evals`` holds one
 ``hexnewton.apps.evaluate`` folder per run and terrain: ``<method>_s<seed>_<terrain>`` (the deterministic action),
 ``<method>_s<seed>_<terrain>_sampled`` (``--stochastic``) and ``cpg_s0_<terrain>`` (the fixed CPG). ``gpu.sh methods``
 and ``gpu.sh evals`` lay them out so.

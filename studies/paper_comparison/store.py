@@ -1,4 +1,4 @@
-"""A study kept across GPU leases: the runs and evaluations of ``scripts/device/gpu.sh methods`` / ``evals``, stored
+"""A study kept across GPU leases: the runs and evaluations of ``studies/device/gpu.sh methods`` / ``evals``, stored
 in a folder on the main branch so that the next lease skips what is finished and the report reads them all.
 
 Layout (the same as ``gpu.sh``'s ``$RUNS/methods`` and ``$RUNS/method_evals``, so a stored study is copied back

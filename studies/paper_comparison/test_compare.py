@@ -1,6 +1,6 @@
 """The paper's comparison kept across leases, end to end on the CPU: two methods trained for a few real iterations (two
 seeds each), evaluated with their deterministic and their sampled action beside the fixed CPG, stored in a study as
-``scripts/device/gpu.sh`` lays a lease out, and reported (Fig. 5a against env-steps and wall time, Table 3)."""
+``studies/device/gpu.sh`` lays a lease out, and reported (Fig. 5a against env-steps and wall time, Table 3)."""
 
 import json
 

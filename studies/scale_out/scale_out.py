@@ -3,7 +3,7 @@
     python studies/scale_out/scale_out.py LEASE [LEASE ...] --out DIR
 
 LEASE (one or more, joined: e.g. the benches of one lease and the runs of another) is what
-``bash scripts/device/scale_out.sh pack`` brings back, unpacked: ``bench_<K>gpu.json`` (``hexnewton-bench --json``
+``bash studies/device/scale_out.sh pack`` brings back, unpacked: ``bench_<K>gpu.json`` (``hexnewton-bench --json``
 under torchrun at K GPUs), ``runs/<name>/`` (a ``train.py`` run's ``timing.json`` and ``config.json``, its
 console log and ``wall.txt``), ``evals/<name>_<terrain>/`` (``python -m hexnewton.apps.evaluate --out`` of the run's
 result) and ``commands.txt`` (the calls, quoted in the report). Writes ``report.md`` and ``results.json``:
@@ -110,7 +110,7 @@ def by_gpu_count(rows: list[dict], runs: dict[str, dict]) -> dict[int, dict]:
 
 
 def collect(folders: list[str]) -> tuple[list[dict], dict[str, dict]]:
-    """Scale-out leases' outputs (``scripts/device/scale_out.sh pack``), joined: ``bench_*.json`` (bench runs),
+    """Scale-out leases' outputs (``studies/device/scale_out.sh pack``), joined: ``bench_*.json`` (bench runs),
     ``runs/<name>/`` (train.py runs) and ``evals/<name>_<terrain>/`` (their evaluations)."""
     benches, runs = [], {}
     for folder in folders:
@@ -140,7 +140,7 @@ def build_report(folders: list[str], out: str, commands: list[str]) -> dict:
                "bench": rows, "runs": runs,
                "bench_commands": sorted({b.get("command", "?") for b in benches}), "commands": commands}  # fmt: skip
     md = [f"# Scale-out on one host: {', '.join(devices)}", "", "Made by `python studies/scale_out/scale_out.py "
-          f"{' '.join(folders)} --out {out}` from the outputs of these calls (`scripts/device/scale_out.sh`):", "",
+          f"{' '.join(folders)} --out {out}` from the outputs of these calls (`studies/device/scale_out.sh`):", "",
           "```bash",
           *commands, "```", ""]  # fmt: skip
     if rows:
@@ -171,7 +171,7 @@ def build_report(folders: list[str], out: str, commands: list[str]) -> dict:
 def parser() -> ArgumentParser:
     """The command line of ``python studies/scale_out/scale_out.py``."""
     p = ArgumentParser(prog="python studies/scale_out/scale_out.py", description=__doc__.split("\n")[0])
-    p.add_argument("lease", nargs="+", help="the unpacked outputs of scripts/device/scale_out.sh pack (one or more "
+    p.add_argument("lease", nargs="+", help="the unpacked outputs of studies/device/scale_out.sh pack (one or more "
                    "folders, joined)")
     p.add_argument("--out", required=True, help="the folder for report.md and results.json: a new one, or one that "
                    "holds neither (e.g. the folder of the leases' outputs); nothing is overwritten")

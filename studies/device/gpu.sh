@@ -1,21 +1,21 @@
 #!/bin/bash
-# One script for the device tool's GPU machines (scripts/device/README.md): one subcommand per device call.
+# One script for the device tool's GPU machines (studies/device/README.md): one subcommand per device call.
 #
-#   bash scripts/device/gpu.sh install                       # after the chunk calls: wheels into /opt/site, the
+#   bash studies/device/gpu.sh install                       # after the chunk calls: wheels into /opt/site, the
 #                                                            # Warp kernel cache (/root/wc.tgz) into ~/.cache
-#   bash scripts/device/gpu.sh train NAME [GPU] -- ARGS...   # `python train.py ARGS` in the background (setsid:
+#   bash studies/device/gpu.sh train NAME [GPU] -- ARGS...   # `python train.py ARGS` in the background (setsid:
 #                                                            # it outlives the call), log in $RUNS/NAME.log,
 #                                                            # run directory $RUNS/NAME/; returns once the run is
 #                                                            # past its imports; refuses a NAME that is running
 #                                                            # (start_run below; `baseline` alike)
-#   bash scripts/device/gpu.sh wait SECONDS NAME...          # until those runs end (at most SECONDS), their progress
-#   bash scripts/device/gpu.sh pack NAME...                  # config, events, log, the result (else the last
+#   bash studies/device/gpu.sh wait SECONDS NAME...          # until those runs end (at most SECONDS), their progress
+#   bash studies/device/gpu.sh pack NAME...                  # config, events, log, the result (else the last
 #                                                            # checkpoint; both with PACK_LAST=1) and best ->
 #                                                            # $OUT/run_NAME.tgz; the shipped checkpoint -> $KEEP/NAME.pt
-#   bash scripts/device/gpu.sh eval SECONDS NAME[@GPU]:ARGS...   # `python -m hexnewton.apps.evaluate ARGS` jobs at once,
+#   bash studies/device/gpu.sh eval SECONDS NAME[@GPU]:ARGS...   # `python -m hexnewton.apps.evaluate ARGS` jobs at once,
 #                                                                # each cut off after SECONDS -> $OUT/evals.tgz
-#   bash scripts/device/gpu.sh baseline NAME [GPU] -- ARGS...   # `python -m hexnewton.apps.baselines ARGS` as train does
-#   bash scripts/device/gpu.sh methods TASK MINUTES ENV_STEPS NUM_ENVS "SEEDS" "GPUS"
+#   bash studies/device/gpu.sh baseline NAME [GPU] -- ARGS...   # `python -m hexnewton.apps.baselines ARGS` as train does
+#   bash studies/device/gpu.sh methods TASK MINUTES ENV_STEPS NUM_ENVS "SEEDS" "GPUS"
 #        # in the background: every method ($METHODS: cpg_rl sac_cpg td3_cpg a2c_cpg joint; also paper: CPG_RL with
 #        # task paper) x seed on TASK (joint: $JOINT_TASK, default complex-joint), or the runs $JOBS names
 #        # ("cpg_rl:1 paper:1 ..."; joint_staged: task complex-joint-staged), each run ending at ENV_STEPS env-steps or
@@ -23,36 +23,36 @@
 #        # wall time; "0 0": two at a time on GPU 0); runs in $RUNS/methods/, NAME.done when a run
 #        # ends well (finished runs are skipped); none starts after $DEADLINE (seconds since the epoch);
 #        # $EVALS_AFTER="ROUNDS TERRAIN...": a GPU with no more runs starts `evals ROUNDS GPU TERRAIN...` at once
-#   bash scripts/device/gpu.sh evals ROUNDS "GPUS" TERRAIN...    # in the background: the fixed CPG, then each
+#   bash studies/device/gpu.sh evals ROUNDS "GPUS" TERRAIN...    # in the background: the fixed CPG, then each
 #        # finished run's last checkpoint with its deterministic action, then with its sampled one, ROUNDS unseen
 #        # rounds per terrain, $PER_GPU jobs per GPU at a time (default 3), each cut off after $EVAL_TIMEOUT s ->
 #        # $RUNS/method_evals/<run>_<terrain>[_sampled]/ (done ones are skipped; $EVAL_ARGS: more evaluate flags);
 #        # runs finishing meanwhile are taken too: the queue ends when nothing is left and no `methods` queue runs
 #        # (both queues look for free slots and finished runs every $POLL_S seconds: 5, 2 and 10 by default)
-#   bash scripts/device/gpu.sh study DIR                        # a kept study's finished runs and evaluations into
+#   bash studies/device/gpu.sh study DIR                        # a kept study's finished runs and evaluations into
 #        # $RUNS (studies/paper_comparison): the queues skip what is finished
-#   bash scripts/device/gpu.sh collect                          # every finished run (policy, config, events, log)
+#   bash studies/device/gpu.sh collect                          # every finished run (policy, config, events, log)
 #        # -> $OUT/methods_runs.tgz.NN (15 MB parts) and the evaluations -> $OUT/method_evals.tgz
-#   bash scripts/device/gpu.sh report WHAT                      # Fig. 5a + Table 3 over seeds (studies/paper_comparison/compare.py)
+#   bash studies/device/gpu.sh report WHAT                      # Fig. 5a + Table 3 over seeds (studies/paper_comparison/compare.py)
 #                                                                # -> $OUT/WHAT/{report.md,results.json,fig5a.*}
-#   bash scripts/device/gpu.sh busy                             # exit 0 while `methods` or `evals` jobs run
-#   bash scripts/device/gpu.sh queue FILE                       # FILE (bash) in the background, detached (setsid),
+#   bash studies/device/gpu.sh busy                             # exit 0 while `methods` or `evals` jobs run
+#   bash studies/device/gpu.sh queue FILE                       # FILE (bash) in the background, detached (setsid),
 #        # from this folder: a lease's whole work in one queue, log in $QUEUE/log (default /root/queue)
-#   bash scripts/device/gpu.sh poll SECONDS [PATH...]           # exit 3 at once where no queue was started (the call
+#   bash studies/device/gpu.sh poll SECONDS [PATH...]           # exit 3 at once where no queue was started (the call
 #        # landed on a fresh machine: the queue is lost); else until it ends (at most SECONDS), its log's last
 #        # $TAIL lines (30), then each PATH copied into $OUT (a quoted glob, '/root/cand/*', is expanded then)
 #
 # Example (the complex task from its name, then 1000 test rounds per terrain, one H200):
-#   bash scripts/device/gpu.sh train complex -- --task complex --num_envs 4096
-#   bash scripts/device/gpu.sh wait 570 complex;  bash scripts/device/gpu.sh pack complex
-#   bash scripts/device/gpu.sh eval 560 "rugged:--controllers cpg cpg_rl --checkpoint cpg_rl=/root/keep/complex.pt \
+#   bash studies/device/gpu.sh train complex -- --task complex --num_envs 4096
+#   bash studies/device/gpu.sh wait 570 complex;  bash studies/device/gpu.sh pack complex
+#   bash studies/device/gpu.sh eval 560 "rugged:--controllers cpg cpg_rl --checkpoint cpg_rl=/root/keep/complex.pt \
 #       --terrains rugged --rounds 1000" ...
-# Example (the paper's comparison, kept in studies/paper_comparison across leases: scripts/device/README.md):
-#   bash scripts/device/gpu.sh study studies/paper_comparison
+# Example (the paper's comparison, kept in studies/paper_comparison across leases: studies/device/README.md):
+#   bash studies/device/gpu.sh study studies/paper_comparison
 #   DEADLINE=$(( $(date +%s) + 840 )) JOBS="sac_cpg:1 td3_cpg:1" \
-#       bash scripts/device/gpu.sh methods complex 20 60000000 4096 "" "0 1"
-#   bash scripts/device/gpu.sh wait 590 _methods     # as often as needed, then
-#   bash scripts/device/gpu.sh collect               # here: python studies/paper_comparison/compare.py --study ... --add ...
+#       bash studies/device/gpu.sh methods complex 20 60000000 4096 "" "0 1"
+#   bash studies/device/gpu.sh wait 590 _methods     # as often as needed, then
+#   bash studies/device/gpu.sh collect               # here: python studies/paper_comparison/compare.py --study ... --add ...
 set -u
 export PYTHONPATH=/opt/site${PYTHONPATH:+:$PYTHONPATH} PYTHONUNBUFFERED=1
 export NCCL_NVLS_ENABLE=0 TORCH_SYMM_MEM_DISABLE_MULTICAST=1 NVSHMEM_DISABLE_NVLS=1   # device docs: no NVLink multicast
@@ -157,7 +157,7 @@ methods)
   # the queue runs from its own copy of the tree: a later call's tree (edited meanwhile) does not change its runs
   code=$RUNS/code_$(date +%s); mkdir -p "$code"
   tar --exclude='./.dw*' --exclude=./runs --exclude=./.git -cf - . | tar -xf - -C "$code"
-  (cd "$code" && nohup setsid bash scripts/device/gpu.sh _methods "$@" >> "$RUNS/methods.log" 2>&1 < /dev/null &)
+  (cd "$code" && nohup setsid bash studies/device/gpu.sh _methods "$@" >> "$RUNS/methods.log" 2>&1 < /dev/null &)
   echo "queued $(for s in $5; do for m in ${METHODS:-cpg_rl sac_cpg td3_cpg a2c_cpg joint}; do echo -n "${m}_s$s "; done; done)on GPUs $6"
   ;;
 _methods)   # the queue behind `methods`

@@ -1,37 +1,37 @@
 #!/bin/bash
 # The time-to-skill measurements (studies/time_to_skill/, BENCHMARKS.md "Start-up" and "Terrain contact"), one
-# subcommand per device call, after the wheel chunks and `gpu.sh install` (scripts/device/README.md):
+# subcommand per device call, after the wheel chunks and `gpu.sh install` (studies/device/README.md):
 #
-#   bash scripts/device/time_to_skill.sh startup [ARGS...]   # `train.py --task complex ARGS` to its first
+#   bash studies/device/time_to_skill.sh startup [ARGS...]   # `train.py --task complex ARGS` to its first
 #                                                      # iterations, twice: a cold Warp kernel cache, then the warm one;
 #                                                      # phase tables (ARGS given: in $OUT/startup_<ARGS>/)
-#   bash scripts/device/time_to_skill.sh caches        # which cache a fresh start lacks: `train.py --task complex` to
+#   bash studies/device/time_to_skill.sh caches        # which cache a fresh start lacks: `train.py --task complex` to
 #                                                      # its first iterations three times, each with its own Warp kernel
 #                                                      # cache (WARP_CACHE_PATH) and CUDA driver JIT cache
 #                                                      # (CUDA_CACHE_PATH): both empty; Warp's empty, the driver's from
 #                                                      # the first; Warp's from the first, the driver's empty
 #                                                      # -> $OUT/caches/
-#   bash scripts/device/time_to_skill.sh fresh         # a fresh machine's start-up, the first CUDA program run:
+#   bash studies/device/time_to_skill.sh fresh         # a fresh machine's start-up, the first CUDA program run:
 #                                                      # `train.py --task complex --max_iterations 1` with empty Warp and
 #                                                      # driver caches of its own, then again with both as it left them;
 #                                                      # logs and timing.json (startup_notes: the modules the first step
 #                                                      # loaded) -> $OUT/fresh/
-#   bash scripts/device/time_to_skill.sh contact       # sim-only complex and stepped at 16384 envs under each terrain
+#   bash studies/device/time_to_skill.sh contact       # sim-only complex and stepped at 16384 envs under each terrain
 #                                                      # contact setting, the task's physics (20 ms frame, 4 substeps)
-#   bash scripts/device/time_to_skill.sh train NAME SEED [ARGS...]   # `python train.py --task complex --seed SEED
+#   bash studies/device/time_to_skill.sh train NAME SEED [ARGS...]   # `python train.py --task complex --seed SEED
 #                                                      # ARGS` alone, in the background, timed from its process start
 #                                                      # (ARGS starting with --resume CKPT: that checkpoint's task)
-#   bash scripts/device/time_to_skill.sh wait SECONDS NAME...        # until those runs end
-#   bash scripts/device/time_to_skill.sh eval SECONDS ROUNDS NAME... # each run's result on ROUNDS test rounds per
+#   bash studies/device/time_to_skill.sh wait SECONDS NAME...        # until those runs end
+#   bash studies/device/time_to_skill.sh eval SECONDS ROUNDS NAME... # each run's result on ROUNDS test rounds per
 #                                                      # terrain, with the fixed CPG, in one evaluate job per run
-#   bash scripts/device/time_to_skill.sh pack NAME...  # logs, timing.json, results, result checkpoints -> $OUT
-#   bash scripts/device/time_to_skill.sh jit           # which library makes the CUDA driver JIT-compile PTX on a
+#   bash studies/device/time_to_skill.sh pack NAME...  # logs, timing.json, results, result checkpoints -> $OUT
+#   bash studies/device/time_to_skill.sh jit           # which library makes the CUDA driver JIT-compile PTX on a
 #                                                      # fresh machine: torch's arch list; a torch-only PPO step and
 #                                                      # `train.py --task complex --max_iterations 3` (Warp's cache as
 #                                                      # unpacked by `gpu.sh install`), each with an empty driver cache,
 #                                                      # first with CUDA_DISABLE_PTX_JIT=1 (what needs the JIT fails and
 #                                                      # names itself), then timed with it -> $RUNS/jit/
-#   bash scripts/device/time_to_skill.sh gate [ARGS...]  # in the background, on one host of 4 GPUs: seeds $SEEDS
+#   bash studies/device/time_to_skill.sh gate [ARGS...]  # in the background, on one host of 4 GPUs: seeds $SEEDS
 #                                                      # (default "1 2 3") of `train.py --task $TASK --seed S ARGS`
 #                                                      # ($TASK: default complex),
 #                                                      # seed i alone on GPU i-1, each result then on $ROUNDS (1000) test
@@ -44,8 +44,8 @@
 #                                                      # (outputs under $RUNS/extra/, packed by gate_wait);
 #                                                      # $SEED_AFTER: commands for each seed's GPU beside its
 #                                                      # evaluations ($NAME seedS, $CKPT its result; e.g.
-#                                                      # scripts/device/capability.sh's curves)
-#   bash scripts/device/time_to_skill.sh gate_wait SECONDS   # until the gate's queue ends (at most SECONDS), its log;
+#                                                      # studies/device/capability.sh's curves)
+#   bash studies/device/time_to_skill.sh gate_wait SECONDS   # until the gate's queue ends (at most SECONDS), its log;
 #                                                      # everything finished so far -> $OUT/gate.tgz (checkpoints in
 #                                                      # $OUT/gate_ckpt.tgz.NN, 9 MB parts)
 #
@@ -233,7 +233,7 @@ gate)
   # the queue runs from its own copy of the tree: the next device call replaces the working tree
   code=$RUNS/code; rm -rf "$code"; mkdir -p "$code"
   tar --exclude='./.dw*' --exclude=./runs --exclude=./.git -cf - . | tar -xf - -C "$code"
-  (cd "$code" && nohup setsid bash scripts/device/time_to_skill.sh _gate "$@" >> "$RUNS/gate.log" 2>&1 < /dev/null &)
+  (cd "$code" && nohup setsid bash studies/device/time_to_skill.sh _gate "$@" >> "$RUNS/gate.log" 2>&1 < /dev/null &)
   echo "started the gate queue: seeds ${SEEDS:-1 2 3}, train.py --task ${TASK:-complex} $* (log $RUNS/gate.log)"
   ;;
 _gate)   # the queue behind `gate`
@@ -277,7 +277,7 @@ _gate)   # the queue behind `gate`
   wait
   if [ "${BENCH:-0}" = 1 ]; then
     echo "$(date +%T) scale-out bench"
-    RUNS=/root/scale_out bash scripts/device/scale_out.sh bench
+    RUNS=/root/scale_out bash studies/device/scale_out.sh bench
   fi
   echo "$(date +%T) gate ended"
   ;;

@@ -1,5 +1,5 @@
 #!/bin/bash
-# Recipe candidates in one device call (scripts/device/README.md, "A lease's work as one queue"): one pipeline per
+# Recipe candidates in one device call (studies/device/README.md, "A lease's work as one queue"): one pipeline per
 # GPU, all at once, each `python train.py ARGS`, then `gpu.sh pack` (its run to $OUT/run_NAME.tgz, its result to
 # $KEEP/NAME.pt), then its result on validation rounds ($VAL_ROUNDS per terrain, `--seed 3000`, deterministic action, one evaluate
 # job per terrain of $VAL_TERRAINS on the same GPU), or with `points` the named capability points (capability.sh
@@ -9,7 +9,7 @@
 # candidate's bundle (`apps.export`) also runs that many rugged rounds in C MuJoCo on the host's cores, beside its
 # evaluations (`apps.sim2sim --fixed_terrains --newton none --workers $S2S_WORKERS`, default 12) -> $EVALS/s2s_NAME.
 #
-#   LIMIT=560 bash scripts/device/candidates.sh "stuck1@0:--task complex --seed 1 --env.cpg.stuck_lift 0.3" \
+#   LIMIT=560 bash studies/device/candidates.sh "stuck1@0:--task complex --seed 1 --env.cpg.stuck_lift 0.3" \
 #       "margin600@3:points:--task complex-margin --seed 1 --max_iterations 600"
 set -u
 export PYTHONPATH=/opt/site${PYTHONPATH:+:$PYTHONPATH} PYTHONUNBUFFERED=1

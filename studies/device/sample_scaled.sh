@@ -1,10 +1,10 @@
 #!/bin/bash
-# The sample-scaled recipe and the 4-GPU seeds (scripts/device/README.md, "A lease's work as one queue") as one queue,
+# The sample-scaled recipe and the 4-GPU seeds (studies/device/README.md, "A lease's work as one queue") as one queue,
 # from a copy of the tree (the README's first line), after the chunk calls and `gpu.sh install`:
 #
-#   bash scripts/device/gpu.sh queue scripts/device/sample_scaled.sh
-#   bash scripts/device/gpu.sh poll 560 '/root/cand/*'     # the next call at once: item 1's archives
-#   bash scripts/device/gpu.sh poll 560 '/root/so_out/*'   # then until "item 2 ended"
+#   bash studies/device/gpu.sh queue studies/device/sample_scaled.sh
+#   bash studies/device/gpu.sh poll 560 '/root/cand/*'     # the next call at once: item 1's archives
+#   bash studies/device/gpu.sh poll 560 '/root/so_out/*'   # then until "item 2 ended"
 #
 # 1. What `g4cmi600` computes, on one GPU ($RECIPE: 16384 envs, 8 mini-batches, 150 iterations, the stages at 25 and
 #    50, a checkpoint every 13 iterations, two lanes a goal), seeds 1-3, and the recipe's seed 1 beside them, one run

@@ -1,5 +1,5 @@
 #!/bin/bash
-# A queue (`bash scripts/device/gpu.sh queue scripts/device/learner.sh`) for one H200: the learner study
+# A queue (`bash studies/device/gpu.sh queue studies/device/learner.sh`) for one H200: the learner study
 # (studies/learner, its README). In order:
 # 1. the arms still missing ($ARMS, default actor) on $SEEDS (1 2), one lane per seed, each training its arms one
 #    after another (candidates.sh: train.py with its own validation, the run packed to $RUNS_OUT/run_NAME.tgz, its
@@ -12,7 +12,7 @@
 # 3. with GATE=1, the gate: `python train.py --task complex --seed N FLAGS` for N in 1 2 3, one after another and
 #    alone on the GPU (the time counts), then every result, the shipped policy and the fixed CPG on 1000 test rounds
 #    per terrain (the evaluate default seed), all at once.
-# Then, from the next calls: `bash scripts/device/gpu.sh poll 560` and `bash scripts/device/learner.sh collect`
+# Then, from the next calls: `bash studies/device/gpu.sh poll 560` and `bash studies/device/learner.sh collect`
 # (everything in 9 MB parts, $OUT/learner.tgz.NN; here: `cat learner.tgz.* | tar xzf - -C LEASE` and
 # `python studies/learner/build.py --add LEASE`).
 set -u
@@ -46,7 +46,7 @@ evaluate() {   # NAME TERRAIN ROUNDS CHECKPOINT [MORE evaluate FLAGS]
   echo "exit $?" >> "$EVALS/${name}_$t.log"
 }
 echo "$(date +%T) the learner's queue: arms '$ARMS' on seeds '$SEEDS', kept results '$KEPT'"
-[ -n "${FAIR_JOBS:-}" ] && { JOBS=$FAIR_JOBS PER_GPU=4 bash scripts/device/fair_comparison.sh > "$QUEUE/fair.log" 2>&1 & }
+[ -n "${FAIR_JOBS:-}" ] && { JOBS=$FAIR_JOBS PER_GPU=4 bash studies/device/fair_comparison.sh > "$QUEUE/fair.log" 2>&1 & }
 for name in $KEPT; do
   for t in complex rugged stepped; do
     evaluate "$name" "$t" "$VAL_ROUNDS" "studies/learner/runs/$name/policy.pt" --seed 3000 &
@@ -63,7 +63,7 @@ for seed in $SEEDS; do
     for arm in $ARMS; do
       f=$(flags "$arm") || continue
       # shellcheck disable=SC2086
-      OUT=$RUNS_OUT LIMIT=${ARM_LIMIT:-1200} VAL_ROUNDS=$VAL_ROUNDS bash scripts/device/candidates.sh \
+      OUT=$RUNS_OUT LIMIT=${ARM_LIMIT:-1200} VAL_ROUNDS=$VAL_ROUNDS bash studies/device/candidates.sh \
         "${arm}_s$seed@0:--task complex --seed $seed $f"
       echo "$(date +%T) ${arm}_s$seed ended"
     done
@@ -82,7 +82,7 @@ for seed in 1 2 3; do
   python train.py --task complex --seed "$seed" $GATE_FLAGS --log_dir "$RUNS" --experiment "gate_s$seed" \
     > "$RUNS/gate_s$seed.log" 2>&1
   echo "$(date +%T) gate_s$seed: train exit $?"
-  OUT=$RUNS_OUT bash scripts/device/gpu.sh pack "gate_s$seed"
+  OUT=$RUNS_OUT bash studies/device/gpu.sh pack "gate_s$seed"
 done
 for t in complex rugged stepped; do
   evaluate gate_shipped "$t" 1000 results/policies/cpg_rl_complex.pt --controllers cpg cpg_rl &

@@ -1,20 +1,20 @@
 #!/bin/bash
 # The scale-out measurements (studies/scale_out: `python studies/scale_out/scale_out.py`), on one host of 4 GPUs
 # (nvidia-h100-x4), one subcommand per device call, after the wheel chunks and `gpu.sh install`
-# (scripts/device/README.md, "Scale-out"):
+# (studies/device/README.md, "Scale-out"):
 #
-#   bash scripts/device/scale_out.sh all                   # in the background: bench, then train, then eval
+#   bash studies/device/scale_out.sh all                   # in the background: bench, then train, then eval
 #                                                          # ($STAGES: those named, e.g. "train eval")
-#   bash scripts/device/scale_out.sh wait SECONDS          # until the background queue ends (at most SECONDS)
-#   bash scripts/device/scale_out.sh pack                  # bench JSONs, runs, evaluations, commands -> $OUT
+#   bash studies/device/scale_out.sh wait SECONDS          # until the background queue ends (at most SECONDS)
+#   bash studies/device/scale_out.sh pack                  # bench JSONs, runs, evaluations, commands -> $OUT
 #
-#   bash scripts/device/scale_out.sh bench                 # hexnewton-bench --task complex --mode train at each
+#   bash studies/device/scale_out.sh bench                 # hexnewton-bench --task complex --mode train at each
 #        # GPU count of $GPU_COUNTS (default "1 2 4") x each of $BENCH_ENVS envs per GPU (default "4096 16384"),
 #        # one after another, under torchrun from 2 GPUs on ($BENCH_MODES: default train; $BENCH_ITERATIONS: 10)
-#   bash scripts/device/scale_out.sh train                 # the time-to-skill runs of $ROUNDS: rounds separated by
+#   bash studies/device/scale_out.sh train                 # the time-to-skill runs of $ROUNDS: rounds separated by
 #        # "|", each a set of NAME:GPUS:ENVS_PER_GPU[:SCALINGS] run at once; the next round starts when the round
 #        # ends; SCALINGS (comma-separated, e.g. iterations or mini_batches,iterations) -> --agent.scale_with_ranks
-#   bash scripts/device/scale_out.sh eval                  # each run's result on $ROUNDS_PER_TERRAIN (1000) unseen
+#   bash studies/device/scale_out.sh eval                  # each run's result on $ROUNDS_PER_TERRAIN (1000) unseen
 #        # rounds of each of $TERRAINS (rugged stepped complex): one evaluate job per run and terrain, all at once,
 #        # spread over the GPUs
 #

@@ -2,21 +2,21 @@
 # Capability curves (studies/capability, docs/evaluation.md "Capability curves"): one policy's curves and the issue's
 # named points, each an evaluate job of its own in the background on this call's GPU (CUDA_VISIBLE_DEVICES), outputs
 # in $RUNS/extra/NAME_<what>/ (a job cut off keeps the others), logs beside them; after the wheel chunks and
-# `gpu.sh install` (scripts/device/README.md, "Capability curves"):
+# `gpu.sh install` (studies/device/README.md, "Capability curves"):
 #
-#   bash scripts/device/capability.sh curves NAME CKPT [CONTROLLER...]   # the default curves (rollout.DEFAULT_SWEEPS,
+#   bash studies/device/capability.sh curves NAME CKPT [CONTROLLER...]   # the default curves (rollout.DEFAULT_SWEEPS,
 #        # `evaluate --sweep CURVE --no-nominal`, each point $CURVE_ROUNDS (200) rounds on its course), one job per
 #        # curve, all at once; CONTROLLER: default cpg_rl (add cpg for the fixed CPG beside)
-#   bash scripts/device/capability.sh points NAME CKPT   # the issue's named points, $POINT_ROUNDS (1000) rounds each:
+#   bash studies/device/capability.sh points NAME CKPT   # the issue's named points, $POINT_ROUNDS (1000) rounds each:
 #        # 8 cm rises and 20 cm treads (stepped), 8 cm blocks (rugged), friction 0.3, 50 % motor strength and a 1 kg
 #        # payload (complex), one job per point, all at once
-#   bash scripts/device/capability.sh wait SECONDS NAME...   # until those jobs end (at most SECONDS), their last lines
-#   bash scripts/device/capability.sh curves4        # on one host of 4 GPUs, detached from the call and run from a
+#   bash studies/device/capability.sh wait SECONDS NAME...   # until those jobs end (at most SECONDS), their last lines
+#   bash studies/device/capability.sh curves4        # on one host of 4 GPUs, detached from the call and run from a
 #        # copy of the tree ($RUNS/code): GPU 0 the shipped policy's curves with the fixed CPG beside; GPU 1 the README
 #        # command (`train.py --task complex`), then its result's curves (NAME readme); GPU 2 the margin seeds 1 and 3
 #        # (studies/capability/policies), GPU 3 seed 2, one after another; poll with `wait SECONDS shipped readme
 #        # seed1 seed2 seed3`; $SKIP: job names not to run (curves already complete)
-#   bash scripts/device/capability.sh margin         # on one host of 4 GPUs, in the background: the one-command gate
+#   bash studies/device/capability.sh margin         # on one host of 4 GPUs, in the background: the one-command gate
 #        # (time_to_skill.sh gate) of $TASK (complex-margin): seeds 1-3 on GPUs 0-2, each result's curves and named
 #        # points beside its test rounds; on GPU 3 the shipped policy's test rounds, then its curves with the fixed
 #        # CPG beside, the README command (`train.py --task complex`) and its result's curves; poll and bring back
@@ -52,7 +52,7 @@ readme_queue() {
     echo \"exit \$?\" >> $RUNS/extra/readme_train.log
     R=\$(sed -n 's/^  python play.py --checkpoint //p' $RUNS/extra/readme_train.log | tail -1)
     [ -n \"\$R\" ] && mkdir -p ${KEEP:-/root/keep} && cp \"\$R\" ${KEEP:-/root/keep}/readme.pt && \\
-      FOREGROUND=1 bash scripts/device/capability.sh curves readme \"\$R\""
+      FOREGROUND=1 bash studies/device/capability.sh curves readme \"\$R\""
 }
 case "$cmd" in
 curves)
@@ -90,7 +90,7 @@ wait)
 curves4)
   code=$RUNS/code; rm -rf "$code"; mkdir -p "$code"
   tar --exclude='./.dw*' --exclude=./runs --exclude=./.git -cf - . | tar -xf - -C "$code"
-  here=scripts/device/capability.sh P=studies/capability/policies
+  here=studies/device/capability.sh P=studies/capability/policies
   queues=("bash $here curves shipped results/policies/cpg_rl_complex.pt cpg cpg_rl" "$(readme_queue)"
           "bash $here curves seed1 $P/complex_margin_seed1.pt; bash $here curves seed3 $P/complex_margin_seed3.pt"
           "bash $here curves seed2 $P/complex_margin_seed2.pt")
@@ -101,13 +101,13 @@ curves4)
   done
   ;;
 margin)
-  here=scripts/device/capability.sh
+  here=studies/device/capability.sh
   TASK=${TASK:-complex-margin} \
   SEED_AFTER="FOREGROUND=1 bash $here curves \$NAME \$CKPT & FOREGROUND=1 bash $here points \$NAME \$CKPT; wait" \
   GPU3_AFTER="FOREGROUND=1 bash $here curves shipped results/policies/cpg_rl_complex.pt cpg cpg_rl &
     $(readme_queue)
     wait" \
-  bash scripts/device/time_to_skill.sh gate "$@"
+  bash studies/device/time_to_skill.sh gate "$@"
   exit $?
   ;;
 *) echo "usage: see the header of $0"; exit 2 ;;

@@ -4,7 +4,7 @@
 # with the kept study (studies/paper_comparison), so run this at the start of every lease, from the repository root:
 #
 #   bash ../shared/device/pack.sh ...    # once per machine, when no .dw* folders exist
-#   bash scripts/device/rechunk.sh       # then the device calls it prints
+#   bash studies/device/rechunk.sh       # then the device calls it prints
 #
 # The chunks are joined in name order and split again into .dw0 ... .dwN (install.sh joins /opt/w/part* in name
 # order); install.sh moves to the last folder.
@@ -34,7 +34,7 @@ echo "tree $((tree / 1048576)) MiB: $n chunks of at most $((chunk / 1048576)) Mi
 echo "  run carry=[\".dw0\"]  command: rm -rf /opt/w && mkdir -p /opt/w && cp .dw0/part* /opt/w/"
 for i in $(seq 1 $((n - 1))); do
   if [ ".dw$i" = "$last" ]; then
-    echo "  run carry=[\"$last\"]  command: cp $last/part* /opt/w/ && bash scripts/device/gpu.sh install && ..."
+    echo "  run carry=[\"$last\"]  command: cp $last/part* /opt/w/ && bash studies/device/gpu.sh install && ..."
   else
     echo "  run carry=[\".dw$i\"]  command: cp .dw$i/part* /opt/w/"
   fi

@@ -1,4 +1,4 @@
-"""scripts/device/gpu.sh's queues on the CPU, with stand-ins for ``python`` and ``nvidia-smi``: a methods queue with
+"""studies/device/gpu.sh's queues on the CPU, with stand-ins for ``python`` and ``nvidia-smi``: a methods queue with
 ``EVALS_AFTER`` evaluates every run it finished (deterministic and sampled, TD3 deterministic only) and the fixed
 CPG, also the runs that end after an evaluation queue has started; no job runs twice."""
 
@@ -43,7 +43,7 @@ def _gate_names(cmd: list[str], env: dict, out) -> set[str]:
     import tarfile
 
     subprocess.run(cmd, cwd=ROOT, env=env, check=True, capture_output=True)
-    waited = subprocess.run(["bash", "scripts/device/time_to_skill.sh", "gate_wait", "60"], cwd=ROOT, env=env,
+    waited = subprocess.run(["bash", "studies/device/time_to_skill.sh", "gate_wait", "60"], cwd=ROOT, env=env,
                             check=True, capture_output=True, text=True)
     assert "gate ended" in waited.stdout, waited.stdout
     with tarfile.open(out / "gate.tgz") as tar:
@@ -56,11 +56,11 @@ def test_methods_queue_then_evaluations(tmp_path):
                JOBS="paper:1 td3_cpg:1 joint:2 sac_cpg:1", PER_GPU="2", EVALS_AFTER="10 rugged stepped", POLL_S="0.1",
                PAUSE_PREFIX="0.")
     _tool(tmp_path / "bin", "nvidia-smi", "#!/bin/bash\necho FakeGPU\n")
-    subprocess.run(["bash", "scripts/device/gpu.sh", "methods", "complex", "20", "600", "16", "", "0 1"], cwd=ROOT,
+    subprocess.run(["bash", "studies/device/gpu.sh", "methods", "complex", "20", "600", "16", "", "0 1"], cwd=ROOT,
                    env=env, check=True, capture_output=True)
     deadline = time.time() + 60
     while time.time() < deadline:
-        busy = subprocess.run(["bash", "scripts/device/gpu.sh", "busy"], cwd=ROOT, env=env).returncode == 0
+        busy = subprocess.run(["bash", "studies/device/gpu.sh", "busy"], cwd=ROOT, env=env).returncode == 0
         if not busy and (runs / "method_evals.log").exists():
             break
         time.sleep(0.2)
@@ -82,7 +82,7 @@ def test_train_runs_detached_from_the_call(tmp_path):
     replaces the working tree) and refuses a second run of the same name."""
     runs = tmp_path / "runs"
     env = _env(tmp_path, FAKE_PYTHON, RUNS=str(runs), OUT=str(tmp_path / "out"))
-    script = "bash scripts/device/gpu.sh train r1 0 -- --task complex; ps -o sid= -p $$"
+    script = "bash studies/device/gpu.sh train r1 0 -- --task complex; ps -o sid= -p $$"
     call = subprocess.run(["setsid", "bash", "-c", script], cwd=ROOT, env=env, check=True, capture_output=True, text=True)
     call_session = int(call.stdout.split()[-1])
     run = subprocess.run(["pgrep", "-f", "--", "--experiment r1"], capture_output=True, text=True).stdout.split()
@@ -90,7 +90,7 @@ def test_train_runs_detached_from_the_call(tmp_path):
     assert all(int(subprocess.run(["ps", "-o", "sid=", "-p", pid], capture_output=True, text=True).stdout or -1)
                != call_session for pid in run)
     assert (runs / "r1.log").read_text().startswith("training r1")  # started past its imports
-    again = subprocess.run(["bash", "scripts/device/gpu.sh", "train", "r1", "0", "--", "--task", "complex"], cwd=ROOT,
+    again = subprocess.run(["bash", "studies/device/gpu.sh", "train", "r1", "0", "--", "--task", "complex"], cwd=ROOT,
                            env=env, capture_output=True, text=True)
     assert again.returncode == 1 and "running already" in again.stderr  # a second r1 would overwrite the first's log
     deadline = time.time() + 30
@@ -112,15 +112,15 @@ echo "training $ex"; echo "  python play.py --checkpoint $ld/$ex/run/model_resul
 
 def test_gate_queue_trains_evaluates_and_packs(tmp_path):
     """``time_to_skill.sh gate`` (the one-command gate on a 4-GPU machine): each seed's run of ``$TASK``, then its
-    result on every terrain beside ``SEED_AFTER`` (here scripts/device/capability.sh's curves and named points, one
+    result on every terrain beside ``SEED_AFTER`` (here studies/device/capability.sh's curves and named points, one
     evaluate each); the shipped policy and the fixed CPG; GPU 3's further work; ``gate_wait`` packs what finished."""
     runs, out = tmp_path / "runs", tmp_path / "out"
     env = _env(tmp_path, FAKE_TRAIN_EVAL, RUNS=str(runs), OUT=str(out),
                KEEP=str(tmp_path / "keep"), SEEDS="1 2", TASK="complex-margin", CURVES="step_rise payload",
                GPU3_AFTER='python -m hexnewton.apps.evaluate --out "$RUNS"/extra/curve',
-               SEED_AFTER='C=scripts/device/capability.sh; FOREGROUND=1 bash $C curves $NAME $CKPT &'
+               SEED_AFTER='C=studies/device/capability.sh; FOREGROUND=1 bash $C curves $NAME $CKPT &'
                           ' FOREGROUND=1 bash $C points $NAME $CKPT; wait')  # fmt: skip
-    names = _gate_names(["bash", "scripts/device/time_to_skill.sh", "gate", "--max_iterations", "5"], env, out)
+    names = _gate_names(["bash", "studies/device/time_to_skill.sh", "gate", "--max_iterations", "5"], env, out)
     assert "--task complex-margin --seed 1 --max_iterations 5" in (runs / "seed1.sh").read_text()
     for job in ("seed1_rugged", "seed2_complex", "shipped_stepped", "cpg_rugged"):
         assert f"eval_{job}/results.json" in names
@@ -141,7 +141,7 @@ def test_capability_margin_lease(tmp_path):
     runs, out = tmp_path / "runs", tmp_path / "out"
     env = _env(tmp_path, FAKE_TRAIN_EVAL, RUNS=str(runs), OUT=str(out), KEEP=str(tmp_path / "keep"), SEEDS="1",
                CURVES="friction")
-    names = _gate_names(["bash", "scripts/device/capability.sh", "margin"], env, out)
+    names = _gate_names(["bash", "studies/device/capability.sh", "margin"], env, out)
     assert "--task complex-margin --seed 1" in (runs / "seed1.sh").read_text()
     for job in ("seed1_friction", "seed1_at_blocks8", "shipped_friction", "readme_friction"):
         assert f"extra/{job}/results.json" in names, sorted(names)
@@ -165,13 +165,13 @@ def test_capability_jobs_at_most_max_jobs_at_once(tmp_path):
     """``capability.sh curves`` runs one evaluation per curve, at most ``MAX_JOBS`` at once, and skips finished ones."""
     runs = tmp_path / "runs"
     env = _env(tmp_path, FAKE_SLOW_EVAL, RUNS=str(runs), MAX_JOBS="2", FOREGROUND="1")
-    subprocess.run(["bash", "scripts/device/capability.sh", "curves", "p", "ck.pt"], cwd=ROOT, env=env, check=True,
+    subprocess.run(["bash", "studies/device/capability.sh", "curves", "p", "ck.pt"], cwd=ROOT, env=env, check=True,
                    capture_output=True, timeout=120)  # fmt: skip
     done = sorted(d.name for d in (runs / "extra").iterdir() if (d / "results.json").exists())
     assert len(done) == 8 and done[0] == "p_action_delay"
     assert max(int(n) for n in (runs / "concurrency").read_text().split()) <= 2
     (runs / "concurrency").unlink()
-    subprocess.run(["bash", "scripts/device/capability.sh", "curves", "p", "ck.pt"], cwd=ROOT, env=env, check=True,
+    subprocess.run(["bash", "studies/device/capability.sh", "curves", "p", "ck.pt"], cwd=ROOT, env=env, check=True,
                    capture_output=True, timeout=120)  # fmt: skip
     assert not (runs / "concurrency").exists()  # every curve finished: nothing runs again
 
@@ -197,7 +197,7 @@ def test_candidates_train_pack_and_evaluate_in_one_call(tmp_path):
     out, keep = tmp_path / "out", tmp_path / "keep"
     env = _env(tmp_path, FAKE_TRAIN_EVAL, RUNS=str(tmp_path / "runs"), OUT=str(out), KEEP=str(keep),
                EVALS=str(tmp_path / "evals"), LIMIT="60", VAL_TERRAINS="rugged stepped", S2S_ROUNDS="2")
-    done = subprocess.run(["bash", "scripts/device/candidates.sh", "a1@0:--task complex --seed 1",
+    done = subprocess.run(["bash", "studies/device/candidates.sh", "a1@0:--task complex --seed 1",
                            "m1@1:points:--task complex-margin --seed 1"], cwd=ROOT, env=env, check=True,
                           capture_output=True, text=True)  # fmt: skip
     assert "a1: evaluations ended" in done.stdout and "m1: evaluations ended" in done.stdout, done.stdout
@@ -221,30 +221,30 @@ def test_queue_and_poll(tmp_path):
     out, q = tmp_path / "out", tmp_path / "queue"
     env = dict(os.environ, OUT=str(out), RUNS=str(tmp_path / "runs"), KEEP=str(tmp_path / "keep"), QUEUE=str(q))
     t0 = time.time()
-    lost = subprocess.run(["bash", "scripts/device/gpu.sh", "poll", "60"], cwd=ROOT, env=env, capture_output=True,
+    lost = subprocess.run(["bash", "studies/device/gpu.sh", "poll", "60"], cwd=ROOT, env=env, capture_output=True,
                           text=True)  # fmt: skip
     assert lost.returncode == 3 and "the queue and its outputs are lost" in lost.stderr
     assert time.time() - t0 < 10
     made = tmp_path / "made.txt"
     work = tmp_path / "work.sh"
     work.write_text(f"sleep 2; echo step one; echo done > {made}; exit 4\n")
-    started = subprocess.run(["bash", "scripts/device/gpu.sh", "queue", str(work)], cwd=ROOT, env=env, check=True,
+    started = subprocess.run(["bash", "studies/device/gpu.sh", "queue", str(work)], cwd=ROOT, env=env, check=True,
                              capture_output=True, text=True)  # fmt: skip
     assert "started the queue" in started.stdout
-    again = subprocess.run(["bash", "scripts/device/gpu.sh", "queue", str(work)], cwd=ROOT, env=env,
+    again = subprocess.run(["bash", "studies/device/gpu.sh", "queue", str(work)], cwd=ROOT, env=env,
                            capture_output=True, text=True)  # fmt: skip
     assert again.returncode == 1 and "running already" in again.stderr
-    polled = subprocess.run(["bash", "scripts/device/gpu.sh", "poll", "60", str(tmp_path / "made*")], cwd=ROOT,
+    polled = subprocess.run(["bash", "studies/device/gpu.sh", "poll", "60", str(tmp_path / "made*")], cwd=ROOT,
                             env=env, check=True, capture_output=True, text=True)  # fmt: skip
     assert "the queue ended (exit 4)" in polled.stdout and "step one" in polled.stdout
     assert (out / "made.txt").read_text() == "done\n"  # the glob, given before the file existed, expanded after
-    missing = subprocess.run(["bash", "scripts/device/gpu.sh", "queue", str(tmp_path / "none.sh")], cwd=ROOT, env=env,
+    missing = subprocess.run(["bash", "studies/device/gpu.sh", "queue", str(tmp_path / "none.sh")], cwd=ROOT, env=env,
                              capture_output=True, text=True)  # fmt: skip
     assert missing.returncode == 2 and "no file" in missing.stderr
 
 
 def test_sample_scaled_queue_on_two_gpus(tmp_path):
-    """scripts/device/sample_scaled.sh on a 2-GPU machine: the three seeds of the sample-scaled recipe and the recipe's
+    """studies/device/sample_scaled.sh on a 2-GPU machine: the three seeds of the sample-scaled recipe and the recipe's
     seed 1, two runs at a time, each packed with its validation rounds; no scale-out on fewer than 4 GPUs."""
     cand, args = tmp_path / "cand", tmp_path / "args.txt"
     env = _env(tmp_path, FAKE_TRAIN_EVAL.replace("#!/bin/bash\n", '#!/bin/bash\necho "$@" >> "$ARGS_LOG"\n', 1),
@@ -253,8 +253,8 @@ def test_sample_scaled_queue_on_two_gpus(tmp_path):
                VAL_TERRAINS="rugged")  # fmt: skip
     _tool(tmp_path / "bin", "nvidia-smi", "#!/bin/bash\necho 'GPU 0: H100'; echo 'GPU 1: H100'\n")
     env["QUEUE"] = str(tmp_path / "queue")  # as a lease starts it: one detached queue, polled
-    for cmd in (["queue", "scripts/device/sample_scaled.sh"], ["poll", "120"]):
-        done = subprocess.run(["bash", "scripts/device/gpu.sh", *cmd], cwd=ROOT, env=env, check=True,
+    for cmd in (["queue", "studies/device/sample_scaled.sh"], ["poll", "120"]):
+        done = subprocess.run(["bash", "studies/device/gpu.sh", *cmd], cwd=ROOT, env=env, check=True,
                               capture_output=True, text=True)  # fmt: skip
     assert "the queue ended (exit 0)" in done.stdout, done.stdout
     assert "item 1 ended" in done.stdout and "item 2" not in done.stdout
