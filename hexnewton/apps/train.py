@@ -275,6 +275,11 @@ def validate_result(runner, cfg, agent, run_dir: str | None, first_it: int, rank
         kept = Candidate(best.iteration, best.path, f"best training success {best.rate:.3f}") \
             if best.iteration is not None else None  # fmt: skip
         cands = candidates(run_dir, stage_start, last, kept, agent.validation_candidates)
+        if agent.validation_average and len(cands) > 1:
+            from hexnewton.learning.checkpoint import average_checkpoints
+
+            path = average_checkpoints([c.path for c in cands], os.path.join(run_dir, "model_average.pt"))
+            cands.append(Candidate(it, path, "average of iterations " + ", ".join(str(c.iteration) for c in cands)))
     t0 = time.time()
     cands = share_objects(cands, cfg.sim.device)[0]
     ranks = rank.world_size if all(share_objects(all(os.path.isfile(c.path) for c in cands), cfg.sim.device)) else 1

@@ -152,6 +152,10 @@ class AgentConfig:
     #: the courses validated on (§3.1's, by name), each candidate judged on its shares averaged over them; empty: the
     #: task's own course
     validation_terrains: tuple[str, ...] = field(default=(), metadata={"choices": TERRAINS})
+    #: ours: one more candidate, the weight average of the last stage's candidates (actor, critic and their
+    #: observation normalisers; :func:`hexnewton.learning.checkpoint.average_checkpoints`), kept as
+    #: ``model_average.pt``
+    validation_average: bool = False
     #: under torchrun with K ranks (:meth:`for_ranks`): ``mini_batches``: K times the mini-batches per rank (the
     #: mini-batch summed over the ranks stays one process's, K times the optimizer steps per iteration);
     #: ``iterations``: max_iterations, save_interval and the stages' first iterations divided by K (one process's

@@ -75,6 +75,34 @@ def load_into_runner(runner, ckpt: dict, load_cfg: dict | None = None) -> None:
         runner.current_learning_iteration = ckpt["iter"]
 
 
+def average_checkpoints(paths: list[str], out: str) -> str:
+    """The weight average of rsl-rl checkpoints of one run, written to ``out``: every floating-point tensor of the
+    actor's and the critic's state (weights and observation normalisers' means and variances) averaged, each
+    normaliser's standard deviation the square root of its averaged variance; counts, the optimiser's state, the
+    iteration and the metadata are the last checkpoint's. Returns ``out``."""
+    import torch
+
+    if len(paths) < 2:
+        raise ValueError(f"an average needs two checkpoints or more, not {len(paths)}")
+    ckpts = [load_checkpoint(p) for p in paths]
+    avg = dict(ckpts[-1])
+    for key in ("actor_state_dict", "critic_state_dict"):
+        if key not in avg:
+            continue
+        state = {}
+        for name, value in ckpts[-1][key].items():
+            parts = [c[key][name] for c in ckpts]
+            if any(p.shape != value.shape for p in parts):
+                raise ValueError(f"{key}[{name!r}] differs in shape between the checkpoints: not one run's")
+            state[name] = torch.stack(parts).mean(0) if torch.is_floating_point(value) else value.clone()
+        for name in state:
+            if name.endswith("obs_normalizer._std"):
+                state[name] = state[name[: -len("_std")] + "_var"].sqrt()
+        avg[key] = state
+    torch.save(avg, out)
+    return out
+
+
 def checkpoint_meta(ckpt: dict | None) -> dict:
     """The hexnewton metadata train.py saves with a checkpoint ({} for none, or for a checkpoint without it)."""
     infos = (ckpt or {}).get("infos")

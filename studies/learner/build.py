@@ -31,7 +31,7 @@ TERRAINS = ("rugged", "stepped", "complex")
 METRICS = ("success_3m", "fall_rate", "fall_rate_before_goal", "pitch_var_deg2", "roll_var_deg2")
 #: the gate's lines (1000 test rounds per terrain, deterministic action)
 GATE = {"success_3m_min": 0.975, "fall_rate_before_goal_max": 0.005, "rugged_var_vs_fixed_cpg": 0.8, "wall_s_max": 240}
-CANDIDATE = re.compile(r"^\s*(->)?\s*(model_\w+\.pt) \((\w+), iteration (\d+)\): goal ([\d.]+) %, fell before the goal "
+CANDIDATE = re.compile(r"^\s*(->)?\s*(model_\w+\.pt) \((.+?), iteration (\d+)\): goal ([\d.]+) %, fell before the goal "
                        r"([\d.]+) % \(in all ([\d.]+) %\), 3 m ([\d.]+) %, off course ([\d.]+) %, pitch / roll var "
                        r"([\d.]+) / ([\d.]+) deg")
 
@@ -108,7 +108,7 @@ def run_entry(name: str, log: str, timing: str, lease: dict) -> dict:
     arm, seed = name.rsplit("_s", 1)
     info = parse_log(open(log).read())
     per_course = json.load(open(timing)).get("validation", {}).get("courses") if os.path.exists(timing) else None
-    goals = [c["goal"] for c in info["candidates"]] or [0.0]
+    goals = [c["goal"] for c in info["candidates"] if c["file"] != "model_average.pt"] or [0.0]
     chosen = next((c["file"] for c in info["candidates"] if c["chosen"]), None)
     return {"arm": arm, "seed": int(seed), "device": lease.get("device"), "wall_s": info.get("wall_s"),
            "train_s": info.get("train_s"), "startup_s": info.get("startup_s"),
@@ -117,7 +117,10 @@ def run_entry(name: str, log: str, timing: str, lease: dict) -> dict:
            "validation": {"rounds_per_course": info.get("validation_rounds"),
                           "seconds": info.get("validation_s"), "candidates": info["candidates"],
                           "per_course": per_course,
-                          "goal_spread": round(max(goals) - min(goals), 4), "chosen": chosen},
+                          "goal_spread": round(max(goals) - min(goals), 4), "chosen": chosen,
+                 "average": next(({"goal": c["goal"], "fell_before_goal": c["fell_before_goal"],
+                                   "chosen": c["chosen"]} for c in info["candidates"]
+                                  if c["file"] == "model_average.pt"), None)},
            "result_on_validation": {}, "result_on_test": {}}  # fmt: skip
 
 
@@ -156,7 +159,9 @@ def summarise(runs: dict) -> dict:
         mine = [r for r in runs.values() if r["arm"] == arm]
         if not mine:
             continue
-        chosen = [next(c for c in r["validation"]["candidates"] if c["chosen"]) for r in mine]
+        # the arms compare on the checkpoints train.py saves: a weight-averaged candidate (--agent.validation_average)
+        # is left out here and reported apart (``average``)
+        chosen = [plain_choice(r["validation"]["candidates"]) for r in mine]
         arms[arm] = {"label": ARMS[arm], "seeds": sorted(r["seed"] for r in mine),
                      "chosen_goal": [c["goal"] for c in chosen],
                      "chosen_fell_before_goal": [c["fell_before_goal"] for c in chosen],
@@ -165,6 +170,12 @@ def summarise(runs: dict) -> dict:
                      "mean_chosen_fell_before_goal": round(sum(c["fell_before_goal"] for c in chosen) / len(chosen),
                                                            4)}  # fmt: skip
     return arms
+
+
+def plain_choice(cands: list[dict]) -> dict:
+    """train.py's choice among the saved checkpoints alone: the most goals, then the fewest falls before the goal."""
+    plain = [c for c in cands if c["file"] != "model_average.pt"]
+    return max(plain, key=lambda c: (c["goal"], -c["fell_before_goal"]))
 
 
 def pays(arm: dict, base: dict) -> bool:
@@ -312,6 +323,14 @@ def verdict(res: dict) -> list[str]:
                    f"recipe's {pct(base['mean_chosen_goal'])} ({100 * goal:+.1f} points), fall before the goal line "
                    f"{100 * falls:+.1f} points against it, and its candidates spread {100 * spread:+.1f} points more "
                    f"in goal share within a run.")
+    averaged = [(n, r) for n, r in runs.items() if r["validation"]["average"] is not None]
+    if averaged:
+        won = [n for n, r in averaged if r["validation"]["average"]["chosen"]]
+        gain = [r["validation"]["average"]["goal"] - plain_choice(r["validation"]["candidates"])["goal"]
+                for _, r in averaged]
+        out.append(f"- **The weight average of the last stage's candidates** (`--agent.validation_average true`) is "
+                   f"chosen in {len(won)} of {len(averaged)} runs ({', '.join(won) or 'none'}); its goal share against "
+                   f"the best saved checkpoint's: {', '.join(f'{100 * g:+.1f}' for g in gain)} points.")
     if res["gate"]:
         failed = [k for k, v in res["gate"]["lines"].items() if not v]
         out.append("- **The gate " + ("holds**." if not failed else "does not hold**: " + "; ".join(failed) + "."))

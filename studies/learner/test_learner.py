@@ -62,3 +62,12 @@ def test_the_gate_lines_read_the_test_rounds():
     g = build.gate(runs, test)
     assert not g["holds"] and [k for k, v in g["lines"].items() if not v] == ["falls before the goal <= 0.5 %, rugged"]
     assert build.gate({}, test) is None
+
+
+def test_the_average_candidate_is_parsed_and_left_out_of_the_arms_choice():
+    log = LOG.replace("230 s from", "  model_average.pt (average of iterations 200, 250, iteration 250): goal 99.0 %, "
+                      "fell before the goal 0.0 % (in all 0.0 %), 3 m 99.0 %, off course 0.0 %, pitch / roll var "
+                      "20.0 / 8.0 deg²\n230 s from")
+    cands = build.parse_log(log)["candidates"]
+    assert [c["file"] for c in cands][-1] == "model_average.pt" and cands[-1]["kind"].startswith("average of")
+    assert build.plain_choice(cands)["file"] == "model_250.pt"

@@ -299,7 +299,11 @@ def test_training_reports_its_start_up_and_writes_timing(trained):
     # model_result.pt, which play.py and evaluate take for the run's result
     v = timing["validation"]
     assert timing["result"] == os.path.join(run_dir, "model_result.pt") and v["rounds"] == 4
-    assert [c["iteration"] for c in v["candidates"]] == [0, 1] and v["chosen"] in [c["path"] for c in v["candidates"]]
+    assert [c["iteration"] for c in v["candidates"]] == [0, 1, 1]
+    assert v["chosen"] in [c["path"] for c in v["candidates"]]
+    # --agent.validation_average: the weight average of the last stage's candidates, its own file, one more candidate
+    assert v["candidates"][-1]["path"] == os.path.join(run_dir, "model_average.pt") and os.path.isfile(
+        v["candidates"][-1]["path"]) and v["candidates"][-1]["why"] == "average of iterations 0, 1"
     assert "deterministic validation, 4 rounds of the flat course (seed 3000) per candidate" in out
     assert "the result: " in out
 
