@@ -12,6 +12,8 @@
 # 3. with GATE=1, the gate: `python train.py --task complex --seed N FLAGS` for N in 1 2 3, one after another and
 #    alone on the GPU (the time counts), then every result, the shipped policy and the fixed CPG on 1000 test rounds
 #    per terrain (the evaluate default seed), all at once.
+# With AVERAGE=1 every run of the lease also validates the weight average of its candidates
+# (`--agent.validation_average true`: one more candidate; the study compares arms on the saved checkpoints).
 # Then, from the next calls: `bash studies/device/gpu.sh poll 560` and `bash studies/device/learner.sh collect`
 # (everything in 9 MB parts, $OUT/learner.tgz.NN; here: `cat learner.tgz.* | tar xzf - -C LEASE` and
 # `python studies/learner/build.py --add LEASE`).
@@ -31,6 +33,7 @@ if [ "${1:-}" = collect ]; then   # logs, configs, timings, results (not the oth
   ls -la "$out"; exit 0
 fi
 ARMS=${ARMS:-actor} SEEDS=${SEEDS:-1 2} VAL_ROUNDS=${VAL_ROUNDS:-500} KEPT=${KEPT-recipe_s1 recipe_s2}
+EXTRA=""; [ "${AVERAGE:-0}" = 1 ] && EXTRA="--agent.validation_average true"
 flags() {
   case $1 in
     recipe) echo "" ;;
@@ -64,7 +67,7 @@ for seed in $SEEDS; do
       f=$(flags "$arm") || continue
       # shellcheck disable=SC2086
       OUT=$RUNS_OUT LIMIT=${ARM_LIMIT:-1200} VAL_ROUNDS=$VAL_ROUNDS bash studies/device/candidates.sh \
-        "${arm}_s$seed@0:--task complex --seed $seed $f"
+        "${arm}_s$seed@0:--task complex --seed $seed $f $EXTRA"
       echo "$(date +%T) ${arm}_s$seed ended"
     done
   ) &
@@ -79,7 +82,7 @@ fi
 echo "$(date +%T) the gate: python train.py --task complex --seed N $GATE_FLAGS"
 for seed in 1 2 3; do
   # shellcheck disable=SC2086
-  python train.py --task complex --seed "$seed" $GATE_FLAGS --log_dir "$RUNS" --experiment "gate_s$seed" \
+  python train.py --task complex --seed "$seed" $GATE_FLAGS $EXTRA --log_dir "$RUNS" --experiment "gate_s$seed" \
     > "$RUNS/gate_s$seed.log" 2>&1
   echo "$(date +%T) gate_s$seed: train exit $?"
   OUT=$RUNS_OUT bash studies/device/gpu.sh pack "gate_s$seed"
