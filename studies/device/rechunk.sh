@@ -14,7 +14,10 @@ dirs=$(ls -d .dw[0-9]* 2>/dev/null | sort -V) || true
 [ -n "$dirs" ] || { echo "rechunk.sh: no .dw0 .dw1 ... folders: run ../shared/device/pack.sh first" >&2; exit 1; }
 install=$(ls $(for d in $dirs; do echo "$d/install.sh"; done) 2>/dev/null | tail -1) || true
 [ -n "$install" ] || { echo "rechunk.sh: no install.sh in the .dw* folders" >&2; exit 1; }
-tree=$( (git ls-files -z; git ls-files -z --others --exclude-standard) | xargs -0 du -cb 2>/dev/null | tail -1 | cut -f1)
+# the files a call carries: tracked and untracked-not-ignored ones that exist (a study's data folder set aside for the
+# chunk calls, README "Workflow", is not in the tree then)
+tree=$( (git ls-files -z; git ls-files -z --others --exclude-standard) | xargs -0 du -cb 2>/dev/null | tail -1 | cut -f1 \
+  || true)
 chunk=$(( 64 * 1048576 - tree - 2 * 1048576 ))
 [ "$chunk" -gt 4194304 ] || { echo "rechunk.sh: the tree ($tree bytes) leaves no room for wheel chunks" >&2; exit 1; }
 work=$(mktemp -d)
