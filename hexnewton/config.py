@@ -150,7 +150,7 @@ class TerrainConfig:
     # treads, landings, flat ground beyond the blocks -- as one static box, the rugged blocks as one triangle mesh,
     # all down to one common bottom; the same surface as "mesh", one closed triangle mesh of the whole grid, with
     # fewer mesh lookups per robot (none on stepped): 5 % more robot-s/s on complex, 36 % on stepped at 16384 envs
-    # on an H100 (BENCHMARKS.md, "Terrain contact"; studies/time_to_skill). "boxes": every rectangle of equal-height
+    # on an H100 (studies/time_to_skill/report.md, "Terrain contact"). "boxes": every rectangle of equal-height
     # cells one static box, each 2 cm rugged block one (~50,000 on rugged, the whole patch, as in the C MuJoCo
     # model), each robot shape paired only with the boxes under it (physics/terrain/box_pairs.py): the box edges
     # MuJoCo's feet meet (studies/sim2sim/wedge/report.md).
@@ -172,7 +172,7 @@ class SimConfig:
     # ours: 10 ms physics frame (collision detection once per frame) split into 4 MuJoCo steps of 2.5 ms.
     # Contacts found at the frame start are re-evaluated (distance, position) at every substep; a new
     # touch-down is caught in time while a shape approaches slower than rigid_gap / frame_dt = 0.5 m/s.
-    # Measured on an H100 (BENCHMARKS.md): complex terrain 16384 envs ~5,000 robot-s/s with 5 ms frames,
+    # Measured on an H100 (studies/throughput/report.md): complex terrain 16384 envs ~5,000 robot-s/s with 5 ms frames,
     # ~6,800 with 10 ms frames; solver iterations barely matter (collision dominates).
     frame_dt: float = 0.010
     substeps: int = 4
@@ -267,8 +267,8 @@ class CPGConfig:
     a1_range: tuple[float, float] = (0.0, 0.5)  # hip; the hip limit is pi/6 = 0.52 about the pose's 0
     # knee lift; 0.15 + 1.3 stays inside the knee limit pi/2. Eq. 4 lowers the foot as it reaches forward, so
     # a 6 cm step needs more lift than its height: fixed gaits with A2 <= 0.8 stop at the first or second
-    # step, with A2 = 1.1 they climb 12 steps (CPU sweep, RESULTS.md). Policies trained with (0, 0.8) keep
-    # their ranges: play, evaluate, export and --resume read them from the checkpoint.
+    # step, with A2 = 1.1 they climb 12 steps (CPU sweep, studies/physics_screen/report.md). Policies trained with
+    # (0, 0.8) keep their ranges: play, evaluate, export and --resume read them from the checkpoint.
     a2_range: tuple[float, float] = (0.0, 1.3)
     a3_range: tuple[float, float] = (0.0, 0.8)  # ankle tuck; 0.15 + 0.8 < pi/3 keeps it inside the limit
     # ours: body posture (physics/cpg.py), three more parameters after the 15: knee offsets [rad] for height
@@ -332,8 +332,8 @@ def gait_params(omega: float, a1: float, a2: float, a3: float) -> list[float]:
 
 
 #: Fixed CPG gaits (omega [rad/s], A1, A2, A3 [rad]) besides ``CPGConfig.fixed_*``: ``swept`` is the best gait of the
-#: sweep in studies/cpg_sweep (``python studies/cpg_sweep/sweep.py``; highest mean success at 3 m over rugged, stepped and
-#: complex ground, then the lowest pitch + roll variance), the fair fixed baseline.
+#: sweep in studies/cpg_sweep (``python studies/cpg_sweep/sweep.py``; highest mean success at 3 m over rugged,
+#: stepped and complex ground, then the lowest pitch + roll variance), the fair fixed baseline.
 FIXED_GAITS = {"swept": (2.0 * math.pi, 0.2, 0.9, 0.3)}
 
 
@@ -399,7 +399,7 @@ class RewardConfig:
     # heading error [rad] within which the direction term is silent. Table 1's condition "θ > π/6" would be
     # math.pi / 6 (``--env.reward.direction_deadband 0.5236``); ours is 0: with the π/6 dead band a policy never learns
     # to correct start-yaw errors below 30° (H100, flat, 150 iterations: 32/64 vs 63/64 reach the goal from
-    # ±0.2 rad start yaw, RESULTS.md).
+    # ±0.2 rad start yaw, docs/evaluation.md "Conventions").
     direction_deadband: float = 0.0
     # ours: Table 1's D is the start-to-goal vector; True takes it from the robot to the goal, so the direction
     # term steers back toward a goal the robot has drifted away from (docs/internals.md). False: the paper's.

@@ -4,8 +4,8 @@ Documents: ``README.md``, ``RESULTS.md``, ``BENCHMARKS.md``, ``docs/*.md``, ``re
 artefacts) and each study's ``studies/<name>/README.md``, and for their commands also the reports under ``results/``
 and ``studies/`` that they cite (a result's provenance: the report named, or the one beside a named file or
 in a named folder). Commands: the lines of fenced code blocks and the inline ``code`` spans that start with
-``python``, ``python3``, ``torchrun``, ``bash scripts/`` or ``bash studies/`` (after ``VAR=value`` prefixes; a fenced line joined with
-its ``\\`` continuations, cut at ``&&``, ``||``, ``;`` and `` | `` (a pipe between spaces: ``{a|b}`` is one word),
+``python``, ``python3``, ``torchrun``, ``bash scripts/`` or ``bash studies/`` (after ``VAR=value`` prefixes; a
+fenced line joined with its ``\\`` continuations, cut at ``&&``, ``||``, ``;`` and `` | `` (a pipe between spaces: ``{a|b}`` is one word),
 its ``# comment`` and a trailing `` &`` dropped; an inline span may wrap over lines). Each is
 checked without running it:
 

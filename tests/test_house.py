@@ -341,11 +341,11 @@ def _kernel_files(obj, seen: set) -> set[str]:
     return files
 
 
-def test_one_control_step_passes_the_files_the_readme_names():
-    """The README's "How one control step flows" names exactly the package files whose code one ``env.step`` runs
+def test_one_control_step_passes_the_files_the_internals_name():
+    """docs/internals.md's "How one control step flows" names exactly the package files whose code one ``env.step`` runs
     (Python called, Warp kernels launched and the Warp functions they call), at most five, with every part of the step
     switched on: the body posture and reflex, domain randomisation, the terrain curriculum, the observation switches
-    (gyro, last actions, the critic's group). A package the README names
+    (gyro, last actions, the critic's group). A package the section names
     as a folder (``hexnewton/mdp/terms/``) counts as one, for all its files."""
     import re
 
@@ -387,27 +387,34 @@ def test_one_control_step_passes_the_files_the_readme_names():
     seen: set = set()
     files = called | {f for k in launched for f in _kernel_files(k, seen)}
     files = {os.path.relpath(f, ROOT) for f in files if f.startswith(package)}
-    readme = open(os.path.join(ROOT, "README.md")).read()
-    section = readme.split("## How one control step flows", 1)[1].split("\n## ", 1)[0]
+    internals = open(os.path.join(ROOT, "docs", "internals.md")).read()
+    section = internals.split("## How one control step flows", 1)[1].split("\n## ", 1)[0]
     named = set(re.findall(r"hexnewton/[\w/]+(?:\.py|/)", section))
     files = {next((p for p in named if p.endswith("/") and f.startswith(p)), f) for f in files}
     assert files == named and len(files) <= 5, (sorted(files), sorted(named))
     assert np.isfinite(env.obs.numpy()).all()
 
 
-def test_results_holds_folders_only():
-    """``results/`` holds one folder per result (each with its report), no loose files at its root but its README (the
-    table of the shipped policies)."""
+#: what ``results/`` holds: the shipped artefacts (policies, their deployment bundles, the videos) and its README table
+SHIPPED = {"README.md", "policies", "controllers", "videos"}
+
+
+def test_results_holds_only_shipped_artefacts():
+    """``results/`` holds the shipped policies, bundles and videos with its README table; every experiment, with its
+    reports, lives in its study (``studies/<name>/``)."""
     results = os.path.join(ROOT, "results")
-    loose = sorted(f for f in os.listdir(results) if os.path.isfile(os.path.join(results, f)) and f != "README.md")
-    assert not loose, f"files at results/'s root (each belongs in its result's folder): {loose}"
+    other = sorted(set(os.listdir(results)) - SHIPPED)
+    assert not other, f"results/ holds more than the shipped artefacts {sorted(SHIPPED)}: {other} (a study's folder)"
+    reports = [os.path.relpath(os.path.join(d, f), ROOT) for d, _, files in os.walk(results) for f in files
+               if f == "report.md" and os.path.dirname(os.path.join(d, f)) != os.path.join(results, "videos")]
+    assert not reports, f"reports under results/ (each belongs in its study): {reports}"
 
 
 #: the README's longest length, in lines: what it is, set-up, quick start, tasks, layout, links (the evidence lives in
 #: RESULTS.md, BENCHMARKS.md and docs/)
 MAX_README_LINES = 130
-#: the longest summary RESULTS.md and BENCHMARKS.md open with, in lines
-MAX_SUMMARY_LINES = 60
+#: the longest RESULTS.md and BENCHMARKS.md may be, in lines: one page each, every row linking its study
+MAX_PAGE_LINES = 150
 
 
 def test_readme_is_short():
@@ -417,15 +424,16 @@ def test_readme_is_short():
 
 
 @pytest.mark.parametrize("doc", ["RESULTS.md", "BENCHMARKS.md"])
-def test_results_and_benchmarks_open_with_a_short_summary(doc):
-    """The document's summary is everything from its top to the first ``## `` heading after ``## Summary``, which is
-    its first ``## `` heading: the headline numbers with links down into the evidence below."""
+def test_results_and_benchmarks_are_one_page_whose_rows_link_their_study(doc):
+    """RESULTS.md and BENCHMARKS.md are one page each (the detail lives in the studies), and every row of their
+    tables links the study that holds its numbers (``studies/<name>/``)."""
     with open(os.path.join(ROOT, doc)) as f:
         lines = f.read().splitlines()
-    headings = [n for n, line in enumerate(lines) if line.startswith("## ")]
-    assert headings and lines[headings[0]] == "## Summary", f"{doc}'s first ## heading is not '## Summary'"
-    end = headings[1] if len(headings) > 1 else len(lines)
-    assert end <= MAX_SUMMARY_LINES, f"{doc}'s summary (its top to line {end + 1}) has {end} lines"
+    assert len(lines) <= MAX_PAGE_LINES, f"{doc} has {len(lines)} lines (at most {MAX_PAGE_LINES})"
+    rows = [(n, line) for n, line in enumerate(lines, 1) if line.startswith("|") and not set(line) <= set("|-: ")]
+    headers = {n for n, line in rows if n < len(lines) and set(lines[n]) <= set("|-: ")}  # a row above |---|
+    unlinked = [f"{doc}:{n}" for n, line in rows if n not in headers and "](studies/" not in line]
+    assert rows and not unlinked, f"table rows that link no study: {unlinked}"
 
 
 def test_the_package_imports_nothing_from_studies():

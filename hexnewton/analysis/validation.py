@@ -22,7 +22,7 @@ import numpy as np
 from hexnewton.analysis.metrics import round_metrics
 from hexnewton.mdp.status import FELL, OFF_COURSE, SUCCESS
 
-#: the validation rounds' terrain seed (start seed + 1000): ``evaluate --seed 3000`` (RESULTS.md, conventions)
+#: the validation rounds' terrain seed (start seed + 1000): ``evaluate --seed 3000`` (docs/evaluation.md, "Conventions")
 VALIDATION_SEED = 3000
 _SAVED = re.compile(r"model_(\d+)\.pt$")
 

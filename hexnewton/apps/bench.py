@@ -4,7 +4,7 @@
     python -m hexnewton.apps.bench --num_envs 1024 4096 16384 --terrain flat complex --device cuda
     python -m hexnewton.apps.bench --mode sim              # simulation only
     python -m hexnewton.apps.bench --mode sim --terrain stepped --env.terrain.collision mesh_boxes  # terrain settings
-    python -m hexnewton.apps.bench --append BENCHMARKS.md  # also append the table (date, device, git rev)
+    python -m hexnewton.apps.bench --append studies/throughput/report.md  # the table appended (date, device, git)
     python -m hexnewton.apps.bench --task complex --mode train --num_envs 4096    # the complex task's physics, learner
     torchrun --standalone --nproc_per_node=4 -m hexnewton.apps.bench --task complex --mode train --num_envs 4096 \
         --baseline bench_1gpu.json --json bench_4gpu.json  # 4096 envs on each of 4 GPUs; efficiency vs 1 GPU

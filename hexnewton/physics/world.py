@@ -64,7 +64,7 @@ class ContactOverflowError(HexnewtonError):
     pass
 
 
-MAX_ENVS = 1 << 20  # per device; an H100 holds 16384 envs in a few GB (BENCHMARKS.md)
+MAX_ENVS = 1 << 20  # per device; an H100 holds 16384 envs in a few GB (studies/throughput/report.md)
 
 
 def validate_sim(cfg: SimConfig) -> None:

@@ -30,7 +30,7 @@ def _upright(q: np.ndarray) -> np.ndarray:
 
 
 # the default physics (10 ms frame = 4 x 2.5 ms) and the 20 ms frame = 4 x 5 ms the shipped complex policy was
-# trained under (BENCHMARKS.md): both must pass the stability checks
+# trained under (studies/throughput/report.md): both must pass the stability checks
 PHYSICS = [pytest.param({}, id="10ms"), pytest.param({"frame_dt": 0.02, "substeps": 4}, id="20ms")]
 # a narrower contact band with Newton's speculative contacts (SimConfig.terrain_gap, speculative_gap)
 SPECULATIVE = {"rigid_gap": 0.002, "terrain_gap": 0.0, "speculative_gap": 0.01}
