@@ -5,9 +5,14 @@ and its version, when an upgrade moves one.
 - the Python modules that define the Warp modules a step and the solver's set-up launch (``newton._src``,
   ``mujoco_warp._src`` and ``warp._src`` module names), which :mod:`hexnewton.physics.precompile` compiles ahead;
 - Warp's registry of modules (:func:`warp_user_modules`) and whether Warp has started (:func:`warp_started`);
-- the block size of Newton's contact reduction export (:func:`export_reduced_contacts_block_dim`).
+- the block size of Newton's contact reduction export (:func:`export_reduced_contacts_block_dim`);
+- the flag Newton's contact reduction raises when it drops candidates (:func:`reduction_overflow`; ``Contacts``
+  keeps it as one slot of ``contact_counters``, whose layout it does not document);
+- Warp's struct type (``WarpStruct``, :func:`warp_struct_type`), for the MDP's configuration structs: ``wp.struct``
+  makes one, ``warp.types.type_is_struct`` tests for one, no public name holds the class.
 
-What each name is for is said where it is used (``precompile.py``, ``device.py``)."""
+What each name is for is said where it is used (``precompile.py``, ``device.py``, ``world.py``,
+``mdp/terms/structs.py``)."""
 
 from __future__ import annotations
 
@@ -39,6 +44,26 @@ def warp_started() -> bool:
     from warp._src import context
 
     return context.runtime is not None
+
+
+def reduction_overflow(contacts):
+    """Newton's flag (a Warp array of one int32) that a collision pass which filled ``contacts`` (a
+    ``newton.Contacts``) sets when its global contact reduction dropped candidates."""
+    return contacts._reduction_overflow
+
+
+def warp_struct_type() -> type:
+    """The class of Warp's struct types (what ``@wp.struct`` returns)."""
+    from warp._src.codegen import Struct
+
+    return Struct
+
+
+def __getattr__(name: str):
+    """``WarpStruct``: :func:`warp_struct_type`, imported when first named (``import hexnewton`` loads no Warp)."""
+    if name == "WarpStruct":
+        return warp_struct_type()
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 def export_reduced_contacts_block_dim() -> int:

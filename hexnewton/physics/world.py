@@ -38,6 +38,7 @@ from hexnewton.config import HexConfig, SimConfig
 from hexnewton.errors import HexnewtonError
 from hexnewton.physics.device import resolve_device
 from hexnewton.physics.graphs import capture_graph
+from hexnewton.physics.private_api import reduction_overflow
 from hexnewton.physics.precompile import (
     compiles_generated,
     install_shipped_modules,
@@ -507,7 +508,7 @@ class World:
                 self.leg_sensor.update(None, self.contacts, observables=seen)
             wp.launch(_accumulate_overflow, dim=self.num_envs,
                       inputs=[seen.overflow, self._triangle_pair_count(),
-                              self.pipeline.narrow_phase.max_triangle_pairs, self.contacts._reduction_overflow,
+                              self.pipeline.narrow_phase.max_triangle_pairs, reduction_overflow(self.contacts),
                               self._overflow_world, self._overflow_global], device=self.device)  # fmt: skip
             if self.substeps % 2 == 1 and i == self.substeps - 1:
                 self.state_0.assign(self.state_1)

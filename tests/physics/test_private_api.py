@@ -39,6 +39,39 @@ def test_private_name_exists(func, name):
     assert isinstance(value, {"warp._src.context.user_modules": dict, "warp._src.context.runtime": bool}.get(name, int))
 
 
+def test_warp_struct_type_is_what_wp_struct_makes():
+    import warp as wp
+
+    try:
+        struct_type = private_api.WarpStruct
+    except (ImportError, AttributeError) as exc:
+        pytest.fail(_moved("warp._src.codegen.Struct", exc))
+
+    @wp.struct
+    class Pair:
+        a: wp.float32
+        b: wp.int32
+
+    assert isinstance(Pair, struct_type) and wp.types.type_is_struct(Pair)
+    assert private_api.warp_struct_type() is struct_type
+    with pytest.raises(AttributeError, match="no attribute 'Nothing'"):
+        private_api.Nothing  # noqa: B018
+
+
+def test_reduction_overflow_is_the_contacts_own_flag():
+    """Newton's ``Contacts`` keeps the contact reduction's overflow flag (one int32, cleared with the counters)."""
+    import newton
+    import warp as wp
+
+    contacts = newton.Contacts(4, 0, device="cpu")
+    try:
+        flag = private_api.reduction_overflow(contacts)
+    except AttributeError as exc:
+        pytest.fail(_moved("newton._src.sim.contacts.Contacts._reduction_overflow", exc))
+    assert isinstance(flag, wp.array) and flag.dtype == wp.int32 and flag.shape == (1,)
+    assert int(flag.numpy()[0]) == 0
+
+
 def test_a_moved_name_fails_with_one_clear_line():
     exc = ImportError("No module named 'newton._src.sim.collide'")
     line = _moved("newton._src.sim.collide", exc)

@@ -8,7 +8,7 @@ and converts the config dataclasses; :func:`choose` picks the rows a task names.
 import dataclasses
 
 import warp as wp
-from warp._src.codegen import Struct
+from hexnewton.physics.private_api import WarpStruct as Struct  # Warp has no public name for its struct type
 
 from hexnewton.config import RewardConfig, TaskConfig
 
