@@ -4,6 +4,7 @@ sensors (:class:`HeightScanner`), the episode ends, the rounds of the evaluation
 
 from __future__ import annotations
 
+import math
 import time
 from dataclasses import replace
 
@@ -13,7 +14,7 @@ from hexnewton.analysis.metrics import round_metrics, summarize
 from hexnewton.analysis.rollout import EVAL_TERRAIN_SEED, START_SEED_OFFSET
 from hexnewton.config import CPGConfig, RobotConfig, SimConfig, TaskConfig, TerrainConfig, terrain_for_goal
 from hexnewton.deploy.mjcf import SENSORS_PER_ROBOT, build_model
-from hexnewton.deploy.runtime import FORMAT, Controller, target_in_heading_frame
+from hexnewton.deploy.runtime import FORMAT, Controller
 from hexnewton.mdp.status import FELL, NONFINITE, OFF_COURSE, RUNNING, SUCCESS, TIMEOUT
 from hexnewton.physics.reference import quat_to_rpy_np
 from hexnewton.physics.robot.geometry import footprint, leg_bounds, spawn_clearance
@@ -109,10 +110,16 @@ def start_poses(rounds: int, seed: int, task: TaskConfig | None = None, spread: 
 
 
 def episode_status(qpos: np.ndarray, qvel: np.ndarray, ground: np.ndarray, start_xy: np.ndarray, steps: int,
-                   task: TaskConfig) -> tuple[np.ndarray, np.ndarray]:
-    """The episode ends of ``mdp/terms/terminations.py`` (TERMINATIONS, first match wins) for robots (N, 25) /
-    (N, 24) after ``steps`` control steps: (status codes (N,), roll / pitch / yaw (N, 3)). Quaternions are MuJoCo's
-    (w, x, y, z)."""
+                   task: TaskConfig, goal: np.ndarray | None = None, course: np.ndarray | None = None,
+                   last: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+    """The episode ends of ``mdp/terms/terminations.py`` (TERMINATIONS, first match wins; those of
+    ``task.terminations``, the blow-up always) for robots (N, 25) / (N, 24) after ``steps`` control steps: (status
+    codes (N,), roll / pitch / yaw (N, 3)). Quaternions are MuJoCo's (w, x, y, z). ``goal`` (N, 2), its ``course``
+    (N, 2) and ``last`` (N,), whether it is the episode's last (``mdp/terms/goals.py``): None, the paper's goal
+    ``goal_distance`` ahead of ``start_xy`` along +x, the last."""
+    if goal is None:
+        goal, course = start_xy + [task.goal_distance, 0.0], np.tile([1.0, 0.0], (len(qpos), 1))
+    last = np.ones(len(qpos), bool) if last is None else np.asarray(last, bool)
     finite = np.isfinite(qpos).all(axis=1) & np.isfinite(qvel).all(axis=1)
     quat = np.where(finite[:, None], qpos[:, [4, 5, 6, 3]], [0.0, 0.0, 0.0, 1.0])
     rpy = quat_to_rpy_np(quat)
@@ -120,10 +127,12 @@ def episode_status(qpos: np.ndarray, qvel: np.ndarray, ground: np.ndarray, start
         blown = ~finite | (np.linalg.norm(qvel[:, :3], axis=1) > task.max_base_speed) | \
             (np.abs(qvel[:, 6:]) > task.max_joint_speed).any(axis=1)
         fell = (qpos[:, 2] - ground < task.min_height) | (np.abs(rpy[:, :2]) > task.max_tilt).any(axis=1)
-        off = np.abs(qpos[:, 1] - start_xy[:, 1]) > task.max_abs_y
-        won = np.hypot(qpos[:, 0] - start_xy[:, 0] - task.goal_distance, qpos[:, 1] - start_xy[:, 1]) < task.goal_radius
+        off = np.abs((qpos[:, 1] - goal[:, 1]) * course[:, 0] - (qpos[:, 0] - goal[:, 0]) * course[:, 1]) > task.max_abs_y
+        won = last & (np.hypot(goal[:, 0] - qpos[:, 0], goal[:, 1] - qpos[:, 1]) < task.goal_radius)
     late = np.full(len(qpos), steps >= task.max_episode_steps)
-    status = np.select([blown, fell, off, won, late], [NONFINITE, FELL, OFF_COURSE, SUCCESS, TIMEOUT], RUNNING)
+    ends = {"fell": (fell, FELL), "off_course": (off, OFF_COURSE), "success": (won, SUCCESS), "timeout": (late, TIMEOUT)}
+    rows = [ends[name] for name in ends if name in task.terminations]
+    status = np.select([blown] + [r[0] for r in rows], [NONFINITE] + [r[1] for r in rows], RUNNING)
     return status, np.where((status == NONFINITE)[:, None], 0.0, rpy)
 
 
@@ -134,10 +143,14 @@ class Rounds:
     ``terrain``: a terrain name (its config from ``TerrainConfig``, patch long enough for the goal), seed ``seed``;
     starts from ``seed + START_SEED_OFFSET`` (:func:`start_poses`). MuJoCo's timestep is the bundle's substep.
     ``robots``: the indices of the rounds this model runs (default all ``rounds``), each with the start it has among
-    all of them, so that a split of the rounds over processes (:func:`measure`'s ``workers``) runs the same rounds."""
+    all of them, so that a split of the rounds over processes (:func:`measure`'s ``workers``) runs the same rounds.
+    ``waypoints`` ((x, y), ...) in each start frame: the goals in turn instead of the one ahead, as in Newton's
+    navigation evaluation (``analysis.navigation``: the navigate tasks' square patch, every start heading, no
+    off-course end); the runtime keeps each robot's goal (``Controller.set_goal``) and forms the target from its
+    pose."""
 
     def __init__(self, controller: str | dict, terrain: str, rounds: int, seed: int = EVAL_TERRAIN_SEED,
-                 robot: RobotConfig | None = None, task: TaskConfig | None = None, robots=None):
+                 robot: RobotConfig | None = None, task: TaskConfig | None = None, robots=None, waypoints=None):
         import mujoco
 
         from hexnewton.physics.terrain.heightmap import build_height_grid
@@ -152,7 +165,8 @@ class Rounds:
         self.policy = self.ctrl.session is not None
         self.control_dt, self.substeps = float(self.spec["control_dt"]), int(self.spec["substeps_per_control"])
         self.task = replace(self.task, goal_distance=float(self.spec.get("goal_distance", self.task.goal_distance)))
-        self.grid = build_height_grid(terrain_for_goal(TerrainConfig(name=terrain, seed=seed), self.task.goal_distance))
+        self.course_points = None if waypoints is None else np.asarray(waypoints, np.float64).reshape(-1, 2)
+        self.grid = build_height_grid(self._terrain(terrain, seed))
         s = start_poses(total, seed + START_SEED_OFFSET, self.task, stand=self.spec["stand_pose"], robot=self.robot)
         s = {k: v[keep] for k, v in s.items()}
         places = [(0.0, y, 1.0, a) for y, a in zip(s["y"], s["yaw"])]
@@ -169,12 +183,62 @@ class Rounds:
         q[:, 7:] = s["joints"]
         self.d.ctrl[:] = s["joints"].ravel()
         mujoco.mj_forward(self.m, self.d)
-        self.start = np.stack([np.zeros(rounds), s["y"]], axis=1)
-        self.goal = self.start + [self.task.goal_distance, 0.0]
-        self.goal_z = np.array([self.scan.height(gx, gy) for gx, gy in self.goal])
+        self.start, self.start_yaw = np.stack([np.zeros(rounds), s["y"]], axis=1), s["yaw"]
+        self._first_goals()
         self.alive = np.ones(rounds, bool)
         self.steps = 0
         self._show_only(0)
+
+    def _terrain(self, terrain: str, seed: int) -> TerrainConfig:
+        """The terrain's config: the paper's patch long enough for the goal, or for a waypoint course the navigate
+        tasks' square (with every start heading and the navigation's ends)."""
+        if self.course_points is None:
+            return terrain_for_goal(TerrainConfig(name=terrain, seed=seed), self.task.goal_distance)
+        from hexnewton.analysis.navigation import NAVIGATION_ENDS
+        from hexnewton.tasks import navigation_terrain
+
+        self.task = replace(self.task, reset_yaw=math.pi, terminations=NAVIGATION_ENDS)
+        return replace(navigation_terrain(terrain), seed=seed)
+
+    def _first_goals(self) -> None:
+        """Each robot's goals in the world (``course`` (N, K, 2): the one ahead, or the waypoints in its start frame)
+        and their ground heights, the first of them set (:meth:`_set_goals`)."""
+        if self.course_points is None:
+            world = (self.start + [self.task.goal_distance, 0.0])[:, None]
+        else:
+            c, s = np.cos(self.start_yaw)[:, None], np.sin(self.start_yaw)[:, None]
+            w = self.course_points[None]
+            world = np.stack([self.start[:, :1] + c * w[..., 0] - s * w[..., 1],
+                              self.start[:, 1:] + s * w[..., 0] + c * w[..., 1]], axis=-1)  # fmt: skip
+        self.course = world
+        self.course_z = np.array([[self.scan.height(x, y) for x, y in row] for row in world])
+        self.leg = np.zeros(self.n, np.int64)  # the goal each robot walks to now (goals reached before it)
+        self.goal, self.goal_z, self.line = np.zeros((self.n, 2)), np.zeros(self.n), np.tile([1.0, 0.0], (self.n, 1))
+        self._set_goals(self.start, np.ones(self.n, bool))
+
+    def _set_goals(self, xy: np.ndarray, which: np.ndarray) -> None:
+        """Robots ``which``: goal number ``leg`` of their course, its line from ``xy`` (+x for the one ahead), whether
+        it is the last; the runtime gets every robot's goal (``Controller.set_goal``)."""
+        k = np.minimum(self.leg, self.course.shape[1] - 1)
+        goal, goal_z = self.course[np.arange(self.n), k], self.course_z[np.arange(self.n), k]
+        self.goal[which], self.goal_z[which] = goal[which], goal_z[which]
+        if self.course_points is not None:
+            d = goal - xy
+            norm = np.hypot(d[:, 0], d[:, 1])
+            line = np.where((norm > 1e-6)[:, None], d / np.maximum(norm, 1e-6)[:, None], [1.0, 0.0])
+            self.line[which] = line[which]
+        self.final = self.leg >= self.course.shape[1] - 1
+        self.ctrl.set_goal(self.goal[:, 0], self.goal[:, 1], self.goal_z)
+
+    def next_goals(self, status: np.ndarray) -> None:
+        """Robots still walking within ``goal_radius`` of a goal that is not their last: the next waypoint, as the
+        env's goal switch (``mdp/terms/goals.py``)."""
+        q = self.d.qpos.reshape(self.n, 25)[:, :2]
+        near = np.hypot(self.goal[:, 0] - q[:, 0], self.goal[:, 1] - q[:, 1]) < self.task.goal_radius
+        switch = self.alive & (status == RUNNING) & ~self.final & near
+        if switch.any():
+            self.leg[switch] += 1
+            self._set_goals(q, switch)
 
     def _show_only(self, k: int) -> None:
         """Robot ``k``'s geoms in group 0, the others' in group 3 (hidden by the viewer's and renderer's defaults)."""
@@ -194,7 +258,8 @@ class Rounds:
         """The rest of the observation: the goal in the heading frame (odometry: the free joint's position) and the
         terrain reading, for the robots still walking (0 for the others)."""
         pos = self.d.qpos.reshape(self.n, 25)[:, :3]
-        target = target_in_heading_frame(pos, r["quat"], np.c_[self.goal, np.zeros(self.n)], self.goal_z)
+        pose = np.c_[pos[:, :2], quat_to_rpy_np(np.atleast_2d(r["quat"]))[:, 2]]  # odometry's planar pose
+        target = self.ctrl.target_from_pose(pose, pos[:, 2])
         height = np.zeros(self.n)
         for k in np.flatnonzero(self.alive):
             height[k] = self.scan.reading(pos[k, 0], pos[k, 1])
@@ -223,7 +288,7 @@ class Rounds:
         """Episode status codes (N,) and roll / pitch / yaw (N, 3) after the last control step."""
         q, v = self.d.qpos.reshape(self.n, 25), self.d.qvel.reshape(self.n, 24)
         ground = np.array([self.scan.height(x, y) if a else 0.0 for (x, y), a in zip(q[:, :2], self.alive)])
-        return episode_status(q, v, ground, self.start, self.steps, self.task)
+        return episode_status(q, v, ground, self.start, self.steps, self.task, self.goal, self.line, self.final)
 
     def park(self, mask: np.ndarray) -> None:
         """Finished robots wait far below the terrain, 1 m apart and at rest (re-parked every step: they fall
@@ -235,14 +300,16 @@ class Rounds:
 
     def run(self, max_steps: int | None = None, on_step=None) -> dict:
         """Run until every robot's first episode ended (or ``max_steps``); returns the per-step arrays the metrics
-        take: ``pos`` (T, N, 2) relative to the start, ``rpy`` (T, N, 3), ``done`` (T, N), ``status`` (T, N).
-        ``on_step(self)`` after every control step (a video frame, the viewer)."""
+        take: ``pos`` (T, N, 2) relative to the start, ``rpy`` (T, N, 3), ``done`` (T, N), ``status`` (T, N), and
+        ``legs`` (N,) the goals reached before the last one walked to. ``on_step(self)`` after every control step (a
+        video frame, the viewer)."""
         max_steps = max_steps or self.task.max_episode_steps
         pos, rpy, done, status = [], [], [], []
         while self.alive.any() and self.steps < max_steps:
             self.control_step()
             st, a = self.status()
             st = np.where(self.alive, st, RUNNING)
+            self.next_goals(st)
             p = self.d.qpos.reshape(self.n, 25)[:, :2] - self.start
             pos.append(np.where(self.alive[:, None], p, np.nan))
             rpy.append(np.where(self.alive[:, None], a, np.nan))
@@ -252,14 +319,16 @@ class Rounds:
             self.park(~self.alive)
             if on_step is not None:
                 on_step(self)
-        return {"pos": np.stack(pos), "rpy": np.stack(rpy), "done": np.stack(done), "status": np.stack(status)}
+        return {"pos": np.stack(pos), "rpy": np.stack(rpy), "done": np.stack(done), "status": np.stack(status),
+                "legs": self.leg.copy(), "start_yaw": np.asarray(self.start_yaw, np.float64)}
 
 
 def run_part(controller: str | dict, terrain: str, rounds: int, seed: int, max_steps: int | None,
-             robots=None, on_step=None) -> dict:
-    """The rounds ``robots`` (indices of ``rounds``; None: all) run to the end: :meth:`Rounds.run`'s arrays plus
-    ``control_dt``, ``steps`` and the scanner's ``rays``. A top-level function, so that worker processes can run it."""
-    r = Rounds(controller, terrain, rounds, seed, robots=robots)
+             robots=None, on_step=None, waypoints=None) -> dict:
+    """The rounds ``robots`` (indices of ``rounds``; None: all) run to the end (toward ``waypoints``, if given):
+    :meth:`Rounds.run`'s arrays plus ``control_dt``, ``steps`` and the scanner's ``rays``. A top-level function, so
+    that worker processes can run it."""
+    r = Rounds(controller, terrain, rounds, seed, robots=robots, waypoints=waypoints)
     ep = r.run(max_steps, on_step)
     ep.update(control_dt=r.control_dt, steps=r.steps, rays=r.scan.rays)
     return ep
@@ -275,13 +344,31 @@ def join_parts(parts: list[dict]) -> dict:
         padded = [np.concatenate([p[k], np.full((t - p[k].shape[0],) + p[k].shape[1:], v, p[k].dtype)]) for p in parts]
         out[k] = np.concatenate(padded, axis=1)
     out.update(control_dt=parts[0]["control_dt"], steps=t, rays=sum(p["rays"] for p in parts))
+    out.update({k: np.concatenate([p[k] for p in parts]) for k in ("legs", "start_yaw") if all(k in p for p in parts)})
     return out
 
 
+def waypoint_summary(ep: dict, count: int) -> dict:
+    """The waypoint rounds as Newton's navigation evaluation scores its square (``analysis.navigation``): the share
+    that completed the course (its last goal reached), the time, the goals reached, the path, the falls."""
+    from hexnewton.analysis.navigation import summarize_square
+
+    status = ep["status"]
+    ended = status.any(axis=0)
+    last = np.where(ended, np.argmax(status != RUNNING, axis=0), len(status) - 1)
+    end = np.where(ended, status[last, np.arange(status.shape[1])], RUNNING)
+    c, s = np.cos(ep["start_yaw"]), np.sin(ep["start_yaw"])
+    d = ep["pos"]
+    pos = np.stack([c * d[..., 0] + s * d[..., 1], -s * d[..., 0] + c * d[..., 1]], axis=-1)  # the start frame
+    goals = np.where(end == SUCCESS, count, ep["legs"])
+    return summarize_square({"pos": pos, "end": end, "steps": last + 1, "goals": goals, "dt": ep["control_dt"]})
+
+
 def measure(controller: str | dict, terrain: str, rounds: int, seed: int = EVAL_TERRAIN_SEED,
-            max_steps: int | None = None, on_step=None, workers: int = 1) -> dict:
+            max_steps: int | None = None, on_step=None, workers: int = 1, waypoints=None) -> dict:
     """:class:`Rounds` run to the end and summarised with :mod:`hexnewton.analysis.metrics` (``summarize``'s dict plus
-    the wall time, the control steps and the scanner's ray count). ``workers`` > 1 splits the rounds into that many
+    the wall time, the control steps and the scanner's ray count; with ``waypoints`` also ``waypoints``, the course's
+    :func:`waypoint_summary`). ``workers`` > 1 splits the rounds into that many
     consecutive ranges, each a MuJoCo model of its own in a process of its own (no ``on_step`` then): the robots of
     one model never touch each other, so each round starts and walks as in one model of all of them, to rounding (a
     smaller model and policy batch round differently, and over thousands of steps on blocks that can change how a
@@ -291,17 +378,20 @@ def measure(controller: str | dict, terrain: str, rounds: int, seed: int = EVAL_
     if workers > 1 and on_step is not None:
         raise ValueError("a film or viewer (on_step) shows one model: run it with workers=1")
     if workers == 1:
-        ep = run_part(controller, terrain, rounds, seed, max_steps, None, on_step)
+        ep = run_part(controller, terrain, rounds, seed, max_steps, None, on_step, waypoints)
     else:
         import multiprocessing
         from concurrent.futures import ProcessPoolExecutor
 
         ranges = np.array_split(np.arange(rounds), workers)
         with ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn")) as pool:
-            parts = list(pool.map(run_part, *zip(*[(controller, terrain, rounds, seed, max_steps, r) for r in ranges])))
+            parts = list(pool.map(run_part, *zip(*[(controller, terrain, rounds, seed, max_steps, r, None, waypoints)
+                                                   for r in ranges])))  # fmt: skip
         ep = join_parts(parts)
     out = summarize(round_metrics(ep["pos"], ep["rpy"], ep["done"], ep["status"], ep["control_dt"]), ep["rpy"])
     out.update(control_steps=ep["steps"], wall_s=round(time.perf_counter() - t0, 1), rays=ep["rays"])
+    if waypoints is not None:
+        out["waypoints"] = waypoint_summary(ep, len(waypoints))
     return out
 
 

@@ -83,7 +83,8 @@ def validate(cands: list[Candidate], controller: str, terrain, rounds: int, devi
     Returns per candidate the shares of rounds that reached the goal, walked 3 m, fell, fell before the goal line
     (``fell_before_goal``) and left the course, and its body's pitch and roll variance over its rounds [deg²] (the
     stability the last curriculum stage trains: the choice does not weigh it, the console and ``timing.json`` show
-    it)."""
+    it). A navigate run (random goals) walks the navigation's validation instead: one goal at 2 m per round, every
+    bearing (:func:`hexnewton.analysis.navigation.validate_navigation`)."""
     from hexnewton.analysis.rollout import CONTROLLERS, START_SEED_OFFSET, read_controller_checkpoint, stepped
     from hexnewton.learning.checkpoint import trained_config
     from hexnewton.mdp.env import make_env
@@ -91,6 +92,14 @@ def validate(cands: list[Candidate], controller: str, terrain, rounds: int, devi
 
     k = len(cands)
     trained = trained_config(read_controller_checkpoint(controller, cands[-1].path))
+    if trained.task.random_goals:  # a navigate run: one goal at 2 m per round, every bearing (analysis/navigation.py)
+        from hexnewton.analysis.navigation import navigation_config, validate_navigation
+
+        env = make_env(navigation_config(terrain, trained, rounds * k, device, VALIDATION_SEED, max_steps),
+                       CONTROLLERS[controller])  # fmt: skip
+        shares, run = validate_navigation(env, _batched_policy(env, controller, cands), k)
+        pitch, roll = candidate_variances(run["rpy"], np.isfinite(run["pos"][..., 0]), k)
+        return [dict(r, pitch_var=pitch[i], roll_var=roll[i]) for i, r in enumerate(shares)]
     goal = {} if goal_distance is None else {"goal_distance": goal_distance}
     cfg = course(terrain, trained, None, rounds * k, device, VALIDATION_SEED, seed=VALIDATION_SEED + START_SEED_OFFSET,
                  **goal)  # fmt: skip
@@ -186,6 +195,7 @@ def report_lines(cands: list[Candidate], results: list[dict], chosen: int) -> li
     """One console line per candidate, the chosen one marked."""
     return [f"  {'->' if i == chosen else '  '} {os.path.basename(c.path)} ({c.why}, iteration {c.iteration}): goal "
             f"{100 * r['goal']:.1f} %, fell before the goal {100 * r['fell_before_goal']:.1f} % (in all "
-            f"{100 * r['fell']:.1f} %), 3 m {100 * r['walk_3m']:.1f} %, off course {100 * r['off_course']:.1f} %, "
+            f"{100 * r['fell']:.1f} %), " + (f"3 m {100 * r['walk_3m']:.1f} %, " if np.isfinite(r["walk_3m"]) else "")
+            + f"off course {100 * r['off_course']:.1f} %, "
             f"pitch / roll var {r['pitch_var']:.1f} / {r['roll_var']:.1f} deg²"
             for i, (c, r) in enumerate(zip(cands, results))]  # fmt: skip

@@ -4,14 +4,24 @@ from __future__ import annotations
 
 import argparse
 import os
+import re
 import sys
 from collections.abc import Callable
 
 from hexnewton.config import TERRAINS
 
 
+#: a value that starts with a minus but is a number or an ``X,Y`` pair (``--waypoints -1,2``), not a flag
+NEGATIVE_VALUE = re.compile(r"^-\d*\.?\d+([eE][-+]?\d+)?(,-?\d*\.?\d+([eE][-+]?\d+)?)?$")
+
+
 class ArgumentParser(argparse.ArgumentParser):
-    """argparse, but a usage error is one line (``prog: error: ...``) and exit status 2."""
+    """argparse, but a usage error is one line (``prog: error: ...``) and exit status 2, and an ``X,Y`` pair with a
+    negative X is a value (argparse's own test for a negative number, widened)."""
+
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        self._negative_number_matcher = NEGATIVE_VALUE
 
     def error(self, message: str):  # noqa: D102
         sys.stderr.write(f"{self.prog}: error: {message}\n")
@@ -32,6 +42,18 @@ def terrain_name(text: str) -> str:
     if text not in TERRAINS:
         raise argparse.ArgumentTypeError(f"unknown terrain '{text}': choose one of {', '.join(TERRAINS)}")
     return text
+
+
+def waypoint(text: str) -> tuple[float, float]:
+    """``X,Y`` [m] (``--waypoints 2,0 2,2``): one waypoint in the robot's start frame (x along its start heading)."""
+    parts = text.split(",")
+    try:
+        x, y = (float(v) for v in parts) if len(parts) == 2 else (None, None)
+    except ValueError:
+        x = y = None
+    if x is None or not all(abs(v) < 1e3 for v in (x, y)):
+        raise argparse.ArgumentTypeError(f"expected a waypoint X,Y in metres (e.g. 2,0), got '{text}'")
+    return x, y
 
 
 def check_writable(path: str, ext: str) -> None:

@@ -7,6 +7,8 @@
     python -m hexnewton.apps.evaluate ... --sweep terrain.step_rise 0.06 0.08 0.10          # a capability curve
     python -m hexnewton.apps.evaluate ... --sweep default                                   # the default set of curves
     python -m hexnewton.apps.evaluate ... --sweep step_rise --no-nominal                    # one of them, alone
+    python -m hexnewton.apps.evaluate --navigate --controllers cpg_rl --checkpoint cpg_rl=NAV.pt --terrains flat \
+        --rounds 1000 --out eval/navigate     # goals at 8 bearings and the 2 m square (hexnewton.analysis.navigation)
 
 Protocol. A round is one robot walking toward the target 3.5 m ahead, from its own start pose, until its
 first episode ends (goal, fall, off course) or the episode limit (``TaskConfig.max_episode_steps``,
@@ -34,6 +36,11 @@ each distance. Outputs in ``--out``:
   value for every controller, also under ``sweeps`` in ``results.json`` (one entry per value: rounds, success, time,
   falls, pitch / roll variance and p99.9). A sweep point is the course with one field at one value
   (:func:`hexnewton.analysis.rollout.sweep_overrides`, the mechanism of ``--perturbations`` and ``--env.*``).
+
+``--navigate``: the navigation evaluation instead (:mod:`hexnewton.analysis.navigation`): ``--rounds`` rounds at each
+of 8 bearings (a goal at 2 m) and ``--rounds`` rounds of the 2 m waypoint square per controller and terrain, on the
+navigate tasks' square patch; ``report.md``, ``results.json`` and ``fig_paths_<terrain>_<controller>.png``, the top view
+of the paths. ``--max_steps`` defaults to 1500 (a goal) and 4000 (the square) there.
 
 Controllers: ``cpg`` (fixed parameters), ``cpg_rl`` and ``joint`` (rsl-rl checkpoints from ``train.py``),
 ``sac_cpg`` / ``td3_cpg`` / ``a2c_cpg`` (skrl checkpoints from ``python -m hexnewton.apps.baselines``, deterministic action
@@ -156,8 +163,12 @@ def parser() -> ArgumentParser:
     p.add_argument("--checkpoint", nargs="+", metavar="CTRL[:TERRAIN]=PATH", help="policy of cpg_rl / joint / sac_cpg / td3_cpg / a2c_cpg")
     p.add_argument("--terrains", nargs="+", type=terrain_name, default=["rugged", "stepped", "complex"])
     p.add_argument("--rounds", type=positive_int, default=25, help="rounds per controller and terrain (paper: 25)")
-    p.add_argument("--max_steps", type=positive_int, default=TaskConfig.max_episode_steps,
-                   help="control steps per round (default: the episode limit)")  # fmt: skip
+    p.add_argument("--max_steps", type=positive_int, default=None,
+                   help=f"control steps per round (default: the episode limit, {TaskConfig.max_episode_steps}; with "
+                        "--navigate 1500 per goal, 4000 per square)")  # fmt: skip
+    p.add_argument("--navigate", action="store_true",
+                   help="the navigation evaluation: goals at 2 m at bearings 0, +-45, +-90, +-135, 180 deg and the 2 m "
+                        "waypoint square, --rounds of each, on the navigate tasks' patch of each terrain")  # fmt: skip
     p.add_argument("--runs", nargs="+", metavar="CTRL=RUN[,RUN]", help="training runs for Fig. 5a")
     p.add_argument("--distances", nargs="+", type=float, default=list(DISTANCES),
                    help="success distances [m] (Table 3: 0.5 1 2 3)")
@@ -308,9 +319,57 @@ def evaluate_perturbations(args, evaluate_one, distances: tuple[float, ...]) -> 
     return robustness
 
 
+def evaluate_navigation(args, env_overrides: dict, argv: list[str]) -> int:
+    """``--navigate``: both protocols of :mod:`hexnewton.analysis.navigation` for every controller on every terrain,
+    one line each; ``report.md``, ``results.json`` and one path figure per controller and terrain in ``--out``."""
+    from hexnewton.analysis import navigation as nav
+
+    checkpoints = _pairs(args.checkpoint, "--checkpoint")
+    read_checkpoints(checkpoints, args.controllers, args.terrains)
+    out = args.out or default_out()
+    check_new_dir(out)
+    from hexnewton.physics.device import resolve_device
+
+    device = resolve_device(args.device)
+    os.makedirs(out)
+    t0, progress = time.perf_counter(), not args.no_progress and sys.stderr.isatty()
+    steps = (args.max_steps or nav.BEARING_STEPS, args.max_steps or nav.SQUARE_STEPS)
+    results: dict[str, dict[str, dict]] = {}
+    for terrain in args.terrains:
+        for ctrl in args.controllers:
+            ck = None if ctrl in FIXED else checkpoint_for(checkpoints, ctrl, terrain)
+            s, runs = nav.evaluate_controller(ctrl, ck, terrain, args.rounds, device, args.seed, progress,
+                                              env_overrides, steps)  # fmt: skip
+            results.setdefault(terrain, {})[ctrl] = dict(s, checkpoint=ck)
+            nav.plot_paths(os.path.join(out, f"fig_paths_{terrain}_{ctrl}.png"), f"{LABELS[ctrl]} on {terrain}", runs)
+            b, sq = s["bearings"], s["square"]
+            print(f"{terrain:8s} {LABELS[ctrl]:8s} goals at 2 m: |b| <= 90 {percent(b['near']['reached'])}, 135-180 "
+                  f"{percent(b['behind']['reached'])}, falls {percent(b['all']['fall_rate'])}; square completed "
+                  f"{percent(sq['completed'])}, falls {percent(sq['fall_rate'])}", flush=True)  # fmt: skip
+    wall = time.perf_counter() - t0
+    meta = {"device": device, "rounds per bearing and of the square": args.rounds,
+            "bearings [deg]": list(nav.BEARINGS_DEG), "goal distance [m]": nav.GOAL_DISTANCE,
+            "square [m]": [list(c) for c in nav.SQUARE], "max_steps (goal, square)": list(steps),
+            "goal radius [m]": TaskConfig.goal_radius, "actions": "deterministic (mean)", "overrides": env_overrides,
+            "terrain_seed": args.seed, "reset_seed": args.seed + START_SEED_OFFSET,
+            "command": "python -m hexnewton.apps.evaluate " + " ".join(argv), "wall_s": round(wall, 1)}
+    with open(os.path.join(out, "results.json"), "w") as f:
+        json.dump({"meta": meta, "results": results}, f, indent=1)
+    with open(os.path.join(out, "report.md"), "w") as f:
+        f.write(nav.report_markdown(results, meta))
+    print(f"report in {out}/ (report.md, results.json, path figures) after {wall:.0f} s")
+    return 0
+
+
 def main(argv: list[str] | None = None) -> int:
     args = parser().parse_args(argv)
     env_overrides = config_overrides(args, "env")
+    if args.navigate:
+        if args.merge or args.sweep or args.perturbations or args.runs or args.stochastic or args.expected:
+            raise ValueError("--navigate runs the navigation evaluation alone: no --merge, --sweep, --perturbations, "
+                             "--runs, --stochastic or --expected")  # fmt: skip
+        return evaluate_navigation(args, env_overrides, list(sys.argv[1:] if argv is None else argv))
+    args.max_steps = args.max_steps or TaskConfig.max_episode_steps
     goal_distance = env_overrides.get("task.goal_distance", TaskConfig.goal_distance)
     course = apply_overrides(HexConfig(), env_overrides)  # fail before any output folder is made
     control_decimation(course.task.control_dt, course.sim.frame_dt)

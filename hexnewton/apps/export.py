@@ -82,6 +82,10 @@ def controller_spec(env, checkpoint: str, action_std: list[float] | None) -> dic
         "joint_upper": list(upper),
         "joint_gains": {"kp": cfg.robot.joint_ke, "kd": cfg.robot.joint_kd, "effort_limit": cfg.robot.effort_limit},
         "goal_distance": cfg.task.goal_distance,
+        # the goals it was trained to: "ahead" (goal_distance along +x, the paper's) or "any" (every direction: steer it
+        # with Controller.set_goal); within goal_radius a goal is reached
+        "goals": "any" if cfg.task.random_goals else "ahead",
+        "goal_radius": cfg.task.goal_radius,
         "source": {"checkpoint": os.path.abspath(checkpoint), "sha256": _sha256(checkpoint), "git": git_rev()},
     }
 

@@ -9,10 +9,13 @@
     python play.py --controller cpg --terrain stepped --record rollout.npz --plot gait.png
     python play.py --checkpoint logs/.../model_299.pt                    # its controller and course from the file
     python play.py --checkpoint results/policies/cpg_rl_complex.pt --terrain stepped --env.terrain.step_rise 0.07
+    python play.py --checkpoint NAV.pt --waypoints 2,0 2,2 0,2 0,0 --viewer viser   # a waypoint course, drawn
 
 Without ``--controller`` and ``--checkpoint`` it plays the newest checkpoint under ``--log_dir`` (any task), or the
 shipped ``results/policies/cpg_rl_complex.pt`` when nothing was trained; without ``--terrain``, on the course the
-policy was trained on (its terrain without the curriculum's lanes, its goal distance). ``--env.<section>.<field>``
+policy was trained on (its terrain without the curriculum's lanes, its goal distance; a navigate policy its random
+goals). ``--waypoints X,Y ...`` gives every robot that waypoint course in its start frame (x along its start heading)
+instead: the goals in turn, the last one's reaching ending the episode (no off-course end). ``--env.<section>.<field>``
 sets any field of that course's config (HexConfig).
 
 Controllers:
@@ -53,6 +56,7 @@ from hexnewton.apps.cli import (
     positive_int,
     run,
     terrain_name,
+    waypoint,
 )
 from hexnewton.config import TERRAINS, HexConfig
 from hexnewton.physics.viewer import VIEWERS
@@ -70,6 +74,9 @@ def parser() -> ArgumentParser:
     p.add_argument("--terrain", type=terrain_name, nargs="+", default=None,
                    help=f"one or more of {TERRAINS} as §3.1 defines them (default: the policy's training course, else "
                         "flat)")
+    p.add_argument("--waypoints", nargs="+", type=waypoint, metavar="X,Y",
+                   help="a waypoint course in each robot's start frame [m] (x along its start heading), e.g. 2,0 2,2 "
+                        "0,2 0,0: the goals in turn; the viewers draw them")  # fmt: skip
     p.add_argument("--num_envs", type=positive_int, default=64)
     p.add_argument("--steps", type=positive_int, default=500, help="control steps (20 ms each by default)")
     p.add_argument("--device", default=None, help="cpu, cuda or cuda:N (default: cuda if present, else cpu)")
@@ -164,8 +171,10 @@ def play_course(args, ground, first: bool, trained: HexConfig, ckpt: dict | None
     from hexnewton.mdp.env import make_env
     from hexnewton.tasks import course
 
+    from hexnewton.analysis.navigation import played_goals
+
     cfg = course(ground, trained, config_overrides(args, "env"), args.num_envs, args.device, args.seed,
-                 seed=args.seed, reset_yaw=0.0, goal_distance=trained.task.goal_distance)
+                 seed=args.seed, reset_yaw=0.0, **played_goals(trained.task, args.waypoints))  # fmt: skip
     terrain = cfg.terrain.name
     env = make_env(cfg, CONTROLLERS[args.controller])
     policy = controller_policy(env, args.controller, args.checkpoint, ckpt, args.stochastic, args.expected)

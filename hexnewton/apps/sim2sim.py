@@ -5,6 +5,8 @@
     python -m hexnewton.apps.sim2sim BUNDLE --terrains rugged --rounds 300 --workers 0 --out /tmp/s2s  # every core
     python -m hexnewton.apps.sim2sim BUNDLE --terrains rugged --rounds 1 --video walk.mp4 --out /tmp/s2s  # one round filmed
     python -m hexnewton.apps.sim2sim BUNDLE --terrains complex --rounds 1 --viewer --out /tmp/s2s         # MuJoCo's viewer
+    python -m hexnewton.apps.sim2sim NAV_BUNDLE --terrains flat --rounds 100 --waypoints 2,0 2,2 0,2 0,0 \
+        --newton eval/navigate/results.json --out /tmp/s2s_square                     # a waypoint course, as Newton's
 
 The robot and the terrain are a MuJoCo model written from the project's descriptions (:mod:`hexnewton.deploy.mjcf`): MuJoCo's
 own collision detection and solver, every step. Per control step (``control_dt`` of the bundle) the loop does what
@@ -26,6 +28,13 @@ other; a finished robot is parked out of the way. ``--workers N`` splits a terra
 each a model of its own in a process of its own (0: one per core), the same rounds on more cores (a film or the
 viewer runs its terrain in one process). Metrics: :mod:`hexnewton.analysis.metrics`, as for Newton.
 
+``--waypoints X,Y ...``: each round walks that waypoint course in its start frame instead (the goals in turn, the last
+one's reaching ending the round), on the navigate tasks' square patch with every start heading and no off-course end,
+as Newton's navigation evaluation (``evaluate --navigate``) walks its 2 m square: the runtime keeps each robot's goal
+(``Controller.set_goal``) and forms the target from its pose. Scored as the completion rate, the time, the goals
+reached and the falls; ``--newton`` then takes a navigation evaluation's ``results.json`` (its ``square`` of
+``cpg_rl``); the fixed CPG runs only on ``--fixed_terrains`` given.
+
 Outputs in ``--out`` (which must not exist): ``results.json`` (``{terrain: metrics}`` of the bundle), ``details.json``
 (the fixed CPG's rounds, the Newton reference numbers, the command, versions) and ``report.md``. The fixed CPG
 (``CPGConfig().fixed_params()`` through the same runtime maths, :func:`fixed_cpg_spec`) runs on ``--fixed_terrains``.
@@ -41,7 +50,7 @@ import time
 from hexnewton.analysis.report import ended_cell
 from hexnewton.analysis.rollout import EVAL_TERRAIN_SEED, START_SEED_OFFSET
 from hexnewton.analysis.sim2sim import Film, Viewer, fixed_cpg_spec, measure
-from hexnewton.apps.cli import ArgumentParser, check_writable, positive_int, run, terrain_name
+from hexnewton.apps.cli import ArgumentParser, check_writable, positive_int, run, terrain_name, waypoint
 from hexnewton.config import TaskConfig
 from hexnewton.deploy.runtime import load_spec
 
@@ -164,8 +173,11 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--out", required=True, help="output folder (must not exist)")
     p.add_argument("--seed", type=int, default=EVAL_TERRAIN_SEED, help="terrain seed; starts use seed + 1000")
     p.add_argument("--max_steps", type=positive_int, default=TaskConfig.max_episode_steps)
-    p.add_argument("--fixed_terrains", nargs="*", type=terrain_name, default=["rugged"],
-                   help="terrains for the fixed CPG (none: skip it)")  # fmt: skip
+    p.add_argument("--fixed_terrains", nargs="*", type=terrain_name, default=None,
+                   help="terrains for the fixed CPG (default rugged; with --waypoints none; empty: skip it)")  # fmt: skip
+    p.add_argument("--waypoints", nargs="+", type=waypoint, metavar="X,Y",
+                   help="each round walks this waypoint course in its start frame [m] (e.g. 2,0 2,2 0,2 0,0), as "
+                        "evaluate --navigate's square")  # fmt: skip
     p.add_argument("--newton", default=NEWTON_REFERENCE, help="a Newton evaluation's results.json ('none': skip)")
     p.add_argument("--video", metavar="PATH.mp4", help="film robot 0 of the first terrain's bundle rounds")
     p.add_argument("--viewer", action="store_true", help="show robot 0 in MuJoCo's interactive viewer")
@@ -176,6 +188,8 @@ def main(argv: list[str] | None = None) -> int:
         raise ValueError(f"--workers must be 0 (one per core) or more, got {args.workers}")
     args.workers = args.workers or os.cpu_count() or 1
     args.argv = list(sys.argv[1:] if argv is None else argv)
+    if args.fixed_terrains is None:
+        args.fixed_terrains = [] if args.waypoints else ["rugged"]
     if os.path.exists(args.out):
         raise ValueError(f"--out {args.out} exists already (nothing is overwritten)")
     load_spec(args.bundle)
@@ -187,6 +201,8 @@ def main(argv: list[str] | None = None) -> int:
         if args.newton != NEWTON_REFERENCE:
             raise ValueError(f"--newton {args.newton}: no such file")
         newton_path = None
+    if args.waypoints:
+        return run_waypoints(args, None if args.newton == NEWTON_REFERENCE else newton_path)
     return run_all(args, newton_reference(newton_path))
 
 
@@ -227,6 +243,72 @@ def run_all(args, newton: dict) -> int:
         f.write(report_markdown(args.bundle, bundle_res, fixed_res, newton, meta))
     print(f"wrote {args.out}/report.md, results.json, details.json")
     return 0
+
+
+def newton_square(path: str | None) -> dict:
+    """``{terrain: summary}`` of the square in a navigation evaluation's results.json (``evaluate --navigate``: its
+    ``cpg_rl``'s), with the file; empty without one."""
+    if not path:
+        return {}
+    with open(path) as f:
+        data = json.load(f)
+    out = {t: per["cpg_rl"]["square"] for t, per in data.get("results", {}).items()
+           if isinstance(per, dict) and "square" in per.get("cpg_rl", {})}  # fmt: skip
+    if not out:
+        raise ValueError(f"--newton {path}: no navigation evaluation of cpg_rl (evaluate --navigate) in it")
+    return dict(out, file=path, meta=data.get("meta", {}))
+
+
+def run_waypoints(args, newton_path: str | None) -> int:
+    """The waypoint rounds of the bundle (and the fixed CPG on ``--fixed_terrains``): results.json, details.json and
+    report.md in ``args.out``, MuJoCo's completion beside Newton's where ``--newton`` gives it."""
+    import mujoco
+
+    from hexnewton.analysis.report import git_rev
+
+    newton = newton_square(newton_path)
+    t0, bundle_res, fixed_res = time.perf_counter(), {}, {}
+    for terrain in args.terrains:
+        bundle_res[terrain] = measure(args.bundle, terrain, args.rounds, args.seed, args.max_steps,
+                                      workers=args.workers, waypoints=args.waypoints)  # fmt: skip
+        print(_waypoint_line("bundle", terrain, bundle_res[terrain]), flush=True)
+    for terrain in args.fixed_terrains:
+        fixed_res[terrain] = measure(fixed_cpg_spec(), terrain, args.rounds, args.seed, args.max_steps,
+                                     workers=args.workers, waypoints=args.waypoints)  # fmt: skip
+        print(_waypoint_line("fixed CPG", terrain, fixed_res[terrain]), flush=True)
+    course = " ".join(f"({x:g}, {y:g})" for x, y in args.waypoints)
+    meta = {"command": f"`{PROG} " + " ".join(args.argv) + "`", "MuJoCo": mujoco.__version__, "git": git_rev(),
+            "waypoints (start frame)": course, "rounds per terrain": args.rounds,
+            "terrain seed / start seed": f"{args.seed} / {args.seed + START_SEED_OFFSET}",
+            "wall time": f"{time.perf_counter() - t0:.0f} s"}  # fmt: skip
+    os.makedirs(args.out)
+    with open(os.path.join(args.out, "results.json"), "w") as f:
+        json.dump({t: s["waypoints"] for t, s in bundle_res.items()}, f, indent=1)
+    with open(os.path.join(args.out, "details.json"), "w") as f:
+        json.dump({"meta": meta, "bundle": bundle_res, "fixed_cpg": fixed_res, "newton": newton}, f, indent=1)
+    lines = [f"# Sim2sim: `{args.bundle}` through the waypoints {course} in C MuJoCo", ""]
+    lines += [f"- {k}: {v}" for k, v in meta.items()] + ["", "MuJoCo (this run) / Newton (" + (
+        f"`{newton['file']}`" if newton else "none given") + "):", "",
+        "| terrain | controller | rounds | completed | time [s] | goals reached | falls | within 5 points |",
+        "|---|---|---|---|---|---|---|---|"]  # fmt: skip
+    for label, res in (("bundle (CPG_RL)", bundle_res), ("fixed CPG", fixed_res)):
+        for terrain, s in res.items():
+            m, n = s["waypoints"], newton.get(terrain, {}) if label.startswith("bundle") else {}
+            gap = "—" if not n else ("yes" if abs(m["completed"] - n["completed"]) <= 0.05 else "no")
+            lines.append(f"| {terrain} | {label} | {m['rounds']} / {n.get('rounds', '—')} | "
+                         f"{_fmt(m['completed'], 'pct')} / {_fmt(n.get('completed'), 'pct')} | {_fmt(m['time_s'], 'x')} / "
+                         f"{_fmt(n.get('time_s'), 'x')} | {_fmt(m['corners'], 'x')} / {_fmt(n.get('corners'), 'x')} | "
+                         f"{_fmt(m['fall_rate'], 'pct')} / {_fmt(n.get('fall_rate'), 'pct')} | {gap} |")  # fmt: skip
+    with open(os.path.join(args.out, "report.md"), "w") as f:
+        f.write("\n".join(lines) + "\n")
+    print(f"wrote {args.out}/report.md, results.json, details.json")
+    return 0
+
+
+def _waypoint_line(label: str, terrain: str, s: dict) -> str:
+    w = s["waypoints"]
+    return (f"{label} on {terrain}: {w['rounds']} rounds through the waypoints, completed {100 * w['completed']:.0f} %, "
+            f"falls {100 * w['fall_rate']:.0f} %, {s['control_steps']} control steps in {s['wall_s']:.0f} s")
 
 
 def _line(label: str, terrain: str, s: dict) -> str:

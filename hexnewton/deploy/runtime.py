@@ -11,7 +11,9 @@ A controller bundle (written by ``python -m hexnewton.apps.export``) is a folder
 Per control step (``control_dt``, 20 ms by default) :meth:`Controller.step` takes the robot's readings:
 - joint positions and velocities (18 each, order R1..L3 x hip, knee, ankle);
 - the base orientation quaternion (x, y, z, w);
-- the goal relative to the robot in its heading frame (:func:`target_in_heading_frame`);
+- the goal relative to the robot in its heading frame (:func:`target_in_heading_frame`), or instead the robot's planar
+  pose from odometry (x, y, yaw; ``pose``), from which the controller forms it toward the goal it keeps
+  (:meth:`Controller.set_goal`, in the odometry frame: a navigate bundle is steered by moving its goal);
 - the highest terrain within ±30 cm minus the ground under the robot (0 without a terrain sensor);
 - for a policy that observes it (``gyro`` in its layout: ``ObsConfig.gyro``), the base angular velocity in the body
   frame, the IMU's gyro [rad/s].
@@ -56,6 +58,9 @@ from hexnewton.physics.reference import (
 )
 
 FORMAT = "hexnewton-controller/1"
+#: the torso's height above level ground when the robot stands and walks (the simulated robot's, RobotConfig) [m]: the
+#: base height :meth:`Controller.target_from_pose` assumes where none is given
+STAND_HEIGHT = 0.13
 
 
 def target_in_heading_frame(base_pos, base_quat, goal, goal_ground_z=None) -> np.ndarray:
@@ -136,6 +141,7 @@ class Controller:
         self.stuck = {k: spec.get(f"stuck_{k}", d) for k, d in (("lift", 0.0), ("window", 1), ("progress", 0.0),
                                                                  ("hold", 1))}  # fmt: skip
         self.last_actions = np.zeros((self.n, int(spec["num_actions"])))  # the observation's ``last_action``
+        self.goal = None  # (N, 3): the goal's ground point in the odometry frame (set_goal)
         self.reset()
 
     def reset(self, mask=None) -> None:
@@ -155,6 +161,38 @@ class Controller:
         self.dy[m] = 0.0
         self.stuck_count[m] = self.stuck_left[m] = 0
         self.last_actions[m] = 0.0
+
+    def set_goal(self, x, y, ground_z=0.0) -> None:
+        """The goal to walk to, in the odometry frame [m] (the frame of the ``pose`` :meth:`step` takes): the same for
+        every robot (numbers) or one per robot ((N,) arrays); ``ground_z``: the ground's height there (0: level with
+        the frame's origin). It stays until the next call; a waypoint course is the caller's goals in turn."""
+        g = np.stack(np.broadcast_arrays(*(np.asarray(v, np.float64) for v in (x, y, ground_z))), axis=-1)
+        if g.size not in (3, 3 * self.n) or not np.isfinite(g).all():
+            raise ValueError(f"set_goal: finite x, y, ground_z, numbers or one per robot ({self.n}), got shape "
+                             f"{g.shape}")  # fmt: skip
+        self.goal = np.broadcast_to(g.reshape(-1, 3), (self.n, 3)).copy()
+
+    def target_from_pose(self, pose, base_z=None) -> np.ndarray:
+        """The observation's target (N, 3) toward the goal of :meth:`set_goal` from the robots' planar poses ``pose``
+        (N, 3): odometry's x, y [m] and yaw [rad]; ``base_z`` (N,): the base's height in the odometry frame (None: the
+        standing height above level ground, :data:`STAND_HEIGHT`). As the simulator's: the goal in the heading frame
+        (x forward, y left), z the goal's ground minus the base height."""
+        if self.goal is None:
+            raise ValueError("no goal: call set_goal(x, y) first, or pass the target to step()")
+        p = np.asarray(pose, np.float64).reshape(self.n, 3)
+        dx, dy = self.goal[:, 0] - p[:, 0], self.goal[:, 1] - p[:, 1]
+        c, s = np.cos(p[:, 2]), np.sin(p[:, 2])
+        z = np.full(self.n, STAND_HEIGHT) if base_z is None else np.broadcast_to(np.asarray(base_z, np.float64),
+                                                                               (self.n,))  # fmt: skip
+        return np.stack([c * dx + s * dy, -s * dx + c * dy, self.goal[:, 2] - z], axis=1)
+
+    def goal_distance(self, pose) -> np.ndarray:
+        """Each robot's planar distance to its goal [m] from its pose (N, 3) (x, y, yaw): within the bundle's
+        ``goal_radius`` it has reached it."""
+        if self.goal is None:
+            raise ValueError("no goal: call set_goal(x, y) first")
+        p = np.asarray(pose, np.float64).reshape(self.n, 3)
+        return np.hypot(self.goal[:, 0] - p[:, 0], self.goal[:, 1] - p[:, 1])
 
     def observe(self, joint_pos, joint_vel, base_quat, target, max_height=0.0, gyro=None) -> np.ndarray:
         """The policy's observation (N, num_obs), laid out as in training (``controller.json``). ``gyro`` (N, 3): the
@@ -234,8 +272,15 @@ class Controller:
             self.last_substep_targets[k] = self.substep(q[k] if q is not None and q.ndim == 3 else q)
         return self.last_substep_targets[-1].copy()
 
-    def step(self, joint_pos, joint_vel, base_quat, target, max_height=0.0, gyro=None) -> np.ndarray:
-        """One control step: readings in, 18 joint position targets out (N, 18)."""
+    def step(self, joint_pos, joint_vel, base_quat, target=None, max_height=0.0, gyro=None, pose=None,
+             base_z=None) -> np.ndarray:  # fmt: skip
+        """One control step: readings in, 18 joint position targets out (N, 18). ``target``: the goal in the heading
+        frame (:func:`target_in_heading_frame`); or, none given, ``pose`` (N, 3), the odometry's x, y, yaw, toward
+        the goal of :meth:`set_goal` (:meth:`target_from_pose`, with ``base_z``)."""
+        if target is None:
+            if pose is None:
+                raise ValueError("step() needs the target, or the robot's pose (x, y, yaw) and a goal (set_goal)")
+            target = self.target_from_pose(pose, base_z)
         obs = self.observe(joint_pos, joint_vel, base_quat, target, max_height, gyro)
         return self.advance(self.act(obs), base_quat, target)
 

@@ -18,7 +18,8 @@ its own lane) to one of Newton's viewers (``newton.viewer``):
 - ``null``: ``ViewerNull``, nothing drawn (timing, tests).
 
 Only the first ``robots`` lanes are shown (``ViewerBase.set_visible_worlds``), where the simulation put them: the
-viewer's automatic world offsets are switched off. A follow camera looks at the mean base position of the shown
+viewer's automatic world offsets are switched off. The shown robots' goals are drawn as points (``log_points``): each
+one's goal now green, the rest of its waypoint course white (an env's ``goals``, ``mdp/terms/goals.py``). A follow camera looks at the mean base position of the shown
 robots from behind and to the side. ``RolloutViewer.add`` has the signature of the rollout recorders
 (:func:`hexnewton.analysis.rollout.rollout`), so a viewer rides along any rollout.
 
@@ -205,6 +206,7 @@ class VideoWriter:
 
 # ----------------------------------------------------------------------------------------------- the viewer
 GROUND_COLOR, TORSO_COLOR, LEG_COLOR = (0.62, 0.58, 0.50), (0.93, 0.55, 0.15), (0.22, 0.24, 0.28)
+GOAL_COLOR, WAYPOINT_COLOR, GOAL_RADIUS = (0.10, 0.80, 0.25), (0.95, 0.95, 0.95), 0.04
 
 
 def paint(model) -> None:
@@ -281,8 +283,31 @@ class RolloutViewer:
             self.viewer.set_camera(pos.tolist(), pitch, yaw)
 
     # -- per frame
-    def render(self, world, t: float) -> None:
-        """Draw ``world``'s current state at simulated time ``t``."""
+    def goal_marks(self, env) -> tuple[np.ndarray, np.ndarray] | None:
+        """The shown robots' goals (R, 2) and waypoint courses (R, K, 2) in the world from ``env``'s goals (None for
+        an env without them)."""
+        goals = getattr(env, "goals", None)
+        if goals is None or self.world is None:
+            return None
+        return goals.goal.numpy()[: self.shown].astype(np.float64), goals.waypoints_world()[: self.shown]
+
+    def draw_goals(self, world, marks) -> None:
+        """The goals as points on the ground: the goal now green, the other waypoints white."""
+        import warp as wp
+
+        from hexnewton.physics.terrain.query import terrain_height_np
+
+        for name, xy, color in (("goals", marks[0], GOAL_COLOR), ("waypoints", marks[1].reshape(-1, 2), WAYPOINT_COLOR)):
+            if not len(xy):
+                continue
+            z = terrain_height_np(world.terrain.grid, xy[:, 0], xy[:, 1]) + GOAL_RADIUS
+            device = getattr(self.viewer, "device", None) or world.device
+            points = wp.array(np.c_[xy, z].astype(np.float32), dtype=wp.vec3, device=device)
+            colors = wp.full(len(xy), wp.vec3(*color), dtype=wp.vec3, device=device)
+            self.viewer.log_points(name, points, GOAL_RADIUS if name == "goals" else 0.6 * GOAL_RADIUS, colors)
+
+    def render(self, world, t: float, goals=None) -> None:
+        """Draw ``world``'s current state at simulated time ``t`` (and ``goals``, :meth:`goal_marks`' arrays)."""
         if self.world is not world:
             self.attach(world)
         v = self.viewer
@@ -298,6 +323,8 @@ class RolloutViewer:
             self._next_frame += self.control_dt  # one control step of wall time per drawn frame: stride x real time
         v.begin_frame(t)
         v.log_state(world.state_0)
+        if goals is not None:
+            self.draw_goals(world, goals)
         if self.caption is not None:
             self.caption.content = "  \n".join(line for line in (self.title, f"t = {t:6.2f} s") if line)
         v.end_frame()
@@ -309,7 +336,9 @@ class RolloutViewer:
     def add(self, env, t: float, q=None, rpy=None, done=None) -> None:
         """The rollout hook: every ``stride``-th control step, draw ``env``'s world."""
         if self._k % self.stride == 0:
-            self.render(env.world, t)
+            if self.world is not env.world:
+                self.attach(env.world)
+            self.render(env.world, t, self.goal_marks(env))
         self._k += 1
 
     def close(self) -> None:
@@ -359,7 +388,10 @@ class LiveEnv(_TrainingEnvView):
         if self._step % self.stride == 0:
             iteration = self.first_iteration + self._step // self.steps_per_iteration
             self.viewer.title = f"{self.title}iteration {iteration}"
-            self.viewer.render(self.env.world, self._step * self.env.cfg.task.control_dt)
+            if self.viewer.world is not self.env.world:
+                self.viewer.attach(self.env.world)
+            self.viewer.render(self.env.world, self._step * self.env.cfg.task.control_dt,
+                               self.viewer.goal_marks(self.env))  # fmt: skip
         self._step += 1
         return out
 

@@ -21,11 +21,17 @@ start), domain randomisation, the 20 ms physics frame, a 0.1 s filter on the CPG
 studies/time_to_skill). ``paper`` is Table 1's reward and Table 2's PPO on the complex course, with
 none of that. The recipes observe :data:`RECIPE_OBSERVATION`; ``complex-asymmetric`` is the complex recipe with
 :data:`ASYMMETRIC_OBSERVATION` (docs/training.md, "Observations").
+
+``navigate-flat`` and ``navigate-rugged`` (ours) walk to goals in every direction (:data:`NAVIGATE_GOALS`) on a square
+patch around the starts (:func:`navigation_terrain`) with a signed hip amplitude (:data:`SIGNED_HIP`), within a
+10-minute budget on one H200 (:data:`NAVIGATE_ITERATIONS`, :data:`NAVIGATE_MINUTES`; docs/training.md, "Walking to any
+goal").
 """
 
 from __future__ import annotations
 
 import copy
+import math
 from dataclasses import dataclass, field, replace
 
 from hexnewton.config import (
@@ -92,6 +98,24 @@ ASYMMETRIC_OBSERVATION = ObsConfig(gyro=True, last_action=True, critic=True)
 RECIPE_OBSERVATION = ObsConfig()
 #: §3.1's three courses, the ones the terrain recipes' result is chosen on
 PAPER_COURSES = ("rugged", "stepped", "complex")
+#: The navigate tasks' goals (ours, ``TaskConfig``; mdp/terms/goals.py): each at a bearing anywhere round the robot
+#: (-180..180 deg from its heading when set), 1-4 m away, inside +-4 m of the start; reaching one (0.5 m) sets the
+#: next; an episode (20 s, a few goals) ends on a fall or its time limit; every start heading (reset_yaw pi)
+NAVIGATE_GOALS = dict(random_goals=True, goal_bearing=math.pi, goal_distance_min=1.0, goal_distance_max=4.0,
+                      goal_area=4.0, reset_yaw=math.pi, max_episode_steps=1000,
+                      terminations=("nonfinite", "fell", "success", "timeout"), seed=1)  # fmt: skip
+#: ours: a signed hip amplitude per side (CPGConfig.a1_range; the paper's tasks (0, 0.5)): a side's stride reverses,
+#: so the robot turns on the spot (A1_R = -A1_L); ``--env.cpg.a1_range 0 0.5`` switches it off
+SIGNED_HIP = (-0.5, 0.5)
+#: the patch's margin beyond the goals' square [m]: room to overshoot a goal's 0.5 m circle and to turn
+NAVIGATION_MARGIN = 1.0
+#: The navigate tasks' budget on one H200 (<= 10 min from process start; docs/training.md, "Walking to any goal"):
+#: at 4096 envs x 24 steps, up to NAVIGATE_ITERATIONS iterations, stopped after NAVIGATE_MINUTES of training (flat,
+#: rugged), leaving ~1 min of start-up and ~1.5 min for validation and export
+NAVIGATE_ITERATIONS = 1500
+NAVIGATE_MINUTES = {"flat": 7.0, "rugged": 6.5}
+#: their validation: 256 rounds per candidate, 32 at each of the evaluation's 8 bearings, 2 m, 30 s each
+NAVIGATE_VALIDATION = dict(validation_rounds=256, validation_candidates=3, validation_steps=1500)
 
 
 @dataclass
@@ -156,6 +180,20 @@ def course(terrain: str | TerrainConfig, trained: HexConfig | None = None, overr
                                                           cfg.task.goal_distance))
 
 
+def navigation_terrain(terrain: str | TerrainConfig, goal_area: float = NAVIGATE_GOALS["goal_area"],
+                       margin: float = NAVIGATION_MARGIN) -> TerrainConfig:  # fmt: skip
+    """``terrain`` (a name or a config, without curriculum lanes) as one square patch that holds every goal of the
+    robots' starts: +-(goal_area + margin) along x around x = 0, and along y as much more as the starts spread
+    (``SimConfig.spawn_y_spread`` + ``TaskConfig.reset_lateral``), on the block lattice; blocks (rugged) over all of
+    it."""
+    t = TerrainConfig(name=terrain) if isinstance(terrain, str) else without_lanes(terrain)
+    unit = t.block_size
+    half_x = math.ceil((goal_area + margin) / unit - 1e-9) * unit
+    half_y = math.ceil((goal_area + margin + SimConfig.spawn_y_spread + TaskConfig.reset_lateral) / unit - 1e-9) * unit
+    return replace(t, x_min=-round(half_x, 9), x_max=round(half_x, 9), width=round(2 * half_y, 9),
+                   rugged_x_max=round(half_x, 9), rugged_half_width=round(half_y, 9))  # fmt: skip
+
+
 def _register_gymnasium(t: Task) -> None:
     """Register ``t`` with Gymnasium (when it is installed): ``gym.make(t.gym_id, num_envs=N, device=D)``."""
     try:
@@ -180,6 +218,20 @@ def _recipe(terrain: str, goal_distance: float = TaskConfig.goal_distance, postu
         randomization=RandomizationConfig(enabled=True),
         obs=replace(RECIPE_OBSERVATION),
     )
+
+
+def _navigate(terrain: str) -> HexConfig:
+    """The terrain recipe's physics, randomisation and shaping (:func:`_recipe`) walking to :data:`NAVIGATE_GOALS` on
+    :func:`navigation_terrain`'s patch (no curriculum lanes), with :data:`SIGNED_HIP`; on flat ground without the
+    knee-lift floor (nothing to step over)."""
+    cfg = _recipe(terrain)
+    a2 = CPGConfig.a2_range if terrain == "flat" else cfg.cpg.a2_range
+    return replace(cfg, terrain=navigation_terrain(terrain), cpg=replace(cfg.cpg, a1_range=SIGNED_HIP, a2_range=a2),
+                   task=TaskConfig(**NAVIGATE_GOALS))  # fmt: skip
+
+
+def _navigate_agent(terrain: str) -> AgentConfig:
+    return AgentConfig(max_iterations=NAVIGATE_ITERATIONS, max_minutes=NAVIGATE_MINUTES[terrain], **NAVIGATE_VALIDATION)
 
 
 def _margin_recipe() -> HexConfig:
@@ -240,9 +292,16 @@ register(Task("complex-joint-staged", "pure DRL on the complex course as complex
               "curriculum's reward weights (w_tilt 5 -> 15 -> 40, w_ang_vel 0.05 -> 0.1 -> 0.3 at iterations 100 and "
               "200, as the complex task's CPG_RL)", _recipe("complex"),
               AgentConfig(stages=STABLE_REWARD_STAGES, **TERRAIN_VALIDATION), action_mode="joint"))
+register(Task("navigate-flat", "walk to goals in every direction (-180..180 deg, 1-4 m; ours) on flat ground with a "
+              "signed hip amplitude, the terrain recipe's physics and randomisation; <= 10 min on one H200",
+              _navigate("flat"), _navigate_agent("flat")))
+register(Task("navigate-rugged", "walk to goals in every direction on a 10 m square of 2 cm blocks of 0-6 cm (§3.1's "
+              "rugged ground, no curriculum lanes) with the rugged recipe and a signed hip amplitude; <= 10 min on one "
+              "H200", _navigate("rugged"), _navigate_agent("rugged")))
 
 
 __all__ = ["ACTION_MODES", "ASYMMETRIC_OBSERVATION", "FLAT_VALIDATION", "FOOT_CONTACT_RANGES", "LONG_STABLE_STAGES",
-           "MARGIN_LANES", "MARGIN_RANDOMIZATION", "PAPER_COURSES", "RECIPE_OBSERVATION", "STABLE_REWARD_STAGES",
-           "STABLE_SHAPING", "STABLE_STAGES", "TASKS", "TERRAIN_VALIDATION", "Task", "course", "register", "task",
-           "task_table"]
+           "MARGIN_LANES", "MARGIN_RANDOMIZATION", "NAVIGATE_GOALS", "NAVIGATE_ITERATIONS", "NAVIGATE_MINUTES",
+           "NAVIGATE_VALIDATION", "NAVIGATION_MARGIN", "PAPER_COURSES", "RECIPE_OBSERVATION", "SIGNED_HIP",
+           "STABLE_REWARD_STAGES", "STABLE_SHAPING", "STABLE_STAGES", "TASKS", "TERRAIN_VALIDATION", "Task", "course",
+           "navigation_terrain", "register", "task", "task_table"]

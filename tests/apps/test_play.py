@@ -150,3 +150,45 @@ def test_newest_checkpoint_is_the_runs_result(tmp_path):
     (new / "model_best.pt").write_bytes(b"")
     assert newest_checkpoint(str(tmp_path), "hexnewton_*") == str(new / "model_best.pt")
     assert newest_checkpoint(str(tmp_path), "hexnewton_flat") == str(old / "model_best.pt")
+
+
+@pytest.mark.parametrize(("waypoints", "message"), [
+    (["2"], "expected a waypoint X,Y in metres (e.g. 2,0), got '2'"),
+    (["2,0", "2,x"], "got '2,x'"),
+    (["1,2,3"], "got '1,2,3'"),
+    (["nan,0"], "got 'nan,0'"),
+    ([], "expected at least one argument"),
+])  # fmt: skip
+def test_bad_waypoints_are_one_line_errors(waypoints, message, capsys):
+    """``play.py --waypoints X,Y ...``: a malformed waypoint is one stderr line and exit status 2, before any world."""
+    from hexnewton.apps import play
+    from hexnewton.apps.cli import run
+
+    try:
+        code = run(play.main, "python play.py", ["--controller", "cpg", "--waypoints", *waypoints, "--device", "cpu"])
+    except SystemExit as exc:
+        code = exc.code
+    err = [line for line in capsys.readouterr().err.splitlines() if line.strip()]
+    assert code == 2 and len(err) == 1 and message in err[0], err
+
+
+def test_waypoints_parse_negative_coordinates():
+    """A waypoint with a negative X (``-1,2``) is a value, not a flag; the course reaches the task as (x, y) pairs."""
+    from hexnewton.analysis.navigation import NAVIGATION_ENDS, played_goals
+    from hexnewton.apps.play import parser
+    from hexnewton.config import TaskConfig
+
+    args = parser().parse_args(["--waypoints", "2,0", "-1,-2.5", "0,2e0", "--num_envs", "2"])
+    assert args.waypoints == [(2.0, 0.0), (-1.0, -2.5), (0.0, 2.0)] and args.num_envs == 2
+    fields = played_goals(TaskConfig(), args.waypoints)
+    assert fields["waypoints"] == ((2.0, 0.0), (-1.0, -2.5), (0.0, 2.0)) and fields["terminations"] == NAVIGATION_ENDS
+
+
+def test_play_walks_a_waypoint_course():
+    """The fixed CPG walks straight: waypoints 0.3 m and 0.6 m ahead are reached in turn and the last ends the
+    episode as a success."""
+    proc = subprocess.run([sys.executable, "play.py", "--controller", "cpg", "--terrain", "flat", "--num_envs", "2",
+                           "--steps", "150", "--device", "cpu", "--no-progress", "--viewer", "null", "--waypoints",
+                           "0.3,0", "0.6,0"], capture_output=True, text=True, timeout=600, cwd=ROOT)  # fmt: skip
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    assert "first episodes ended: success 2" in proc.stdout, proc.stdout

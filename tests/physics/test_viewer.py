@@ -68,6 +68,21 @@ def test_headless_video_shows_the_robots_moving(tmp_path):
     assert min(change) > 0.05 and np.abs(frames[-1].astype(int) - frames[0].astype(int)).mean() > 1.0
 
 
+@needs_gl
+def test_headless_video_draws_the_goals(tmp_path):
+    """Each shown robot's goal is drawn as a green point on the ground (GOAL_COLOR): the paper's goal 3.5 m ahead, or
+    with ``--waypoints`` the course's first waypoint 0.76 m away (bigger in the picture), the rest of it white."""
+    counts = []
+    for extra in ([], ["--waypoints", "0.7,0.3", "1.2,-0.3"]):
+        out = tmp_path / f"goals{len(extra)}.mp4"
+        proc = _play(*ROLLOUT, "--headless", "--video", str(out), *extra)
+        assert proc.returncode == 0, proc.stderr[-3000:]
+        f = _decode(out)[-1].astype(int)
+        green = (f[..., 1] > 150) & (f[..., 0] < 100) & (f[..., 2] < 120)
+        counts.append(int(green.sum()))
+    assert counts[0] > 50 and counts[1] > 2 * counts[0], counts
+
+
 def test_usd_recording_opens_in_pxr(tmp_path):
     """--viewer usd --out: the same rollout as a USD stage that pxr opens, one time sample per frame, the first robot's
     torso walking forward (+x) over them."""

@@ -3,7 +3,7 @@
 
 import pytest
 
-from hexnewton.config import HexConfig, RewardConfig
+from hexnewton.config import HexConfig, RewardConfig, TaskConfig
 from hexnewton.tasks import TASKS, task
 
 
@@ -172,3 +172,30 @@ def test_complex_margin_steps():
     for _ in range(5):
         obs, rew, _, _ = env.step(torch.zeros(4, env.num_actions))
         assert np.isfinite(obs["policy"].numpy()).all() and np.isfinite(rew.numpy()).all()
+
+
+def test_navigate_tasks():
+    """``navigate-flat`` and ``navigate-rugged``: random goals all round (-180..180 deg, 1-4 m, inside +-4 m of the
+    start), every start heading, episodes that end on a fall or their time limit, a signed hip amplitude, one square
+    patch (no lanes) holding every goal with a metre to spare, a budget under 10 minutes; the other tasks keep the
+    paper's goal ahead and hip range."""
+    import math
+
+    from hexnewton.tasks import NAVIGATE_GOALS, NAVIGATE_MINUTES, SIGNED_HIP, navigation_terrain
+
+    for name, ground in (("navigate-flat", "flat"), ("navigate-rugged", "rugged")):
+        t = task(name)
+        k, tc = t.env.task, t.env.terrain
+        assert k.random_goals and k.goal_bearing == math.pi and (k.goal_distance_min, k.goal_distance_max) == (1, 4)
+        assert k.reset_yaw == math.pi and "off_course" not in k.terminations and k.waypoints == ()
+        assert t.env.cpg.a1_range == SIGNED_HIP == (-0.5, 0.5) and tc.name == ground and tc.levels == 0
+        reach = k.goal_area + 0.6 + 1.0  # the goals' square around the farthest start, and the margin
+        assert -tc.x_min >= k.goal_area + 1.0 and tc.x_max >= k.goal_area + 1.0 and tc.width / 2 >= reach - 1e-9
+        assert tc.rugged_x_max == tc.x_max and tc.rugged_half_width == tc.width / 2  # blocks all over (rugged)
+        assert tc == navigation_terrain(ground) and t.env.randomization.enabled
+        assert t.agent.max_minutes == NAVIGATE_MINUTES[ground] <= 7.0 and t.agent.validation_terrains == ()
+        assert t.env.task == TaskConfig(**NAVIGATE_GOALS)
+    assert task("navigate-flat").env.cpg.a2_range == (0.0, 1.3) and task("navigate-rugged").env.cpg.a2_range == (0.9, 1.3)
+    for name, t in TASKS.items():
+        if not name.startswith("navigate"):
+            assert not t.env.task.random_goals and t.env.cpg.a1_range == (0.0, 0.5), name
