@@ -1,0 +1,37 @@
+#!/bin/bash
+# Walking to any goal (studies/navigate/README.md) as one queue on one H200, from a copy of the tree after the chunk
+# calls and `gpu.sh install` (studies/device/README.md, "A lease's work as one queue"):
+#
+#   bash studies/device/gpu.sh queue studies/navigate/queue.sh
+#   bash studies/device/gpu.sh poll 560 '/root/navigate/*.tgz'    # the next call at once, then until "queue ended"
+#
+# For each task, navigate-flat then navigate-rugged: the one training command (its wall time from process start in
+# train_<t>.time, timing.json in the run), the navigation evaluation on 1000 unseen rounds per bearing and 1000 of the
+# square (deterministic action, the test seeds), the bundle, a headless video of three robots on the square; then the
+# flat bundle in C MuJoCo through the same square, 100 rounds on the host's cores, beside Newton's. Each step's outputs
+# are packed into $OUT/<step>.tgz as soon as they exist (a lost machine keeps what was polled).
+set -u
+OUT=${OUT:-/root/navigate} ROUNDS=${ROUNDS:-1000} S2S_ROUNDS=${S2S_ROUNDS:-100}
+mkdir -p "$OUT"
+pack() { tar czf "$OUT/$1.tgz" -C "$OUT" "${@:2}" 2>/dev/null; echo "$(date +%T) packed $1"; }
+for t in flat rugged; do
+  echo "$(date +%T) training navigate-$t"
+  /usr/bin/time -f "%e s from process start" -o "$OUT/train_$t.time" \
+    python train.py --task "navigate-$t" --log_dir "$OUT/logs" > "$OUT/train_$t.log" 2>&1
+  run=$(ls -d "$OUT/logs/hexnewton_navigate-$t"/*/ | tail -1)
+  ckpt="${run}model_result.pt"
+  mkdir -p "$OUT/keep" && cp "$ckpt" "$OUT/keep/navigate_$t.pt" && cp "${run}timing.json" "$OUT/keep/timing_$t.json"
+  pack "train_$t" "train_$t.log" "train_$t.time" "keep/navigate_$t.pt" "keep/timing_$t.json"
+  echo "$(date +%T) evaluating navigate-$t"
+  python -m hexnewton.apps.evaluate --navigate --controllers cpg_rl --checkpoint "cpg_rl=$ckpt" --terrains "$t" \
+    --rounds "$ROUNDS" --no-progress --out "$OUT/eval_$t" > "$OUT/eval_$t.log" 2>&1
+  python -m hexnewton.apps.export --checkpoint "$ckpt" --out "$OUT/bundle_$t" > "$OUT/export_$t.log" 2>&1
+  MUJOCO_GL=egl python play.py --checkpoint "$ckpt" --waypoints 2,0 2,2 0,2 0,0 --num_envs 3 --steps 2000 \
+    --headless --video "$OUT/square_$t.mp4" --no-progress > "$OUT/video_$t.log" 2>&1
+  pack "eval_$t" "eval_$t" "eval_$t.log" "bundle_$t" "export_$t.log" "square_$t.mp4" "video_$t.log"
+done
+echo "$(date +%T) sim2sim"
+python -m hexnewton.apps.sim2sim "$OUT/bundle_flat" --terrains flat --rounds "$S2S_ROUNDS" --waypoints 2,0 2,2 0,2 0,0 \
+  --max_steps 4000 --newton "$OUT/eval_flat/results.json" --workers 0 --out "$OUT/s2s_flat" > "$OUT/s2s_flat.log" 2>&1
+pack s2s_flat s2s_flat s2s_flat.log
+echo "$(date +%T) queue ended"
