@@ -360,3 +360,22 @@ def test_random_goals_in_the_env():
         _env(1, random_goals=True, goal_distance_min=0.4)
     with pytest.raises(ValueError, match="task.waypoints"):
         _env(1, waypoints=((1.0, float("nan")),))
+
+
+def test_random_goals_with_the_observation_switches():
+    """The learner's switches (gyro, last actions, the critic's group) with random goals: the policy group's target is
+    the goal in the heading frame, both groups finite, the goals switching as without them."""
+    from hexnewton.config import ObsConfig
+
+    cfg = HexConfig(sim=SimConfig(num_envs=4, device=DEV), terrain=TerrainConfig(name="flat"),
+                    task=dataclasses.replace(TaskConfig(), random_goals=True, reset_yaw=math.pi),
+                    obs=ObsConfig(gyro=True, last_action=True, critic=True))  # fmt: skip
+    env = make_env(cfg)
+    for _ in range(3):
+        obs, _, _, _ = env.step(torch.zeros(4, env.num_actions))
+    assert set(obs.keys()) == {"policy", "critic"} and all(np.isfinite(v.numpy()).all() for v in obs.values())
+    q, goal = env.world.joint_q_wp.numpy(), env.goals.goal.numpy()
+    yaw = 2 * np.arctan2(q[:, 5], q[:, 6])
+    d = goal - q[:, :2]
+    want = np.stack([np.cos(yaw) * d[:, 0] + np.sin(yaw) * d[:, 1], -np.sin(yaw) * d[:, 0] + np.cos(yaw) * d[:, 1]], 1)
+    np.testing.assert_allclose(obs["policy"].numpy()[:, 36:38], want, atol=0.05)  # (small roll/pitch: yaw as here)
