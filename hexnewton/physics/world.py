@@ -367,9 +367,9 @@ class World:
             self.model, shape_pairs_filtered=None if self.box_pairs is None else self.box_pairs.pairs,
             rigid_contact_max=max_contacts, speculative_contact_gap_max=sim.speculative_gap,
             max_triangle_pairs=max(1_000_000, sim.triangle_pairs_per_env * self.num_envs))  # fmt: skip
-        # speculative contacts need the time until the next detection: one frame
-        self._collide_dt = sim.frame_dt if sim.speculative_gap is not None else None
+        self._collide_dt = sim.frame_dt if sim.speculative_gap is not None else None  # speculative: one frame
         self.contacts = self.pipeline.contacts()
+        self._reduction_overflow = reduction_overflow(self.contacts)  # set by the contact reduction when it drops
         startup.mark("collision pipeline")
         precompile(self.device, self.solver if since is not None else None, since, pipeline=self.pipeline)
         startup.mark("kernels")
@@ -430,8 +430,7 @@ class World:
         self.overflow_frames = 0  # frames in which some overflow was reported (upper bound per check)
 
         self._reset_mask = wp.zeros(n, dtype=wp.bool, device=self.device)
-        # SolverMuJoCo.reset's world mask: one entry per world plus the global world -1 (never reset)
-        self._solver_mask = wp.zeros(n + 1, dtype=wp.bool, device=self.device)
+        self._solver_mask = wp.zeros(n + 1, dtype=wp.bool, device=self.device)  # SolverMuJoCo.reset's (+ world -1)
         efc = self.solver.mjw_data.efc
         self._efc_rows = [a.reshape((n, -1)) for a in (efc.J, efc.D, efc.Jqvel, efc.aref, efc.force, efc.frictionloss,
                                                         efc.margin, efc.pos, efc.vel)]  # fmt: skip
@@ -508,7 +507,7 @@ class World:
                 self.leg_sensor.update(None, self.contacts, observables=seen)
             wp.launch(_accumulate_overflow, dim=self.num_envs,
                       inputs=[seen.overflow, self._triangle_pair_count(),
-                              self.pipeline.narrow_phase.max_triangle_pairs, reduction_overflow(self.contacts),
+                              self.pipeline.narrow_phase.max_triangle_pairs, self._reduction_overflow,
                               self._overflow_world, self._overflow_global], device=self.device)  # fmt: skip
             if self.substeps % 2 == 1 and i == self.substeps - 1:
                 self.state_0.assign(self.state_1)
