@@ -127,14 +127,46 @@ class Recorder:
         np.savez_compressed(path, **arrays)
 
 
-def stepped(env, policy, steps: int, description: str, progress: bool = True):
+def progress_mode() -> bool | str:
+    """How long work shows its progress: a bar on a terminal, else plain lines with the time left (a log file)."""
+    import sys
+
+    return True if sys.stderr.isatty() else "lines"
+
+
+def duration(seconds: float) -> str:
+    """``45 s``, ``6 min``, ``1.5 h`` for the console."""
+    if seconds < 90:
+        return f"{seconds:.0f} s"
+    return f"{seconds / 60:.0f} min" if seconds < 5400 else f"{seconds / 3600:.1f} h"
+
+
+def progress_lines(it: range, description: str, every: int = 10):
+    """``it``, printing a line at each ``1 / every`` of it: the steps done, the seconds so far and at most how many
+    are left (the rounds may all end sooner)."""
+    import time
+
+    t0, n = time.perf_counter(), len(it)
+    marks = {max(1, round(n * j / every)) for j in range(1, every)}
+    for k in it:
+        yield k
+        if k + 1 in marks:
+            done = time.perf_counter() - t0
+            print(f"{description}: {k + 1} of {n} control steps, {duration(done)}, at most "
+                  f"{duration(done / (k + 1) * (n - k - 1))} left", flush=True)  # fmt: skip
+
+
+def stepped(env, policy, steps: int, description: str, progress: bool | str = True):
     """Run ``policy(obs) -> actions`` for up to ``steps`` control steps (deterministic, no gradients); yield
     per step the host copies ``(k, status, q, pos, rpy)``: status codes (N,), the state before resets
-    (N, 25), base position relative to each env's start (N, 3) and roll/pitch/yaw (N, 3)."""
+    (N, 25), base position relative to each env's start (N, 3) and roll/pitch/yaw (N, 3). ``progress``: a bar
+    (True), plain lines with the time left (``"lines"``, :func:`progress_lines`) or nothing (False)."""
     import torch
 
     it = range(steps)
-    if progress:
+    if progress == "lines":
+        it = progress_lines(it, description)
+    elif progress:
         from rich.progress import track
 
         it = track(it, description=description, transient=True)

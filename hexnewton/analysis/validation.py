@@ -85,7 +85,8 @@ def validate(cands: list[Candidate], controller: str, terrain, rounds: int, devi
     stability the last curriculum stage trains: the choice does not weigh it, the console and ``timing.json`` show
     it). A navigate run (random goals) walks the navigation's validation instead: one goal at 2 m per round, every
     bearing (:func:`hexnewton.analysis.navigation.validate_navigation`)."""
-    from hexnewton.analysis.rollout import CONTROLLERS, START_SEED_OFFSET, read_controller_checkpoint, stepped
+    from hexnewton.analysis.rollout import (CONTROLLERS, START_SEED_OFFSET, progress_mode,
+                                            read_controller_checkpoint, stepped)
     from hexnewton.learning.checkpoint import trained_config
     from hexnewton.mdp.env import make_env
     from hexnewton.tasks import course
@@ -107,7 +108,8 @@ def validate(cands: list[Candidate], controller: str, terrain, rounds: int, devi
     policy = _batched_policy(env, controller, cands)
     pos, rpy, status = [], [], []
     finished = np.zeros(env.num_envs, bool)
-    for _, st, _, p, r in stepped(env, policy, max_steps, "validation", progress=False):
+    where = f"validation of {k} candidates on {cfg.terrain.name}, {rounds} rounds each"
+    for _, st, _, p, r in stepped(env, policy, max_steps, where, progress_mode()):
         pos.append(p[:, :2])
         rpy.append(r)
         status.append(st.copy())

@@ -49,6 +49,11 @@ from hexnewton.apps.cli import (
 from hexnewton.config import apply_overrides
 from hexnewton.learning.stopping import exit_status
 
+#: on the CPU, a validation sized for a GPU (more rounds per candidate than ``CPU_VALIDATION_MAX``, the flat main
+#: job's) runs ``CPU_VALIDATION_ROUNDS`` instead unless the command line sets them: the terrain tasks' 256 per candidate
+#: (a GPU steps 1024 robots as fast as 256) would take hours on a 2-core CPU, 8 take minutes
+CPU_VALIDATION_ROUNDS, CPU_VALIDATION_MAX = 8, 16
+
 
 def _base_task(argv: list[str] | None):
     """The task the command line starts from: ``--task``'s (default flat), or a resumed checkpoint's own configs,
@@ -164,6 +169,18 @@ def check_outputs(args) -> None:
         check_viewer_args(args.viewer, True, None, None, args.host, args.port)
 
 
+def device_validation(agent, device: str, argv: list[str] | None):
+    """``agent`` with :data:`CPU_VALIDATION_ROUNDS` validation rounds per candidate on the CPU where it has more than
+    :data:`CPU_VALIDATION_MAX`, unless the command line sets ``--agent.validation_rounds``; on CUDA, as it is."""
+    argv = sys.argv[1:] if argv is None else argv
+    named = any(a == "--agent.validation_rounds" or a.startswith("--agent.validation_rounds=") for a in argv)
+    if device.startswith("cuda") or named or agent.validation_rounds <= CPU_VALIDATION_MAX:
+        return agent
+    print(f"validation on the CPU: {CPU_VALIDATION_ROUNDS} rounds per candidate (the task's {agent.validation_rounds} "
+          "are sized for a GPU; --agent.validation_rounds sets them)")  # fmt: skip
+    return dataclasses.replace(agent, validation_rounds=CPU_VALIDATION_ROUNDS)
+
+
 def rank_config(args, env_cfg):
     """This process's torchrun rank and its config: the device resolved, ``--num_envs`` (default 4096 on CUDA, 64 on
     the CPU), the rank's own seeds (``seed_everything(cfg.task.seed)`` seeds them; no torch here)."""
@@ -264,7 +281,7 @@ def validate_result(runner, cfg, agent, run_dir: str | None, first_it: int, rank
     checkpoints. Every rank of a torchrun job calls it and validates its share (:func:`validation_share`) on its own
     GPU, where every rank reads rank 0's checkpoints (one host); else rank 0 validates them all. Returns on rank 0
     the candidates, each one's results and the seconds (None on the other ranks)."""
-    from hexnewton.analysis.validation import Candidate, candidates, combine_courses, validate_share
+    from hexnewton.analysis.validation import Candidate, candidates, combine_courses, course_names, validate_share
     from hexnewton.learning.runner import share_objects
 
     cands = None
@@ -285,6 +302,11 @@ def validate_result(runner, cfg, agent, run_dir: str | None, first_it: int, rank
     ranks = rank.world_size if all(share_objects(all(os.path.isfile(c.path) for c in cands), cfg.sim.device)) else 1
     controller = "joint" if runner.meta["action_mode"] == "joint" else "cpg_rl"
     terrains = list(agent.validation_terrains) or [cfg.terrain]
+    if rank.is_main:
+        names = [t if isinstance(t, str) else t.name for t in terrains]
+        print(f"deterministic validation: {len(cands)} candidates, {agent.validation_rounds} rounds each on "
+              f"{course_names(names)}, at most {agent.validation_steps} control steps a round"
+              + (f", shared by {ranks} ranks" if ranks > 1 else ""), flush=True)  # fmt: skip
     mine = validate_share(cands, controller, terrains, agent.validation_rounds, cfg.sim.device,
                           agent.validation_steps, cfg.task.goal_distance, rank.rank, ranks) \
         if rank.rank < ranks else {}  # fmt: skip
@@ -390,6 +412,7 @@ def main(argv: list[str] | None = None) -> int:
     # the physics model (NumPy and Newton, no torch) build in a thread meanwhile (--no-build_beside_imports: after)
     startup.timed_imports("warp", "newton", "hexnewton.physics.world")
     rank, cfg = rank_config(args, env_cfg)
+    agent = device_validation(agent, cfg.sim.device, argv)
     from hexnewton.physics.world import ModelBuild
 
     build = ModelBuild(cfg, beside=True) if args.build_beside_imports else None

@@ -348,6 +348,7 @@ def test_capability_sweep_on_a_tiny_run(tmp_path):
     assert (out / "fig_sweep_terrain.step_rise.png").stat().st_size > 2000
     assert "## Capability curve: terrain.step_rise" in (out / "report.md").read_text()
     assert set(res["results"]) == {"stepped"}  # the course as given, then the sweep points
+    assert "(point 1 of 6, " in proc.stdout and "(point 6 of 6, " in proc.stdout and " left)" in proc.stdout
     # a default curve by name, its points alone (--no-nominal): nothing of the course as given
     alone = tmp_path / "alone"
     proc = subprocess.run([sys.executable, "-m", "hexnewton.apps.evaluate", "--controllers", "cpg_rl", "--checkpoint",

@@ -336,3 +336,19 @@ def test_best_checkpoint_keeps_the_best_iteration(tmp_path):
              "episodes": RING}
     assert training_success(stats, levels=10) == 0.9 and training_success(stats, levels=0) == 0.1
     assert training_success({**stats, "top_level_episodes": 3}, levels=10) is None
+
+
+def test_cpu_validation_takes_minutes_unless_the_command_line_says_otherwise(capsys):
+    """On the CPU a terrain task validates 8 rounds per candidate, not the 256 sized for a GPU, and says so; a
+    command line that sets ``--agent.validation_rounds``, CUDA and the flat task's 16 keep theirs."""
+    from hexnewton.apps.train import CPU_VALIDATION_MAX, CPU_VALIDATION_ROUNDS, device_validation
+    from hexnewton.tasks import task
+
+    rugged, flat = task("rugged").agent, task("flat").agent
+    assert rugged.validation_rounds > CPU_VALIDATION_MAX == flat.validation_rounds and CPU_VALIDATION_ROUNDS == 8
+    assert device_validation(rugged, "cpu", ["--task", "rugged"]).validation_rounds == CPU_VALIDATION_ROUNDS
+    assert "8 rounds per candidate (the task's 256 are sized for a GPU" in capsys.readouterr().out
+    argv = ["--task", "rugged", "--agent.validation_rounds", "256"]
+    assert device_validation(rugged, "cpu", argv).validation_rounds == rugged.validation_rounds
+    assert device_validation(rugged, "cuda:0", ["--task", "rugged"]) is rugged
+    assert device_validation(flat, "cpu", []) is flat and capsys.readouterr().out == ""
