@@ -68,6 +68,7 @@ from hexnewton.analysis.rollout import (
     PERTURBATIONS,
     START_SEED_OFFSET,
     perturbation,
+    progress_mode,
     read_controller_checkpoint,
     run_rounds,
     sweep_overrides,
@@ -207,7 +208,7 @@ def parser() -> ArgumentParser:
     p.add_argument("--merge", nargs="+", metavar="DIR",
                    help="simulate nothing: join the results.json of evaluations run apart (one controller or terrain "
                         "per GPU or process, the same seeds) into one report in --out")
-    p.add_argument("--no-progress", action="store_true")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar or lines")
     add_config_args(p, "env", HexConfig(), skip=("sim.num_envs", "sim.device", "task.seed", "terrain.seed", "terrain.name"),
                     title="--env.*: a field of every course (HexConfig; e.g. --env.terrain.step_rise 0.08, "
                           "--env.randomization.enabled true, --env.cpg.posture_reflex 2: a fixed gait gets the body "
@@ -266,8 +267,9 @@ def fixed_gait_physics(physics: dict, checkpoints: dict[str, str], controllers: 
 def evaluator(args, checkpoints: dict[str, str], env_overrides: dict, fixed_physics: dict, device: str,
               distances: tuple[float, ...]):
     """``evaluate_one(ctrl, terrain, perturbed=None) -> (summary, episode, metrics)``: ``args.rounds`` rounds of one
-    controller on one course, ``perturbed`` (a perturbation's or a sweep point's overrides) on top of ``--env.*``."""
-    progress = not args.no_progress and sys.stderr.isatty()
+    controller on one course, ``perturbed`` (a perturbation's or a sweep point's overrides) on top of ``--env.*``;
+    its progress a bar on a terminal, else plain lines with at most how long is left (``--no-progress``: none)."""
+    progress = False if args.no_progress else progress_mode()
 
     def evaluate_one(ctrl: str, terrain: str, perturbed: dict | None = None):
         ck = None if ctrl in FIXED else checkpoint_for(checkpoints, ctrl, terrain)
