@@ -34,7 +34,7 @@ def exercise(workdir: pathlib.Path) -> None:
 
     log = workdir / "logs"
     for extra in (["--task", "complex", "--env.terrain.levels", "3"], ["--task", "complex-margin"],
-                  ["--task", "complex-joint"]):  # fmt: skip
+                  ["--task", "complex-joint"], ["--task", "navigate-flat"]):  # fmt: skip
         train.main(["--num_envs", "4", "--max_iterations", "1", "--log_dir", str(log), "--experiment", "pre",
                     "--device", "cpu", "--agent.validation_rounds", "2", "--agent.validation_steps", "5", *extra])
     play.main(["--controller", "cpg", "--num_envs", "2", "--steps", "3", "--terrain", "rugged", "--device", "cpu",

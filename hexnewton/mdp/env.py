@@ -6,7 +6,7 @@ five files:
 
     [latency, pushes (mdp/events.py)] -> actions to CPG parameters (physics/cpg.py)
     -> [CPG + mapping (physics/cpg.py) + physics (physics/world.py)] x frames x substeps
-    -> episode ends, rewards, the goal switch (mdp/terms/) -> done flags and the episode ring (here)
+    -> episode ends, rewards, the goal switch (mdp/terms/) -> done flags and the episode ring (mdp/events.py)
     -> [curriculum lane change (mdp/events.py)] -> resets of finished envs (mdp/events.py, physics/world.py)
     -> observations (mdp/terms/) [+ noise (mdp/events.py)]
 

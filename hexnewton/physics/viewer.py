@@ -423,7 +423,10 @@ class VideoEnv(_TrainingEnvView):
                                            title=f"{self.title}iteration {iteration}")  # fmt: skip
             self._left = self.length
         if self._recorder is not None:
-            self._recorder.render(self.env.world, (self.length - self._left) * self.env.cfg.task.control_dt)
+            if self._recorder.world is not self.env.world:
+                self._recorder.attach(self.env.world)
+            self._recorder.render(self.env.world, (self.length - self._left) * self.env.cfg.task.control_dt,
+                                  self._recorder.goal_marks(self.env))  # fmt: skip
             self._left -= 1
             if self._left <= 0:
                 self.close()
