@@ -73,12 +73,12 @@ def navigation_config(terrain, trained, rounds: int, device: str | None, seed: i
                   reset_yaw=math.pi, terminations=NAVIGATION_ENDS, max_episode_steps=max_steps)  # fmt: skip
 
 
-def run_goals(env, policy, waypoints: np.ndarray, max_steps: int, progress: bool = False,
+def run_goals(env, policy, waypoints: np.ndarray, max_steps: int, progress: bool | str = False,
               keep_rpy: bool = False) -> dict:  # fmt: skip
     """Every robot's first episode toward its waypoint course ``waypoints`` ((K, 2) or (N, K, 2), start frame):
     ``pos`` (T, N, 2) float32 in each start frame (NaN after the episode), ``end`` (N,) status (0: still walking at
     the end), ``steps`` (N,) the episode's steps, ``goals`` (N,) the waypoints reached, ``dt``; with ``keep_rpy`` also
-    ``rpy`` (T, N, 3) [rad] (NaN after the episode)."""
+    ``rpy`` (T, N, 3) [rad] (NaN after the episode). ``progress``: as :func:`~hexnewton.analysis.rollout.stepped`'s."""
     env.set_waypoints(waypoints)
     env.reset()
     n, k = env.num_envs, env.goals.count
@@ -87,7 +87,7 @@ def run_goals(env, policy, waypoints: np.ndarray, max_steps: int, progress: bool
     alive, goals = np.ones(n, bool), np.zeros(n, np.int64)
     end, steps = np.zeros(n, np.int64), np.full(n, max_steps)
     pos, rpy = [], []
-    for t, st, _, p, r in stepped(env, policy, max_steps, "navigation", progress):
+    for t, st, _, p, r in stepped(env, policy, max_steps, f"navigation, {env.num_envs} rounds", progress):
         d = p[:, :2].astype(np.float64)
         here = np.stack([c * d[:, 0] + s * d[:, 1], -s * d[:, 0] + c * d[:, 1]], axis=1)  # the start frame
         pos.append(np.where(alive[:, None], here, np.nan).astype(np.float32))
@@ -150,7 +150,7 @@ def summarize_square(run: dict) -> dict:
 
 
 def evaluate_controller(controller: str, checkpoint: str | None, terrain: str, rounds: int, device: str | None,
-                        seed: int, progress: bool = False, overrides: dict | None = None,
+                        seed: int, progress: bool | str = False, overrides: dict | None = None,
                         steps: tuple[int, int] = (BEARING_STEPS, SQUARE_STEPS)) -> tuple[dict, dict]:  # fmt: skip
     """Both protocols for one controller on one terrain: ``rounds`` rounds at each bearing, ``rounds`` rounds of the
     square. Returns ({"bearings": summary, "square": summary}, the two runs' arrays for the figure)."""

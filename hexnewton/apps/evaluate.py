@@ -340,7 +340,7 @@ def evaluate_navigation(args, env_overrides: dict, argv: list[str]) -> int:
 
     device = resolve_device(args.device)
     os.makedirs(out)
-    t0, progress = time.perf_counter(), not args.no_progress and sys.stderr.isatty()
+    t0, progress = time.perf_counter(), False if args.no_progress else progress_mode()
     steps = (args.max_steps or nav.BEARING_STEPS, args.max_steps or nav.SQUARE_STEPS)
     results: dict[str, dict[str, dict]] = {}
     for terrain in args.terrains:
