@@ -13,7 +13,7 @@ A task is data: :func:`task` returns a fresh copy, ``train.py`` applies the comm
 checkpoint records the task's name and the full configs it trained with, so ``play.py``, ``evaluate`` and ``export``
 need nothing but the checkpoint. Adding a task is one :func:`register` call below.
 
-The recipe of the paper's terrains (ours; RESULTS.md says what each part does): a terrain curriculum (10 lanes of
+The recipe of the paper's terrains (ours; docs/training.md says what each part does): a terrain curriculum (10 lanes of
 rising difficulty, robots start on the first 3), a knee-lift floor (A2 in 0.9-1.3 rad: a high-stepping gait from the
 start), domain randomisation, the 20 ms physics frame, a 0.1 s filter on the CPG parameters and the stability shaping
 (:data:`STABLE_SHAPING`). The complex course adds the body posture and the stable-gait curriculum
@@ -50,7 +50,7 @@ from hexnewton.config import (
 )
 from hexnewton.learning.agent import AgentConfig, paper_agent
 
-#: The stability shaping of the variant chosen on validation rounds among six (RESULTS.md, "Stable gaits"): fewest
+#: The stability shaping of the variant chosen on validation rounds among six (studies/stable_gait): fewest
 #: falls, lowest rugged pitch and roll variance; 2 / 0.02 / 0.05 (with a 0.03 s filter) fell 18x as often on rugged
 #: ground, 20 / 0.2 / 0.1 20x.
 STABLE_SHAPING = dict(w_tilt=5.0, w_ang_vel=0.05, w_action_rate=0.1)
@@ -60,7 +60,7 @@ STABLE_SHAPING = dict(w_tilt=5.0, w_ang_vel=0.05, w_action_rate=0.1)
 #: in Newton and in C MuJoCo: studies/sim2sim/contact_randomisation)
 FOOT_CONTACT_RANGES = dict(foot_radius=(0.010, 0.014), contact_timeconst=(0.010, 0.030))
 
-#: The stable-gait curriculum of the complex recipe (RESULTS.md, "Stable gaits"; studies/time_to_skill): (first
+#: The stable-gait curriculum of the complex recipe (studies/stable_gait; studies/time_to_skill): (first
 #: iteration, changes) of the reflex gain (``posture_reflex``) and the reward weights, applied from that iteration on;
 #: the run ends after 300 iterations (29.5 M env-steps at 4096 envs).
 STABLE_STAGES = ((100, dict(posture_reflex=2.0, w_tilt=15.0, w_ang_vel=0.1)), (200, dict(w_tilt=40.0, w_ang_vel=0.3)))
