@@ -14,7 +14,8 @@ one instant with one stamp) and applies the targets it gets back:
 
 Before each round it sends the goal (``geometry_msgs/PoseStamped`` in ``odom``, z the ground at the goal) and waits
 for the node's diagnostics to show it holding with that goal. :class:`Bag` records a run as a rosbag2 file (MCAP
-storage, metadata version 9); :func:`replay` plays one back to a node, restamped, at its recorded pace."""
+storage, metadata version 9); :func:`replay` plays one back to a node at its recorded pace, each instant's messages
+together, restamped."""
 
 from __future__ import annotations
 
@@ -286,17 +287,44 @@ def run_rounds(bundle: str, terrain: str, rounds: int, seed: int, max_steps: int
         rclpy.try_shutdown()
 
 
-def replay(bag_path: str, speed: float = 1.0, wait: float = 30.0) -> dict:
-    """Publish a recorded run's readings and goals (:data:`SENT`) to a node at their recorded pace (``speed`` times
-    faster), each instant's messages restamped with one new stamp; returns the counts per topic."""
+def bag_instants(bag_path: str) -> list[tuple[int, list]]:
+    """A recorded run's readings and goals (:data:`SENT`) as instants: ``[(recorded time [ns], [(key, message),
+    ...])]``, an instant the messages of one recorded stamp in their recorded order, at its first message's recorded
+    time, deserialized."""
     from rosbags.rosbag2 import Reader
 
-    rclpy = import_rclpy()
+    import_rclpy()
     from rclpy.serialization import deserialize_message
 
-    keys = {TOPICS[k]: k for k in SENT}
+    keys, classes = {TOPICS[k]: k for k in SENT}, {k: _message_class(TYPES[k]) for k in SENT}
+    instants, index = [], {}
+    with Reader(bag_path) as reader:
+        conns = [c for c in reader.connections if c.topic in keys]
+        for conn, t, data in reader.messages(connections=conns):
+            key = keys[conn.topic]
+            msg = deserialize_message(data, classes[key])
+            stamp = stamp_ns(msg.header.stamp)
+            if stamp not in index:
+                index[stamp] = len(instants)
+                instants.append((t, []))
+            instants[index[stamp]][1].append((key, msg))
+    return instants
+
+
+def replay(bag_path: str, speed: float = 1.0, wait: float = 30.0) -> dict:
+    """Publish a recorded run's readings and goals (:data:`SENT`) to a node as a robot's driver publishes them: each
+    instant's messages (:func:`bag_instants`: those of one recorded stamp) together, in their recorded order, at the
+    instant's recorded time (``speed`` times faster), restamped with one stamp, the time its first message is
+    published. The recording robot's own waits between an instant's messages are not replayed: the node would count
+    them as its latency. The messages are deserialized before the first is published, and the garbage collector
+    waits while they are published. Returns the counts per topic."""
+    import gc
+
+    instants = bag_instants(bag_path)
+    rclpy = import_rclpy()
     rclpy.init()
     node = rclpy.create_node("hexnewton_bag_replay")
+    collecting = gc.isenabled()
     try:
         pubs = {k: node.create_publisher(_message_class(TYPES[k]), TOPICS[k], qos("reliable", 10)) for k in SENT}
         end = time.monotonic() + wait
@@ -305,22 +333,25 @@ def replay(bag_path: str, speed: float = 1.0, wait: float = 30.0) -> dict:
                 raise HexnewtonError(f"no node subscribed to {TOPICS['imu']} within {wait:g} s")
             time.sleep(0.05)
         time.sleep(0.5)
-        counts, stamps, t0, w0 = dict.fromkeys(SENT, 0), {}, None, time.perf_counter()
-        with Reader(bag_path) as reader:
-            conns = [c for c in reader.connections if c.topic in keys]
-            for conn, t, data in reader.messages(connections=conns):
-                key = keys[conn.topic]
-                msg = deserialize_message(data, _message_class(TYPES[key]))
-                t0 = t if t0 is None else t0
-                while (left := w0 + (t - t0) * 1e-9 / speed - time.perf_counter()) > 0:
-                    time.sleep(min(left, 0.001))
-                old = stamp_ns(msg.header.stamp)
-                if old not in stamps:
-                    stamps = {old: time.time_ns()}
-                msg.header.stamp = ros_time(stamps[old])
+        counts = dict.fromkeys(SENT, 0)
+        gc.collect()
+        gc.freeze()  # the messages, out of the collector's way
+        gc.disable()
+        t0, w0 = instants[0][0] if instants else 0, time.perf_counter()
+        for t, messages in instants:
+            left = w0 + (t - t0) * 1e-9 / speed - time.perf_counter()
+            if left > 0:
+                time.sleep(left)
+            stamp = ros_time(time.time_ns())
+            for _, msg in messages:
+                msg.header.stamp = stamp
+            for key, msg in messages:
                 pubs[key].publish(msg)
                 counts[key] += 1
         return counts
     finally:
+        if collecting:
+            gc.enable()
+        gc.unfreeze()
         node.destroy_node()
         rclpy.try_shutdown()

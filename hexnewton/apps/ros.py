@@ -7,7 +7,7 @@
         -p sensor_reliability:=reliable -p sync_tolerance:=0.0 -p sensor_timeout:=1.0   # for the lockstep robot
     python -m hexnewton.apps.ros robot BUNDLE --terrain flat --rounds 1 --max_steps 400 --out robot.json
     python -m hexnewton.apps.ros robot BUNDLE --terrain flat --rounds 20 --realtime --bag run_bag --out robot.json
-    python -m hexnewton.apps.ros replay run_bag                  # the recorded readings to a node, at their pace
+    python -m hexnewton.apps.ros replay run_bag                  # the recorded readings to a node, instant by instant
 
 ``node`` (:mod:`hexnewton.deploy.ros`) runs the bundle's policy and CPG on ``sensor_msgs/JointState``, ``Imu``,
 ``nav_msgs/Odometry``, the terrain reading and a ``geometry_msgs/PoseStamped`` goal, and publishes the joint targets
@@ -20,7 +20,8 @@ latency (sensor stamp to the targets' publish) to a JSON file when it stops.
 ``--seed``, the evaluation's starts and episode ends), one after another, each its own model, the targets from
 the node, in lockstep (the default: each step waits for its targets) or ``--realtime`` (paced by the wall clock);
 ``--bag`` records the run as a rosbag2 folder (MCAP); ``--out`` writes the rounds and the robot's counts as JSON.
-``replay`` plays a recorded run's readings back to a node (open loop).
+``replay`` plays a recorded run's readings back to a node (open loop), each instant's messages together at the
+instant's recorded time.
 """
 
 from __future__ import annotations

@@ -24,6 +24,8 @@ imported only by :class:`ControllerNode`.
 
 from __future__ import annotations
 
+import gc
+import json
 import math
 import os
 import time
@@ -346,7 +348,7 @@ class ControlLoop:
         if self.walking or reason != self.reason:
             if self.walking:
                 self.counts["holds"] += 1
-                self.ctrl = Controller(self.p["bundle"], num_robots=1)  # a fresh CPG when it walks again
+                self.ctrl.reset()  # a fresh CPG when it walks again (building a Controller anew: 40-60 ms)
             self.walking, self.sub, self.reason, self.changed = False, 0, reason, True
             self.log(f"holding the standing pose: {reason}")
         if self.last is None:  # from the measured joints; nothing before the first joint state
@@ -554,16 +556,13 @@ def realtime_priority(priority: int) -> None:
         try:
             os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(priority))
         except (OSError, AttributeError) as exc:
-            raise ValueError(f"real-time priority {priority}: {exc} (it needs CAP_SYS_NICE or an rtprio "
-                             "limit)") from None
+            raise ValueError(f"real-time priority {priority}: {exc} (needs CAP_SYS_NICE or an rtprio limit)") from None
 
 
 def run_node(bundle: str, ros_args: list[str], stats: str | None = None, priority: int = 0) -> int:
     """``hexnewton-ros node``: the node spun until Ctrl-C (SIGINT or SIGTERM), then its counters (and every latency,
     in ``stats``, a JSON file) and a clean exit. ``priority`` > 0: the process (and the middleware's threads it
     starts) under the real-time FIFO scheduler at that priority, as a robot runs its control loop."""
-    import json
-
     unknown = sorted(set(parameter_names(ros_args)) - set(PARAMETERS) - {"use_sim_time"})
     if unknown:
         raise ValueError(f"unknown parameter {unknown[0]!r} (the node's: {', '.join(PARAMETERS)})")
@@ -578,8 +577,10 @@ def run_node(bundle: str, ros_args: list[str], stats: str | None = None, priorit
     node = None
     try:
         node = ControllerNode(bundle, cli_args=None)
-        spinner = SingleThreadedExecutor()  # (rclpy 9.1.2's EventsExecutor fires no timers: no watchdog)
+        spinner = SingleThreadedExecutor()  # (rclpy 9.1.2's EventsExecutor.spin stops on neither SIGINT nor SIGTERM)
         spinner.add_node(node.node)
+        gc.collect()  # what is built so far, then out of the collector's scans: a full collection of the modules,
+        gc.freeze()  # onnxruntime's session and the node stops the node for 15-30 ms on a 2-core CPU
         try:
             spinner.spin()
         except (KeyboardInterrupt, ExternalShutdownException):

@@ -135,6 +135,7 @@ def test_stale_data_holds_the_standing_pose_says_so_once_and_resumes():
     q1 = _readings(loop, t)[-1][1]  # (after the earlier pending substep, served now)
     assert loop.walking and "walking" in lines[-1]
     np.testing.assert_array_equal(q1, q0)  # the same readings as at the start: the same first targets
+    assert loop.ctrl.session.get_session_options().intra_op_num_threads == 1  # still the one-thread session
 
 
 def test_goal_reached_and_no_goal_hold_the_pose():
@@ -319,6 +320,37 @@ def test_node_faults_over_ros(ros_env):
     # one line for the first refusal of a topic, then at most one per 5 s
     assert 1 <= log.count("refused a joint_states message") <= 2 and log.count("refused a goal message") == 1, log
     assert log.count("holding the standing pose: ") >= 2  # no data yet, then the stale readings: once each
+
+
+def test_a_bag_replays_as_instants_in_their_recorded_order(tmp_path):
+    """A recording's messages grouped by stamp: each instant once, at its first message's recorded time, its messages
+    in their recorded order, whatever the recording's gaps between them."""
+    pytest.importorskip("rclpy")
+    pytest.importorskip("rosbags")
+    from rclpy.serialization import serialize_message
+    from sensor_msgs.msg import Imu, JointState
+
+    from hexnewton.analysis.ros_robot import TOPICS, TYPES, Bag, bag_instants
+    from hexnewton.deploy.ros import ros_time, stamp_ns
+
+    bag = Bag(str(tmp_path / "bag"))
+    t = 1_000 * MS
+    for k in range(3):
+        stamp = ros_time(t + k * 5 * MS)
+        js, imu = JointState(name=list(JOINT_NAMES), position=[0.0] * 18, velocity=[0.0] * 18), Imu()
+        js.header.stamp = imu.header.stamp = stamp
+        if k == 1:  # the IMU alone
+            bag.write(TOPICS["imu"], TYPES["imu"], serialize_message(imu), t + k * 5 * MS + 10_000)
+            continue
+        bag.write(TOPICS["joint_states"], TYPES["joint_states"], serialize_message(js), t + k * 5 * MS + 10_000)
+        bag.write(TOPICS["imu"], TYPES["imu"], serialize_message(imu), t + k * 5 * MS + 3 * MS)  # 3 ms later
+    bag.write(TOPICS["commands"], TYPES["commands"], b"\x00\x01\x00\x00", t + 20 * MS)  # not replayed
+    bag.close()
+    instants = bag_instants(str(tmp_path / "bag"))
+    assert [when for when, _ in instants] == [t + k * 5 * MS + 10_000 for k in range(3)]
+    assert [[key for key, _ in msgs] for _, msgs in instants] == [["joint_states", "imu"], ["imu"],
+                                                                  ["joint_states", "imu"]]  # fmt: skip
+    assert all(stamp_ns(m.header.stamp) == t + k * 5 * MS for k, (_, msgs) in enumerate(instants) for _, m in msgs)
 
 
 def test_timer_trigger_runs_a_substep_per_tick_on_the_latest_readings():
