@@ -12,8 +12,8 @@ loopback, on one ROS_DOMAIN_ID, discovery on this machine only:
    seed 1000, starts from seed 2000), flat and rugged, then the same rounds over ROS 2, the robot waiting for each
    target; per round, how it ended beside the in-process one;
 2. ``realtime``: flat rounds paced by the wall clock, the node's default QoS (best-effort sensors);
-3. ``replay``: a short real-time run recorded as rosbag2 (MCAP), then replayed to a fresh node (no MuJoCo on the
-   cores), each instant's messages together at the instant's recorded time;
+3. ``replay``: a short real-time run recorded as rosbag2 (MCAP), then replayed ``--replays`` times, each to a fresh
+   node (no MuJoCo on the cores; their latencies pooled), each instant's messages together at its recorded time;
 2 and 3 once under the normal scheduler and once with the node, the robot and the replay at real-time FIFO
 priority (``--priority``, results.json's ``realtime_fifo`` and ``replay_fifo``), as a robot runs its driver and
 controller; the lockstep runs stay on the normal one. ``--parts`` runs only the parts named: results.json in --out
@@ -54,7 +54,8 @@ def node(stats: str, params: list[str], priority: int = 0):
                             stderr=subprocess.STDOUT, text=True)  # fmt: skip
 
 
-def stop(proc, stats: str) -> dict:
+def stop(proc, stats: str, samples: list | None = None) -> dict:
+    """Ctrl-C to the node, then its stats (the latencies as a histogram; appended to ``samples`` if given)."""
     proc.send_signal(signal.SIGINT)
     out, _ = proc.communicate(timeout=60)
     if proc.returncode != 0 or not os.path.isfile(stats):
@@ -62,9 +63,21 @@ def stop(proc, stats: str) -> dict:
     with open(stats) as f:
         s = json.load(f)
     lat = np.asarray(s.pop("latency_samples_ms"))
+    if samples is not None:
+        samples.extend(lat.tolist())
     s["latency_histogram_ms"] = {"bins": BINS[:-1], "counts": np.histogram(lat, BINS)[0].tolist()}
     s["log_lines"] = out.count("\n")
     return s
+
+
+def pooled(runs: list[dict], samples: list) -> dict:
+    """The node stats of several runs as one: counts added, latencies over all their samples."""
+    from hexnewton.deploy.ros import percentiles_ms
+
+    out = {k: {c: sum(r[k][c] for r in runs) for c in runs[0][k]} for k in ("counts", "received", "refused")}
+    out["latency_ms"] = percentiles_ms(samples)
+    out["latency_histogram_ms"] = {"bins": BINS[:-1], "counts": np.histogram(samples, BINS)[0].tolist()}
+    return out
 
 
 def robot(args: list[str], out: str) -> dict:
@@ -123,8 +136,8 @@ def realtime_part(args, tmp: str, priority: int) -> dict:
 
 
 def replay_part(args, tmp: str, priority: int) -> dict:
-    """A real-time run recorded as a bag, then replayed to a fresh node; the node, the robot and the replay at
-    ``priority``."""
+    """A real-time run recorded as a bag, then replayed ``args.replays`` times, each to a fresh node (their
+    latencies pooled); the node, the robot and the replay at ``priority``."""
     tag = f"_fifo{priority}" if priority else ""
     fifo = ["--priority", str(priority)] if priority else []
     bag = os.path.join(tmp, f"bag{tag}")
@@ -133,18 +146,24 @@ def replay_part(args, tmp: str, priority: int) -> dict:
     rec = robot(["--terrain", "flat", "--rounds", str(args.bag_rounds), "--realtime", "--bag", bag, *fifo],
                 os.path.join(tmp, f"bag_robot{tag}.json"))  # fmt: skip
     stop(n, stats)
-    stats = os.path.join(tmp, f"node_replay{tag}.json")
-    n = node(stats, [], priority)
-    load = os.getloadavg()[0]
-    rep = subprocess.run(PY + ["replay", bag, *fifo], cwd=ROOT, env=ENV, capture_output=True, text=True,
-                         timeout=3600)  # fmt: skip
-    if rep.returncode != 0:
-        raise RuntimeError(rep.stderr[-3000:])
-    s = stop(n, stats)
-    print(f"replay{tag}: node latency {s['latency_ms']}", flush=True)
-    line = rep.stdout.strip().splitlines()[-1]
-    return {"node": s, "bag_rounds": args.bag_rounds, "bag_messages": rec["bag_messages"], "replay": line,
-            "dropped": dropped(replayed_counts(line), s["received"]), "priority": priority,
+    replays, samples, load = [], [], os.getloadavg()[0]
+    for k in range(args.replays):
+        stats = os.path.join(tmp, f"node_replay{tag}_{k}.json")
+        n = node(stats, [], priority)
+        load_k = os.getloadavg()[0]
+        rep = subprocess.run(PY + ["replay", bag, *fifo], cwd=ROOT, env=ENV, capture_output=True, text=True,
+                             timeout=3600)  # fmt: skip
+        if rep.returncode != 0:
+            raise RuntimeError(rep.stderr[-3000:])
+        s = stop(n, stats, samples)
+        line = rep.stdout.strip().splitlines()[-1]
+        replays.append({"node": s, "replay": line, "dropped": dropped(replayed_counts(line), s["received"]),
+                        "load_1min": [load_k, os.getloadavg()[0]]})  # fmt: skip
+        print(f"replay{tag} {k + 1} of {args.replays}: node latency {s['latency_ms']}", flush=True)
+    s = pooled([r["node"] for r in replays], samples)
+    return {"node": s, "replays": replays, "bag_rounds": args.bag_rounds, "bag_messages": rec["bag_messages"],
+            "replay": replays[0]["replay"], "priority": priority,
+            "dropped": {k: sum(r["dropped"][k] for r in replays) for k in replays[0]["dropped"]},
             "load_1min": [load, os.getloadavg()[0]],
             "bag_bytes": sum(os.path.getsize(os.path.join(bag, f)) for f in os.listdir(bag))}  # fmt: skip
 
@@ -294,7 +313,9 @@ def report(res: dict, meta: dict) -> str:
     for key, p in res.get("provenance", {}).items():
         lines.append(f"| {key} | `{p['command']}` | {p['git']} | {p.get('started', '')} | {_load(p)} | "
                      f"{p.get('wall_s', '')} |")  # fmt: skip
-    lines += ["", "## Targets", ""] + target_lines(res)
+    lines += ["", "The load averages count this study's own processes too (the node with the robot or the replay: "
+              "about 1-2 of them); the rest is other work on the machine, which shares its 2 cores.", ""]  # fmt: skip
+    lines += ["## Targets", ""] + target_lines(res)
     lines += ["", "## Latency: the sensor message's stamp to the targets' publish, measured by the node", "",
               "| run | substeps | p50 / p90 / p99 / p99.9 / max [ms] | policy steps on unmatched readings | load "
               "average (1 min) at start / end |", "|---|---|---|---|---|"]  # fmt: skip
@@ -302,7 +323,18 @@ def report(res: dict, meta: dict) -> str:
         load = res[key].get("load_1min") if key != "lockstep" else None
         lines.append(f"| {name} | {s['counts']['substeps']} | {_lat(s)} | {s['counts']['unmatched_control_steps']} "
                      f"of {s['counts']['control_steps']} | {' / '.join(f'{v:.1f}' for v in load) if load else ''} |")
-    lines += ["", "Distribution (substeps per bin; bins from the lower edge in ms):", ""]
+    for key in ("replay", "replay_fifo"):
+        if "replays" in res.get(key, {}):
+            each = res[key]["replays"]
+            p99 = ", ".join(f"{r['node']['latency_ms']['p99']:.2f}" for r in each)
+            unmatched = ", ".join(str(r["node"]["counts"]["unmatched_control_steps"]) for r in each)
+            lost = ", ".join(str(r["dropped"]["imu"]) for r in each)
+            lines += ["", f"{LABELS[key][0].upper() + LABELS[key][1:]}: the row above pools {len(each)} replays of one "
+                      f"bag, each to a fresh node; each replay's p99 {p99} ms, policy steps on unmatched readings "
+                      f"{unmatched}, IMU messages dropped {lost}."]  # fmt: skip
+    lines += ["", "A policy step on unmatched readings waited for its readings until the next IMU message (5 ms); "
+              "after IMU messages lost while walking, every policy step does until the next hold (docs/deployment.md, "
+              "Rates).", "", "Distribution (substeps per bin; bins from the lower edge in ms):", ""]  # fmt: skip
     head = ["run"] + [f"{b:g}" for b in BINS[:-1]]
     lines += ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
     for _, name, s, _ in _runs(res):
@@ -336,9 +368,9 @@ def report(res: dict, meta: dict) -> str:
     for key in ("replay", "replay_fifo"):
         if key in res:
             rp = res[key]
-            lines += ["", f"The bag of {LABELS[key]}: {rp.get('bag_rounds', res.get('bag_rounds', 2))} real-time "
-                      f"rounds, {rp['bag_messages']} messages, {rp['bag_bytes'] / 1e6:.1f} MB (rosbag2, MCAP "
-                      f"storage, metadata version 9); {rp['replay']}."]  # fmt: skip
+            name, n = LABELS[key][0].upper() + LABELS[key][1:], rp.get("bag_rounds", res.get("bag_rounds", 2))
+            lines += ["", f"{name}: the bag of {n} real-time rounds, {rp['bag_messages']} messages, "
+                      f"{rp['bag_bytes'] / 1e6:.1f} MB (rosbag2, MCAP storage, metadata version 9); {rp['replay']}."]
     return "\n".join(lines) + "\n"
 
 
@@ -362,6 +394,7 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--rounds", type=positive_int, default=40)
     p.add_argument("--realtime_rounds", type=positive_int, default=25)
     p.add_argument("--bag_rounds", type=positive_int, default=2)
+    p.add_argument("--replays", type=positive_int, default=5, help="replays of the bag, each to a fresh node")
     p.add_argument("--priority", type=int, default=50, help="also the latency runs with the node at this real-time "
                    "FIFO priority (0: not)")
     p.add_argument("--out", default=os.path.dirname(os.path.abspath(__file__)))

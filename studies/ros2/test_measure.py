@@ -25,21 +25,24 @@ def test_a_bad_part_is_one_error_line(tmp_path):
 
 
 def test_parts_rerun_merges_into_the_results_and_the_report_names_each_command(tmp_path):
-    """The replay part alone (one recorded round, the normal scheduler) into a copy of the study's results: the other
-    parts stay as they were, with their own command; the report says which command produced which part."""
+    """The replay part alone (one recorded round replayed twice, the normal scheduler) into a copy of the study's
+    results: the other parts stay as they were, with their own command; the report says which command produced which
+    part."""
     pytest.importorskip("rclpy")
     pytest.importorskip("rosbags")
     shutil.copy(os.path.join(STUDY, "results.json"), tmp_path / "results.json")
     old = json.loads((tmp_path / "results.json").read_text())
     env = dict(os.environ, ROS_DOMAIN_ID=str(60 + os.getpid() % 20))
-    args = ["--parts", "replay", "--bag_rounds", "1", "--priority", "0", "--out", str(tmp_path)]
+    args = ["--parts", "replay", "--bag_rounds", "1", "--replays", "2", "--priority", "0", "--out", str(tmp_path)]
     proc = subprocess.run([sys.executable, MEASURE, *args], capture_output=True, text=True, timeout=900, cwd=ROOT,
                           env=env)  # fmt: skip
     assert proc.returncode == 0, proc.stderr[-3000:]
     res = json.loads((tmp_path / "results.json").read_text())
     for key in ("lockstep", "realtime", "realtime_fifo", "replay_fifo"):
         assert res[key] == old[key], key
-    assert res["replay"] != old["replay"] and res["replay"]["bag_rounds"] == 1
+    rp = res["replay"]
+    assert rp != old["replay"] and rp["bag_rounds"] == 1 and len(rp["replays"]) == 2
+    assert rp["node"]["counts"]["substeps"] == sum(r["node"]["counts"]["substeps"] for r in rp["replays"]) > 0
     prov = res["provenance"]
     assert prov["replay"]["command"] == "python " + MEASURE + " " + " ".join(args)
     assert len(prov["replay"]["load_start"]) == 3 and prov["replay"]["git"]
