@@ -40,7 +40,8 @@ sys.path.insert(0, ROOT)
 BUNDLE = "results/controllers/cpg_rl_complex"
 PY = [sys.executable, "-m", "hexnewton.apps.ros"]
 LOCKSTEP = None  # the node's parameters for the lockstep robot (hexnewton.analysis.ros_robot), set in main
-ENV = dict(os.environ, ROS_DOMAIN_ID=os.environ.get("ROS_DOMAIN_ID", "77"), ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST")
+#: one ROS domain for the study's processes (101: outside the tests' 20-99), discovery on this machine only
+ENV = dict(os.environ, ROS_DOMAIN_ID=os.environ.get("ROS_DOMAIN_ID", "101"), ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST")
 BINS = [0, 0.5, 1, 1.5, 2, 3, 4, 5, 7.5, 10, 15, 20, 50, 1e9]
 #: the parts of the study (``--parts``), in the order they run
 PARTS = ("realtime", "replay", "lockstep")
@@ -109,7 +110,16 @@ def agreement(ros: list[dict], ref: list[dict]) -> dict:
 
 
 def dropped(sent: dict, received: dict) -> dict:
-    return {k: int(sent[k] - received.get(k, 0)) for k in sent}
+    """Messages sent and not received by the node, per topic; HexnewtonError where the node received more than were
+    sent: another process publishes on the study's ROS domain, and the run measures it too."""
+    from hexnewton.errors import HexnewtonError
+
+    out = {k: int(sent[k] - received.get(k, 0)) for k in sent}
+    extra = {k: -v for k, v in out.items() if v < 0}
+    if extra:
+        raise HexnewtonError(f"the node received {extra} more messages than were sent: another process publishes on "
+                             f"ROS_DOMAIN_ID {ENV['ROS_DOMAIN_ID']}; set ROS_DOMAIN_ID to a free one")  # fmt: skip
+    return out
 
 
 def replayed_counts(line: str) -> dict:
@@ -145,7 +155,7 @@ def replay_part(args, tmp: str, priority: int) -> dict:
     n = node(stats, [], priority)
     rec = robot(["--terrain", "flat", "--rounds", str(args.bag_rounds), "--realtime", "--bag", bag, *fifo],
                 os.path.join(tmp, f"bag_robot{tag}.json"))  # fmt: skip
-    stop(n, stats)
+    dropped(rec["sent"], stop(n, stats)["received"])  # (what the bag holds is the robot's alone)
     replays, samples, load = [], [], os.getloadavg()[0]
     for k in range(args.replays):
         stats = os.path.join(tmp, f"node_replay{tag}_{k}.json")
