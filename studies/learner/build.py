@@ -27,6 +27,9 @@ ARMS = {"recipe": "the complex recipe (`--task complex`)",
         "critic": "+ the asymmetric critic (`--env.obs.critic true`)",
         "actor": "+ the gyro and the last actions in the actor's observation (`--env.obs.gyro true "
                  "--env.obs.last_action true`)"}
+#: each arm's train.py flags beside ``--task complex`` (studies/device/learner.sh passes the same)
+ARM_FLAGS = {"recipe": "", "critic": "--env.obs.critic true",
+             "actor": "--env.obs.gyro true --env.obs.last_action true"}
 TERRAINS = ("rugged", "stepped", "complex")
 METRICS = ("success_3m", "fall_rate", "fall_rate_before_goal", "pitch_var_deg2", "roll_var_deg2")
 #: the gate's lines (1000 test rounds per terrain, deterministic action)
@@ -124,13 +127,19 @@ def run_entry(name: str, log: str, timing: str, lease: dict) -> dict:
            "result_on_validation": {}, "result_on_test": {}}  # fmt: skip
 
 
-def collect() -> dict:
-    leases = json.load(open(os.path.join(HERE, "leases.json")))
-    runs: dict = {}
+def study_runs(leases: list[dict]) -> dict:
+    """The study's kept runs (``runs/NAME/train.log``), each with the lease that ran it."""
+    runs = {}
     for log in sorted(glob.glob(os.path.join(HERE, "runs", "*", "train.log"))):
         name = os.path.basename(os.path.dirname(log))
         lease = next((le for le in leases if name in le["runs"]), {})
         runs[name] = run_entry(name, log, os.path.join(os.path.dirname(log), "timing.json"), lease)
+    return runs
+
+
+def collect() -> dict:
+    leases = json.load(open(os.path.join(HERE, "leases.json")))
+    runs = study_runs(leases)
     fixed: dict = {k: {"shipped": {}, "fixed_cpg": {}} for k in ("validation", "test")}
     for res in sorted(glob.glob(os.path.join(HERE, "evals", "*", "results.json"))):
         job = os.path.basename(os.path.dirname(res))
@@ -213,9 +222,7 @@ def gate(runs: dict, test: dict) -> dict | None:
 
 def choose(run_dirs: list[str]) -> str:
     """The train.py flags of the changes that paid: the study's runs and those of ``run_dirs`` (NAME.log each)."""
-    runs = {}
-    for log in sorted(glob.glob(os.path.join(HERE, "runs", "*", "train.log"))):
-        runs[os.path.basename(os.path.dirname(log))] = run_entry(os.path.basename(os.path.dirname(log)), log, "", {})
+    runs = study_runs([])
     for d in run_dirs:
         for log in sorted(glob.glob(os.path.join(d, "*_s[0-9].log"))):
             name = os.path.basename(log)[:-4]
@@ -224,12 +231,28 @@ def choose(run_dirs: list[str]) -> str:
     arms = summarise(runs)
     if "recipe" not in arms:
         raise ValueError("the study holds no recipe runs to compare with")
-    flags = {"critic": "--env.obs.critic true", "actor": "--env.obs.gyro true --env.obs.last_action true"}
-    return " ".join(flags[a] for a in flags if a in arms and pays(arms[a], arms["recipe"]))
+    return " ".join(ARM_FLAGS[a] for a in ARM_FLAGS if a != "recipe" and a in arms and pays(arms[a], arms["recipe"]))
 
 
 def pct(x) -> str:
     return "—" if x is None else f"{100 * x:.1f} %"
+
+
+def terrain_rows(rows: list[tuple[str, dict]], rounds: bool) -> list[str]:
+    """A table's rows per policy and terrain: 3 m, falls before the goal, falls, pitch / roll variance; with
+    ``rounds`` the rounds' column, and a row saying "not run" where a terrain has no result (else none)."""
+    out = []
+    for name, per in rows:
+        for t in TERRAINS:
+            s = per.get(t)
+            if s is None:
+                if rounds:
+                    out.append(f"| {name} | {t} | — | not run | | | |")
+                continue
+            out.append(f"| {name} | {t} | " + (f"{s['rounds']} | " if rounds else "") + f"{pct(s['success_3m'])} | "
+                       f"{pct(s['fall_rate_before_goal'])} | {pct(s['fall_rate'])} | {s['pitch_var_deg2']:.1f} / "
+                       f"{s['roll_var_deg2']:.1f} |")
+    return out
 
 
 def report(res: dict) -> str:
@@ -265,14 +288,7 @@ def report(res: dict) -> str:
     val = fixed["validation"]
     rows = [(n, r["result_on_validation"]) for n, r in runs.items() if r["arm"] in ARMS] + [
         ("shipped `cpg_rl_complex`", val["shipped"]), ("fixed CPG", val["fixed_cpg"])]
-    for name, per in rows:
-        for t in TERRAINS:
-            s = per.get(t)
-            if s is None:
-                lines.append(f"| {name} | {t} | — | not run | | | |")
-                continue
-            lines.append(f"| {name} | {t} | {s['rounds']} | {pct(s['success_3m'])} | {pct(s['fall_rate_before_goal'])}"
-                         f" | {pct(s['fall_rate'])} | {s['pitch_var_deg2']:.1f} / {s['roll_var_deg2']:.1f} |")
+    lines += terrain_rows(rows, rounds=True)
     if res["gate"]:
         test = fixed["test"]
         lines += ["", "## The gate", "", "`python train.py --task complex --seed N` (with the flags of the changes that "
@@ -283,12 +299,7 @@ def report(res: dict) -> str:
                   "|---|---|---:|---:|---:|---:|"]
         rows = [(n, r["result_on_test"]) for n, r in runs.items() if r["arm"] == "gate"] + [
             ("shipped `cpg_rl_complex`", test["shipped"]), ("fixed CPG", test["fixed_cpg"])]
-        for name, per in rows:
-            for t in TERRAINS:
-                s = per.get(t)
-                if s:
-                    lines.append(f"| {name} | {t} | {pct(s['success_3m'])} | {pct(s['fall_rate_before_goal'])} | "
-                                 f"{pct(s['fall_rate'])} | {s['pitch_var_deg2']:.1f} / {s['roll_var_deg2']:.1f} |")
+        lines += terrain_rows(rows, rounds=False)
         lines += ["", "| line | holds |", "|---|---|"] + [
             f"| {k} | {'yes' if v else '**no**'} |" for k, v in res["gate"]["lines"].items()]
     lines += ["", "## Time", "",
@@ -314,10 +325,9 @@ def verdict(res: dict) -> list[str]:
         if arm == "recipe" or base is None:
             continue
         goal = s["mean_chosen_goal"] - base["mean_chosen_goal"]
-        falls = sum(s["chosen_fell_before_goal"]) / len(s["seeds"]) - sum(base["chosen_fell_before_goal"]) / len(
-            base["seeds"])
+        falls = s["mean_chosen_fell_before_goal"] - base["mean_chosen_fell_before_goal"]
         spread = sum(s["goal_spread"]) / len(s["seeds"]) - sum(base["goal_spread"]) / len(base["seeds"])
-        word = "pays" if goal > 0 and falls <= 0 else "does not pay" if goal < 0 else "is even"
+        word = "pays" if pays(s, base) else "does not pay" if goal < 0 else "is even"
         out.append(f"- **`{arm}` {word} on validation** (seeds {', '.join(map(str, s['seeds']))}): the chosen "
                    f"candidates reach the goal in {pct(s['mean_chosen_goal'])} of the validation rounds against the "
                    f"recipe's {pct(base['mean_chosen_goal'])} ({100 * goal:+.1f} points), fall before the goal line "
