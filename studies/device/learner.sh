@@ -34,7 +34,7 @@ if [ "${1:-}" = collect ]; then   # logs, configs, timings, results (not the oth
 fi
 ARMS=${ARMS:-actor} SEEDS=${SEEDS:-1 2} VAL_ROUNDS=${VAL_ROUNDS:-500} KEPT=${KEPT-recipe_s1 recipe_s2}
 EXTRA=""; [ "${AVERAGE:-0}" = 1 ] && EXTRA="--agent.validation_average true"
-flags() {
+flags() {   # the arms' flags, as studies/learner/build.py ARM_FLAGS names them
   case $1 in
     recipe) echo "" ;;
     critic) echo "--env.obs.critic true" ;;
