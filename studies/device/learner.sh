@@ -12,6 +12,9 @@
 # 3. with GATE=1, the gate: `python train.py --task complex --seed N FLAGS` for N in 1 2 3, one after another and
 #    alone on the GPU (the time counts), then every result, the shipped policy and the fixed CPG on 1000 test rounds
 #    per terrain (the evaluate default seed), all at once.
+# With TEST_KEPT="gate_s1 gate_s2 gate_s3" (say ARMS= KEPT= beside it) the study's kept results of those names
+# (studies/learner/runs/NAME/policy.pt), the shipped policy and the fixed CPG go on 1000 test rounds per terrain first:
+# a gate whose test evaluations did not finish in its lease.
 # With AVERAGE=1 every run of the lease also validates the weight average of its candidates
 # (`--agent.validation_average true`: one more candidate; the study compares arms on the saved checkpoints).
 # Then, from the next calls: `bash studies/device/gpu.sh poll 560` and `bash studies/device/learner.sh collect`
@@ -58,6 +61,14 @@ done
 if [ "${SHIPPED:-0}" = 1 ]; then
   for t in complex rugged stepped; do
     evaluate shipped "$t" "$VAL_ROUNDS" results/policies/cpg_rl_complex.pt --seed 3000 --controllers cpg cpg_rl &
+  done
+fi
+if [ -n "${TEST_KEPT:-}" ]; then
+  for t in complex rugged stepped; do
+    evaluate gate_shipped "$t" 1000 results/policies/cpg_rl_complex.pt --controllers cpg cpg_rl &
+    for name in $TEST_KEPT; do
+      evaluate "$name" "$t" 1000 "studies/learner/runs/$name/policy.pt" &
+    done
   done
 fi
 for seed in $SEEDS; do
