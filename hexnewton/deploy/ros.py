@@ -14,7 +14,9 @@ The node runs :class:`hexnewton.deploy.runtime.Controller` on a robot's own mess
 
 Per IMU message (``trigger`` imu) or per timer tick at the bundle's substep (``trigger`` timer) it runs one CPG
 substep; every ``substeps_per_control`` substeps first the policy, on readings stamped within ``sync_tolerance`` of
-that IMU message (it waits for them until the next IMU message). Faults: a reading missing or older than
+that IMU message (it waits for them until the next IMU message). Where the readings come once per control period,
+their instant is the policy's: IMU messages lost while walking re-align the count to it (``realigned_control_steps``).
+Faults: a reading missing or older than
 ``sensor_timeout``, no goal, or the goal reached: it moves to the standing pose at ``stand_speed`` and holds it, says
 so once in the log and in diagnostics, and walks again, with a fresh CPG, when all is back. A malformed message
 (wrong joint names or count, NaN, a goal in another frame than the odometry's) is refused with one log line (then
@@ -167,7 +169,14 @@ class ControlLoop:
         self.pending_since = 0
         self.sub, self.walking, self.reached, self.reason = 0, False, False, "no readings yet"
         self.last, self.last_time = None, 0
-        self.counts = {k: 0 for k in ("substeps", "control_steps", "holds", "unmatched_control_steps")}
+        self.counts = {k: 0 for k in ("substeps", "control_steps", "holds", "unmatched_control_steps",
+                                      "realigned_control_steps")}
+        # the readings' instants: IMU messages accepted, that count at the latest new joint state, the last gaps
+        # between new joint states in IMU messages, the joint state stamp the last policy step read, and whether the
+        # next substep is a policy step on readings of the substep before it (they came after its IMU message)
+        self.imu_seen, self._imu_at_reading, self.reading_gaps = 0, None, deque(maxlen=8)
+        self.policy_reading, self.late = None, False
+        self.last_stamp, self.last_sub = None, None  # the last substep's IMU stamp and its index
         self.received = dict.fromkeys(("joint_states", "imu", "odom", "terrain", "goal"), 0)
         self.refused = dict.fromkeys(self.received, 0)
         self._refusal_logged: dict[str, float] = {}
@@ -202,6 +211,11 @@ class ControlLoop:
         if not (np.isfinite(pos).all() and np.isfinite(vel).all()):
             return self.refuse("joint_states", "a position or velocity is not finite", now)
         idx = [names.index(j) for j in self.joints] if names != list(self.joints) else slice(None)
+        last = self.latest.get("joint_states")
+        if last is None or stamp != last.stamp:  # a new instant: IMU messages since the previous one
+            if self._imu_at_reading is not None:
+                self.reading_gaps.append(self.imu_seen - self._imu_at_reading)
+            self._imu_at_reading = self.imu_seen
         self._store("joint_states", (pos[idx], vel[idx]), stamp, now)
         return None
 
@@ -213,6 +227,7 @@ class ControlLoop:
         if abs(np.linalg.norm(q) - 1.0) > 0.01:
             return self.refuse("imu", f"the orientation's norm is {np.linalg.norm(q):.3f}, not 1", now)
         self._store("imu", (q, w), stamp, now)
+        self.imu_seen += 1
         return None
 
     def odometry(self, frame: str, position, quat, stamp: int, now: int) -> str | None:
@@ -275,11 +290,34 @@ class ControlLoop:
             self.counts["unmatched_control_steps"] += 1
             out.append(self._substep(now))
         self.pending, self.pending_since = stamp, now
+        if self.sub != 0 and self._fresh_readings_at(stamp):  # readings of this instant: the policy's substep
+            self.sub = 0
+            self.counts["realigned_control_steps"] += 1
         return out + self._try(now)
 
     def on_reading(self, now: int) -> list:
-        """After a joint state or odometry: the substep waiting for it, if it was the last one missing."""
-        return self._try(now) if self.pending is not None else []
+        """After a joint state or odometry: the substep waiting for it, if it was the last one missing; readings of
+        the instant of a substep that ran without the policy make the next substep the policy's, on them."""
+        if self.pending is not None:
+            return self._try(now)
+        if self.last_sub not in (None, 0) and not self.late and self._fresh_readings_at(self.last_stamp):
+            self.sub, self.late = 0, True
+            self.counts["realigned_control_steps"] += 1
+        return []
+
+    def once_per_period(self) -> bool:
+        """Whether the joint states come once per control period (so their instants are the policy's)."""
+        gaps = sorted(self.reading_gaps)
+        return self.substeps > 1 and len(gaps) >= 3 and gaps[len(gaps) // 2] == self.substeps
+
+    def _fresh_readings_at(self, stamp: int | None) -> bool:
+        """While walking on the IMU: readings of ``stamp``'s instant that no policy step has read, arriving once per
+        control period (IMU messages lost since the last policy step moved its count off their instant); never with
+        ``sync_tolerance`` negative (the policy reads the latest, whatever its instant)."""
+        js = self.latest.get("joint_states")
+        return (self.walking and self.p["trigger"] == "imu" and self.p["sync_tolerance"] >= 0 and stamp is not None
+                and js is not None
+                and js.stamp != self.policy_reading and self.once_per_period() and self._synced(stamp))
 
     def on_timer(self, now: int) -> list:
         """A timer tick (``trigger`` timer): one substep on the latest readings."""
@@ -299,7 +337,7 @@ class ControlLoop:
         return [(None, self._hold(reason, now))]
 
     def _try(self, now: int) -> list:
-        if self.sub == 0 and not self._synced(self.pending):
+        if self.sub == 0 and not self.late and not self._synced(self.pending):
             return []
         return [self._substep(now)]
 
@@ -319,7 +357,10 @@ class ControlLoop:
         if self.sub == 0:
             self._policy(imu[0], imu[1])
         q = self.ctrl.substep(imu[0])[0]
-        self.sub = (self.sub + 1) % self.substeps
+        self.last_stamp, self.last_sub = stamp, self.sub
+        # after a policy step on the readings of the substep before: the count goes on from their instant
+        self.sub = (self.sub + (2 if self.late else 1)) % self.substeps
+        self.late = False
         self.counts["substeps"] += 1
         self.last, self.last_time = q, now
         return stamp, q
@@ -341,6 +382,7 @@ class ControlLoop:
         obs = self.ctrl.observe(joint_pos, joint_vel, quat, target, height, gyro)
         self.ctrl.set_actions(self.ctrl.act(obs), target)
         self.counts["control_steps"] += 1
+        self.policy_reading = self.latest["joint_states"].stamp
 
     def _hold(self, reason: str, now: int) -> np.ndarray | None:
         """Move to the standing pose at ``stand_speed`` from the last targets (or the measured joints; None before
@@ -349,7 +391,7 @@ class ControlLoop:
             if self.walking:
                 self.counts["holds"] += 1
                 self.ctrl.reset()  # a fresh CPG when it walks again (building a Controller anew: 40-60 ms)
-            self.walking, self.sub, self.reason, self.changed = False, 0, reason, True
+            self.walking, self.sub, self.reason, self.changed, self.late = False, 0, reason, True, False
             self.log(f"holding the standing pose: {reason}")
         if self.last is None:  # from the measured joints; nothing before the first joint state
             js = self.latest.get("joint_states")

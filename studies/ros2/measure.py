@@ -327,12 +327,14 @@ def report(res: dict, meta: dict) -> str:
               "about 1-2 of them); the rest is other work on the machine, which shares its 2 cores.", ""]  # fmt: skip
     lines += ["## Targets", ""] + target_lines(res)
     lines += ["", "## Latency: the sensor message's stamp to the targets' publish, measured by the node", "",
-              "| run | substeps | p50 / p90 / p99 / p99.9 / max [ms] | policy steps on unmatched readings | load "
-              "average (1 min) at start / end |", "|---|---|---|---|---|"]  # fmt: skip
+              "| run | substeps | p50 / p90 / p99 / p99.9 / max [ms] | policy steps on unmatched readings | "
+              "re-aligned | load average (1 min) at start / end |", "|---|---|---|---|---|---|"]  # fmt: skip
     for key, name, s, _ in _runs(res):
         load = res[key].get("load_1min") if key != "lockstep" else None
+        realigned = s["counts"].get("realigned_control_steps", "—")  # (a node that did not count them: —)
         lines.append(f"| {name} | {s['counts']['substeps']} | {_lat(s)} | {s['counts']['unmatched_control_steps']} "
-                     f"of {s['counts']['control_steps']} | {' / '.join(f'{v:.1f}' for v in load) if load else ''} |")
+                     f"of {s['counts']['control_steps']} | {realigned} | "
+                     f"{' / '.join(f'{v:.1f}' for v in load) if load else ''} |")
     for key in ("replay", "replay_fifo"):
         if "replays" in res.get(key, {}):
             each = res[key]["replays"]
@@ -342,9 +344,9 @@ def report(res: dict, meta: dict) -> str:
             lines += ["", f"{LABELS[key][0].upper() + LABELS[key][1:]}: the row above pools {len(each)} replays of one "
                       f"bag, each to a fresh node; each replay's p99 {p99} ms, policy steps on unmatched readings "
                       f"{unmatched}, IMU messages dropped {lost}."]  # fmt: skip
-    lines += ["", "A policy step on unmatched readings waited for its readings until the next IMU message (5 ms); "
-              "after IMU messages lost while walking, every policy step does until the next hold (docs/deployment.md, "
-              "Rates).", "", "Distribution (substeps per bin; bins from the lower edge in ms):", ""]  # fmt: skip
+    lines += ["", "A policy step on unmatched readings waited for its readings until the next IMU message (5 ms). "
+              "Re-aligned: policy steps moved back onto the readings' instant after IMU messages were lost "
+              "(docs/deployment.md, Rates).", "", "Distribution (substeps per bin; bins from the lower edge in ms):", ""]  # fmt: skip
     head = ["run"] + [f"{b:g}" for b in BINS[:-1]]
     lines += ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
     for _, name, s, _ in _runs(res):

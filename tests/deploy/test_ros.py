@@ -105,6 +105,60 @@ def test_the_loop_runs_the_runtime_and_waits_for_the_policys_readings():
     assert loop.walking and loop.counts["control_steps"] == 3 and loop.counts["substeps"] == 12
 
 
+def _walk(loop, instants, lost=(), readings_first=True, every=4):
+    """The robot's messages at ``instants`` substeps of 5 ms: the IMU at each (but those in ``lost``), the joints,
+    odometry and terrain every ``every``-th (before or after the IMU message); the IMU stamps of the substeps that
+    ran the policy, and of those whose readings were of their own instant."""
+    policy, matched = [], []
+    for k in range(instants):
+        t = (k + 1) * 5 * MS
+        feed = k % every == 0
+        q = (0.0, 0.0, 0.0, 1.0)
+
+        def send():
+            assert loop.joint_state(JOINT_NAMES, np.tile([0.0, 0.15, -0.15], 6), np.zeros(18), t, t) is None
+            assert loop.odometry("odom", (0.001 * k, 0.0, 0.15), q, t, t) is None
+            assert loop.terrain(0.0, t, t) is None
+            return loop.on_reading(t)
+
+        before = loop.counts["control_steps"]
+        out = send() if feed and readings_first else []
+        if k not in lost:
+            out += loop.on_imu(q, (0.0, 0.0, 0.0), t, t)
+        if feed and not readings_first:
+            out += send()
+        if loop.counts["control_steps"] > before:
+            policy.append(out[-1][0])
+            matched.append(loop.latest["joint_states"].stamp == out[-1][0])
+    return policy, matched
+
+
+@pytest.mark.parametrize("readings_first", [True, False])
+def test_lost_imu_messages_realign_the_policy_on_the_readings_instant(readings_first):
+    """Readings once per control period mark its instant: after an IMU message lost while walking, the policy runs on
+    the readings' instant again (one step re-aligned), not one substep late for the rest of the walk."""
+    loop, _ = _loop()
+    loop.set_goal("odom", (3.0, 0.0, 0.0), 0)
+    policy, matched = _walk(loop, 200, lost=(41, 122), readings_first=readings_first)
+    assert loop.walking and loop.counts["unmatched_control_steps"] == 0
+    assert loop.counts["realigned_control_steps"] == 2
+    # every policy step reads the readings of its own instant, but those re-aligned on readings that came after the
+    # IMU message of their instant: they run one substep later, on them
+    assert len(policy) == 50 and matched.count(False) == (0 if readings_first else 2)
+    if readings_first:  # the policy runs at each instant the readings come
+        assert policy == [(k + 1) * 5 * MS for k in range(0, 200, 4)]
+
+
+def test_readings_every_substep_or_the_latest_never_realign():
+    """Readings at every substep (any IMU message is a policy instant) and ``sync_tolerance`` negative (the latest,
+    whatever its instant) keep the count from the start: a lost IMU message shifts it, as nothing marks the period."""
+    for params, every in (({}, 1), ({"sync_tolerance": -1.0}, 4)):
+        loop, _ = _loop(**params)
+        loop.set_goal("odom", (3.0, 0.0, 0.0), 0)
+        policy, _ = _walk(loop, 120, lost=(41,), every=every)
+        assert loop.counts["realigned_control_steps"] == 0 and len(policy) == 30
+
+
 def test_stale_data_holds_the_standing_pose_says_so_once_and_resumes():
     loop, lines = _loop()
     assert loop.on_watchdog(0) == [] or loop.on_watchdog(0)[0][1] is None  # nothing before the first joint state
