@@ -25,7 +25,8 @@ import numpy as np
 
 from hexnewton.analysis.sim2sim import Rounds
 from hexnewton.config import JOINT_NAMES
-from hexnewton.deploy.ros import import_rclpy, percentiles_ms, qos, ros_time, stamp_ns
+from hexnewton.deploy.control_loop import percentiles_ms
+from hexnewton.deploy.ros import import_rclpy, qos, ros_time, stamp_ns
 from hexnewton.errors import HexnewtonError
 from hexnewton.mdp.status import STATUS_NAMES
 

@@ -72,7 +72,7 @@ def _parser() -> ArgumentParser:
 def main(argv: list[str] | None = None) -> int:
     args = _parser().parse_args(argv)
     if args.command == "params":
-        from hexnewton.deploy.ros import PARAMETERS
+        from hexnewton.deploy.control_loop import PARAMETERS
 
         for name, (default, text) in PARAMETERS.items():
             print(f"{name} = {default!r}: {text}")

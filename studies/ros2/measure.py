@@ -73,7 +73,7 @@ def stop(proc, stats: str, samples: list | None = None) -> dict:
 
 def pooled(runs: list[dict], samples: list) -> dict:
     """The node stats of several runs as one: counts added, latencies over all their samples."""
-    from hexnewton.deploy.ros import percentiles_ms
+    from hexnewton.deploy.control_loop import percentiles_ms
 
     out = {k: {c: sum(r[k][c] for r in runs) for c in runs[0][k]} for k in ("counts", "received", "refused")}
     out["latency_ms"] = percentiles_ms(samples)
@@ -206,8 +206,8 @@ def provenance(command: str, git: str, load0: tuple, t0: float, wall: float) -> 
 
 
 #: the files whose code a part measures: a revision with these changed is marked ``+`` (uncommitted changes)
-MEASURED = ("hexnewton/deploy/ros.py", "hexnewton/deploy/runtime.py", "hexnewton/analysis/ros_robot.py",
-            "hexnewton/apps/ros.py", "studies/ros2/measure.py")
+MEASURED = ("hexnewton/deploy/ros.py", "hexnewton/deploy/control_loop.py", "hexnewton/deploy/runtime.py",
+            "hexnewton/analysis/ros_robot.py", "hexnewton/apps/ros.py", "studies/ros2/measure.py")
 
 
 def revision() -> str:
@@ -346,7 +346,8 @@ def report(res: dict, meta: dict) -> str:
                       f"{unmatched}, IMU messages dropped {lost}."]  # fmt: skip
     lines += ["", "A policy step on unmatched readings waited for its readings until the next IMU message (5 ms). "
               "Re-aligned: policy steps moved back onto the readings' instant after IMU messages were lost "
-              "(docs/deployment.md, Rates).", "", "Distribution (substeps per bin; bins from the lower edge in ms):", ""]  # fmt: skip
+              "(docs/deployment.md, Rates).", "",
+              "Distribution (substeps per bin; bins from the lower edge in ms):", ""]  # fmt: skip
     head = ["run"] + [f"{b:g}" for b in BINS[:-1]]
     lines += ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
     for _, name, s, _ in _runs(res):

@@ -102,6 +102,7 @@ def _fake_run(path, rewards):
         json.dump({"hexnewton": {"config": {"sim": {"num_envs": 8}}}, "train": {"num_steps_per_env": 24}}, f)
 
 
+@pytest.mark.slow  # end to end: 15 s or more on a 2-core CPU
 def test_report_on_a_tiny_run(tmp_path):
     """Fixed CPG and the shipped CPG_RL policy, 2 rounds of 25 steps on stepped ground, plus Fig. 5a from
     two fake runs: every output exists and the Markdown carries the paper's row."""
@@ -141,6 +142,7 @@ def test_report_on_a_tiny_run(tmp_path):
     assert sorted(os.listdir(out)) == before and not (tmp_path / "x").exists()
 
 
+@pytest.mark.slow  # end to end: 15 s or more on a 2-core CPU
 def test_stochastic_rounds_are_seeded_and_sample_around_the_mean():
     """``--stochastic``: the policy samples its actions (trajectories differ from the mean action's), and the
     same evaluation seed gives the same rounds; another seed (``--seed``, a validation set) other rounds."""
@@ -197,6 +199,7 @@ def test_posture_reflex_for_posture_policies_and_fixed_gaits():
                    False, overrides={"cpg.posture_reflex": 2.0})
 
 
+@pytest.mark.slow  # end to end: 15 s or more on a 2-core CPU
 def test_shipped_complex_policy_climbs_steps_under_its_20ms_physics():
     """The shipped complex policy (trained under a 20 ms frame = 4 x 5 ms) climbs the 6 cm risers on the CPU as
     on the GPU: 8 unseen rounds, sampled actions, 20 s. Steps climbable is one of the stability checks
@@ -213,6 +216,7 @@ def test_shipped_complex_policy_climbs_steps_under_its_20ms_physics():
     assert (ep.pos[:, :, 0].max(axis=0) > 0.8).sum() >= 6  # the torso is past the second riser (0.75 m)
 
 
+@pytest.mark.slow  # end to end: 15 s or more on a 2-core CPU
 def test_shipped_policy_is_more_level_than_the_fixed_cpg_on_rugged_ground():
     """The shipped complex policy (body posture, levelling reflex, deterministic action) against the fixed CPG with
     its default gait under the same physics: 4 unseen rugged rounds of 8 s, the same seeds, no falls, lower pitch
@@ -267,6 +271,7 @@ def test_named_perturbations_change_one_thing():
         perturbation("gravity")
 
 
+@pytest.mark.slow  # end to end: 15 s or more on a 2-core CPU
 def test_robustness_and_merge_on_a_tiny_run(tmp_path):
     """``evaluate --perturbations`` adds a robustness table per controller, with the swept fixed gait beside;
     ``--merge`` joins evaluations run apart."""
@@ -328,6 +333,7 @@ def test_sweep_points_change_one_thing():
             sweep_specs(args, ["stepped"])
 
 
+@pytest.mark.slow  # end to end: 15 s or more on a 2-core CPU
 def test_capability_sweep_on_a_tiny_run(tmp_path):
     """``evaluate --sweep FIELD V1 V2``: every controller at each value, one entry per value with its rounds counted,
     in results.json, the report and one figure per sweep; bad sweeps end with one line and exit 2."""

@@ -109,6 +109,7 @@ def test_square_and_validation_shares(fixed_cpg_env):
     assert all(np.isnan(r["walk_3m"]) for r in shares) and run["rpy"].shape == (5, 8, 3)
 
 
+@pytest.mark.slow  # end to end: 15 s or more on a 2-core CPU
 def test_evaluate_navigate_writes_its_report(tmp_path):
     """``evaluate --navigate``: one line per controller and terrain, report.md with the targets and both protocols'
     tables, results.json, the paths' figure; incompatible flags are one line."""

@@ -109,6 +109,7 @@ def _fixed(env):
     return lambda obs: actions
 
 
+@pytest.mark.slow  # end to end: 15 s or more on a 2-core CPU
 def test_fixed_cpg_walks_straight_on_flat():
     """64 robots walk >= 1 m forward in 10 s with |y| drift < 0.2 m, none falls."""
     env = make_env(_cfg("flat", 64, reset_yaw=0.0))  # as play.py: every robot starts facing its goal
@@ -162,6 +163,7 @@ def test_tilted_robot_counts_as_fallen():
     assert env.status.numpy()[0] == FELL
 
 
+@pytest.mark.slow  # end to end: 15 s or more on a 2-core CPU
 def test_play_records_and_plots(tmp_path):
     rec, png = tmp_path / "r.npz", tmp_path / "g.png"
     proc = subprocess.run(

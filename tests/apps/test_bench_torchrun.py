@@ -5,6 +5,8 @@ import json
 import os
 import subprocess
 
+import pytest
+
 from hexnewton.apps.bench import main
 from hexnewton.apps.cli import run
 
@@ -17,6 +19,7 @@ def _baseline(path, world_size: int = 1) -> None:
     path.write_text(json.dumps({"world_size": world_size, "device_name": "cpu", "command": "x", "ranks": rows}))
 
 
+@pytest.mark.slow  # end to end: 15 s or more on a 2-core CPU
 def test_two_cpu_ranks_gather_their_rates(tmp_path):
     _baseline(tmp_path / "one.json")
     cmd = ["torchrun", "--standalone", "--nproc_per_node=2", "-m", "hexnewton.apps.bench", "--device", "cpu",

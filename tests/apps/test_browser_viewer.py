@@ -147,6 +147,7 @@ def test_a_port_in_use_is_one_line(capsys):
     assert f"127.0.0.1:{port} is in use" in err and len(err.strip().splitlines()) == 1
 
 
+@pytest.mark.slow  # end to end: 15 s or more on a 2-core CPU
 def test_training_draws_its_first_robots_for_the_browser(tmp_path, capsys):
     """train.py --viewer viser: the page's address, the warning that every interface listens, frames drawn every
     --viewer_stride control steps of the training robots."""

@@ -13,6 +13,7 @@ import torch
 ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
 
 
+@pytest.mark.slow  # end to end: 15 s or more on a 2-core CPU
 def test_play_loads_the_trained_checkpoint(trained):
     logs, _ = trained
     proc = subprocess.run([sys.executable, "play.py", "--controller", "cpg_rl", "--log_dir", str(logs), "--num_envs",
@@ -23,6 +24,7 @@ def test_play_loads_the_trained_checkpoint(trained):
     assert "[cpg_rl (" in proc.stdout and "model_result.pt" in proc.stdout
 
 
+@pytest.mark.slow  # end to end: 15 s or more on a 2-core CPU
 def test_play_without_arguments_plays_the_newest_policy(trained, tmp_path):
     """``python play.py``: the newest run's checkpoint on the terrain it was trained on; with nothing trained, the
     shipped complex policy; a checkpoint given to the fixed CPG is an error, never ignored."""
@@ -184,6 +186,7 @@ def test_waypoints_parse_negative_coordinates():
     assert fields["waypoints"] == ((2.0, 0.0), (-1.0, -2.5), (0.0, 2.0)) and fields["terminations"] == NAVIGATION_ENDS
 
 
+@pytest.mark.slow  # end to end: 15 s or more on a 2-core CPU
 def test_play_walks_a_waypoint_course():
     """The fixed CPG walks straight: waypoints 0.3 m and 0.6 m ahead are reached in turn and the last ends the
     episode as a success."""

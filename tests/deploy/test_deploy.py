@@ -141,6 +141,7 @@ def test_expected_actions_in_the_runtime_and_the_simulator(bundle):
     np.testing.assert_allclose(got, expected_clipped_action(mu, std), atol=1e-5)
 
 
+@pytest.mark.slow  # end to end: 15 s or more on a 2-core CPU
 def test_bad_bundles_and_exports(bundle, tmp_path):
     not_bundle = _run(["-m", "hexnewton.apps.deploy", str(tmp_path)])
     assert not_bundle.returncode == 2 and "not a controller bundle" in not_bundle.stderr
@@ -173,6 +174,7 @@ def test_policies_keep_their_trained_parameter_ranges():
 BETA_POLICY = os.path.join(ROOT, "results", "policies", "cpg_rl_complex_beta.pt")
 
 
+@pytest.mark.slow  # end to end: 15 s or more on a 2-core CPU
 def test_beta_policy_bundle_runs_its_deterministic_action(tmp_path):
     """A Beta policy: the ONNX file computes the distribution's mean (the controller), the runtime reproduces the
     simulator with it, and sampling in the runtime is refused with one clear error (no Gaussian std to sample)."""
@@ -195,6 +197,7 @@ def test_beta_policy_bundle_runs_its_deterministic_action(tmp_path):
 REFLEX_POLICY = os.path.join(ROOT, "results", "policies", "cpg_rl_complex.pt")
 
 
+@pytest.mark.slow  # end to end: 15 s or more on a 2-core CPU
 def test_reflex_bundle_reads_the_attitude_at_every_substep(tmp_path):
     """The shipped complex policy has the body posture and the levelling reflex: its bundle records the body's
     quaternion at every substep, the runtime reproduces the simulator with them (and not with the control step's
@@ -221,6 +224,7 @@ def test_reflex_bundle_reads_the_attitude_at_every_substep(tmp_path):
         ctrl.substep()
 
 
+@pytest.mark.slow  # end to end: 15 s or more on a 2-core CPU
 def test_stuck_response_in_the_simulator_and_the_runtime(tmp_path):
     """A policy whose config turns the stuck response on (here so that every robot counts as stuck after 3 control
     steps): its bundle carries the response's settings, the runtime reproduces the simulator's joint targets with it
@@ -267,6 +271,7 @@ class _Payload:
         return (os.system, (f"touch {self.marker}",))
 
 
+@pytest.mark.slow  # end to end: 15 s or more on a 2-core CPU
 def test_checkpoints_load_as_data_only(tmp_path):
     """A checkpoint whose pickle would run code is refused with one line and nothing runs; an ONNX file passed as a
     checkpoint is named for what it is."""

@@ -17,7 +17,8 @@ import numpy as np
 import pytest
 
 from hexnewton.config import JOINT_NAMES
-from hexnewton.deploy.ros import PARAMETERS, ControlLoop, check_parameters, parameter_names
+from hexnewton.deploy.control_loop import PARAMETERS, ControlLoop, check_parameters
+from hexnewton.deploy.ros import parameter_names
 from hexnewton.deploy.runtime import Controller, target_in_heading_frame
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
@@ -205,10 +206,10 @@ def test_goal_reached_and_no_goal_hold_the_pose():
 
 
 def test_the_node_module_loads_neither_warp_newton_nor_torch_and_asks_for_rclpy():
-    """``hexnewton.deploy.ros`` and its loop run on NumPy and onnxruntime; without rclpy the command says in one line
-    how to install it."""
+    """``hexnewton.deploy.ros`` and its loop (``control_loop``) run on NumPy and onnxruntime; without rclpy the
+    command says in one line how to install it."""
     code = ("import json, sys\n"
-            "from hexnewton.deploy.ros import ControlLoop, check_parameters\n"
+            "import hexnewton.deploy.ros\nfrom hexnewton.deploy.control_loop import ControlLoop, check_parameters\n"
             f"ControlLoop(check_parameters({{'bundle': {BUNDLE!r}}}))\n"
             "print(json.dumps([m for m in ('warp', 'newton', 'torch', 'rclpy') if m in sys.modules]))\n")  # fmt: skip
     proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120, cwd=ROOT)
@@ -262,6 +263,7 @@ def _stop(proc) -> tuple[str, str]:
     return out, err
 
 
+@pytest.mark.slow  # end to end: 15 s or more on a 2-core CPU
 def test_node_and_mujoco_robot_walk_in_lockstep_as_in_process(ros_env, tmp_path):
     """Two processes on loopback: the node and C MuJoCo as its robot, lockstep on flat ground, the run recorded as
     a rosbag2 file; the robot walks past 1 m, exactly as the in-process sim2sim's round does."""

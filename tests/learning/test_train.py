@@ -49,6 +49,7 @@ def _actor(path):
     return torch.load(path, weights_only=False)["actor_state_dict"]
 
 
+@pytest.mark.slow  # end to end: 15 s or more on a 2-core CPU
 def test_same_seed_same_first_iteration_on_cpu(tmp_path):
     """Seeds reach torch, numpy and the env's resets: the same seed gives the same first update."""
     for name, seed in (("a", "3"), ("b", "3"), ("c", "4")):
@@ -58,6 +59,7 @@ def test_same_seed_same_first_iteration_on_cpu(tmp_path):
     assert not all(torch.equal(a[k], c[k]) for k in a)
 
 
+@pytest.mark.slow  # end to end: 15 s or more on a 2-core CPU
 def test_resume_continues_iterations_and_learning_rate(tmp_path):
     """2 iterations + resume 2 numbers its iterations like 4 straight ones and keeps the adapted learning rate and
     the physics it was trained under."""
@@ -97,6 +99,7 @@ def read_scalars_lr(run_dir):
     return {e.step: e.value for e in acc.Scalars("Loss/learning_rate")}
 
 
+@pytest.mark.slow  # end to end: 15 s or more on a 2-core CPU
 def test_interrupt_saves_and_exports(tmp_path):
     """SIGINT in the middle of training: a final checkpoint and the ONNX policy are written, exit status 130 (128 +
     SIGINT: a queue never takes a stopped run for a finished one)."""
@@ -145,6 +148,7 @@ def test_torchrun_ranks_devices_and_seeds():
     assert proc.returncode == 2 and len(err) == 1 and "runs on cuda" in err[0], proc.stderr[-1500:]
 
 
+@pytest.mark.slow  # end to end: 15 s or more on a 2-core CPU
 def test_torchrun_two_cpu_processes_train_as_one(tmp_path):
     """``torchrun --nproc_per_node=2 train.py --device cpu``: two processes (Gloo) train two iterations with their
     gradients averaged; their parameters agree at the end, and only rank 0 writes a run directory and chooses the
@@ -201,6 +205,7 @@ def test_stop_reason_is_one_decision_for_all_ranks():
     assert stop_reason(False, full, 0.95, 0, time_up_elsewhere) == "the --max_minutes limit"
 
 
+@pytest.mark.slow  # end to end: 15 s or more on a 2-core CPU
 @pytest.mark.parametrize("curriculum", [(), ("--env.terrain.levels", "2", "--env.terrain.start_levels", "2")])
 def test_target_success_stops_training(tmp_path, curriculum):
     """--target_success (time-to-skill): with the goal 1 cm beyond reach every episode succeeds at once, so
@@ -213,6 +218,7 @@ def test_target_success_stops_training(tmp_path, curriculum):
     assert os.path.isfile(run + "/policy.onnx") and len(glob.glob(run + "/model_*.pt")) >= 2
 
 
+@pytest.mark.slow  # end to end: 15 s or more on a 2-core CPU
 def test_max_minutes_stops_at_an_iteration_boundary(tmp_path):
     """--max_minutes: the alarm is acted on at the end of an iteration (as under torchrun), then save and export."""
     out = _train(tmp_path, "--agent.max_minutes", "0.001", "--max_iterations", "100000", "--num_envs", "8")
@@ -222,6 +228,7 @@ def test_max_minutes_stops_at_an_iteration_boundary(tmp_path):
     assert os.path.isfile(run + "/policy.onnx") and os.path.isfile(f"{run}/model_{it.group(1)}.pt")
 
 
+@pytest.mark.slow  # end to end: 15 s or more on a 2-core CPU
 def test_curriculum_stages_change_reflex_and_weights_in_one_run(tmp_path, capsys):
     """The complex recipe's curriculum, on shortened stages (--agent.stages): each stage begins at its iteration (its
     reflex gain, reward weights, PPO settings and effort clamp), the checkpoints carry the task, the gain, weights and

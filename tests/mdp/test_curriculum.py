@@ -195,6 +195,7 @@ def test_start_levels_spread():
     assert start_levels(5, 1).tolist() == [0] * 5
 
 
+@pytest.mark.slow  # end to end: 15 s or more on a 2-core CPU
 def test_env_moves_robots_between_lanes():
     """Robots start on their lanes; walking the (short) goal promotes them and the next episode starts one lane
     over; the level is logged."""

@@ -81,6 +81,7 @@ def test_ppo_stores_the_observation_each_action_was_taken_from():
     assert len(kls) == 8 and kls[0] < 1e-6, kls[:3]
 
 
+@pytest.mark.slow  # end to end: 15 s or more on a 2-core CPU
 def test_ppo_update_options_reach_rsl_rl():
     """AgentConfig's update options: fewer mini-batches and epochs, torch.compile and bfloat16 autocast are rsl-rl's
     own; the runner must train with them (here on the CPU, inductor's C++ backend)."""
@@ -225,6 +226,7 @@ def test_posture_env_acts_with_18_and_levels_with_the_reflex():
     assert np.all(knee[:, [0, 3]] <= knee[:, [2, 5]] - 0.3) and np.all(knee[:, [2, 5]] >= stand + 0.19)
 
 
+@pytest.mark.slow  # end to end: 15 s or more on a 2-core CPU
 def test_set_shaping_recaptures_the_step_with_new_weights_and_reflex():
     """A curriculum stage (``set_shaping``) between steps: the same weights again leave the rollout as it was (the
     step is captured again from the same state), a heavier tilt penalty lowers the reward, the reflex moves the
@@ -259,6 +261,7 @@ def test_target_is_in_the_heading_frame():
     np.testing.assert_allclose(obs[sl["amplitudes"]].numpy(), HexConfig().cpg.fixed_params()[1:], rtol=1e-6)
 
 
+@pytest.mark.slow  # end to end: 15 s or more on a 2-core CPU
 def test_gymnasium_makes_a_task_by_its_id():
     """``gym.make("Hexnewton-<Task>-v0")`` after ``import hexnewton.tasks``: a batched env with torch tensors."""
     import gymnasium as gym

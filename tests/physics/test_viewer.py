@@ -48,6 +48,7 @@ def _decode(path) -> np.ndarray:
     return np.stack([np.frombuffer(f, np.uint8).reshape(h, w, 3) for f in reader])
 
 
+@pytest.mark.slow  # end to end: 15 s or more on a 2-core CPU
 @needs_gl
 def test_headless_video_shows_the_robots_moving(tmp_path):
     """ViewerGL headless -> .mp4: >= 10 frames, each with the robots' orange torsos on the ground and the caption,
@@ -68,6 +69,7 @@ def test_headless_video_shows_the_robots_moving(tmp_path):
     assert min(change) > 0.05 and np.abs(frames[-1].astype(int) - frames[0].astype(int)).mean() > 1.0
 
 
+@pytest.mark.slow  # end to end: 15 s or more on a 2-core CPU
 @needs_gl
 def test_headless_video_draws_the_goals(tmp_path):
     """Each shown robot's goal is drawn as a green point on the ground (GOAL_COLOR): the paper's goal 3.5 m ahead, or
@@ -83,6 +85,7 @@ def test_headless_video_draws_the_goals(tmp_path):
     assert counts[0] > 50 and counts[1] > 2 * counts[0], counts
 
 
+@pytest.mark.slow  # end to end: 15 s or more on a 2-core CPU
 def test_usd_recording_opens_in_pxr(tmp_path):
     """--viewer usd --out: the same rollout as a USD stage that pxr opens, one time sample per frame, the first robot's
     torso walking forward (+x) over them."""
@@ -100,6 +103,7 @@ def test_usd_recording_opens_in_pxr(tmp_path):
     assert 0.03 < x[1] - x[0] < 0.5, x
 
 
+@pytest.mark.slow  # end to end: 15 s or more on a 2-core CPU
 def test_file_recording_replays(tmp_path):
     """--viewer file --out: Newton's own recording loads back (ViewerFile) with the model and every frame."""
     from newton.viewer import ViewerFile

@@ -301,6 +301,7 @@ def test_precompile_auto_compiles_generated_kernels_on_cuda_only():
     assert compiles_generated("generated", is_cuda=False) and not compiles_generated("imported", is_cuda=True)
 
 
+@pytest.mark.slow  # end to end: 15 s or more on a 2-core CPU
 def test_precompile_leaves_the_first_step_nothing_to_compile():
     """A built World has every module its first step (and graph capture) launches loaded: mujoco_warp's generated
     kernels included, each compiled once; ``loaded_variants`` (what train.py's timing.json lists as the first step's
@@ -316,6 +317,7 @@ def test_precompile_leaves_the_first_step_nothing_to_compile():
     assert variant_names(loaded_variants(world.device) - before) == []
 
 
+@pytest.mark.slow  # end to end: 15 s or more on a 2-core CPU
 def test_bench_reports_sim_env_and_training(tmp_path):
     """One tiny run of every benchmark mode under non-default physics: JSON numbers and the appended Markdown
     table."""
