@@ -216,7 +216,8 @@ def gate(runs: dict, test: dict) -> dict | None:
         lines[f"every seed >= 97.5 % at 3 m, {t}"] = _line(got, lambda v: min(v) >= GATE["success_3m_min"])
         lines[f"median >= the shipped policy's, {t}"] = None if shipped is None else _line(
             got, lambda v: sorted(v)[1] >= shipped)
-        lines[f"falls before the goal <= 0.5 %, {t}"] = _line(falls, lambda v: max(v) <= GATE["fall_rate_before_goal_max"])
+        lines[f"falls before the goal <= 0.5 %, {t}"] = _line(
+            falls, lambda v: max(v) <= GATE["fall_rate_before_goal_max"])
     cpg = test["fixed_cpg"].get("rugged", {})
     for v in ("pitch_var_deg2", "roll_var_deg2"):
         vals = [r["result_on_test"].get("rugged", {}).get(v) for r in seeds.values()]
