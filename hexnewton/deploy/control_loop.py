@@ -297,8 +297,8 @@ class ControlLoop:
         ``sync_tolerance`` negative (the policy reads the latest, whatever its instant)."""
         js = self.latest.get("joint_states")
         return (self.walking and self.p["trigger"] == "imu" and self.p["sync_tolerance"] >= 0 and stamp is not None
-                and js is not None
-                and js.stamp != self.policy_reading and self.once_per_period() and self._synced(stamp))
+                and js is not None and js.stamp != self.policy_reading and self.once_per_period()
+                and self._synced(stamp))
 
     def on_timer(self, now: int) -> list:
         """A timer tick (``trigger`` timer): one substep on the latest readings."""
