@@ -152,10 +152,10 @@ class ControlLoop:
         self.last, self.last_time = None, 0
         self.counts = {k: 0 for k in ("substeps", "control_steps", "holds", "unmatched_control_steps",
                                       "realigned_control_steps")}
-        # the readings' instants: IMU messages accepted, that count at the latest new joint state, the last gaps
+        # the readings' instants: the count of IMU messages accepted at the latest new joint state, the last gaps
         # between new joint states in IMU messages, the joint state stamp the last policy step read, and whether the
         # next substep is a policy step on readings of the substep before it (they came after its IMU message)
-        self.imu_seen, self._imu_at_reading, self.reading_gaps = 0, None, deque(maxlen=8)
+        self._imu_at_reading, self.reading_gaps = None, deque(maxlen=8)
         self.policy_reading, self.late = None, False
         self.last_stamp, self.last_sub = None, None  # the last substep's IMU stamp and its index
         self.received = dict.fromkeys(("joint_states", "imu", "odom", "terrain", "goal"), 0)
@@ -195,8 +195,8 @@ class ControlLoop:
         last = self.latest.get("joint_states")
         if last is None or stamp != last.stamp:  # a new instant: IMU messages since the previous one
             if self._imu_at_reading is not None:
-                self.reading_gaps.append(self.imu_seen - self._imu_at_reading)
-            self._imu_at_reading = self.imu_seen
+                self.reading_gaps.append(self.received["imu"] - self._imu_at_reading)
+            self._imu_at_reading = self.received["imu"]
         self._store("joint_states", (pos[idx], vel[idx]), stamp, now)
         return None
 
@@ -208,7 +208,6 @@ class ControlLoop:
         if abs(np.linalg.norm(q) - 1.0) > 0.01:
             return self.refuse("imu", f"the orientation's norm is {np.linalg.norm(q):.3f}, not 1", now)
         self._store("imu", (q, w), stamp, now)
-        self.imu_seen += 1
         return None
 
     def odometry(self, frame: str, position, quat, stamp: int, now: int) -> str | None:
