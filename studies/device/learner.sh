@@ -37,19 +37,22 @@ if [ "${1:-}" = collect ]; then   # logs, configs, timings, results (not the oth
 fi
 ARMS=${ARMS:-actor} SEEDS=${SEEDS:-1 2} VAL_ROUNDS=${VAL_ROUNDS:-500} KEPT=${KEPT-recipe_s1 recipe_s2}
 EXTRA=""; [ "${AVERAGE:-0}" = 1 ] && EXTRA="--agent.validation_average true"
-flags() {   # the arms' flags, as studies/learner/build.py ARM_FLAGS names them
-  case $1 in
-    recipe) echo "" ;;
-    critic) echo "--env.obs.critic true" ;;
-    actor) echo "--env.obs.gyro true --env.obs.last_action true" ;;
-    *) echo "learner.sh: no arm $1" >&2; return 1 ;;
-  esac
-}
+flags() { python studies/learner/build.py --flags "$1"; }   # an arm's train.py flags (build.py ARM_FLAGS)
 evaluate() {   # NAME TERRAIN ROUNDS CHECKPOINT [MORE evaluate FLAGS]
   local name=$1 t=$2 rounds=$3 ckpt=$4; shift 4
   python -m hexnewton.apps.evaluate --controllers cpg_rl --checkpoint "cpg_rl=$ckpt" --terrains "$t" \
     --rounds "$rounds" --out "$EVALS/${name}_$t" --no-progress "$@" > "$EVALS/${name}_$t.log" 2>&1
   echo "exit $?" >> "$EVALS/${name}_$t.log"
+}
+test_rounds() {   # NAME=CHECKPOINT...: each (one without its checkpoint is said and left out), the shipped policy and
+  local t spec   # the fixed CPG on 1000 test rounds per terrain (the evaluate default seed), all at once
+  for t in complex rugged stepped; do
+    evaluate gate_shipped "$t" 1000 results/policies/cpg_rl_complex.pt --controllers cpg cpg_rl &
+    for spec in "$@"; do
+      if [ -f "${spec#*=}" ]; then evaluate "${spec%%=*}" "$t" 1000 "${spec#*=}" &
+      else echo "learner.sh: ${spec%%=*} has no checkpoint ${spec#*=}: left out of the $t test rounds"; fi
+    done
+  done
 }
 echo "$(date +%T) the learner's queue: arms '$ARMS' on seeds '$SEEDS', kept results '$KEPT'"
 [ -n "${FAIR_JOBS:-}" ] && { JOBS=$FAIR_JOBS PER_GPU=4 bash studies/device/fair_comparison.sh > "$QUEUE/fair.log" 2>&1 & }
@@ -64,12 +67,8 @@ if [ "${SHIPPED:-0}" = 1 ]; then
   done
 fi
 if [ -n "${TEST_KEPT:-}" ]; then
-  for t in complex rugged stepped; do
-    evaluate gate_shipped "$t" 1000 results/policies/cpg_rl_complex.pt --controllers cpg cpg_rl &
-    for name in $TEST_KEPT; do
-      evaluate "$name" "$t" 1000 "studies/learner/runs/$name/policy.pt" &
-    done
-  done
+  # shellcheck disable=SC2046
+  test_rounds $(for name in $TEST_KEPT; do echo "$name=studies/learner/runs/$name/policy.pt"; done)
 fi
 for seed in $SEEDS; do
   [ -n "$ARMS" ] || break
@@ -98,11 +97,6 @@ for seed in 1 2 3; do
   echo "$(date +%T) gate_s$seed: train exit $?"
   OUT=$RUNS_OUT bash studies/device/gpu.sh pack "gate_s$seed"
 done
-for t in complex rugged stepped; do
-  evaluate gate_shipped "$t" 1000 results/policies/cpg_rl_complex.pt --controllers cpg cpg_rl &
-  for seed in 1 2 3; do
-    [ -f "$KEEP/gate_s$seed.pt" ] && evaluate "gate_s$seed" "$t" 1000 "$KEEP/gate_s$seed.pt" &
-  done
-done
+test_rounds "gate_s1=$KEEP/gate_s1.pt" "gate_s2=$KEEP/gate_s2.pt" "gate_s3=$KEEP/gate_s3.pt"
 wait
 echo "$(date +%T) the learner's queue ended"

@@ -27,7 +27,7 @@ ARMS = {"recipe": "the complex recipe (`--task complex`)",
         "critic": "+ the asymmetric critic (`--env.obs.critic true`)",
         "actor": "+ the gyro and the last actions in the actor's observation (`--env.obs.gyro true "
                  "--env.obs.last_action true`)"}
-#: each arm's train.py flags beside ``--task complex`` (studies/device/learner.sh passes the same)
+#: each arm's train.py flags beside ``--task complex`` (studies/device/learner.sh reads them: ``--flags ARM``)
 ARM_FLAGS = {"recipe": "", "critic": "--env.obs.critic true",
              "actor": "--env.obs.gyro true --env.obs.last_action true"}
 TERRAINS = ("rugged", "stepped", "complex")
@@ -375,7 +375,14 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--add", metavar="LEASE", help="a lease's folder (runs/, evals/) to copy into the study first")
     p.add_argument("--choose", action="store_true", help="print the train.py flags of the changes that paid, and stop")
     p.add_argument("--runs", nargs="*", default=[], metavar="DIR", help="with --choose: more runs (NAME.log each)")
+    p.add_argument("--flags", metavar="ARM", help="print an arm's train.py flags, and stop")
     args = p.parse_args(argv)
+    if args.flags is not None:
+        if args.flags not in ARM_FLAGS:
+            print(f"build.py: no arm {args.flags!r} (the arms: {', '.join(ARM_FLAGS)})", file=sys.stderr)
+            return 2
+        print(ARM_FLAGS[args.flags])
+        return 0
     if args.choose:
         try:
             print(choose(args.runs))
