@@ -23,13 +23,13 @@ import shutil
 import sys
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-ARMS = {"recipe": "the complex recipe (`--task complex`)",
-        "critic": "+ the asymmetric critic (`--env.obs.critic true`)",
-        "actor": "+ the gyro and the last actions in the actor's observation (`--env.obs.gyro true "
-                 "--env.obs.last_action true`)"}
 #: each arm's train.py flags beside ``--task complex`` (studies/device/learner.sh reads them: ``--flags ARM``)
 ARM_FLAGS = {"recipe": "", "critic": "--env.obs.critic true",
              "actor": "--env.obs.gyro true --env.obs.last_action true"}
+#: each arm in words, with its flags
+ARMS = {arm: f"{what} (`{ARM_FLAGS[arm] or '--task complex'}`)" for arm, what in (
+    ("recipe", "the complex recipe"), ("critic", "+ the asymmetric critic"),
+    ("actor", "+ the gyro and the last actions in the actor's observation"))}
 TERRAINS = ("rugged", "stepped", "complex")
 METRICS = ("success_3m", "fall_rate", "fall_rate_before_goal", "pitch_var_deg2", "roll_var_deg2")
 #: the gate's lines (1000 test rounds per terrain, deterministic action)
