@@ -15,6 +15,7 @@ import sys
 import time
 
 import pytest
+from test_docs import _strip_comment  # the documents' own reading of a command and its comment
 
 pytestmark = pytest.mark.slow
 
@@ -34,9 +35,9 @@ def quick_start() -> list[tuple[str, str]]:
     block = re.search(r"## Quick start\n+```bash\n(.*?)\n```", text, re.S).group(1)
     out = []
     for line in block.replace("\\\n", " ").splitlines():
-        command, _, comment = line.partition("#")
-        if command.strip():
-            out.append((" ".join(command.split()), comment.strip()))
+        command, comment = _strip_comment(line.strip())
+        if command:
+            out.append((" ".join(command.split()), comment))
     return out
 
 
