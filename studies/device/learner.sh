@@ -14,7 +14,8 @@
 #    per terrain (the evaluate default seed), all at once.
 # With TEST_KEPT="gate_s1 gate_s2 gate_s3" (say ARMS= KEPT= beside it) the study's kept results of those names
 # (studies/learner/runs/NAME/policy.pt), the shipped policy and the fixed CPG go on 1000 test rounds per terrain first:
-# a gate whose test evaluations did not finish in its lease.
+# a gate whose test evaluations did not finish in its lease ($TEST_TERRAINS: the terrains still missing, default all
+# three).
 # With AVERAGE=1 every run of the lease also validates the weight average of its candidates
 # (`--agent.validation_average true`: one more candidate; the study compares arms on the saved checkpoints).
 # Then, from the next calls: `bash studies/device/gpu.sh poll 560` and `bash studies/device/learner.sh collect`
@@ -45,8 +46,8 @@ evaluate() {   # NAME TERRAIN ROUNDS CHECKPOINT [MORE evaluate FLAGS]
   echo "exit $?" >> "$EVALS/${name}_$t.log"
 }
 test_rounds() {   # NAME=CHECKPOINT...: each (one without its checkpoint is said and left out), the shipped policy and
-  local t spec   # the fixed CPG on 1000 test rounds per terrain (the evaluate default seed), all at once
-  for t in complex rugged stepped; do
+  local t spec   # the fixed CPG on 1000 test rounds per terrain of $TEST_TERRAINS (the evaluate default seed), at once
+  for t in ${TEST_TERRAINS:-complex rugged stepped}; do
     evaluate gate_shipped "$t" 1000 results/policies/cpg_rl_complex.pt --controllers cpg cpg_rl &
     for spec in "$@"; do
       if [ -f "${spec#*=}" ]; then evaluate "${spec%%=*}" "$t" 1000 "${spec#*=}" &

@@ -25,11 +25,13 @@ import sys
 HERE = os.path.dirname(os.path.abspath(__file__))
 #: each arm's train.py flags beside ``--task complex`` (studies/device/learner.sh reads them: ``--flags ARM``)
 ARM_FLAGS = {"recipe": "", "critic": "--env.obs.critic true",
-             "actor": "--env.obs.gyro true --env.obs.last_action true"}
+             "actor": "--env.obs.gyro true --env.obs.last_action true",
+             "both": "--env.obs.critic true --env.obs.gyro true --env.obs.last_action true"}
 #: each arm in words, with its flags
 ARMS = {arm: f"{what} (`{ARM_FLAGS[arm] or '--task complex'}`)" for arm, what in (
     ("recipe", "the complex recipe"), ("critic", "+ the asymmetric critic"),
-    ("actor", "+ the gyro and the last actions in the actor's observation"))}
+    ("actor", "+ the gyro and the last actions in the actor's observation"),
+    ("both", "+ the asymmetric critic and the actor's gyro and last actions together"))}
 TERRAINS = ("rugged", "stepped", "complex")
 METRICS = ("success_3m", "fall_rate", "fall_rate_before_goal", "pitch_var_deg2", "roll_var_deg2")
 #: the gate's lines (1000 test rounds per terrain, deterministic action)
@@ -221,7 +223,7 @@ def gate(runs: dict, test: dict) -> dict | None:
     cpg = test["fixed_cpg"].get("rugged", {})
     for v in ("pitch_var_deg2", "roll_var_deg2"):
         vals = [r["result_on_test"].get("rugged", {}).get(v) for r in seeds.values()]
-        lines[f"rugged {v[:-5]} variance < 0.8x the fixed CPG's"] = None if cpg.get(v) is None else _line(
+        lines[f"rugged {v.split('_')[0]} variance < 0.8x the fixed CPG's"] = None if cpg.get(v) is None else _line(
             vals, lambda x, v=v: all(y < GATE["rugged_var_vs_fixed_cpg"] * cpg[v] for y in x))
     lines["<= 240 s from process start, validation included"] = _line(
         [r["wall_s"] for r in seeds.values()], lambda v: max(v) <= GATE["wall_s_max"])
@@ -241,7 +243,14 @@ def choose(run_dirs: list[str]) -> str:
     arms = summarise(runs)
     if "recipe" not in arms:
         raise ValueError("the study holds no recipe runs to compare with")
-    return " ".join(ARM_FLAGS[a] for a in ARM_FLAGS if a != "recipe" and a in arms and pays(arms[a], arms["recipe"]))
+    paid = [a for a in ARM_FLAGS if a != "recipe" and a in arms and pays(arms[a], arms["recipe"])]
+    flags: list[list[str]] = []   # each flag with its values, once: arms that paid may share flags
+    for word in " ".join(ARM_FLAGS[a] for a in paid).split():
+        if word.startswith("--"):
+            flags.append([word])
+        else:
+            flags[-1].append(word)
+    return " ".join(dict.fromkeys(" ".join(f) for f in flags))
 
 
 def pct(x) -> str:

@@ -49,6 +49,11 @@ def test_a_change_pays_only_with_more_goals_and_no_more_falls():
         "--env.obs.critic", "--env.obs.gyro", "--env.obs.last_action", "true"}
 
 
+def test_arms_that_paid_give_each_flag_once(monkeypatch):
+    monkeypatch.setattr(build, "pays", lambda arm, recipe: True)   # critic, actor and both: their flags overlap
+    assert build.choose([]) == "--env.obs.critic true --env.obs.gyro true --env.obs.last_action true"
+
+
 def test_the_gate_lines_read_the_test_rounds():
     def per(s, f, pv=10.0):
         return {t: {"success_3m": s, "fall_rate_before_goal": f, "pitch_var_deg2": pv, "roll_var_deg2": pv}
