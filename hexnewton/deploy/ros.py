@@ -21,6 +21,7 @@ from __future__ import annotations
 import gc
 import json
 import os
+import signal
 import time
 
 from hexnewton.deploy.control_loop import PARAMETERS, ControlLoop, check_parameters, percentiles_ms
@@ -204,6 +205,10 @@ def realtime_priority(priority: int) -> None:
             raise ValueError(f"real-time priority {priority}: {exc} (needs CAP_SYS_NICE or an rtprio limit)") from None
 
 
+#: how often the node's spin looks for a stop request while no message comes [s]
+STOP_POLL_S = 0.05
+
+
 def run_node(bundle: str, ros_args: list[str], stats: str | None = None, priority: int = 0) -> int:
     """``hexnewton-ros node``: the node spun until Ctrl-C (SIGINT or SIGTERM), then its counters (and every latency,
     in ``stats``, a JSON file) and a clean exit. ``priority`` > 0: the process (and the middleware's threads it
@@ -214,9 +219,11 @@ def run_node(bundle: str, ros_args: list[str], stats: str | None = None, priorit
     realtime_priority(priority)
     rclpy = import_rclpy()
     from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+    from rclpy.signals import SignalHandlerOptions
 
-    try:
-        rclpy.init(args=["hexnewton_ros", "--ros-args", *ros_args] if ros_args else None)
+    try:  # the node's own SIGINT / SIGTERM handling (below), not rclpy's
+        rclpy.init(args=["hexnewton_ros", "--ros-args", *ros_args] if ros_args else None,
+                   signal_handler_options=SignalHandlerOptions.NO)
     except Exception as exc:  # noqa: BLE001 - rcl's parse error
         raise ValueError(f"bad ROS arguments {' '.join(ros_args)!r}: {str(exc).splitlines()[0]}") from None
     node = None
@@ -226,9 +233,15 @@ def run_node(bundle: str, ros_args: list[str], stats: str | None = None, priorit
         spinner.add_node(node.node)
         gc.collect()  # what is built so far, then out of the collector's scans: a full collection of the modules,
         gc.freeze()  # onnxruntime's session and the node stops the node for 15-30 ms on a 2-core CPU
+        # Ctrl-C (SIGINT) or SIGTERM asks the loop to stop between callbacks: a KeyboardInterrupt raised inside one
+        # (rclpy's handling) can leave the executor's objects half built, and their finalizers print tracebacks
+        stop: list[int] = []
+        for sig in (signal.SIGINT, signal.SIGTERM):
+            signal.signal(sig, lambda signum, frame: stop.append(signum))
         try:
-            spinner.spin()
-        except (KeyboardInterrupt, ExternalShutdownException):
+            while not stop and rclpy.ok():
+                spinner.spin_once(timeout_sec=STOP_POLL_S)
+        except ExternalShutdownException:
             pass
         s = node.loop.stats()
         lat = s["latency_ms"]
