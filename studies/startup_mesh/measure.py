@@ -119,12 +119,12 @@ def _report(rows: list[dict], command: str, machine: str) -> str:
         "",
         "`collision` \"mesh_boxes\" is what the tasks use (the rugged blocks as meshes, the strips as boxes; with the",
         "curricula's 10 lanes the blocks make one mesh of nearly the whole grid); \"mesh\" is one mesh of the whole",
-        "grid. `make_terrain` builds the whole-grid mesh (`Terrain.mesh`, the last column) in both modes, although",
-        "\"mesh_boxes\" never adds it to the builder: with the switch on that unused build costs about as much as the",
-        "part meshes themselves (add_to_builder wall s, off -> on: "
+        "grid. The whole-grid mesh (`Terrain.mesh`, the last column) is built on first use: \"mesh_boxes\" never",
+        "adds it to the builder, so a task's start-up does not pay that column. The part meshes (add_to_builder wall s,",
+        "off -> on: "
         + ", ".join(f"{t} {by[(t, 'mesh_boxes', False)]['add_to_builder_s']} -> {by[(t, 'mesh_boxes', True)]['add_to_builder_s']}"
                     for t in ("complex", "rugged") if (t, "mesh_boxes", False) in by)
-        + "). Building `Terrain.mesh` only on demand would save it (and 1-2 s today).",
+        + ").",
         "",
         "Cells lowered by the watertight mesh (neighbours closer than 1 um put at the lower height, <= 1e-6 m): "
         + ", ".join(f"{t} {by[(t, 'mesh', True)]['merged_cells']}" for t in ("complex", "rugged", "stepped")

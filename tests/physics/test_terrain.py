@@ -359,6 +359,17 @@ def test_generate() -> None:
     np.testing.assert_array_equal(small.vertices, grid_to_mesh(grid)[0])
 
 
+def test_the_whole_grid_mesh_is_built_only_when_used() -> None:
+    """mesh_boxes (the tasks' collision) adds its own parts: the whole-grid mesh stays unbuilt; asked for, it is the
+    grid's mesh, built once."""
+    cfg = TerrainConfig(name="rugged", seed=3, x_max=0.0, width=0.4)
+    terrain = make_terrain(cfg)
+    terrain.add_to_builder(newton.ModelBuilder(), newton.ModelBuilder.ShapeConfig())
+    assert "mesh" not in vars(terrain)
+    np.testing.assert_array_equal(terrain.mesh.vertices, grid_to_mesh(build_height_grid(cfg))[0])
+    assert terrain.mesh is terrain.mesh
+
+
 def test_add_to_builder_and_finalize() -> None:
     shape_cfg = newton.ModelBuilder.ShapeConfig()
     builder = newton.ModelBuilder()

@@ -1,8 +1,8 @@
 """The paper's terrains (Huang et al. 2025, §3.1): flat, rugged, stepped and complex.
 
 ``make_terrain(cfg)`` builds a :class:`Terrain`: the exact piecewise-constant height grid
-(:mod:`.heightmap`), its compact closed collision mesh (:mod:`.mesh`, ``None`` for flat, which is an
-infinite ground plane at z = 0; or boxes plus meshes of the same surface, :mod:`.parts`) and helpers to add
+(:mod:`.heightmap`), its compact closed collision mesh (:mod:`.mesh`, built on first use; ``None`` for flat, which is
+an infinite ground plane at z = 0; or boxes plus meshes of the same surface, :mod:`.parts`) and helpers to add
 it to a ``newton.ModelBuilder`` and to query heights on the host. The grids and their box decomposition load without
 Warp or Newton (the MuJoCo model, :mod:`hexnewton.deploy.mjcf`, is built from them). :mod:`.query` holds the float64 height
 queries (the MDP's in-kernel ones are their Warp twins, ``hexnewton/mdp/terms/ground.py``).
@@ -11,6 +11,7 @@ queries (the MDP's in-kernel ones are their Warp twins, ``hexnewton/mdp/terms/gr
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
+from functools import cached_property
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -52,8 +53,14 @@ class Terrain:
     name: str
     cfg: TerrainConfig
     grid: HeightGrid
-    mesh: newton.Mesh | None
     boxes: BoxIndex | None = None  # with collision "boxes": the boxes added by add_to_builder
+
+    @cached_property
+    def mesh(self) -> newton.Mesh | None:
+        """The whole grid as one closed triangle mesh (None for flat), built on first use: collision "mesh" adds it,
+        "mesh_boxes" and "boxes" build their own shapes from the grid and never need it (a 1-5 s build on the
+        curricula's grids)."""
+        return None if self.name == "flat" else _mesh_from_grid(self.grid, self.cfg.watertight)
 
     def add_to_builder(self, builder: newton.ModelBuilder, cfg: newton.ModelBuilder.ShapeConfig) -> int:
         """Add the terrain as static shapes (body -1); returns the index of the first one.
@@ -65,7 +72,7 @@ class Terrain:
         (:mod:`~hexnewton.physics.terrain.boxes`, consecutive shapes, then one box far below: :attr:`boxes` holds
         them, their pairs with the robot shapes come from :mod:`~hexnewton.physics.terrain.box_pairs`).
         """
-        if self.mesh is None:
+        if self.name == "flat":
             return builder.add_ground_plane(cfg=cfg)
         if self.cfg.collision == "mesh_boxes":
             band = round(self.cfg.lane_width / self.grid.res) if self.cfg.levels else None
@@ -90,9 +97,7 @@ def _mesh_from_grid(grid: HeightGrid, watertight: bool = False) -> newton.Mesh:
 
 def make_terrain(cfg: TerrainConfig) -> Terrain:
     """Build terrain ``cfg.name``; raises ``ValueError`` for unknown names or invalid parameters."""
-    grid = build_height_grid(cfg)
-    mesh = None if cfg.name == "flat" else _mesh_from_grid(grid, cfg.watertight)
-    return Terrain(name=cfg.name, cfg=cfg, grid=grid, mesh=mesh)
+    return Terrain(name=cfg.name, cfg=cfg, grid=build_height_grid(cfg))
 
 
 def generate(name: str, seed: int = 0, **overrides) -> newton.Mesh | None:
