@@ -26,12 +26,18 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 #: each arm's train.py flags beside ``--task complex`` (studies/device/learner.sh reads them: ``--flags ARM``)
 ARM_FLAGS = {"recipe": "", "critic": "--env.obs.critic true",
              "actor": "--env.obs.gyro true --env.obs.last_action true",
-             "both": "--env.obs.critic true --env.obs.gyro true --env.obs.last_action true"}
+             "both": "--env.obs.critic true --env.obs.gyro true --env.obs.last_action true",
+             # the shipped policy's schedule (hexnewton/tasks LONG_STABLE_STAGES): 1062 iterations, stages at 382, 744
+             "long": "--max_iterations 1062 --agent.stages ((382,{'posture_reflex':2.0,'w_tilt':15.0,'w_ang_vel':0.1}),"
+                     "(744,{'w_tilt':40.0,'w_ang_vel':0.3}))",
+             "envs8192": "--num_envs 8192"}
 #: each arm in words, with its flags
 ARMS = {arm: f"{what} (`{ARM_FLAGS[arm] or '--task complex'}`)" for arm, what in (
     ("recipe", "the complex recipe"), ("critic", "+ the asymmetric critic"),
     ("actor", "+ the gyro and the last actions in the actor's observation"),
-    ("both", "+ the asymmetric critic and the actor's gyro and last actions together"))}
+    ("both", "+ the asymmetric critic and the actor's gyro and last actions together"),
+    ("long", "the shipped policy's schedule: 1062 iterations, the stages at 382 and 744 (3.5x the env-steps)"),
+    ("envs8192", "8192 envs at the same 300 iterations (2x the env-steps)"))}
 TERRAINS = ("rugged", "stepped", "complex")
 METRICS = ("success_3m", "fall_rate", "fall_rate_before_goal", "pitch_var_deg2", "roll_var_deg2")
 #: the gate's lines (1000 test rounds per terrain, deterministic action)

@@ -51,6 +51,7 @@ def test_a_change_pays_only_with_more_goals_and_no_more_falls():
 
 def test_arms_that_paid_give_each_flag_once(monkeypatch):
     monkeypatch.setattr(build, "pays", lambda arm, recipe: True)   # critic, actor and both: their flags overlap
+    monkeypatch.setattr(build, "ARM_FLAGS", {a: build.ARM_FLAGS[a] for a in ("recipe", "critic", "actor", "both")})
     assert build.choose([]) == "--env.obs.critic true --env.obs.gyro true --env.obs.last_action true"
 
 
