@@ -205,10 +205,6 @@ def realtime_priority(priority: int) -> None:
             raise ValueError(f"real-time priority {priority}: {exc} (needs CAP_SYS_NICE or an rtprio limit)") from None
 
 
-#: how often the node's spin looks for a stop request while no message comes [s]
-STOP_POLL_S = 0.05
-
-
 def run_node(bundle: str, ros_args: list[str], stats: str | None = None, priority: int = 0) -> int:
     """``hexnewton-ros node``: the node spun until Ctrl-C (SIGINT or SIGTERM), then its counters (and every latency,
     in ``stats``, a JSON file) and a clean exit. ``priority`` > 0: the process (and the middleware's threads it
@@ -239,8 +235,8 @@ def run_node(bundle: str, ros_args: list[str], stats: str | None = None, priorit
         for sig in (signal.SIGINT, signal.SIGTERM):
             signal.signal(sig, lambda signum, frame: stop.append(signum))
         try:
-            while not stop and rclpy.ok():
-                spinner.spin_once(timeout_sec=STOP_POLL_S)
+            while not stop and rclpy.ok():  # the watchdog's timer wakes the wait while no message comes
+                spinner.spin_once()  # (no timeout: rclpy would build a timer for every wait)
         except ExternalShutdownException:
             pass
         s = node.loop.stats()
