@@ -39,6 +39,8 @@ PARAMETERS = {
     "command_reliability": ("reliable", "the targets' publishers: reliable or best_effort"),
     "goal_durability": ("volatile", "the goal's subscription: volatile or transient_local"),
     "trigger": ("imu", "a CPG substep per IMU message (imu) or per timer tick at substep_period (timer)"),
+    "executor": ("single_threaded", "rclpy's SingleThreadedExecutor (single_threaded) or its EventsExecutor (events: "
+                 "rclpy.experimental, the waits in C++)"),
     "substep_period": (0.0, "the CPG substep [s] (0: the bundle's; another value is refused)"),
     "control_period": (0.0, "the policy's period [s] (0: the bundle's; another value is refused)"),
     "sensor_timeout": (0.1, "a reading older than this [s] holds the standing pose"),
@@ -49,7 +51,8 @@ PARAMETERS = {
     "diagnostics_period": (1.0, "the diagnostics' period [s]"),
 }
 CHOICES = {"sensor_reliability": ("best_effort", "reliable"), "command_reliability": ("reliable", "best_effort"),
-           "goal_durability": ("volatile", "transient_local"), "trigger": ("imu", "timer")}  # fmt: skip
+           "goal_durability": ("volatile", "transient_local"), "trigger": ("imu", "timer"),
+           "executor": ("single_threaded", "events")}  # fmt: skip
 #: refusals of one topic are logged the first time, then at most once per this many seconds
 REFUSAL_LOG_PERIOD = 5.0
 

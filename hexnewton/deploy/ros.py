@@ -205,6 +205,10 @@ def realtime_priority(priority: int) -> None:
             raise ValueError(f"real-time priority {priority}: {exc} (needs CAP_SYS_NICE or an rtprio limit)") from None
 
 
+#: how often the EventsExecutor's spin returns to look for a stop request [s]
+STOP_POLL_S = 0.05
+
+
 def run_node(bundle: str, ros_args: list[str], stats: str | None = None, priority: int = 0) -> int:
     """``hexnewton-ros node``: the node spun until Ctrl-C (SIGINT or SIGTERM), then its counters (and every latency,
     in ``stats``, a JSON file) and a clean exit. ``priority`` > 0: the process (and the middleware's threads it
@@ -225,7 +229,12 @@ def run_node(bundle: str, ros_args: list[str], stats: str | None = None, priorit
     node = None
     try:
         node = ControllerNode(bundle, cli_args=None)
-        spinner = SingleThreadedExecutor()  # (rclpy 9.1.2's EventsExecutor.spin stops on neither SIGINT nor SIGTERM)
+        if node.loop.p["executor"] == "events":
+            from rclpy.experimental import EventsExecutor
+
+            spinner = EventsExecutor()
+        else:
+            spinner = SingleThreadedExecutor()
         spinner.add_node(node.node)
         gc.collect()  # what is built so far, then out of the collector's scans: a full collection of the modules,
         gc.freeze()  # onnxruntime's session and the node stops the node for 15-30 ms on a 2-core CPU
@@ -235,8 +244,11 @@ def run_node(bundle: str, ros_args: list[str], stats: str | None = None, priorit
         for sig in (signal.SIGINT, signal.SIGTERM):
             signal.signal(sig, lambda signum, frame: stop.append(signum))
         try:
-            while not stop and rclpy.ok():  # the watchdog's timer wakes the wait while no message comes
-                spinner.spin_once()  # (no timeout: rclpy would build a timer for every wait)
+            # SingleThreadedExecutor: no timeout (it would build a timer for every wait), the watchdog's timer wakes
+            # its wait while no message comes; EventsExecutor waits in C++ past Python's signal handler, so a timeout
+            timeout = STOP_POLL_S if node.loop.p["executor"] == "events" else None
+            while not stop and rclpy.ok():
+                spinner.spin_once(timeout_sec=timeout)
         except ExternalShutdownException:
             pass
         s = node.loop.stats()

@@ -40,6 +40,7 @@ sys.path.insert(0, ROOT)
 BUNDLE = "results/controllers/cpg_rl_complex"
 PY = [sys.executable, "-m", "hexnewton.apps.ros"]
 LOCKSTEP = None  # the node's parameters for the lockstep robot (hexnewton.analysis.ros_robot), set in main
+EXECUTOR = "single_threaded"  # the node's executor parameter (--executor), set in main
 #: one ROS domain for the study's processes (101: outside the tests' 20-99), discovery on this machine only
 ENV = dict(os.environ, ROS_DOMAIN_ID=os.environ.get("ROS_DOMAIN_ID", "101"), ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST")
 BINS = [0, 0.5, 1, 1.5, 2, 3, 4, 5, 7.5, 10, 15, 20, 50, 1e9]
@@ -51,7 +52,7 @@ KEYS = {"realtime": ("realtime", "realtime_fifo"), "replay": ("replay", "replay_
 
 def node(stats: str, params: list[str], priority: int = 0):
     cmd = PY + ["node", BUNDLE, "--stats", stats] + (["--priority", str(priority)] if priority else [])
-    return subprocess.Popen(cmd + ["--ros-args", *params], cwd=ROOT, env=ENV, stdout=subprocess.PIPE,
+    return subprocess.Popen(cmd + ["--ros-args", *params, "-p", f"executor:={EXECUTOR}"], cwd=ROOT, env=ENV, stdout=subprocess.PIPE,
                             stderr=subprocess.STDOUT, text=True)  # fmt: skip
 
 
@@ -410,6 +411,8 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--replays", type=positive_int, default=5, help="replays of the bag, each to a fresh node")
     p.add_argument("--priority", type=int, default=50, help="also the latency runs with the node at this real-time "
                    "FIFO priority (0: not)")
+    p.add_argument("--executor", choices=("single_threaded", "events"), default="single_threaded",
+                   help="the node's executor parameter (default: the node's default)")
     p.add_argument("--out", default=os.path.dirname(os.path.abspath(__file__)))
     args = p.parse_args(argv)
     check_priority(args.priority)
@@ -426,7 +429,8 @@ def main(argv: list[str] | None = None) -> int:
         raise ValueError(f"cannot write {args.out}")
     from hexnewton.analysis.ros_robot import LOCKSTEP_NODE_PARAMETERS
 
-    global LOCKSTEP
+    global LOCKSTEP, EXECUTOR
+    EXECUTOR = args.executor
     LOCKSTEP = [w for k, v in LOCKSTEP_NODE_PARAMETERS.items() for w in ("-p", f"{k}:={v}")]
     command = "python " + " ".join([os.path.relpath(os.path.abspath(__file__), ROOT)] + list(sys.argv[1:]
                                                                                           if argv is None else argv))
@@ -438,7 +442,7 @@ def main(argv: list[str] | None = None) -> int:
     res = merge(old, new, prov)
     res.update(bundle=BUNDLE)
     meta = {"machine": f"{platform.processor() or platform.machine()}, {os.cpu_count()} cores, no GPU",
-            "ROS 2": "rclpy 9.1.2 (Kilted wheels), Fast DDS, SingleThreadedExecutor, loopback",
+            "ROS 2": f"rclpy 9.1.2 (Kilted wheels), Fast DDS, the node's executor {args.executor}, loopback",
             "MuJoCo": mujoco.__version__, "parts run by the last command": ", ".join(args.parts)}  # fmt: skip
     res["meta"] = meta
     with open(path, "w") as f:
