@@ -49,6 +49,7 @@ def test_parameters_are_checked():
     assert p["sensor_timeout"] == PARAMETERS["sensor_timeout"][0] and p["trigger"] == "imu"
     assert check_parameters({"bundle": BUNDLE, "sensor_timeout": 1})["sensor_timeout"] == 1.0  # an int for a float
     for bad, words in [({"sensor_timeout": "fast"}, "expected float"), ({"trigger": "clock"}, "not one of"),
+                       ({"executor": "multi_threaded"}, "not one of"),
                        ({"sensor_timeout": 0.0}, "positive"), ({"substep_period": 0.0025}, "bundle's policy"),
                        ({"no_such": 1}, "unknown parameter"), ({"sensor_depth": 2.5}, "expected int")]:  # fmt: skip
         with pytest.raises(ValueError, match=words):
@@ -296,6 +297,16 @@ def test_node_and_mujoco_robot_walk_in_lockstep_as_in_process(ros_env, tmp_path)
         assert reader.connections[0].digest is not None
     assert counts["imu"] == 1200 and counts["joint_states"] == 300 and counts["joint_trajectory"] >= 1200
     assert os.path.isfile(bag / "metadata.yaml") and list(bag.glob("*.mcap"))
+
+
+def test_node_on_the_events_executor_stops_on_ctrl_c(ros_env):
+    """rclpy's EventsExecutor waits in C++: the node's spin returns to look for Ctrl-C, and the node stops cleanly."""
+    node = _node(ros_env, "-p", "executor:=events")
+    for line in node.stderr:  # spinning: its watchdog says why it holds
+        if "holding the standing pose" in line:
+            break
+    out, _ = _stop(node)
+    assert "stopped after 0 substeps" in out
 
 
 def test_node_faults_over_ros(ros_env):
