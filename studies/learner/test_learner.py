@@ -84,3 +84,15 @@ def test_the_average_candidate_is_parsed_and_left_out_of_the_arms_choice():
     cands = build.parse_log(log)["candidates"]
     assert [c["file"] for c in cands][-1] == "model_average.pt" and cands[-1]["kind"].startswith("average of")
     assert build.plain_choice(cands)["file"] == "model_250.pt"
+
+
+def test_the_long_arm_is_the_shipped_schedule():
+    """The long arm's flags, as train.py's parser reads them, are the tasks' 1062-iteration schedule."""
+    from hexnewton.apps.cli import ArgumentParser, add_config_args
+    from hexnewton.tasks import LONG_STABLE_ITERATIONS, LONG_STABLE_STAGES, TASKS
+
+    p = ArgumentParser(prog="train.py")
+    add_config_args(p, "agent", TASKS["complex"].agent)
+    p.add_argument("--max_iterations", type=int)
+    args = vars(p.parse_args(build.ARM_FLAGS["long"].split()))
+    assert args["override:agent:stages"] == LONG_STABLE_STAGES and args["max_iterations"] == LONG_STABLE_ITERATIONS
