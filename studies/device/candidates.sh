@@ -2,7 +2,7 @@
 # Recipe candidates in one device call (studies/device/README.md, "A lease's work as one queue"): one pipeline per
 # GPU, all at once, each `python train.py ARGS`, then `gpu.sh pack` (its run to $OUT/run_NAME.tgz, its result to
 # $KEEP/NAME.pt), then its result on validation rounds ($VAL_ROUNDS per terrain, `--seed 3000`, deterministic action, one evaluate
-# job per terrain of $VAL_TERRAINS on the same GPU), or with `points` the named capability points (capability.sh
+# job per terrain of $VAL_TERRAINS on the same GPU; none with VAL_ROUNDS=0), or with `points` the named capability points (capability.sh
 # points, $POINT_ROUNDS each, `--seed 3000`). Everything ends by $LIMIT seconds after the start (evaluations are cut
 # off there), and the evaluations ($EVALS, default /root/evals) are packed into $OUT/evals.tgz, so the call brings
 # back whatever finished: a machine given back after the call keeps nothing. With S2S_ROUNDS set, a validation
@@ -27,6 +27,7 @@ pipeline() {
   echo "$name: train exit $? at $SECONDS s"
   bash "$here/gpu.sh" pack "$name"
   [ -f "$KEEP/$name.pt" ] || return 0
+  [ "${VAL_ROUNDS:-1000}" = 0 ] && { echo "$name: no evaluations (VAL_ROUNDS=0)"; return 0; }
   if [ "$what" = points ]; then
     CUDA_VISIBLE_DEVICES=$gpu RUNS=$EVALS FOREGROUND=1 MAX_JOBS=6 POINT_ROUNDS=${POINT_ROUNDS:-500} \
       EVAL_ARGS="--seed 3000" timeout -k 10 $(left) bash "$here/capability.sh" points "$name" \

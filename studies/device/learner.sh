@@ -16,6 +16,8 @@
 # (studies/learner/runs/NAME/policy.pt), the shipped policy and the fixed CPG go on 1000 test rounds per terrain first:
 # a gate whose test evaluations did not finish in its lease ($TEST_TERRAINS: the terrains still missing, default all
 # three).
+# With ALONE=1 the arms' runs go one after another, each alone on the GPU, and their results' validation rounds all at
+# once after the last (the times count; the lanes' runs share the GPU).
 # With AVERAGE=1 every run of the lease also validates the weight average of its candidates
 # (`--agent.validation_average true`: one more candidate; the study compares arms on the saved checkpoints).
 # Then, from the next calls: `bash studies/device/gpu.sh poll 560` and `bash studies/device/learner.sh collect`
@@ -70,6 +72,24 @@ fi
 if [ -n "${TEST_KEPT:-}" ]; then
   # shellcheck disable=SC2046
   test_rounds $(for name in $TEST_KEPT; do echo "$name=studies/learner/runs/$name/policy.pt"; done)
+fi
+if [ "${ALONE:-0}" = 1 ]; then   # one run at a time, alone on the GPU (the times count), then their evaluations at once
+  done_runs=""
+  for seed in $SEEDS; do
+    for arm in $ARMS; do
+      f=$(flags "$arm") || continue
+      # shellcheck disable=SC2086
+      OUT=$RUNS_OUT LIMIT=${ARM_LIMIT:-1200} VAL_ROUNDS=0 bash studies/device/candidates.sh \
+        "${arm}_s$seed@0:--task complex --seed $seed $f $EXTRA"
+      echo "$(date +%T) ${arm}_s$seed ended"
+      done_runs="$done_runs ${arm}_s$seed"
+    done
+  done
+  for name in $done_runs; do
+    [ -f "$KEEP/$name.pt" ] || continue
+    for t in complex rugged stepped; do evaluate "$name" "$t" "$VAL_ROUNDS" "$KEEP/$name.pt" --seed 3000 & done
+  done
+  ARMS=""
 fi
 for seed in $SEEDS; do
   [ -n "$ARMS" ] || break
