@@ -204,6 +204,11 @@ def pays(arm: dict, base: dict) -> bool:
         arm["mean_chosen_fell_before_goal"] <= base["mean_chosen_fell_before_goal"])
 
 
+def complete(arm: dict, base: dict) -> bool:
+    """An arm is judged once it ran on every seed the recipe ran on: a lead on fewer seeds is reported, not chosen."""
+    return set(base["seeds"]) <= set(arm["seeds"])
+
+
 def _line(values: list, ok) -> bool | None:
     """One gate line over the three seeds' values: None (not measured) while a seed's value is missing."""
     return None if len(values) < 3 or None in values else bool(ok(values))
@@ -249,7 +254,8 @@ def choose(run_dirs: list[str]) -> str:
     arms = summarise(runs)
     if "recipe" not in arms:
         raise ValueError("the study holds no recipe runs to compare with")
-    paid = [a for a in ARM_FLAGS if a != "recipe" and a in arms and pays(arms[a], arms["recipe"])]
+    paid = [a for a in ARM_FLAGS if a != "recipe" and a in arms and complete(arms[a], arms["recipe"])
+            and pays(arms[a], arms["recipe"])]
     flags: list[list[str]] = []   # each flag with its values, once: arms that paid may share flags
     for word in " ".join(ARM_FLAGS[a] for a in paid).split():
         if word.startswith("--"):
@@ -353,7 +359,11 @@ def verdict(res: dict) -> list[str]:
         falls = s["mean_chosen_fell_before_goal"] - base["mean_chosen_fell_before_goal"]
         spread = sum(s["goal_spread"]) / len(s["seeds"]) - sum(base["goal_spread"]) / len(base["seeds"])
         word = "pays" if pays(s, base) else "does not pay" if goal < 0 else "is even"
-        out.append(f"- **`{arm}` {word} on validation** (seeds {', '.join(map(str, s['seeds']))}): the chosen "
+        if not complete(s, base):
+            word = {"pays": "leads", "does not pay": "trails", "is even": "is even so far"}[word]
+        seeds = ", ".join(map(str, s["seeds"])) + ("" if complete(s, base) else
+                                                   f"; partial, the recipe ran on {len(base['seeds'])}")
+        out.append(f"- **`{arm}` {word} on validation** (seeds {seeds}): the chosen "
                    f"candidates reach the goal in {pct(s['mean_chosen_goal'])} of the validation rounds against the "
                    f"recipe's {pct(base['mean_chosen_goal'])} ({100 * goal:+.1f} points), fall before the goal line "
                    f"{100 * falls:+.1f} points against it, and its candidates spread {100 * spread:+.1f} points more "

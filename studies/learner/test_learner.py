@@ -55,6 +55,17 @@ def test_arms_that_paid_give_each_flag_once(monkeypatch):
     assert build.choose([]) == "--env.obs.critic true --env.obs.gyro true --env.obs.last_action true"
 
 
+def test_an_arm_on_fewer_seeds_than_the_recipe_leads_but_is_not_chosen(monkeypatch):
+    recipe = {"seeds": [1, 2], "mean_chosen_goal": 0.94, "mean_chosen_fell_before_goal": 0.008, "goal_spread": [0, 0]}
+    long = {"seeds": [1], "mean_chosen_goal": 0.95, "mean_chosen_fell_before_goal": 0.003, "goal_spread": [0]}
+    assert build.pays(long, recipe) and not build.complete(long, recipe)
+    monkeypatch.setattr(build, "summarise", lambda runs: {"recipe": recipe, "long": long})
+    assert build.choose([]) == ""
+    res = {"runs": {}, "arms": {"recipe": recipe, "long": long}, "gate": None}
+    line = next(v for v in build.verdict(res) if "`long`" in v)
+    assert "**`long` leads on validation** (seeds 1; partial, the recipe ran on 2)" in line
+
+
 def test_the_gate_lines_read_the_test_rounds():
     def per(s, f, pv=10.0):
         return {t: {"success_3m": s, "fall_rate_before_goal": f, "pitch_var_deg2": pv, "roll_var_deg2": pv}
