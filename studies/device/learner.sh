@@ -16,8 +16,8 @@
 # (studies/learner/runs/NAME/policy.pt), the shipped policy and the fixed CPG go on 1000 test rounds per terrain first:
 # a gate whose test evaluations did not finish in its lease ($TEST_TERRAINS: the terrains still missing, default all
 # three).
-# With ALONE=1 the arms' runs go one after another, each alone on the GPU, and their results' validation rounds all at
-# once after the last (the times count; the lanes' runs share the GPU).
+# With ALONE=1 the arms' runs go one after another, each alone on the GPU, and their results' and the kept results'
+# validation rounds all at once after the last (the times count; the lanes' runs share the GPU).
 # With AVERAGE=1 every run of the lease also validates the weight average of its candidates
 # (`--agent.validation_average true`: one more candidate; the study compares arms on the saved checkpoints).
 # Then, from the next calls: `bash studies/device/gpu.sh poll 560` and `bash studies/device/learner.sh collect`
@@ -59,11 +59,15 @@ test_rounds() {   # NAME=CHECKPOINT...: each (one without its checkpoint is said
 }
 echo "$(date +%T) the learner's queue: arms '$ARMS' on seeds '$SEEDS', kept results '$KEPT'"
 [ -n "${FAIR_JOBS:-}" ] && { JOBS=$FAIR_JOBS PER_GPU=4 bash studies/device/fair_comparison.sh > "$QUEUE/fair.log" 2>&1 & }
-for name in $KEPT; do
-  for t in complex rugged stepped; do
-    evaluate "$name" "$t" "$VAL_ROUNDS" "studies/learner/runs/$name/policy.pt" --seed 3000 &
+kept_rounds() {   # the kept results' validation rounds, at once
+  local name t
+  for name in $KEPT; do
+    for t in complex rugged stepped; do
+      evaluate "$name" "$t" "$VAL_ROUNDS" "studies/learner/runs/$name/policy.pt" --seed 3000 &
+    done
   done
-done
+}
+[ "${ALONE:-0}" = 1 ] || kept_rounds   # with ALONE=1 they wait for the runs, which run alone
 if [ "${SHIPPED:-0}" = 1 ]; then
   for t in complex rugged stepped; do
     evaluate shipped "$t" "$VAL_ROUNDS" results/policies/cpg_rl_complex.pt --seed 3000 --controllers cpg cpg_rl &
@@ -85,6 +89,7 @@ if [ "${ALONE:-0}" = 1 ]; then   # one run at a time, alone on the GPU (the time
       done_runs="$done_runs ${arm}_s$seed"
     done
   done
+  kept_rounds
   for name in $done_runs; do
     [ -f "$KEEP/$name.pt" ] || continue
     for t in complex rugged stepped; do evaluate "$name" "$t" "$VAL_ROUNDS" "$KEEP/$name.pt" --seed 3000 & done
