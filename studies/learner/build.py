@@ -359,10 +359,10 @@ def verdict(res: dict) -> list[str]:
         falls = s["mean_chosen_fell_before_goal"] - base["mean_chosen_fell_before_goal"]
         spread = sum(s["goal_spread"]) / len(s["seeds"]) - sum(base["goal_spread"]) / len(base["seeds"])
         word = "pays" if pays(s, base) else "does not pay" if goal < 0 else "is even"
+        seeds = ", ".join(map(str, s["seeds"]))
         if not complete(s, base):
             word = {"pays": "leads", "does not pay": "trails", "is even": "is even so far"}[word]
-        seeds = ", ".join(map(str, s["seeds"])) + ("" if complete(s, base) else
-                                                   f"; partial, the recipe ran on {len(base['seeds'])}")
+            seeds += f"; partial, the recipe ran on {len(base['seeds'])}"
         out.append(f"- **`{arm}` {word} on validation** (seeds {seeds}): the chosen "
                    f"candidates reach the goal in {pct(s['mean_chosen_goal'])} of the validation rounds against the "
                    f"recipe's {pct(base['mean_chosen_goal'])} ({100 * goal:+.1f} points), fall before the goal line "
