@@ -30,14 +30,21 @@ ARM_FLAGS = {"recipe": "", "critic": "--env.obs.critic true",
              # the shipped policy's schedule (hexnewton/tasks LONG_STABLE_STAGES): 1062 iterations, stages at 382, 744
              "long": "--max_iterations 1062 --agent.stages ((382,{'posture_reflex':2.0,'w_tilt':15.0,'w_ang_vel':0.1}),"
                      "(744,{'w_tilt':40.0,'w_ang_vel':0.3}))",
-             "envs8192": "--num_envs 8192"}
+             "envs8192": "--num_envs 8192",
+             # the last stage's PPO steps smaller (KL target 0.004, the recipe's 0.01) and without the entropy bonus
+             "settle": "--agent.stages ((100,{'posture_reflex':2.0,'w_tilt':15.0,'w_ang_vel':0.1}),"
+                       "(200,{'w_tilt':40.0,'w_ang_vel':0.3,'desired_kl':0.004,'entropy_coef':0.0}))",
+             # the last stage saved every 10 iterations, 8 candidates validated (the recipe: every 50, at most 4)
+             "candidates": "--agent.save_interval 10 --agent.validation_candidates 8"}
 #: each arm in words, with its flags
 ARMS = {arm: f"{what} (`{ARM_FLAGS[arm] or '--task complex'}`)" for arm, what in (
     ("recipe", "the complex recipe"), ("critic", "+ the asymmetric critic"),
     ("actor", "+ the gyro and the last actions in the actor's observation"),
     ("both", "+ the asymmetric critic and the actor's gyro and last actions together"),
     ("long", "the shipped policy's schedule: 1062 iterations, the stages at 382 and 744 (3.5x the env-steps)"),
-    ("envs8192", "8192 envs at the same 300 iterations (2x the env-steps)"))}
+    ("envs8192", "8192 envs at the same 300 iterations (2x the env-steps)"),
+    ("settle", "the last stage (iterations 200-299) with smaller PPO steps: KL target 0.004 and no entropy bonus"),
+    ("candidates", "the last stage saved every 10 iterations and 8 of its checkpoints validated (validation time x2)"))}
 TERRAINS = ("rugged", "stepped", "complex")
 METRICS = ("success_3m", "fall_rate", "fall_rate_before_goal", "pitch_var_deg2", "roll_var_deg2")
 #: the gate's lines (1000 test rounds per terrain, deterministic action)

@@ -107,3 +107,22 @@ def test_the_long_arm_is_the_shipped_schedule():
     p.add_argument("--max_iterations", type=int)
     args = vars(p.parse_args(build.ARM_FLAGS["long"].split()))
     assert args["override:agent:stages"] == LONG_STABLE_STAGES and args["max_iterations"] == LONG_STABLE_ITERATIONS
+
+
+def test_the_settle_and_candidates_arms_parse_as_train_py_reads_them():
+    """settle: the recipe's stages with the last one's PPO steps smaller; candidates: denser saves, more candidates."""
+    from hexnewton.apps.cli import ArgumentParser, add_config_args, config_overrides
+    from hexnewton.config import apply_overrides
+    from hexnewton.tasks import STABLE_STAGES, TASKS
+
+    base = TASKS["complex"].agent
+    p = ArgumentParser(prog="train.py")
+    add_config_args(p, "agent", base)
+    settle = apply_overrides(base, config_overrides(p.parse_args(build.ARM_FLAGS["settle"].split()), "agent"))
+    settle.check()
+    (s1, c1), (s2, c2) = settle.stages
+    assert (s1, c1) == STABLE_STAGES[0] and s2 == STABLE_STAGES[1][0]
+    assert c2 == {**STABLE_STAGES[1][1], "desired_kl": 0.004, "entropy_coef": 0.0}
+    more = apply_overrides(base, config_overrides(p.parse_args(build.ARM_FLAGS["candidates"].split()), "agent"))
+    more.check()
+    assert (more.save_interval, more.validation_candidates, more.stages) == (10, 8, base.stages)
