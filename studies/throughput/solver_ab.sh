@@ -1,0 +1,40 @@
+#!/bin/bash
+# A queue for one H200 (`bash studies/device/gpu.sh queue studies/throughput/solver_ab.sh`): the solver settings that
+# could cut the complex step's dominant part (MuJoCo-Warp's solver, 68.5 % of its GPU time: profile/), each against
+# today's settings on the same machine:
+# 1. the physics alone, each variant alone on the GPU, one after another (bench --mode sim, 16384 envs, the complex,
+#    rugged and stepped courses) -> $TP/ab/sim_VARIANT.json;
+# 2. the A/B: the shipped policy and the fixed CPG on 1000 test rounds per terrain (the evaluate default seed) under each
+#    variant's physics, all at once -> $TP/ab/eval_VARIANT_TERRAIN/ (a variant is kept only with success within 1
+#    point and falls before the goal within 0.5 points of the base's, on every terrain).
+# VARIANTS (default all below) picks some. Then from the next call: `bash studies/device/gpu.sh poll 500 '/root/throughput'`.
+set -u
+cd "$(dirname "$0")/../.."
+export PYTHONPATH=/opt/site:$PWD${PYTHONPATH:+:$PYTHONPATH} PYTHONUNBUFFERED=1
+TP=${TP:-/root/throughput}
+mkdir -p "$TP/ab"
+declare -A FLAGS=(
+  [base]=""
+  [iter5]="--env.sim.iterations 5 --env.sim.ls_iterations 5"
+  [ls4]="--env.sim.ls_iterations 4"
+  [cg]="--env.sim.solver cg"
+)
+VARIANTS=${VARIANTS:-base iter5 ls4 cg}
+nvidia-smi --query-gpu=name,driver_version --format=csv,noheader > "$TP/ab/gpu.txt"
+for v in $VARIANTS; do
+  echo "$(date +%T) sim $v"
+  # shellcheck disable=SC2086  # the variant's flags are words
+  python -m hexnewton.apps.bench --device cuda --num_envs 16384 --mode sim --frames 200 --env.sim.frame_dt 0.02 \
+    --env.sim.substeps 4 --terrain complex rugged stepped ${FLAGS[$v]} --json "$TP/ab/sim_$v.json" \
+    > "$TP/ab/sim_$v.log" 2>&1; echo "exit $?" >> "$TP/ab/sim_$v.log"
+done
+for v in $VARIANTS; do
+  for t in complex rugged stepped; do
+    # shellcheck disable=SC2086
+    python -m hexnewton.apps.evaluate --controllers cpg cpg_rl --checkpoint cpg_rl=results/policies/cpg_rl_complex.pt \
+      --terrains "$t" --rounds 1000 ${FLAGS[$v]} --out "$TP/ab/eval_${v}_$t" --no-progress \
+      > "$TP/ab/eval_${v}_$t.log" 2>&1 &
+  done
+done
+wait
+echo "$(date +%T) done"
