@@ -392,11 +392,13 @@ def verdict(res: dict) -> list[str]:
                    f"{len(lines) - len(unmeasured)} of {len(lines)} lines measured"
                    + (f"; fails: {'; '.join(failed)}" if failed else "")
                    + (f"; not measured yet: {'; '.join(unmeasured)}" if unmeasured else "") + ".")
-    missing = [a for a in ARMS if a not in arms or len(arms[a]["seeds"]) < 2]
+    not_run = [a for a in ARMS if a not in arms]
+    missing = [a for a in ARMS if a in arms and len(arms[a]["seeds"]) < 2]
     unevaluated = [n for n, r in runs.items() if r["arm"] in ARMS and len(r["result_on_validation"]) < len(TERRAINS)]
-    if missing or unevaluated:
+    if not_run or missing or unevaluated:
         out.append("- **Partial**: " + "; ".join(
-            ([f"arms without two seeds: {', '.join(missing)}"] if missing else [])
+            ([f"arms not run yet: {', '.join(not_run)}"] if not_run else [])
+            + ([f"arms on one seed: {', '.join(missing)}"] if missing else [])
             + ([f"results not yet on 500 validation rounds per course: {', '.join(unevaluated)}"] if unevaluated
                else [])) + "." + ("" if res["gate"] else " The 3-seed gate waits for the chosen recipe."))
     return out + [""]
