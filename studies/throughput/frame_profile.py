@@ -124,7 +124,8 @@ def profile(task_name: str, num_envs: int, steps: int, warmup: int, seed: int) -
         parts[r["part"]] += r["ms_per_step"]
     report = env.world.check_contacts()
     return {"task": task_name, "num_envs": num_envs, "steps": steps, "warmup": warmup,
-            "frames_per_step": env.decimation, "control_dt": cfg.task.control_dt, "substeps": cfg.sim.substeps, "device": wp.get_device().name,
+            "frames_per_step": env.decimation, "control_dt": cfg.task.control_dt, "substeps": cfg.sim.substeps,
+            "device": wp.get_device().name,
             "wall_ms_per_step_uncaptured": wall_ms, "gpu_ms_per_step": gpu_ms,
             "launches_per_step": sum(r["launches_per_step"] for r in kernels.values()),
             "parts_ms_per_step": dict(sorted(parts.items(), key=lambda kv: -kv[1])),
@@ -150,9 +151,11 @@ def markdown(r: dict, command: str, git: str) -> str:
               "its last kernel's end, so it includes the GPU's waits for the host's uncaptured launches.", "",
               "| phase | ms per step | share |", "|---|---:|---:|"]  # fmt: skip
     lines += [f"| `{p}` | {ms:.3f} | {ms / total:.1%} |" for p, ms in r["phases_ms_per_step"].items()]
-    lines += ["", "## The 30 costliest kernels", "", "| kernel | module | part | launches per step | ms per step | share |",
+    lines += ["", "## The 30 costliest kernels", "",
+              "| kernel | module | part | launches per step | ms per step | share |",
               "|---|---|---|---:|---:|---:|"]  # fmt: skip
-    lines += [f"| `{k['kernel']}` | {k['module']} | {k['part']} | {k['launches_per_step']:.0f} | {k['ms_per_step']:.3f} "
+    lines += [f"| `{k['kernel']}` | {k['module']} | {k['part']} | {k['launches_per_step']:.0f} | "
+              f"{k['ms_per_step']:.3f} "
               f"| {k['ms_per_step'] / gpu:.1%} |" for k in r["kernels"][:30]]  # fmt: skip
     return "\n".join(lines) + "\n"
 

@@ -7,7 +7,8 @@
 # Then from the next call: `bash studies/device/gpu.sh poll 500 '/root/throughput'`.
 set -u
 cd "$(dirname "$0")/../.."
-export PYTHONPATH=/opt/site:$PWD${PYTHONPATH:+:$PYTHONPATH} PYTHONUNBUFFERED=1   # $PWD: the study scripts import the tree
+# $PWD: the study scripts import the tree
+export PYTHONPATH=/opt/site:$PWD${PYTHONPATH:+:$PYTHONPATH} PYTHONUNBUFFERED=1
 TP=${TP:-/root/throughput}
 mkdir -p "$TP"
 nvidia-smi --query-gpu=name,driver_version --format=csv,noheader > "$TP/gpu.txt"

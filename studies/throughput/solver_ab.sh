@@ -4,10 +4,11 @@
 # today's settings on the same machine:
 # 1. the physics alone, each variant alone on the GPU, one after another (bench --mode sim, 16384 envs, the complex,
 #    rugged and stepped courses) -> $TP/ab/sim_VARIANT.json;
-# 2. the A/B: the shipped policy and the fixed CPG on 1000 test rounds per terrain (the evaluate default seed) under each
-#    variant's physics, all at once -> $TP/ab/eval_VARIANT_TERRAIN/ (a variant is kept only with success within 1
+# 2. the A/B: the shipped policy and the fixed CPG on 1000 test rounds per terrain (the evaluate default seed) under
+#    each variant's physics, all at once -> $TP/ab/eval_VARIANT_TERRAIN/ (a variant is kept only with success within 1
 #    point and falls before the goal within 0.5 points of the base's, on every terrain).
-# VARIANTS (default all below) picks some. Then from the next call: `bash studies/device/gpu.sh poll 500 '/root/throughput'`.
+# VARIANTS (default all below) picks some. Then from the next call:
+# `bash studies/device/gpu.sh poll 500 '/root/throughput'`.
 set -u
 cd "$(dirname "$0")/../.."
 export PYTHONPATH=/opt/site:$PWD${PYTHONPATH:+:$PYTHONPATH} PYTHONUNBUFFERED=1

@@ -41,12 +41,15 @@ def report(res: dict) -> str:
     phases = list(next(iter(runs.values()))["phases_s"])
     lines = ["# Start-up to the first iteration, warm, one GPU", "",
              f"`{res['command']}`, one run after another, each alone on the GPU ({res['gpu']}); the machine warm (its "
-             "Warp kernel cache filled by the runs before). `python studies/throughput/startup.py` writes this file and "
+             "Warp kernel cache filled by the runs before). `python studies/throughput/startup.py` writes this file "
+             "and "
              "results.json from raw/.", "",
              "| | " + " | ".join(names) + " |", "|---|" + "---:|" * len(names),
-             "| **first iteration [s]** | " + " | ".join(f"**{runs[n]['first_iteration_s']:.1f}**" for n in names) + " |"]
+             "| **first iteration [s]** | "
+             + " | ".join(f"**{runs[n]['first_iteration_s']:.1f}**" for n in names) + " |"]
     lines += [f"| {p} | " + " | ".join(f"{runs[n]['phases_s'][p]:.1f}" for n in names) + " |" for p in phases]
-    lines += ["", "Beside the imports, in a thread (`startup_notes.model_build_beside_s`), and the imports' own times:", "",
+    lines += ["", "Beside the imports, in a thread (`startup_notes.model_build_beside_s`), and the imports' own times:",
+              "",
               "| | " + " | ".join(names) + " |", "|---|" + "---:|" * len(names)]
     for key in ("model_build_beside_s", "imports_s"):
         for k in next(iter(runs.values()))[key]:
