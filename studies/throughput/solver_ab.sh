@@ -1,7 +1,7 @@
 #!/bin/bash
 # A queue for one H200 (`bash studies/device/gpu.sh queue studies/throughput/solver_ab.sh`): the solver settings that
 # could cut the complex step's dominant part (MuJoCo-Warp's solver, 68.5 % of its GPU time: profile/), each against
-# today's settings on the same machine:
+# the default settings (SimConfig) on the same machine:
 # 1. the physics alone, each variant alone on the GPU, one after another (bench --mode sim, 16384 envs, the complex,
 #    rugged and stepped courses) -> $TP/ab/sim_VARIANT.json;
 # 2. the A/B: the shipped policy and the fixed CPG on 1000 test rounds per terrain (the evaluate default seed) under
