@@ -47,7 +47,7 @@ def kernel_modules() -> dict[str, str]:
     import warp as wp
 
     return {k.key: getattr(k.func, "__module__", None) or k.module.name for k in gc.get_objects()
-            if isinstance(k, wp.Kernel)}
+            if issubclass(type(k), wp.Kernel)}  # type(): no attribute lookup on other objects (torch's lazy ones)
 
 
 def kernel_key(activity: str) -> str:
@@ -189,12 +189,14 @@ def main(argv: list[str] | None = None) -> int:
 
     r = profile(args.task, args.num_envs, args.steps, args.warmup, args.seed)
     command = "python studies/throughput/frame_profile.py " + " ".join(sys.argv[1:] if argv is None else argv)
+    git = git_rev()
+    md = markdown(r, command, git)
     os.makedirs(args.out, exist_ok=True)
     with open(os.path.join(args.out, "results.json"), "w") as f:
-        json.dump({"command": command, "git": git_rev(), **r}, f, indent=1)
+        json.dump({"command": command, "git": git, **r}, f, indent=1)
     with open(os.path.join(args.out, "report.md"), "w") as f:
-        f.write(markdown(r, command, git_rev()))
-    print(markdown(r, command, git_rev()))
+        f.write(md)
+    print(md)
     return 0
 
 

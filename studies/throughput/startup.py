@@ -42,8 +42,7 @@ def report(res: dict) -> str:
     lines = ["# Start-up to the first iteration, warm, one GPU", "",
              f"`{res['command']}`, one run after another, each alone on the GPU ({res['gpu']}); the machine warm (its "
              "Warp kernel cache filled by the runs before). `python studies/throughput/startup.py` writes this file "
-             "and "
-             "results.json from raw/.", "",
+             "and results.json from raw/.", "",
              "| | " + " | ".join(names) + " |", "|---|" + "---:|" * len(names),
              "| **first iteration [s]** | "
              + " | ".join(f"**{runs[n]['first_iteration_s']:.1f}**" for n in names) + " |"]
@@ -53,7 +52,7 @@ def report(res: dict) -> str:
               "| | " + " | ".join(names) + " |", "|---|" + "---:|" * len(names)]
     for key in ("model_build_beside_s", "imports_s"):
         for k in next(iter(runs.values()))[key]:
-            lines.append(f"| {key.split('_s')[0].replace('_', ' ')}: {k} | " +
+            lines.append(f"| {key.removesuffix('_s').replace('_', ' ')}: {k} | " +
                          " | ".join(f"{runs[n][key].get(k, float('nan')):.1f}" for n in names) + " |")
     best = min(r["first_iteration_s"] for r in runs.values())
     verdict = "met" if best <= res["target_warm_s"] else "not met"

@@ -29,6 +29,18 @@ def test_each_module_has_its_part():
     assert fp.part_of("somewhere.else") == "other"
 
 
+def test_the_phases_are_the_control_steps_calls_in_its_order():
+    """PHASES names HexapodEnv._control_step's calls as the step makes them: a phase renamed or added there fails
+    here."""
+    import inspect
+    import re
+
+    from hexnewton.mdp.env import HexapodEnv
+
+    body = inspect.getsource(HexapodEnv._control_step)
+    assert tuple(re.findall(r"self\.(_\w+)\(", body)) == fp.PHASES
+
+
 def test_the_loaded_kernels_name_their_modules():
     import hexnewton.physics.cpg  # noqa: F401  (its kernels)
 
