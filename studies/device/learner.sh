@@ -1,17 +1,20 @@
 #!/bin/bash
 # A queue (`bash studies/device/gpu.sh queue studies/device/learner.sh`) for one H200: the learner study
 # (studies/learner, its README). In order:
-# 1. the arms still missing ($ARMS, default actor) on $SEEDS (1 2), one lane per seed, each training its arms one
-#    after another (candidates.sh: train.py with its own validation, the run packed to $RUNS_OUT/run_NAME.tgz, its
-#    result on $VAL_ROUNDS validation rounds per course, seed 3000, deterministic action); beside them the study's
-#    kept results that lack those rounds ($KEPT, default recipe_s1 recipe_s2: studies/learner/runs/NAME/policy.pt);
-#    with SHIPPED=1 also the shipped policy and the fixed CPG on the same rounds; with FAIR_JOBS set, the paper
-#    comparison's runs it names (fair_comparison.sh);
+# 1. the arms still missing ($ARMS, default actor; ARMS= none) on $SEEDS (1 2), one lane per seed, each training its
+#    arms one after another (candidates.sh: train.py with its own validation, the run packed to
+#    $RUNS_OUT/run_NAME.tgz, its result on $VAL_ROUNDS validation rounds per course, seed 3000, deterministic
+#    action); beside them the study's kept results that lack those rounds ($KEPT, default recipe_s1 recipe_s2:
+#    studies/learner/runs/NAME/policy.pt); with SHIPPED=1 also the shipped policy and the fixed CPG on the same
+#    rounds; with FAIR_JOBS set, the paper comparison's runs it names (fair_comparison.sh);
 # 2. the choice: `studies/learner/build.py --choose` over the study and this lease's runs names the changes that paid
-#    (their train.py flags), unless $GATE_FLAGS is given;
-# 3. with GATE=1, the gate: `python train.py --task complex --seed N FLAGS` for N in 1 2 3, one after another and
-#    alone on the GPU (the time counts), then every result, the shipped policy and the fixed CPG on 1000 test rounds
-#    per terrain (the evaluate default seed), all at once.
+#    (their train.py flags) and `--gate-name` the gate's run names (gate_ARM-ARM; gate for the recipe itself), unless
+#    $GATE_FLAGS is given (then $GATE_NAME, default gate; the study's runs/ folder set aside for the chunk calls leaves
+#    the choice nothing to read on the device: give both);
+# 3. with GATE=1, the gate: `python train.py --task complex --seed N FLAGS` for N in $GATE_SEEDS (1 2 3), one after
+#    another and alone on the GPU (the time counts), runs GATE_NAME_sN, then every result, the shipped policy and the
+#    fixed CPG on 1000 test rounds per terrain (the evaluate default seed), all at once (not with GATE_TEST=0: a gate
+#    split over leases, its test rounds then through TEST_KEPT).
 # With TEST_KEPT="gate_s1 gate_s2 gate_s3" (say ARMS= KEPT= beside it) the study's kept results of those names
 # (studies/learner/runs/NAME/policy.pt), the shipped policy and the fixed CPG go on 1000 test rounds per terrain first:
 # a gate whose test evaluations did not finish in its lease ($TEST_TERRAINS: the terrains still missing, default all
@@ -38,7 +41,7 @@ if [ "${1:-}" = collect ]; then   # logs, configs, timings, results (not the oth
   tar czhf - -C "$stage" $files | split -b 9M -d - "$out/learner.tgz."
   ls -la "$out"; exit 0
 fi
-ARMS=${ARMS:-actor} SEEDS=${SEEDS:-1 2} VAL_ROUNDS=${VAL_ROUNDS:-500} KEPT=${KEPT-recipe_s1 recipe_s2}
+ARMS=${ARMS-actor} SEEDS=${SEEDS:-1 2} VAL_ROUNDS=${VAL_ROUNDS:-500} KEPT=${KEPT-recipe_s1 recipe_s2}
 EXTRA=""; [ "${AVERAGE:-0}" = 1 ] && EXTRA="--agent.validation_average true"
 flags() { python studies/learner/build.py --flags "$1"; }   # an arm's train.py flags (build.py ARM_FLAGS)
 evaluate() {   # NAME TERRAIN ROUNDS CHECKPOINT [MORE evaluate FLAGS]
@@ -114,15 +117,21 @@ echo "$(date +%T) the arms and their evaluations ended"
 [ "${GATE:-0}" = 1 ] || exit 0
 if [ -z "${GATE_FLAGS+x}" ]; then
   GATE_FLAGS=$(python studies/learner/build.py --choose --runs "$RUNS") || exit 1
+  GATE_NAME=${GATE_NAME:-$(python studies/learner/build.py --gate-name --runs "$RUNS")} || exit 1
 fi
-echo "$(date +%T) the gate: python train.py --task complex --seed N $GATE_FLAGS"
-for seed in 1 2 3; do
+GATE_NAME=${GATE_NAME:-gate} GATE_SEEDS=${GATE_SEEDS:-1 2 3}
+echo "$(date +%T) the gate ${GATE_NAME}_sN, N in $GATE_SEEDS: python train.py --task complex --seed N $GATE_FLAGS"
+specs=""
+for seed in $GATE_SEEDS; do
+  name=${GATE_NAME}_s$seed
   # shellcheck disable=SC2086
-  python train.py --task complex --seed "$seed" $GATE_FLAGS $EXTRA --log_dir "$RUNS" --experiment "gate_s$seed" \
-    > "$RUNS/gate_s$seed.log" 2>&1
-  echo "$(date +%T) gate_s$seed: train exit $?"
-  OUT=$RUNS_OUT bash studies/device/gpu.sh pack "gate_s$seed"
+  python train.py --task complex --seed "$seed" $GATE_FLAGS $EXTRA --log_dir "$RUNS" --experiment "$name" \
+    > "$RUNS/$name.log" 2>&1
+  echo "$(date +%T) $name: train exit $?"
+  OUT=$RUNS_OUT bash studies/device/gpu.sh pack "$name"
+  specs="$specs $name=$KEEP/$name.pt"
 done
-test_rounds "gate_s1=$KEEP/gate_s1.pt" "gate_s2=$KEEP/gate_s2.pt" "gate_s3=$KEEP/gate_s3.pt"
+# shellcheck disable=SC2086  # NAME=CHECKPOINT words
+[ "${GATE_TEST:-1}" = 1 ] && test_rounds $specs
 wait
 echo "$(date +%T) the learner's queue ended"

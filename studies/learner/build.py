@@ -176,7 +176,13 @@ def collect() -> dict:
     arms = summarise(runs)
     return {"meta": {"task": "complex", "validation_seed": 3000, "actions": "deterministic (mean)",
                      "arms": ARMS, "leases": leases, "gate_lines": GATE}, "runs": runs, "arms": arms,
-            "same_rounds": fixed, "gate": gate(runs, fixed["test"])}
+            "same_rounds": fixed, "gates": gates(runs, fixed["test"])}
+
+
+def gates(runs: dict, test: dict) -> dict:
+    """Every gate the study ran (``gate``: the recipe's; ``gate_ARM-ARM``: with those arms' flags), as ``gate``."""
+    stems = sorted({r["arm"] for r in runs.values() if r["arm"] == "gate" or r["arm"].startswith("gate_")})
+    return {stem: g for stem in stems if (g := gate(runs, test, stem)) is not None}
 
 
 def summarise(runs: dict) -> dict:
@@ -221,11 +227,12 @@ def _line(values: list, ok) -> bool | None:
     return None if len(values) < 3 or None in values else bool(ok(values))
 
 
-def gate(runs: dict, test: dict) -> dict | None:
-    """The gate's lines over the gate runs (``gate_sN``) on the test rounds, against the shipped policy and the fixed
-    CPG on the same rounds: each line True, False, or None where a seed's result (or the reference) is not measured
-    yet; ``holds`` is None while no line fails and some are not measured. None before any gate run was evaluated."""
-    seeds = {r["seed"]: r for r in runs.values() if r["arm"] == "gate" and r["result_on_test"]}
+def gate(runs: dict, test: dict, stem: str = "gate") -> dict | None:
+    """The gate's lines over its runs (``STEM_sN``, ``gate_name``) on the test rounds, against the shipped policy and
+    the fixed CPG on the same rounds: each line True, False, or None where a seed's result (or the reference) is not
+    measured yet; ``holds`` is None while no line fails and some are not measured. None before any of its runs was
+    evaluated."""
+    seeds = {r["seed"]: r for r in runs.values() if r["arm"] == stem and r["result_on_test"]}
     if not seeds:
         return None
     lines = {}
@@ -246,12 +253,12 @@ def gate(runs: dict, test: dict) -> dict | None:
     lines["<= 240 s from process start, validation included"] = _line(
         [r["wall_s"] for r in seeds.values()], lambda v: max(v) <= GATE["wall_s_max"])
     states = set(lines.values())
-    return {"seeds": sorted(seeds), "lines": lines,
+    return {"seeds": sorted(seeds), "arms": gate_arms(stem), "flags": arms_flags(gate_arms(stem)), "lines": lines,
             "holds": False if False in states else None if None in states else True}
 
 
-def choose(run_dirs: list[str]) -> str:
-    """The train.py flags of the changes that paid: the study's runs and those of ``run_dirs`` (NAME.log each)."""
+def paid_arms(run_dirs: list[str]) -> list[str]:
+    """The changes that paid: the study's runs and those of ``run_dirs`` (NAME.log each), against the recipe."""
     runs = study_runs([])
     for d in run_dirs:
         for log in sorted(glob.glob(os.path.join(d, "*_s[0-9].log"))):
@@ -261,15 +268,38 @@ def choose(run_dirs: list[str]) -> str:
     arms = summarise(runs)
     if "recipe" not in arms:
         raise ValueError("the study holds no recipe runs to compare with")
-    paid = [a for a in ARM_FLAGS if a != "recipe" and a in arms and complete(arms[a], arms["recipe"])
+    return [a for a in ARM_FLAGS if a != "recipe" and a in arms and complete(arms[a], arms["recipe"])
             and pays(arms[a], arms["recipe"])]
-    flags: list[list[str]] = []   # each flag with its values, once: arms that paid may share flags
-    for word in " ".join(ARM_FLAGS[a] for a in paid).split():
+
+
+def arms_flags(arms: list[str]) -> str:
+    """The train.py flags of these arms together, each flag with its values once (arms may share flags)."""
+    flags: list[list[str]] = []
+    for word in " ".join(ARM_FLAGS[a] for a in arms).split():
         if word.startswith("--"):
             flags.append([word])
         else:
             flags[-1].append(word)
     return " ".join(dict.fromkeys(" ".join(f) for f in flags))
+
+
+def choose(run_dirs: list[str]) -> str:
+    """The train.py flags of the changes that paid (``paid_arms``)."""
+    return arms_flags(paid_arms(run_dirs))
+
+
+def gate_name(arms: list[str]) -> str:
+    """The gate's run names' stem for these arms: ``gate`` for the recipe itself, else ``gate_ARM-ARM``."""
+    return "gate_" + "-".join(arms) if arms else "gate"
+
+
+def gate_arms(name: str) -> list[str]:
+    """The arms a gate's stem names (``gate_name``'s inverse): unknown arms raise ValueError."""
+    arms = name.split("_", 1)[1].split("-") if "_" in name else []
+    unknown = [a for a in arms if a not in ARM_FLAGS]
+    if (name != "gate" and not name.startswith("gate_")) or unknown:
+        raise ValueError(f"{name} is not a gate of known arms")
+    return arms
 
 
 def pct(x) -> str:
@@ -327,19 +357,19 @@ def report(res: dict) -> str:
     rows = [(n, r["result_on_validation"]) for n, r in runs.items() if r["arm"] in ARMS] + [
         ("shipped `cpg_rl_complex`", val["shipped"]), ("fixed CPG", val["fixed_cpg"])]
     lines += terrain_rows(rows, rounds=True)
-    if res["gate"]:
+    for stem, g in res["gates"].items():
         test = fixed["test"]
-        lines += ["", "## The gate", "", "`python train.py --task complex --seed N` (with the flags of the changes that "
-                  "paid: see each run's config), one after another and alone on the GPU; 1000 test rounds per terrain "
+        command = " ".join(["python train.py --task complex --seed N"] + ([g["flags"]] if g["flags"] else []))
+        lines += ["", f"## {gate_title(g)}", "", f"`{command}`"
+                  f" (runs `{stem}_sN`), one after another and alone on the GPU; 1000 test rounds per terrain "
                   "(the evaluate default seed), deterministic action, the shipped policy and the fixed CPG on the "
                   "same rounds.", "",
                   "| policy | terrain | 3 m | falls before the goal | falls | pitch / roll var [deg²] |",
                   "|---|---|---:|---:|---:|---:|"]
-        rows = [(n, r["result_on_test"]) for n, r in runs.items() if r["arm"] == "gate"] + [
+        rows = [(n, r["result_on_test"]) for n, r in runs.items() if r["arm"] == stem] + [
             ("shipped `cpg_rl_complex`", test["shipped"]), ("fixed CPG", test["fixed_cpg"])]
         lines += terrain_rows(rows, rounds=False)
-        lines += ["", "| line | holds |", "|---|---|"] + [
-            f"| {k} | {WORD[v]} |" for k, v in res["gate"]["lines"].items()]
+        lines += ["", "| line | holds |", "|---|---|"] + [f"| {k} | {WORD[v]} |" for k, v in g["lines"].items()]
     lines += ["", "## Time", "",
               "| run | device | GPU shared with | start-up [s] | train [s] | s / iteration | validation [s] | "
               "process start to result [s] |", "|---|---|---|---:|---:|---:|---:|---:|"]
@@ -351,6 +381,11 @@ def report(res: dict) -> str:
         lines += [f"- {le['date']}, {le['device']}: {le['ran']}", f"  - commands: " + "; ".join(
             f"`{c}`" for c in le["commands"]), f"  - {le['notes']}"]
     return "\n".join(lines[:2] + verdict(res) + lines[2:]) + "\n"
+
+
+def gate_title(g: dict) -> str:
+    """A gate in words: the recipe's, or the one with the arms that paid."""
+    return "The gate" + (f" with {' + '.join(f'`{a}`' for a in g['arms'])}" if g["arms"] else " for the recipe")
 
 
 def verdict(res: dict) -> list[str]:
@@ -383,12 +418,12 @@ def verdict(res: dict) -> list[str]:
         out.append(f"- **The weight average of the last stage's candidates** (`--agent.validation_average true`) is "
                    f"chosen in {len(won)} of {len(averaged)} runs ({', '.join(won) or 'none'}); its goal share against "
                    f"the best saved checkpoint's: {', '.join(f'{100 * g:+.1f}' for g in gain)} points.")
-    if res["gate"]:
-        lines = res["gate"]["lines"]
+    for g in res["gates"].values():
+        lines = g["lines"]
         failed = [k for k, v in lines.items() if v is False]
         unmeasured = [k for k, v in lines.items() if v is None]
-        head = {True: "holds**", False: "does not hold**", None: "is partial**"}[res["gate"]["holds"]]
-        out.append(f"- **The gate {head} (seeds {', '.join(map(str, res['gate']['seeds']))}): "
+        head = {True: "holds**", False: "does not hold**", None: "is partial**"}[g["holds"]]
+        out.append(f"- **{gate_title(g)} {head} (seeds {', '.join(map(str, g['seeds']))}): "
                    f"{len(lines) - len(unmeasured)} of {len(lines)} lines measured"
                    + (f"; fails: {'; '.join(failed)}" if failed else "")
                    + (f"; not measured yet: {'; '.join(unmeasured)}" if unmeasured else "") + ".")
@@ -400,7 +435,7 @@ def verdict(res: dict) -> list[str]:
             ([f"arms not run yet: {', '.join(not_run)}"] if not_run else [])
             + ([f"arms on one seed: {', '.join(missing)}"] if missing else [])
             + ([f"results not yet on 500 validation rounds per course: {', '.join(unevaluated)}"] if unevaluated
-               else [])) + "." + ("" if res["gate"] else " The 3-seed gate waits for the chosen recipe."))
+               else [])) + "." + ("" if res["gates"] else " The 3-seed gate waits for the chosen recipe."))
     return out + [""]
 
 
@@ -408,7 +443,10 @@ def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--add", metavar="LEASE", help="a lease's folder (runs/, evals/) to copy into the study first")
     p.add_argument("--choose", action="store_true", help="print the train.py flags of the changes that paid, and stop")
-    p.add_argument("--runs", nargs="*", default=[], metavar="DIR", help="with --choose: more runs (NAME.log each)")
+    p.add_argument("--gate-name", action="store_true",
+                   help="print the stem of the gate's run names for the changes that paid (gate_ARM-ARM), and stop")
+    p.add_argument("--runs", nargs="*", default=[], metavar="DIR",
+                   help="with --choose or --gate-name: more runs (NAME.log each)")
     p.add_argument("--flags", metavar="ARM", help="print an arm's train.py flags, and stop")
     args = p.parse_args(argv)
     if args.flags is not None:
@@ -417,9 +455,10 @@ def main(argv: list[str] | None = None) -> int:
             return 2
         print(ARM_FLAGS[args.flags])
         return 0
-    if args.choose:
+    if args.choose or args.gate_name:
         try:
-            print(choose(args.runs))
+            paid = paid_arms(args.runs)
+            print(gate_name(paid) if args.gate_name else arms_flags(paid))
         except ValueError as e:
             print(f"build.py: {e}", file=sys.stderr)
             return 2

@@ -45,8 +45,9 @@ def test_a_change_pays_only_with_more_goals_and_no_more_falls():
     assert build.pays({"mean_chosen_goal": 0.95, "mean_chosen_fell_before_goal": 0.008}, base)
     assert not build.pays({"mean_chosen_goal": 0.95, "mean_chosen_fell_before_goal": 0.01}, base)
     assert not build.pays({"mean_chosen_goal": 0.92, "mean_chosen_fell_before_goal": 0.0}, base)
-    assert build.choose([]) == "" or set(build.choose([]).split()) <= {
-        "--env.obs.critic", "--env.obs.gyro", "--env.obs.last_action", "true"}
+    arms, paid = build.summarise(build.study_runs([])), build.paid_arms([])
+    assert all(build.pays(arms[a], arms["recipe"]) and build.complete(arms[a], arms["recipe"]) for a in paid)
+    assert build.choose([]) == build.arms_flags(paid)
 
 
 def test_arms_that_paid_give_each_flag_once(monkeypatch):
@@ -61,7 +62,7 @@ def test_an_arm_on_fewer_seeds_than_the_recipe_leads_but_is_not_chosen(monkeypat
     assert build.pays(long, recipe) and not build.complete(long, recipe)
     monkeypatch.setattr(build, "summarise", lambda runs: {"recipe": recipe, "long": long})
     assert build.choose([]) == ""
-    res = {"runs": {}, "arms": {"recipe": recipe, "long": long}, "gate": None}
+    res = {"runs": {}, "arms": {"recipe": recipe, "long": long}, "gates": {}}
     line = next(v for v in build.verdict(res) if "`long`" in v)
     assert "**`long` leads on validation** (seeds 1; partial, the recipe ran on 2)" in line
 
@@ -86,6 +87,36 @@ def test_the_gate_lines_read_the_test_rounds():
     assert g["holds"] is None and g["lines"]["every seed >= 97.5 % at 3 m, stepped"] is True
     assert g["lines"]["every seed >= 97.5 % at 3 m, rugged"] is None
     assert build.gate({}, test) is None
+
+
+def test_each_gate_is_named_by_its_arms_and_judged_on_its_own_runs(capsys):
+    assert build.gate_name([]) == "gate" and build.gate_name(["settle", "critic"]) == "gate_settle-critic"
+    assert build.gate_arms("gate_settle-critic") == ["settle", "critic"] and build.gate_arms("gate") == []
+    with pytest.raises(ValueError):
+        build.gate_arms("gate_nope")
+    assert build.main(["--gate-name"]) == 0 and capsys.readouterr().out.strip() == build.gate_name(build.paid_arms([]))
+
+    def per(s):
+        return {t: {"success_3m": s, "fall_rate_before_goal": 0.0, "pitch_var_deg2": 10.0, "roll_var_deg2": 10.0}
+                for t in build.TERRAINS}
+
+    runs = {f"{stem}_s{k}": {"arm": stem, "seed": k, "wall_s": 230.0, "result_on_test": per(s)}
+            for stem, s in (("gate", 0.9), ("gate_settle", 0.99)) for k in (1, 2, 3)}
+    runs["settle_s1"] = {"arm": "settle", "seed": 1, "wall_s": 230.0, "result_on_test": per(0.5)}
+    test = {"shipped": per(0.98), "fixed_cpg": {t: {**per(0.4)[t], "pitch_var_deg2": 30.0, "roll_var_deg2": 30.0}
+                                                for t in build.TERRAINS}}
+    g = build.gates(runs, test)
+    assert list(g) == ["gate", "gate_settle"] and g["gate"]["holds"] is False and g["gate_settle"]["holds"]
+    assert g["gate_settle"]["flags"] == build.ARM_FLAGS["settle"] and g["gate"]["flags"] == ""
+    line = next(v for v in build.verdict({"runs": {}, "arms": {}, "gates": g}) if "`settle`" in v)
+    assert line.startswith("- **The gate with `settle` holds** (seeds 1, 2, 3)")
+
+
+def test_an_empty_arms_list_trains_nothing():
+    """``ARMS= ... learner.sh`` (a gate or test rounds alone) must not fall back to the default arm."""
+    with open(os.path.join(build.HERE, "..", "device", "learner.sh")) as f:
+        queue = f.read()
+    assert "ARMS=${ARMS-actor}" in queue and "ARMS=${ARMS:-" not in queue
 
 
 def test_the_average_candidate_is_parsed_and_left_out_of_the_arms_choice():

@@ -14,26 +14,22 @@ cd "$(dirname "$0")/../.."
 export PYTHONPATH=/opt/site:$PWD${PYTHONPATH:+:$PYTHONPATH} PYTHONUNBUFFERED=1
 TP=${TP:-/root/throughput}
 mkdir -p "$TP/ab"
-declare -A FLAGS=(
-  [base]=""
-  [iter5]="--env.sim.iterations 5 --env.sim.ls_iterations 5"
-  [ls4]="--env.sim.ls_iterations 4"
-  [cg]="--env.sim.solver cg"
-)
+flags() { python studies/throughput/solver_ab.py --flags "$1"; }   # a variant's flags (solver_ab.py FLAGS)
 VARIANTS=${VARIANTS:-base iter5 ls4 cg}
+for v in $VARIANTS; do flags "$v" > /dev/null || exit 2; done
 nvidia-smi --query-gpu=name,driver_version --format=csv,noheader > "$TP/ab/gpu.txt"
 for v in $VARIANTS; do
   echo "$(date +%T) sim $v"
-  # shellcheck disable=SC2086  # the variant's flags are words
+  # shellcheck disable=SC2046  # the variant's flags are words
   python -m hexnewton.apps.bench --device cuda --num_envs 16384 --mode sim --frames 200 --env.sim.frame_dt 0.02 \
-    --env.sim.substeps 4 --terrain complex rugged stepped ${FLAGS[$v]} --json "$TP/ab/sim_$v.json" \
+    --env.sim.substeps 4 --terrain complex rugged stepped $(flags "$v") --json "$TP/ab/sim_$v.json" \
     > "$TP/ab/sim_$v.log" 2>&1; echo "exit $?" >> "$TP/ab/sim_$v.log"
 done
 for v in $VARIANTS; do
   for t in complex rugged stepped; do
-    # shellcheck disable=SC2086
+    # shellcheck disable=SC2046
     python -m hexnewton.apps.evaluate --controllers cpg cpg_rl --checkpoint cpg_rl=results/policies/cpg_rl_complex.pt \
-      --terrains "$t" --rounds 1000 ${FLAGS[$v]} --out "$TP/ab/eval_${v}_$t" --no-progress \
+      --terrains "$t" --rounds 1000 $(flags "$v") --out "$TP/ab/eval_${v}_$t" --no-progress \
       > "$TP/ab/eval_${v}_$t.log" 2>&1 &
   done
 done

@@ -43,3 +43,11 @@ def test_the_committed_report_is_what_raw_gives():
     res = ab.load(os.path.join(ab.HERE, "raw"))
     with open(os.path.join(ab.HERE, "report.md")) as f:
         assert f.read() == ab.report(res)
+
+
+def test_the_queue_reads_each_variants_flags_from_the_study(capsys):
+    assert ab.main(["--flags", "cg"]) == 0 and capsys.readouterr().out.strip() == ab.FLAGS["cg"]
+    assert ab.main(["--flags", "nope"]) == 2 and "no variant 'nope'" in capsys.readouterr().err
+    with open(os.path.join(os.path.dirname(__file__), "solver_ab.sh")) as f:
+        queue = f.read()
+    assert "solver_ab.py --flags" in queue and "--env.sim" not in queue.split("flags()")[0]
