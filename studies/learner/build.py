@@ -427,6 +427,23 @@ def verdict(res: dict) -> list[str]:
                    f"{len(lines) - len(unmeasured)} of {len(lines)} lines measured"
                    + (f"; fails: {'; '.join(failed)}" if failed else "")
                    + (f"; not measured yet: {'; '.join(unmeasured)}" if unmeasured else "") + ".")
+    paid = [a for a in ARM_FLAGS if a != "recipe" and a in arms and base is not None and complete(arms[a], base)
+            and pays(arms[a], base)]
+    if paid and gate_name(paid) not in res["gates"]:
+        worst = []   # each paid arm's results on the validation rounds, against the gate's falls line
+        for a in paid:
+            for t in TERRAINS:
+                got = [r["result_on_validation"][t] for r in runs.values()
+                       if r["arm"] == a and t in r["result_on_validation"]]
+                if got and max(g["fall_rate_before_goal"] for g in got) > GATE["fall_rate_before_goal_max"]:
+                    worst.append(f"`{a}` falls before the goal in "
+                                 f"{' / '.join(pct(g['fall_rate_before_goal']) for g in got)} of the "
+                                 f"{' / '.join(str(g['rounds']) for g in got)} {t} validation rounds")
+        named = " + ".join(f"`{a}`" for a in paid)
+        out.append(f"- **Not run yet: the gate with {named}** (runs `{gate_name(paid)}_sN`: "
+                   "`python train.py --task complex --seed N` with their flags)"
+                   + (f"; {'; '.join(worst)}, above the gate's "
+                      f"{pct(GATE['fall_rate_before_goal_max'])}." if worst else "."))
     not_run = [a for a in ARMS if a not in arms]
     missing = [a for a in ARMS if a in arms and len(arms[a]["seeds"]) < 2]
     unevaluated = [n for n, r in runs.items() if r["arm"] in ARMS and len(r["result_on_validation"]) < len(TERRAINS)]
