@@ -157,3 +157,6 @@ def test_the_settle_and_candidates_arms_parse_as_train_py_reads_them():
     more = apply_overrides(base, config_overrides(p.parse_args(build.ARM_FLAGS["candidates"].split()), "agent"))
     more.check()
     assert (more.save_interval, more.validation_candidates, more.stages) == (10, 8, base.stages)
+    sharp = apply_overrides(base, config_overrides(p.parse_args(build.ARM_FLAGS["rounds1024"].split()), "agent"))
+    sharp.check()
+    assert (sharp.validation_rounds, base.validation_rounds, sharp.stages) == (1024, 256, base.stages)
