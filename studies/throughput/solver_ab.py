@@ -1,5 +1,6 @@
 """The solver's settings against the defaults: the physics alone under each variant and the A/B on evaluation rounds,
-from what ``solver_ab.sh`` left in ``solver_ab/raw/`` (``sim_VARIANT.json``, ``eval_VARIANT_TERRAIN/results.json``).
+from what ``solver_ab.sh`` left in each lease's folder ``solver_ab/raw/DATE/`` (``sim_VARIANT.json``,
+``eval_VARIANT_TERRAIN/results.json``, ``gpu.txt``: the queue's ``$TP/ab/``, brought back as one tarball).
 
     python studies/throughput/solver_ab.py              # solver_ab/raw/ -> solver_ab/report.md, results.json
     python studies/throughput/solver_ab.py --flags cg   # a variant's bench/evaluate flags (solver_ab.sh reads them)

@@ -7,8 +7,9 @@
 # 2. the A/B: the shipped policy and the fixed CPG on 1000 test rounds per terrain (the evaluate default seed) under
 #    each variant's physics, all at once -> $TP/ab/eval_VARIANT_TERRAIN/ (a variant is kept only with success within 1
 #    point and falls before the goal within 0.5 points of the base's, on every terrain).
-# VARIANTS (default all below) picks some. Then from the next call:
-# `bash studies/device/gpu.sh poll 500 '/root/throughput'`.
+# VARIANTS (default: every variant of solver_ab.py FLAGS) picks some. Then from the next call:
+# `bash studies/device/gpu.sh poll 500` and `tar czf $OUT/ab.tgz -C /root/throughput ab`; here the tarball's ab/ becomes
+# studies/throughput/solver_ab/raw/DATE/ and `python studies/throughput/solver_ab.py` writes the report.
 set -u
 cd "$(dirname "$0")/../.."
 export PYTHONPATH=/opt/site:$PWD${PYTHONPATH:+:$PYTHONPATH} PYTHONUNBUFFERED=1

@@ -51,3 +51,4 @@ def test_the_queue_reads_each_variants_flags_from_the_study(capsys):
     with open(os.path.join(os.path.dirname(__file__), "solver_ab.sh")) as f:
         queue = f.read()
     assert "solver_ab.py --flags" in queue and "--env.sim" not in queue.split("flags()")[0]
+    assert f"VARIANTS=${{VARIANTS:-{' '.join(ab.FLAGS)}}}" in queue   # the default: every variant
