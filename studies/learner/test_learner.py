@@ -62,7 +62,7 @@ def test_an_arm_on_fewer_seeds_than_the_recipe_leads_but_is_not_chosen(monkeypat
     assert build.pays(long, recipe) and not build.complete(long, recipe)
     monkeypatch.setattr(build, "summarise", lambda runs: {"recipe": recipe, "long": long})
     assert build.choose([]) == ""
-    res = {"runs": {}, "arms": {"recipe": recipe, "long": long}, "gates": {}}
+    res = {"runs": {}, "arms": {"recipe": recipe, "long": long}, "gates": {}, "choice_noise": build.choice_noise({})}
     line = next(v for v in build.verdict(res) if "`long`" in v)
     assert "**`long` leads on validation** (seeds 1; partial, the recipe ran on 2)" in line
 
@@ -94,7 +94,8 @@ def test_each_gate_is_named_by_its_arms_and_judged_on_its_own_runs(capsys):
     assert build.gate_arms("gate_settle-critic") == ["settle", "critic"] and build.gate_arms("gate") == []
     with pytest.raises(ValueError):
         build.gate_arms("gate_nope")
-    assert build.main(["--gate-name"]) == 0 and capsys.readouterr().out.strip() == build.gate_name(build.paid_arms([]))
+    assert build.main(["--gate-name"]) == 0
+    assert capsys.readouterr().out.strip() == build.gate_name(build.paid_arms([]))
 
     def per(s):
         return {t: {"success_3m": s, "fall_rate_before_goal": 0.0, "pitch_var_deg2": 10.0, "roll_var_deg2": 10.0}
@@ -108,8 +109,25 @@ def test_each_gate_is_named_by_its_arms_and_judged_on_its_own_runs(capsys):
     g = build.gates(runs, test)
     assert list(g) == ["gate", "gate_settle"] and g["gate"]["holds"] is False and g["gate_settle"]["holds"]
     assert g["gate_settle"]["flags"] == build.ARM_FLAGS["settle"] and g["gate"]["flags"] == ""
-    line = next(v for v in build.verdict({"runs": {}, "arms": {}, "gates": g}) if "`settle`" in v)
+    res = {"runs": {}, "arms": {}, "gates": g, "choice_noise": build.choice_noise({})}
+    line = next(v for v in build.verdict(res) if "`settle`" in v)
     assert line.startswith("- **The gate with `settle` holds** (seeds 1, 2, 3)")
+
+
+def test_the_choice_noise_compares_the_chosen_candidate_before_and_after():
+    def run(before, after, chosen=1):
+        cands = [{"chosen": i == chosen} for i in range(2)]
+        per = {"rugged": [{"rounds": 256, "fell_before_goal": before if i == chosen else 0.5} for i in range(2)]}
+        return {"validation": {"per_course": per, "candidates": cands},
+                "result_on_validation": {"rugged": {"rounds": 500, "fall_rate_before_goal": after}}}
+
+    runs = {"a_s1": run(0.0, 0.02), "a_s2": run(0.01, 0.004), "b_s1": run(0.0, 0.0, chosen=0)}
+    runs["c_s1"] = {"validation": {"per_course": None, "candidates": []}, "result_on_validation": {}}   # no per course
+    n = build.choice_noise(runs)
+    assert set(n["runs"]) == {"a_s1", "a_s2", "b_s1"} and n["higher_when_evaluated"] == 1
+    assert n["runs"]["b_s1"]["chosen_on"]["fell_before_goal"] == 0.0   # the chosen one's share, not the other's
+    assert n["mean_chosen_on"] == pytest.approx(0.0033, abs=1e-4) and n["mean_evaluated"] == pytest.approx(0.008)
+    assert build.choice_noise({})["mean_evaluated"] is None
 
 
 def test_an_empty_arms_list_trains_nothing():
