@@ -19,6 +19,8 @@
 # (studies/learner/runs/NAME/policy.pt), the shipped policy and the fixed CPG go on 1000 test rounds per terrain first:
 # a gate whose test evaluations did not finish in its lease ($TEST_TERRAINS: the terrains still missing, default all
 # three).
+# With ARMS_AFTER_GATE=1 (and GATE=1) the arms' lanes start after the gate's seeds, beside its test rounds: the
+# gate's seeds run alone first, and the arms' times are shared (their comparison on validation is not a time).
 # With ALONE=1 the arms' runs go one after another, each alone on the GPU, and their results' and the kept results'
 # validation rounds all at once after the last (the times count; the lanes' runs share the GPU).
 # With AVERAGE=1 every run of the lease also validates the weight average of its candidates
@@ -43,6 +45,10 @@ if [ "${1:-}" = collect ]; then   # logs, configs, timings, results (not the oth
 fi
 ARMS=${ARMS-actor} SEEDS=${SEEDS:-1 2} VAL_ROUNDS=${VAL_ROUNDS:-500} KEPT=${KEPT-recipe_s1 recipe_s2}
 EXTRA=""; [ "${AVERAGE:-0}" = 1 ] && EXTRA="--agent.validation_average true"
+AFTER=${ARMS_AFTER_GATE:-0}
+if [ "$AFTER" = 1 ] && [ "${GATE:-0}" != 1 ]; then
+  echo "learner.sh: ARMS_AFTER_GATE=1 needs GATE=1" >&2; exit 2
+fi
 flags() { python studies/learner/build.py --flags "$1"; }   # an arm's train.py flags (build.py ARM_FLAGS)
 evaluate() {   # NAME TERRAIN ROUNDS CHECKPOINT [MORE evaluate FLAGS]
   local name=$1 t=$2 rounds=$3 ckpt=$4; shift 4
@@ -99,19 +105,23 @@ if [ "${ALONE:-0}" = 1 ]; then   # one run at a time, alone on the GPU (the time
   done
   ARMS=""
 fi
-for seed in $SEEDS; do
-  [ -n "$ARMS" ] || break
-  (
-    for arm in $ARMS; do
-      f=$(flags "$arm") || continue
-      # shellcheck disable=SC2086
-      OUT=$RUNS_OUT LIMIT=${ARM_LIMIT:-1200} VAL_ROUNDS=$VAL_ROUNDS bash studies/device/candidates.sh \
-        "${arm}_s$seed@0:--task complex --seed $seed $f $EXTRA"
-      echo "$(date +%T) ${arm}_s$seed ended"
-    done
-  ) &
-  sleep 20
-done
+lanes() {   # the arms' lanes in the background, one per seed, each training its arms one after another
+  local seed
+  for seed in $SEEDS; do
+    [ -n "$ARMS" ] || break
+    (
+      for arm in $ARMS; do
+        f=$(flags "$arm") || continue
+        # shellcheck disable=SC2086
+        OUT=$RUNS_OUT LIMIT=${ARM_LIMIT:-1200} VAL_ROUNDS=$VAL_ROUNDS bash studies/device/candidates.sh \
+          "${arm}_s$seed@0:--task complex --seed $seed $f $EXTRA"
+        echo "$(date +%T) ${arm}_s$seed ended"
+      done
+    ) &
+    sleep "${LANE_GAP:-20}"   # the lanes start apart (their imports and builds)
+  done
+}
+[ "$AFTER" = 1 ] || lanes
 wait
 echo "$(date +%T) the arms and their evaluations ended"
 [ "${GATE:-0}" = 1 ] || exit 0
@@ -133,5 +143,6 @@ for seed in $GATE_SEEDS; do
 done
 # shellcheck disable=SC2086  # NAME=CHECKPOINT words
 [ "${GATE_TEST:-1}" = 1 ] && test_rounds $specs
+[ "$AFTER" = 1 ] && lanes   # beside the test rounds: the gate's seeds are done, the GPU is shared from here on
 wait
 echo "$(date +%T) the learner's queue ended"

@@ -137,6 +137,44 @@ def test_an_empty_arms_list_trains_nothing():
     assert "ARMS=${ARMS-actor}" in queue and "ARMS=${ARMS:-" not in queue
 
 
+FAKE_PYTHON = """#!/bin/bash
+case "$1" in
+  train.py) echo "train ${*:2}" >> "$CALLS"; mkdir -p "$RUNS";;
+  -m) echo "$2 ${*:3}" >> "$CALLS";;
+  *) exec python3 "$@";;
+esac
+"""
+
+
+def test_the_queue_runs_the_gate_alone_then_the_arms_beside_its_test_rounds(tmp_path):
+    """learner.sh with ARMS_AFTER_GATE=1: the gate's seeds one after another, then its test rounds and the arms' lanes
+    (train.py and evaluate stand-ins log their calls); without GATE=1 it refuses at once."""
+    import subprocess
+
+    bin_dir = tmp_path / "bin"
+    bin_dir.mkdir()
+    (bin_dir / "python").write_text(FAKE_PYTHON)
+    (bin_dir / "python").chmod(0o755)
+    calls = tmp_path / "calls"
+    env = {**os.environ, "PATH": f"{bin_dir}:{os.environ['PATH']}", "CALLS": str(calls), "LANE_GAP": "0",
+           **{k: str(tmp_path / k.lower()) for k in ("EVALS", "QUEUE", "RUNS", "KEEP", "RUNS_OUT")}}
+    queue = os.path.join(build.HERE, "..", "device", "learner.sh")
+    root = os.path.join(build.HERE, "..", "..")
+    gate = {"ARMS": "rounds1024", "SEEDS": "1", "KEPT": "", "GATE": "1", "ARMS_AFTER_GATE": "1",
+            "GATE_SEEDS": "1 2", "GATE_NAME": "gate_settle", "GATE_FLAGS": build.ARM_FLAGS["settle"]}
+    done = subprocess.run(["bash", queue], env={**env, **gate}, cwd=root, capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stdout + done.stderr
+    lines = calls.read_text().splitlines()
+    trains = [ln for ln in lines if ln.startswith("train ")]
+    assert [t.split("--experiment ")[1] for t in trains] == ["gate_settle_s1", "gate_settle_s2", "rounds1024_s1"]
+    assert "--agent.validation_rounds 1024" in trains[2] and "'desired_kl':0.004" in trains[0]
+    first_eval = next(i for i, ln in enumerate(lines) if ln.startswith("hexnewton.apps.evaluate"))
+    assert lines.index(trains[1]) < first_eval   # the seeds ran before any evaluation
+    refused = subprocess.run(["bash", queue], env={**env, "ARMS_AFTER_GATE": "1"}, cwd=root, capture_output=True,
+                             text=True, timeout=60)
+    assert refused.returncode == 2 and "needs GATE=1" in refused.stderr
+
+
 def test_the_average_candidate_is_parsed_and_left_out_of_the_arms_choice():
     log = LOG.replace("230 s from", "  model_average.pt (average of iterations 200, 250, iteration 250): goal 99.0 %, "
                       "fell before the goal 0.0 % (in all 0.0 %), 3 m 99.0 %, off course 0.0 %, pitch / roll var "
