@@ -207,7 +207,7 @@ def choice_noise(runs: dict, terrain: str = "rugged") -> dict:
 
 def gates(runs: dict, test: dict) -> dict:
     """Every gate the study ran (``gate``: the recipe's; ``gate_ARM-ARM``: with those arms' flags), as ``gate``."""
-    stems = sorted({r["arm"] for r in runs.values() if r["arm"] == "gate" or r["arm"].startswith("gate_")})
+    stems = sorted({r["arm"] for r in runs.values() if is_gate(r["arm"])})
     return {stem: g for stem in stems if (g := gate(runs, test, stem)) is not None}
 
 
@@ -279,7 +279,8 @@ def gate(runs: dict, test: dict, stem: str = "gate") -> dict | None:
     lines["<= 240 s from process start, validation included"] = _line(
         [r["wall_s"] for r in seeds.values()], lambda v: max(v) <= GATE["wall_s_max"])
     states = set(lines.values())
-    return {"seeds": sorted(seeds), "arms": gate_arms(stem), "flags": arms_flags(gate_arms(stem)), "lines": lines,
+    arms = gate_arms(stem)
+    return {"seeds": sorted(seeds), "arms": arms, "flags": arms_flags(arms), "lines": lines,
             "holds": False if False in states else None if None in states else True}
 
 
@@ -294,8 +295,14 @@ def paid_arms(run_dirs: list[str]) -> list[str]:
     arms = summarise(runs)
     if "recipe" not in arms:
         raise ValueError("the study holds no recipe runs to compare with")
-    return [a for a in ARM_FLAGS if a != "recipe" and a in arms and complete(arms[a], arms["recipe"])
-            and pays(arms[a], arms["recipe"])]
+    return paying(arms)
+
+
+def paying(arms: dict) -> list[str]:
+    """The arms of ``summarise`` that ran on the recipe's seeds and paid against it (none without recipe runs)."""
+    base = arms.get("recipe")
+    return [a for a in ARM_FLAGS if a != "recipe" and a in arms and base is not None and complete(arms[a], base)
+            and pays(arms[a], base)]
 
 
 def arms_flags(arms: list[str]) -> str:
@@ -319,11 +326,16 @@ def gate_name(arms: list[str]) -> str:
     return "gate_" + "-".join(arms) if arms else "gate"
 
 
+def is_gate(name: str) -> bool:
+    """Whether a run name's stem is a gate's (``gate_name``)."""
+    return name == "gate" or name.startswith("gate_")
+
+
 def gate_arms(name: str) -> list[str]:
     """The arms a gate's stem names (``gate_name``'s inverse): unknown arms raise ValueError."""
     arms = name.split("_", 1)[1].split("-") if "_" in name else []
     unknown = [a for a in arms if a not in ARM_FLAGS]
-    if (name != "gate" and not name.startswith("gate_")) or unknown:
+    if not is_gate(name) or unknown:
         raise ValueError(f"{name} is not a gate of known arms")
     return arms
 
@@ -465,8 +477,7 @@ def verdict(res: dict) -> list[str]:
                    f"{len(lines) - len(unmeasured)} of {len(lines)} lines measured"
                    + (f"; fails: {'; '.join(failed)}" if failed else "")
                    + (f"; not measured yet: {'; '.join(unmeasured)}" if unmeasured else "") + ".")
-    paid = [a for a in ARM_FLAGS if a != "recipe" and a in arms and base is not None and complete(arms[a], base)
-            and pays(arms[a], base)]
+    paid = paying(arms)
     if paid and gate_name(paid) not in res["gates"]:
         worst = []   # each paid arm's results on the validation rounds, against the gate's falls line
         for a in paid:
