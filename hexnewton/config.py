@@ -145,6 +145,12 @@ class TerrainConfig:
     climb: int = 1
     # robots start evenly spread over levels 0 .. start_levels - 1 (legged_gym: max_init_terrain_level)
     start_levels: int = 1
+    # ours: courses trained beside this one. With levels = L > 0 and lane_courses = (c1, ...), the grid holds one group
+    # of L lanes per course side by side along y (this terrain's first, then c1, ...; each as ``name`` would be, with
+    # its own block seeds), and env i plays group i mod (1 + len(lane_courses)) on its curriculum level. (): this
+    # terrain alone. A policy trained on the complex course sees 1.5 m of blocks before the stairs; with "rugged
+    # stepped" it also walks the rugged and stepped courses whole, as validation and evaluation do.
+    lane_courses: tuple[str, ...] = ()
     # ours: how the terrain collides (flat is always an infinite ground plane). "mesh_boxes" (the default): every
     # strip of constant height across the whole width (of a curriculum lane, with levels > 0) -- run-ups, stair
     # treads, landings, flat ground beyond the blocks -- as one static box, the rugged blocks as one triangle mesh,
@@ -531,10 +537,10 @@ def terrain_for_goal(terrain: TerrainConfig, goal_distance: float) -> TerrainCon
 
 def without_lanes(terrain: TerrainConfig, **fields) -> TerrainConfig:
     """``terrain`` as one course, no curriculum: no lanes and nothing only lanes use (``start_levels``,
-    ``past_share``), then ``fields``."""
+    ``past_share``, ``lane_courses``), then ``fields``."""
     from dataclasses import replace
 
-    return replace(terrain, levels=0, start_levels=1, past_share=0.0, **fields)
+    return replace(terrain, levels=0, start_levels=1, past_share=0.0, lane_courses=(), **fields)
 
 
 def _as_tuples(v):

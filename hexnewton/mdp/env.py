@@ -104,6 +104,7 @@ from hexnewton.physics.cpg import CPGController, joint_actions_kernel
 from hexnewton.physics.graphs import capture_graph
 from hexnewton.physics.precompile import compile_modules, loaded_variants, variant_names
 from hexnewton.physics.robot import BASE_Q
+from hexnewton.physics.terrain.heightmap import env_groups, group_offset_y
 from hexnewton.physics.world import ModelBuild, World
 
 RING = 1024  # finished episodes the logged rates average over
@@ -205,7 +206,8 @@ class HexapodEnv(VecEnv):
             self.level = wp.array(start_levels(n, cfg.terrain.start_levels), dtype=wp.int32, device=dev)
             self._level_t = wp.to_torch(self.level)
             self._played = wp.clone(self.level)  # the lane each episode is played on (past_share: drawn ones)
-            self._lane_offset = wp.array(world.spawn_xy[:, 1].astype(np.float32), device=dev)
+            offset = world.spawn_xy[:, 1] + group_offset_y(cfg.terrain, env_groups(cfg.terrain, n))  # lane_courses
+            self._lane_offset = wp.array(offset.astype(np.float32), device=dev)
             wp.launch(placement_kernel, dim=n,
                       inputs=[self.level, cfg.terrain.levels, cfg.terrain.lane_width, self._lane_offset,
                               self.height_field, world.footprint, world.spawn_clearance],

@@ -33,6 +33,8 @@ When an env's episode ends (status != 0), before it is reset (:func:`curriculum_
 - an episode played on a drawn lane past the course (below): the level stays.
 With ``TerrainConfig.past_share`` = s > 0, each new episode is played with probability s on a lane past the course
 drawn evenly among the P, whatever the level (which it does not change); the others on the level's lane.
+With ``TerrainConfig.lane_courses``, the lanes form one group of L per course, side by side along y, and env i plays
+group i mod the groups' count throughout: its fixed lateral offset holds its group's offset.
 The env's lane start moves to the new (or drawn) level's lane centre (plus the env's own fixed lateral offset), at
 ``spawn_height`` above the highest terrain under the robot's footprint there; the reset then places the
 robot there. :func:`placement_kernel` does the placement alone (at construction).

@@ -37,7 +37,9 @@ ARM_FLAGS = {"recipe": "", "critic": "--env.obs.critic true",
              # the last stage saved every 10 iterations, 8 candidates validated (the recipe: every 50, at most 4)
              "candidates": "--agent.save_interval 10 --agent.validation_candidates 8",
              # each candidate on 1024 rounds per course, not 256: the falls line (0.5 %) within the estimate's noise
-             "rounds1024": "--agent.validation_rounds 1024"}
+             "rounds1024": "--agent.validation_rounds 1024",
+             # the rugged and stepped courses' lanes beside the complex course's: a third of the envs on each
+             "courses": "--env.terrain.lane_courses rugged stepped"}
 #: each arm in words, with its flags
 ARMS = {arm: f"{what} (`{ARM_FLAGS[arm] or '--task complex'}`)" for arm, what in (
     ("recipe", "the complex recipe"), ("critic", "+ the asymmetric critic"),
@@ -48,7 +50,9 @@ ARMS = {arm: f"{what} (`{ARM_FLAGS[arm] or '--task complex'}`)" for arm, what in
     ("settle", "the last stage (iterations 200-299) with smaller PPO steps: KL target 0.004 and no entropy bonus"),
     ("candidates", "the last stage saved every 10 iterations and 8 of its checkpoints validated (validation time x2)"),
     ("rounds1024", "each candidate validated on 1024 rounds per course, not 256 (the choice's noise: at 256 rounds a "
-                   "1 % fall share has a standard error of 0.6 points)"))}
+                   "1 % fall share has a standard error of 0.6 points)"),
+    ("courses", "the rugged and stepped courses trained beside the complex one (a lane group each, a third of the envs "
+                "on each; what it trains on, not what it sees): validation and the gate walk all three"))}
 TERRAINS = ("rugged", "stepped", "complex")
 METRICS = ("success_3m", "fall_rate", "fall_rate_before_goal", "pitch_var_deg2", "roll_var_deg2")
 #: the gate's lines (1000 test rounds per terrain, deterministic action)

@@ -231,3 +231,55 @@ def test_env_moves_robots_between_lanes():
     assert stats["top_level_episodes"] == top.sum() and set(np.unique(played[:, 7])) <= {0, 1, 2, 3}
     if top.any():
         assert stats["top_level_success_rate"] == pytest.approx(played[top, 2].mean())
+
+
+def test_lane_courses_hold_each_course_whole():
+    """``lane_courses``: one group of lanes per course side by side along y; the first group is the terrain's own
+    grid unchanged, and each other group's lane k is that course's lane k (its stairs at the lane's scaled rise, its
+    blocks its own draws); env i plays group i mod 3."""
+    from hexnewton.physics.terrain.heightmap import env_groups, lane_config
+
+    one = TerrainConfig(name="complex", levels=3, lane_width=1.0)
+    cfg = replace(one, lane_courses=("rugged", "stepped"))
+    grid, own = build_height_grid(cfg), build_height_grid(one)
+    assert grid.heights.shape == (own.nx, 3 * own.ny) and grid.y0 == pytest.approx(-4.5)
+    np.testing.assert_array_equal(grid.heights[:, : own.ny], own.heights)
+    x = np.arange(cfg.x_min, cfg.x_max, cfg.query_resolution) + 0.5 * cfg.query_resolution
+    for k in range(3):
+        y = lane_center_y(cfg, k, 2)  # the stepped group: the paper's staircase, rise scaled by (k + 1) / 3
+        step = np.clip(np.floor((x - cfg.stepped_start_x) / cfg.step_depth + 1e-9) + 1, 0, cfg.step_count)
+        np.testing.assert_allclose(terrain_height_np(grid, x, np.full_like(x, y)), cfg.step_rise * (k + 1) / 3 * step,
+                                   atol=1e-6)  # fmt: skip
+        rugged = lane_config(cfg, k, 1)  # the rugged group: blocks from x_min to rugged_x_max, its own seed
+        assert rugged.name == "rugged" and rugged.seed != lane_config(cfg, k, 0).seed
+        ys = lane_center_y(cfg, k, 1) + np.linspace(-0.45, 0.45, 30)
+        xs = np.linspace(0.0, cfg.rugged_x_max - 0.05, 60)
+        h = terrain_height_np(grid, xs[None, :], ys[:, None])
+        np.testing.assert_array_equal(h, terrain_height_np(build_height_grid(rugged), xs[None, :],
+                                                           (ys - lane_center_y(cfg, k, 1))[:, None]))  # fmt: skip
+        assert 0.5 * cfg.block_height_max * (k + 1) / 3 < h.max() <= cfg.block_height_max * (k + 1) / 3 + 1e-6
+    assert env_groups(cfg, 5).tolist() == [0, 1, 2, 0, 1] and env_groups(one, 3).tolist() == [0, 0, 0]
+    assert lane_center_y(one, 1) == lane_center_y(replace(one, lane_courses=()), 1, 0) == 0.0
+
+
+@pytest.mark.parametrize("bad, message", [
+    (dict(lane_courses=("rugged",)), "needs a curriculum"),
+    (dict(levels=2, lane_courses=("moon",)), "unknown terrain 'moon'"),
+    (dict(levels=2, lane_courses=("complex",)), "each course once"),
+])  # fmt: skip
+def test_lane_courses_checked(bad, message):
+    with pytest.raises(ValueError, match=message):
+        build_height_grid(replace(TerrainConfig(name="complex"), **bad))
+
+
+@pytest.mark.slow  # builds an env: a few seconds on a 2-core CPU
+def test_env_places_each_env_on_its_course():
+    """Envs of a curriculum with ``lane_courses`` start on their level's lane of their own group."""
+    from hexnewton.physics.terrain.heightmap import env_groups
+
+    cfg = HexConfig(sim=replace(SimConfig(), num_envs=6, device=DEV),
+                    terrain=TerrainConfig(name="complex", levels=2, start_levels=2, lane_courses=("rugged", "stepped")))
+    env = make_env(cfg)
+    centre = lane_center_y(cfg.terrain, env.level.numpy(), env_groups(cfg.terrain, 6))
+    assert np.all(np.abs(env.start.numpy()[:, 1] - centre) <= cfg.sim.spawn_y_spread + cfg.task.reset_lateral + 1e-5)
+    assert len(np.unique(np.round(centre, 3))) >= 3

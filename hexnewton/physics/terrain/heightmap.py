@@ -108,6 +108,8 @@ def validate_config(cfg: TerrainConfig) -> None:
     _multiple(cfg.width / 2, res, "width / 2", "query_resolution")
     _require(int(cfg.levels) == cfg.levels and cfg.levels >= 0, f"levels must be an integer >= 0, got {cfg.levels!r}")
     _require(cfg.levels or cfg.past_share == 0.0, f"past_share {cfg.past_share} needs a curriculum (levels > 0)")
+    _require(cfg.levels or not cfg.lane_courses,
+             f"lane_courses ({' '.join(cfg.lane_courses)}) needs a curriculum (levels > 0)")
     if cfg.levels:
         _require(int(cfg.start_levels) == cfg.start_levels and 1 <= cfg.start_levels <= cfg.levels,
                  f"start_levels must be an integer in [1, levels = {cfg.levels}], got {cfg.start_levels!r}")
@@ -115,8 +117,13 @@ def validate_config(cfg: TerrainConfig) -> None:
                  f"lane_width must be positive, got {cfg.lane_width!r}")
         _require(int(cfg.climb) == cfg.climb and cfg.climb >= 1, f"climb must be an integer >= 1, got {cfg.climb!r}")
         _check_levels_past(cfg)
-        for level in range(cfg.levels - cfg.levels_past - 1, cfg.levels):  # the course's lane and those past it
-            validate_config(lane_config(cfg, level))
+        for name in cfg.lane_courses:
+            _require(name in TERRAINS, f"lane_courses: unknown terrain '{name}': choose among {', '.join(TERRAINS)}")
+        _require(len(set(course_names(cfg))) == len(course_names(cfg)),
+                 f"lane_courses ({' '.join(cfg.lane_courses)}) must name each course once, '{cfg.name}' not again")
+        for group in range(len(course_names(cfg))):
+            for level in range(cfg.levels - cfg.levels_past - 1, cfg.levels):  # the course's lane and those past it
+                validate_config(lane_config(cfg, level, group))
         return
     TERRAIN_KINDS[cfg.name].check(cfg)
 
@@ -281,13 +288,19 @@ TERRAIN_KINDS = {
 assert tuple(TERRAIN_KINDS) == TERRAINS, "one row per name of config.TERRAINS, in its order"
 
 
-def lane_config(cfg: TerrainConfig, level: int) -> TerrainConfig:
-    """The terrain of curriculum lane ``level``: ``cfg`` one lane wide, its own block seed, and up to the course's lane
-    (``levels - levels_past - 1``) the heights scaled by (level + 1) / (levels - levels_past); past it the step
-    rise, tread and block height a share (level + 1 - course lanes) / levels_past of the way from ``cfg``'s to the
-    ``hardest_*`` values (None: ``cfg``'s), the tread rounded to the query grid."""
+def course_names(cfg: TerrainConfig) -> tuple[str, ...]:
+    """The courses of the curriculum's lane groups, in their order along y: ``cfg.name``, then ``lane_courses``."""
+    return (cfg.name, *cfg.lane_courses)
+
+
+def lane_config(cfg: TerrainConfig, level: int, group: int = 0) -> TerrainConfig:
+    """The terrain of curriculum lane ``level`` of lane group ``group`` (its course ``course_names(cfg)[group]``):
+    ``cfg`` one lane wide, its own block seed, and up to the course's lane (``levels - levels_past - 1``) the heights
+    scaled by (level + 1) / (levels - levels_past); past it the step rise, tread and block height a share
+    (level + 1 - course lanes) / levels_past of the way from ``cfg``'s to the ``hardest_*`` values (None: ``cfg``'s),
+    the tread rounded to the query grid."""
     lanes = dict(width=cfg.lane_width, rugged_half_width=min(cfg.rugged_half_width, cfg.lane_width / 2),
-                 seed=cfg.seed * 1000 + level)
+                 seed=cfg.seed * 1000 + level + 100_000 * group, name=course_names(cfg)[group])
     course = cfg.levels - cfg.levels_past
     if level < course:
         scale = (level + 1) / course
@@ -303,21 +316,34 @@ def lane_config(cfg: TerrainConfig, level: int) -> TerrainConfig:
                          step_rise=toward(cfg.step_rise, cfg.hardest_step_rise), step_depth=depth, **lanes)  # fmt: skip
 
 
-def lane_center_y(cfg: TerrainConfig, level: int | np.ndarray) -> float | np.ndarray:
-    """y of curriculum lane ``level``'s centre line (lanes side by side, centred on y = 0)."""
-    return (np.asarray(level) + 0.5 - cfg.levels / 2) * cfg.lane_width
+def group_offset_y(cfg: TerrainConfig, group: int | np.ndarray) -> float | np.ndarray:
+    """y of lane group ``group``'s centre (the groups of ``course_names`` side by side, centred on y = 0)."""
+    return (np.asarray(group) - 0.5 * (len(course_names(cfg)) - 1)) * cfg.levels * cfg.lane_width
+
+
+def env_groups(cfg: TerrainConfig, num_envs: int) -> np.ndarray:
+    """The lane group each of ``num_envs`` envs plays (int32): env i the group i mod len(course_names(cfg))."""
+    return (np.arange(num_envs) % len(course_names(cfg))).astype(np.int32)
+
+
+def lane_center_y(cfg: TerrainConfig, level: int | np.ndarray, group: int | np.ndarray = 0) -> float | np.ndarray:
+    """y of curriculum lane ``level``'s centre line in lane group ``group`` (lanes side by side, centred on their
+    group's centre)."""
+    return (np.asarray(level) + 0.5 - cfg.levels / 2) * cfg.lane_width + group_offset_y(cfg, group)
 
 
 def build_height_grid(cfg: TerrainConfig) -> HeightGrid:
     """Height grid of terrain ``cfg.name`` over x in [x_min, x_max], |y| <= width / 2 (with curriculum levels:
-    the lanes side by side, |y| <= levels * lane_width / 2).
+    the lanes side by side, one group of them per course of ``course_names``, |y| <= groups * levels * lane_width /
+    2).
 
     Raises ``ValueError`` for an unknown terrain name or invalid parameters.
     """
     validate_config(cfg)
     if cfg.levels:
-        lanes = [build_height_grid(lane_config(cfg, k)) for k in range(cfg.levels)]
-        width = cfg.levels * cfg.lane_width
+        groups = range(len(course_names(cfg)))
+        lanes = [build_height_grid(lane_config(cfg, k, g)) for g in groups for k in range(cfg.levels)]
+        width = len(groups) * cfg.levels * cfg.lane_width
         return HeightGrid(np.concatenate([g.heights for g in lanes], axis=1), float(cfg.x_min), -width / 2,
                           float(cfg.query_resolution))  # fmt: skip
     grid = _empty_grid(cfg)
