@@ -4,6 +4,7 @@
 # with the kept study (studies/paper_comparison), so run this at the start of every lease, from the repository root:
 #
 #   bash ../shared/device/pack.sh ...    # once per machine, when no .dw* folders exist
+#   bash studies/device/aside.sh out     # the studies' data out of the tree (the tracked tree is over 64 MiB)
 #   bash studies/device/rechunk.sh       # then the device calls it prints
 #
 # The chunks are joined in name order and split again into .dw0 ... .dwN (install.sh joins /opt/w/part* in name
@@ -19,7 +20,8 @@ install=$(ls $(for d in $dirs; do echo "$d/install.sh"; done) 2>/dev/null | tail
 tree=$( (git ls-files -z; git ls-files -z --others --exclude-standard) | xargs -0 du -cb 2>/dev/null | tail -1 | cut -f1 \
   || true)
 chunk=$(( 64 * 1048576 - tree - 2 * 1048576 ))
-[ "$chunk" -gt 4194304 ] || { echo "rechunk.sh: the tree ($tree bytes) leaves no room for wheel chunks" >&2; exit 1; }
+[ "$chunk" -gt 4194304 ] || { echo "rechunk.sh: the tree ($((tree / 1048576)) MiB) leaves no room for wheel chunks: set the \
+studies' data aside first (bash studies/device/aside.sh out)" >&2; exit 1; }
 work=$(mktemp -d)
 cp "$install" "$work/install.sh"
 for d in $dirs; do cat "$d"/part*; done > "$work/wheels.tar"

@@ -282,3 +282,34 @@ def test_sample_scaled_queue_on_two_gpus(tmp_path):
     assert one.algorithm.num_mini_batches == four.algorithm.num_mini_batches == 8
     assert one.to_rsl_rl(16384)["num_steps_per_env"] == four.to_rsl_rl(4096)["num_steps_per_env"]
     assert env1.terrain.climb == env4.terrain.climb == 2
+
+
+def test_aside_moves_the_studies_data_out_and_back(tmp_path):
+    """aside.sh: the named folders leave the tree (a device call's size drops) and come back unchanged; KEEP leaves a
+    folder in; a second ``out`` over folders already set aside refuses; bad words get one usage line."""
+    repo, aside = tmp_path / "repo", tmp_path / "aside"
+    (repo / "studies/device").mkdir(parents=True)
+    shutil.copy(os.path.join(ROOT, "studies/device/aside.sh"), repo / "studies/device/aside.sh")
+    for folder in ("studies/big/data", "studies/runs", "studies/kept"):
+        (repo / folder).mkdir(parents=True)
+        (repo / folder / "blob.bin").write_bytes(os.urandom(3 * 1048576))
+    git = dict(cwd=repo, check=True, capture_output=True)
+    subprocess.run(["git", "init", "-q"], **git)
+    subprocess.run(["git", "add", "-A"], **git)
+    env = dict(os.environ, ASIDE=str(aside), FOLDERS="studies/big studies/runs studies/kept studies/none",
+               KEEP="studies/kept")  # fmt: skip
+    run = dict(cwd=repo, env=env, capture_output=True, text=True)
+    assert subprocess.run(["bash", "studies/device/aside.sh", "size"], **run).stdout.strip() == "tree 9 MiB"
+    out = subprocess.run(["bash", "studies/device/aside.sh", "out"], **run)
+    assert out.returncode == 0 and out.stdout.startswith("tree 3 MiB, set aside in"), out.stdout + out.stderr
+    assert (aside / "studies/big/data/blob.bin").is_file() and not (repo / "studies/big").exists()
+    assert (repo / "studies/kept/blob.bin").is_file() and not (aside / "studies/kept").exists()
+    (repo / "studies/runs").mkdir()
+    again = subprocess.run(["bash", "studies/device/aside.sh", "out"], **run)
+    assert again.returncode == 1 and "exists already" in again.stderr
+    (repo / "studies/runs").rmdir()
+    back = subprocess.run(["bash", "studies/device/aside.sh", "back"], **run)
+    assert back.returncode == 0 and back.stdout.strip() == "tree 9 MiB", back.stdout + back.stderr
+    assert (repo / "studies/runs/blob.bin").is_file() and not (aside / "studies/runs").exists()
+    bad = subprocess.run(["bash", "studies/device/aside.sh", "over"], **run)
+    assert bad.returncode == 2 and bad.stderr.count("\n") == 1 and bad.stderr.startswith("usage:")
