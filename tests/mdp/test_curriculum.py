@@ -266,6 +266,7 @@ def test_lane_courses_hold_each_course_whole():
     (dict(lane_courses=("rugged",)), "needs a curriculum"),
     (dict(levels=2, lane_courses=("moon",)), "unknown terrain 'moon'"),
     (dict(levels=2, lane_courses=("complex",)), "each course once"),
+    (dict(name="flat", levels=2, lane_courses=("rugged",)), "beside a flat terrain"),
 ])  # fmt: skip
 def test_lane_courses_checked(bad, message):
     with pytest.raises(ValueError, match=message):

@@ -117,6 +117,8 @@ def validate_config(cfg: TerrainConfig) -> None:
                  f"lane_width must be positive, got {cfg.lane_width!r}")
         _require(int(cfg.climb) == cfg.climb and cfg.climb >= 1, f"climb must be an integer >= 1, got {cfg.climb!r}")
         _check_levels_past(cfg)
+        _require(cfg.name != "flat" or not cfg.lane_courses,
+                 "lane_courses beside a flat terrain (a ground plane): name another course, flat among lane_courses")
         for name in cfg.lane_courses:
             _require(name in TERRAINS, f"lane_courses: unknown terrain '{name}': choose among {', '.join(TERRAINS)}")
         _require(len(set(course_names(cfg))) == len(course_names(cfg)),
