@@ -216,3 +216,22 @@ def test_the_settle_and_candidates_arms_parse_as_train_py_reads_them():
     sharp = apply_overrides(base, config_overrides(p.parse_args(build.ARM_FLAGS["rounds1024"].split()), "agent"))
     sharp.check()
     assert (sharp.validation_rounds, base.validation_rounds, sharp.stages) == (1024, 256, base.stages)
+
+
+def test_the_falls_line_counts_the_results_at_or_below_it():
+    """falls_line: per course, the results on the validation rounds that fall before the goal in at most the gate's
+    share, and the shipped policy's shares beside them; the verdict says it where at most half meet it."""
+    v = lambda rate: {"fall_rate_before_goal": rate, "rounds": 500}  # noqa: E731
+    runs = {"a_s1": {"result_on_validation": {"rugged": v(0.0), "complex": v(0.0)}},
+            "a_s2": {"result_on_validation": {"rugged": v(0.012), "complex": v(0.005)}},
+            "b_s1": {"result_on_validation": {"rugged": v(0.006)}}}
+    fixed = {"validation": {"shipped": {"rugged": v(0.002)}}, "test": {"shipped": {"rugged": v(0.005)}}}
+    fl = build.falls_line(runs, fixed)
+    assert fl["line"] == 0.005
+    assert fl["courses"]["rugged"] == {"results": 3, "met": ["a_s1"], "share_met": 0.3333,
+                                       "shipped_validation": 0.002, "shipped_test": 0.005}
+    assert fl["courses"]["complex"]["met"] == ["a_s1", "a_s2"] and fl["courses"]["stepped"]["results"] == 0
+    res = {"runs": {}, "arms": {}, "gates": {}, "falls_line": fl, "choice_noise": {"runs": {}}}
+    lines = [x for x in build.verdict(res) if "falls line" in x]
+    assert len(lines) == 1 and "on the rugged course is rarely met**: 1 of 3 results" in lines[0]
+    assert "3.70 % of gates" in lines[0]
