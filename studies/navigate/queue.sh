@@ -7,9 +7,10 @@
 #
 # For each task, navigate-flat then navigate-rugged: the one training command (its wall time from process start in
 # train_<t>.time, timing.json in the run), the navigation evaluation on 1000 unseen rounds per bearing and 1000 of the
-# square (deterministic action, the test seeds), the bundle, a headless video of three robots on the square; then the
-# flat bundle in C MuJoCo through the same square, 100 rounds on the host's cores, beside Newton's. Each step's outputs
-# are packed into $OUT/<step>.tgz as soon as they exist (a lost machine keeps what was polled).
+# square (deterministic action, the test seeds), the bundle, a headless video of three robots on the square; after the
+# flat task, its bundle in C MuJoCo through the same square, 100 rounds on the host's cores, beside Newton's (so a lease
+# that ends during navigate-rugged holds the flat task whole). Each step's outputs are packed into $OUT/<step>.tgz as
+# soon as they exist (a lost machine keeps what was polled).
 set -u
 OUT=${OUT:-/root/navigate} ROUNDS=${ROUNDS:-1000} S2S_ROUNDS=${S2S_ROUNDS:-100}
 mkdir -p "$OUT"
@@ -29,9 +30,11 @@ for t in flat rugged; do
   MUJOCO_GL=egl python play.py --checkpoint "$ckpt" --waypoints 2,0 2,2 0,2 0,0 --num_envs 3 --steps 2000 \
     --headless --video "$OUT/square_$t.mp4" --no-progress > "$OUT/video_$t.log" 2>&1
   pack "eval_$t" "eval_$t" "eval_$t.log" "bundle_$t" "export_$t.log" "square_$t.mp4" "video_$t.log"
+  [ "$t" = flat ] || continue
+  echo "$(date +%T) sim2sim"
+  python -m hexnewton.apps.sim2sim "$OUT/bundle_flat" --terrains flat --rounds "$S2S_ROUNDS" --waypoints 2,0 2,2 0,2 \
+    0,0 --max_steps 4000 --newton "$OUT/eval_flat/results.json" --workers 0 --out "$OUT/s2s_flat" \
+    > "$OUT/s2s_flat.log" 2>&1
+  pack s2s_flat s2s_flat s2s_flat.log
 done
-echo "$(date +%T) sim2sim"
-python -m hexnewton.apps.sim2sim "$OUT/bundle_flat" --terrains flat --rounds "$S2S_ROUNDS" --waypoints 2,0 2,2 0,2 0,0 \
-  --max_steps 4000 --newton "$OUT/eval_flat/results.json" --workers 0 --out "$OUT/s2s_flat" > "$OUT/s2s_flat.log" 2>&1
-pack s2s_flat s2s_flat s2s_flat.log
 echo "$(date +%T) queue ended"

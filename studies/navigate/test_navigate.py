@@ -40,3 +40,39 @@ def test_the_measured_patch_is_the_tasks():
     g = terrain.grid
     assert [round(g.x1 - g.x0, 3), round(g.y1 - g.y0, 3)] == row["patch_m"]
     assert sum(len(m.indices) // 3 for m in meshes) == row["triangles"]
+
+
+FAKE_PYTHON = """#!/bin/bash
+# train.py: a run folder with a result and timing.json; the apps: their --out folder; every call noted in order
+echo "$*" >> "$OUT/calls"
+args=("$@"); out= ld= task=
+for ((i = 0; i < $#; i++)); do case ${args[i]} in --out) out=${args[i+1]};; --log_dir) ld=${args[i+1]};;
+  --task) task=${args[i+1]};; --video) touch "${args[i+1]}";; esac; done
+if [ -n "$ld" ]; then mkdir -p "$ld/hexnewton_$task/run"; touch "$ld/hexnewton_$task/run/model_result.pt"
+  echo '{}' > "$ld/hexnewton_$task/run/timing.json"; fi
+if [ -n "$out" ]; then mkdir -p "$out"; echo '{}' > "$out/results.json"; fi
+exit 0
+"""
+
+
+def test_the_queue_finishes_the_flat_task_whole_before_the_rugged_one(tmp_path):
+    """queue.sh with a stand-in python: navigate-flat is trained, evaluated, exported, filmed and run in C MuJoCo
+    before navigate-rugged starts, and every step's outputs are packed as they come."""
+    import subprocess
+
+    bin_dir, out = tmp_path / "bin", tmp_path / "navigate"
+    bin_dir.mkdir()
+    (bin_dir / "python").write_text(FAKE_PYTHON)
+    (bin_dir / "python").chmod(0o755)
+    env = dict(os.environ, PATH=f"{bin_dir}:{os.environ['PATH']}", OUT=str(out), ROUNDS="4", S2S_ROUNDS="2")
+    root = os.path.dirname(os.path.dirname(HERE))
+    done = subprocess.run(["bash", "studies/navigate/queue.sh"], cwd=root, env=env, capture_output=True, text=True)
+    assert done.returncode == 0 and done.stdout.rstrip().endswith("queue ended"), done.stdout + done.stderr
+    calls = (out / "calls").read_text().splitlines()
+    steps = [w[1] if w[0] == "-m" else w[0] for w in map(str.split, calls)]  # the script or the module run
+    assert steps == ["train.py", "hexnewton.apps.evaluate", "hexnewton.apps.export", "play.py",
+                     "hexnewton.apps.sim2sim", "train.py", "hexnewton.apps.evaluate", "hexnewton.apps.export",
+                     "play.py"]  # fmt: skip
+    assert "--task navigate-flat" in calls[0] and "--task navigate-rugged" in calls[5]
+    assert sorted(p.name for p in out.glob("*.tgz")) == ["eval_flat.tgz", "eval_rugged.tgz", "s2s_flat.tgz",
+                                                          "train_flat.tgz", "train_rugged.tgz"]  # fmt: skip
