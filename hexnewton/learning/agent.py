@@ -156,6 +156,10 @@ class AgentConfig:
     #: observation normalisers; :func:`hexnewton.learning.checkpoint.average_checkpoints`), kept as
     #: ``model_average.pt``
     validation_average: bool = False
+    #: ours: rsl-rl's per-step bookkeeping of the finished episodes (the mean reward and episode length it logs) kept
+    #: on the device and read once per iteration (:mod:`hexnewton.learning.episode_log`), not with three host syncs
+    #: every step; the same values logged. False: rsl-rl's own
+    deferred_episode_log: bool = True
     #: under torchrun with K ranks (:meth:`for_ranks`): ``mini_batches``: K times the mini-batches per rank (the
     #: mini-batch summed over the ranks stays one process's, K times the optimizer steps per iteration);
     #: ``iterations``: max_iterations, save_interval and the stages' first iterations divided by K (one process's

@@ -21,6 +21,7 @@ from rsl_rl.runners import OnPolicyRunner
 from hexnewton import startup
 from hexnewton.learning.agent import apply_stage, stage_at
 from hexnewton.learning.checkpoint import load_checkpoint, load_into_runner
+from hexnewton.learning.episode_log import DeferredEpisodes
 from hexnewton.learning.policy import export_onnx
 from hexnewton.learning.ranks import Rank
 from hexnewton.learning.stopping import TrainingStopped, catch_stop_signals
@@ -250,6 +251,7 @@ class HexRunner(RankedRunner):
         self._reduce = _sum_over_ranks(device) if rank.world_size > 1 else None
         self._rsl_log, self.logger.log = self.logger.log, self._after_iteration
         self._rsl_init_writer, self.logger.init_logging_writer = self.logger.init_logging_writer, self._init_writer
+        self._episodes = DeferredEpisodes(self.logger) if agent.deferred_episode_log else None
         self._stage, self._time_up, self._t0 = None, False, time.time()
         self.first_iteration_s = None  # seconds from the process's start to the end of the first iteration
         startup.mark("runner")
@@ -284,6 +286,8 @@ class HexRunner(RankedRunner):
     # -------------------------------------------------------------- per iteration
     def _after_iteration(self, *args, **kwargs) -> None:
         """rsl-rl's 30-line block goes to TensorBoard only; the console gets :func:`progress_line`."""
+        if self._episodes is not None:
+            self._episodes.flush()  # the iteration's finished episodes, before rsl-rl's log reads them
         with contextlib.redirect_stdout(io.StringIO()):
             self._rsl_log(*args, **kwargs)
         stats = self.env.episode_stats()
