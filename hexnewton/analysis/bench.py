@@ -163,6 +163,7 @@ def bench_train(terrain: str, num_envs: int, device: str, iterations: int, seed:
     import torch
     import warp as wp
 
+    from hexnewton.learning.episode_log import DeferredEpisodes
     from hexnewton.learning.runner import RankedRunner, seed_everything
     from hexnewton.mdp.env import make_env
 
@@ -175,6 +176,8 @@ def bench_train(terrain: str, num_envs: int, device: str, iterations: int, seed:
     # a TensorBoard writer as in train.py: rsl-rl's logger only does its per-step bookkeeping with one
     logs = tempfile.TemporaryDirectory(prefix="hexnewton-bench-")
     runner = RankedRunner(env, copy.deepcopy(tcfg), log_dir=logs.name, device=device, rank=rank)
+    if (agent or AgentConfig()).deferred_episode_log:  # as train.py's runner books the finished episodes
+        DeferredEpisodes(runner.logger)
     runner.learn(2 if tcfg["torch_compile_mode"] else 1)  # capture, kernel loading, optimizer state, compile
     wall = _timed_learn(runner, env, iterations)
     rate = num_envs * tcfg["num_steps_per_env"] * iterations / wall

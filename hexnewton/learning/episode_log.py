@@ -16,12 +16,13 @@ import torch
 
 
 class DeferredEpisodes:
-    """Installed on an rsl-rl ``Logger`` (its ``process_env_step`` replaced); :meth:`flush` before its ``log``."""
+    """Installed on an rsl-rl ``Logger``: its ``process_env_step`` replaced, its ``log`` (once per iteration) preceded by
+    :meth:`flush`."""
 
     def __init__(self, logger):
         self.logger = logger
-        self._rsl_process = logger.process_env_step
-        self.logger.process_env_step = self.process_env_step
+        self._rsl_process, logger.process_env_step = logger.process_env_step, self.process_env_step
+        self._rsl_log, logger.log = logger.log, self.log
         self._done: list[torch.Tensor] = []
         self._returns: list[torch.Tensor] = []
         self._lengths: list[torch.Tensor] = []
@@ -47,6 +48,11 @@ class DeferredEpisodes:
         self._lengths.append(lg.cur_episode_length.clone())
         lg.cur_reward_sum.masked_fill_(done, 0.0)
         lg.cur_episode_length.masked_fill_(done, 0.0)
+
+    def log(self, *args, **kwargs):
+        """rsl-rl's ``Logger.log`` after :meth:`flush`."""
+        self.flush()
+        return self._rsl_log(*args, **kwargs)
 
     def flush(self) -> None:
         """The episodes finished since the last flush into the logger's reward and length buffers (one host read)."""

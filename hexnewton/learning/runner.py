@@ -249,9 +249,10 @@ class HexRunner(RankedRunner):
         self.levels = env.cfg.terrain.levels
         self.best = BestCheckpoint(log_dir or "", self.levels)
         self._reduce = _sum_over_ranks(device) if rank.world_size > 1 else None
+        if agent.deferred_episode_log:
+            DeferredEpisodes(self.logger)  # its log flushes the iteration's episodes, then calls rsl-rl's
         self._rsl_log, self.logger.log = self.logger.log, self._after_iteration
         self._rsl_init_writer, self.logger.init_logging_writer = self.logger.init_logging_writer, self._init_writer
-        self._episodes = DeferredEpisodes(self.logger) if agent.deferred_episode_log else None
         self._stage, self._time_up, self._t0 = None, False, time.time()
         self.first_iteration_s = None  # seconds from the process's start to the end of the first iteration
         startup.mark("runner")
@@ -286,8 +287,6 @@ class HexRunner(RankedRunner):
     # -------------------------------------------------------------- per iteration
     def _after_iteration(self, *args, **kwargs) -> None:
         """rsl-rl's 30-line block goes to TensorBoard only; the console gets :func:`progress_line`."""
-        if self._episodes is not None:
-            self._episodes.flush()  # the iteration's finished episodes, before rsl-rl's log reads them
         with contextlib.redirect_stdout(io.StringIO()):
             self._rsl_log(*args, **kwargs)
         stats = self.env.episode_stats()

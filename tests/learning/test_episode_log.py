@@ -66,3 +66,14 @@ def test_without_a_writer_nothing_is_booked():
     lg.process_env_step(torch.ones(4), torch.ones(4), {"log": {}})
     book.flush()
     assert not lg.rewbuffer and not lg.ep_extras and lg.cur_reward_sum.sum() == 0
+
+
+def test_the_log_reads_the_iteration_s_episodes():
+    """The logger's ``log`` (rsl-rl calls it once per iteration) sees the episodes of the steps before it."""
+    lg, seen = _logger(3), []
+    lg.log = lambda **kwargs: seen.append((kwargs, list(lg.lenbuffer)))  # stands in for rsl-rl's Logger.log
+    DeferredEpisodes(lg)
+    lg.process_env_step(torch.ones(3), torch.tensor([0, 1, 0]), {})
+    lg.process_env_step(torch.ones(3), torch.tensor([1, 0, 1]), {})
+    lg.log(it=0)
+    assert seen == [({"it": 0}, [1.0, 2.0, 2.0])]
