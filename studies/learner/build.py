@@ -185,7 +185,7 @@ def collect() -> dict:
     return {"meta": {"task": "complex", "validation_seed": 3000, "actions": "deterministic (mean)",
                      "arms": ARMS, "leases": leases, "gate_lines": GATE}, "runs": runs, "arms": arms,
             "same_rounds": fixed, "gates": gates(runs, fixed["test"]), "choice_noise": choice_noise(runs),
-            "falls_line": falls_line(runs, fixed)}
+            "falls_line": falls_line(runs, fixed), "seed_lines": seed_lines(runs)}
 
 
 def choice_noise(runs: dict, terrain: str = "rugged") -> dict:
@@ -223,6 +223,17 @@ def falls_line(runs: dict, fixed: dict) -> dict:
         out[t] = {"results": len(got), "met": met, "share_met": round(len(met) / len(got), 4) if got else None,
                   "shipped_validation": shipped["validation"], "shipped_test": shipped["test"]}
     return {"line": line, "courses": out}
+
+
+def seed_lines(runs: dict) -> dict:
+    """The gate's lines for one seed, on the validation rounds: which results (those evaluated on every course) reach
+    3 m in at least the gate's share on every course, which fall before the goal in at most its share on every course,
+    and which do both."""
+    done = {n: r["result_on_validation"] for n, r in runs.items() if len(r["result_on_validation"]) == len(TERRAINS)}
+    success = sorted(n for n, v in done.items() if all(x["success_3m"] >= GATE["success_3m_min"] for x in v.values()))
+    falls = sorted(n for n, v in done.items()
+                   if all(x["fall_rate_before_goal"] <= GATE["fall_rate_before_goal_max"] for x in v.values()))
+    return {"results": len(done), "success": success, "falls": falls, "both": sorted(set(success) & set(falls))}
 
 
 def gates(runs: dict, test: dict) -> dict:
@@ -522,6 +533,13 @@ def verdict(res: dict) -> list[str]:
                    f"({', '.join(c['met']) or 'none'}); the gate asks it of three seeds at once (seeds meeting it "
                    f"independently at that share: {100 * c['share_met'] ** 3:.2f} % of gates). The shipped policy: "
                    f"{pct(c['shipped_validation'])} on the same rounds, {pct(c['shipped_test'])} on the test rounds.")
+    sl = res.get("seed_lines")
+    if sl and sl["results"]:
+        out.append(f"- **One seed's lines, on the validation rounds**: of {sl['results']} results, "
+                   f"{len(sl['success'])} reach 3 m in at least {pct(GATE['success_3m_min'])} of the rounds on every "
+                   f"course ({', '.join(sl['success']) or 'none'}), {len(sl['falls'])} fall before the goal in at most "
+                   f"{pct(GATE['fall_rate_before_goal_max'])} on every course ({', '.join(sl['falls']) or 'none'}), "
+                   f"{len(sl['both'])} do both ({', '.join(sl['both']) or 'none'}); the gate asks both of every seed.")
     noise = res["choice_noise"]
     if noise["runs"]:
         first = next(iter(noise["runs"].values()))

@@ -235,3 +235,18 @@ def test_the_falls_line_counts_the_results_at_or_below_it():
     lines = [x for x in build.verdict(res) if "falls line" in x]
     assert len(lines) == 1 and "on the rugged course is rarely met**: 1 of 3 results" in lines[0]
     assert "3.70 % of gates" in lines[0]
+
+
+def test_one_seed_s_lines_on_the_validation_rounds():
+    """seed_lines: the results evaluated on every course that meet the gate's success line on all of them, its falls
+    line on all of them, and both; a result missing a course is left out."""
+    v = lambda ok3, falls: {"success_3m": 0.98 if ok3 else 0.97, "fall_rate_before_goal": falls}  # noqa: E731
+    runs = {"a_s1": {"result_on_validation": {t: v(True, 0.0) for t in build.TERRAINS}},
+            "b_s1": {"result_on_validation": {t: v(t != "rugged", 0.004) for t in build.TERRAINS}},
+            "c_s1": {"result_on_validation": {t: v(True, 0.006 if t == "rugged" else 0.0) for t in build.TERRAINS}},
+            "d_s1": {"result_on_validation": {"rugged": v(True, 0.0)}}}
+    sl = build.seed_lines(runs)
+    assert sl == {"results": 3, "success": ["a_s1", "c_s1"], "falls": ["a_s1", "b_s1"], "both": ["a_s1"]}
+    res = {"runs": {}, "arms": {}, "gates": {}, "seed_lines": sl, "choice_noise": {"runs": {}}}
+    (line,) = [x for x in build.verdict(res) if "One seed's lines" in x]
+    assert "of 3 results, 2 reach 3 m" in line and "1 do both (a_s1)" in line
