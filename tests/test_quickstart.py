@@ -24,8 +24,11 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 LIMIT_S = 120
 #: commands that serve until stopped: their first words
 SERVERS = ("python -m hexnewton.apps.ros node", "tensorboard")
-#: what a command's output must say beside its exit status 0 (its comment's promise), by its first words
-SAYS = {"python train.py --list_tasks": r"complex", "python play.py --num_envs 4": r"first episodes ended: success 4\b",
+#: what a command's output must say beside its exit status 0 (its comment's promise), by its first words. The play
+#: command's rollouts are chaotic: a CPU's float arithmetic decides which robot, if any, is held up at the first stair
+#: (3 of 4 reach the goal on one 2-core machine, 4 on another), so "most" is 3 or 4
+SAYS = {"python train.py --list_tasks": r"complex",
+        "python play.py --num_envs 4": r"first episodes ended: success [34]\b",
         "python -m hexnewton.apps.deploy": r"\(ok, tolerance", "python -m hexnewton.apps.sim2sim": r"rugged"}
 
 
