@@ -4,7 +4,7 @@
 #
 #   bash studies/device/aside.sh out     # the folders below to $ASIDE (default ../device_aside), then the tree's size
 #   bash studies/device/aside.sh back    # them back into the tree
-#   bash studies/device/aside.sh size    # the tree's size as a device call counts it
+#   bash studies/device/aside.sh size    # the tree's size as a device call counts it (bytes: in bytes, rechunk.sh's)
 #
 # `out` before rechunk.sh and the device calls; `back` before anything that reads a study's data (its tests, build.py,
 # a commit). A queue that reads a kept study's files (KEPT=, TEST_KEPT= for studies/learner/runs, `gpu.sh study
@@ -14,19 +14,20 @@ cd "$(git rev-parse --show-toplevel)"
 ASIDE=${ASIDE:-../device_aside}
 FOLDERS=${FOLDERS:-studies/paper_comparison studies/capability studies/training_curves studies/time_to_skill \
 studies/sim2sim studies/scale_out studies/learner/runs}
-tree_bytes() {   # tracked and untracked-not-ignored files that exist (what a device call sends)
-  (git ls-files -z; git ls-files -z --others --exclude-standard) | xargs -0 du -cb 2>/dev/null | tail -1 | cut -f1
+tree_bytes() {   # tracked and untracked-not-ignored files that exist (what a device call sends; du skips the rest)
+  (git ls-files -z; git ls-files -z --others --exclude-standard) | xargs -0 du -cb 2>/dev/null | tail -1 | cut -f1 \
+    || true
 }
 case "${1:-}" in
 out)
+  moved=""
   for f in $FOLDERS; do
     case " ${KEEP:-} " in *" $f "*) continue;; esac
     [ -e "$f" ] || continue
     [ -e "$ASIDE/$f" ] && { echo "aside.sh: $ASIDE/$f exists already: 'aside.sh back' first" >&2; exit 1; }
-    mkdir -p "$ASIDE/$(dirname "$f")" && mv "$f" "$ASIDE/$f"
+    mkdir -p "$ASIDE/$(dirname "$f")" && mv "$f" "$ASIDE/$f" && moved="$moved $f"
   done
-  echo "tree $(( $(tree_bytes) / 1048576 )) MiB, set aside in $ASIDE: $(cd "$ASIDE" && find . -mindepth 2 -maxdepth 3 \
-    -type d | sed 's|^\./||' | grep -xF -f <(printf '%s\n' $FOLDERS) | tr '\n' ' ')"
+  echo "tree $(( $(tree_bytes) / 1048576 )) MiB, set aside in $ASIDE:${moved:- nothing}"
   ;;
 back)
   for f in $FOLDERS; do
@@ -39,7 +40,10 @@ back)
 size)
   echo "tree $(( $(tree_bytes) / 1048576 )) MiB"
   ;;
+bytes)
+  tree_bytes
+  ;;
 *)
-  echo "usage: bash studies/device/aside.sh out|back|size" >&2; exit 2
+  echo "usage: bash studies/device/aside.sh out|back|size|bytes" >&2; exit 2
   ;;
 esac

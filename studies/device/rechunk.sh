@@ -17,8 +17,7 @@ install=$(ls $(for d in $dirs; do echo "$d/install.sh"; done) 2>/dev/null | tail
 [ -n "$install" ] || { echo "rechunk.sh: no install.sh in the .dw* folders" >&2; exit 1; }
 # the files a call carries: tracked and untracked-not-ignored ones that exist (a study's data folder set aside for the
 # chunk calls, README "Workflow", is not in the tree then)
-tree=$( (git ls-files -z; git ls-files -z --others --exclude-standard) | xargs -0 du -cb 2>/dev/null | tail -1 | cut -f1 \
-  || true)
+tree=$(bash studies/device/aside.sh bytes)
 chunk=$(( 64 * 1048576 - tree - 2 * 1048576 ))
 [ "$chunk" -gt 4194304 ] || { echo "rechunk.sh: the tree ($((tree / 1048576)) MiB) leaves no room for wheel chunks: set the \
 studies' data aside first (bash studies/device/aside.sh out)" >&2; exit 1; }

@@ -302,7 +302,10 @@ def test_aside_moves_the_studies_data_out_and_back(tmp_path):
     assert subprocess.run(["bash", "studies/device/aside.sh", "size"], **run).stdout.strip() == "tree 9 MiB"
     out = subprocess.run(["bash", "studies/device/aside.sh", "out"], **run)
     assert out.returncode == 0 and out.stdout.startswith("tree 3 MiB, set aside in"), out.stdout + out.stderr
+    assert out.stdout.rstrip().endswith("set aside in " + str(aside) + ": studies/big studies/runs")
     assert (aside / "studies/big/data/blob.bin").is_file() and not (repo / "studies/big").exists()
+    size = subprocess.run(["bash", "studies/device/aside.sh", "bytes"], **run)  # tracked files set aside: skipped
+    assert size.returncode == 0 and 3 * 1048576 <= int(size.stdout) < 4 * 1048576, size.stdout + size.stderr
     assert (repo / "studies/kept/blob.bin").is_file() and not (aside / "studies/kept").exists()
     (repo / "studies/runs").mkdir()
     again = subprocess.run(["bash", "studies/device/aside.sh", "out"], **run)
