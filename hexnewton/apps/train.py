@@ -289,7 +289,7 @@ def validate_result(runner, cfg, agent, run_dir: str | None, first_it: int, rank
         it, best = runner.current_learning_iteration, runner.best
         stage_start = max([start for start, _ in agent.stages if start <= it] + [first_it])
         last = Candidate(it, os.path.join(run_dir, f"model_{it}.pt"), "last")
-        kept = Candidate(best.iteration, best.path, f"best training success {best.rate:.3f}") \
+        kept = Candidate(best.iteration, best.path, f"best training {best.measure} {best.rate:.3f}") \
             if best.iteration is not None else None  # fmt: skip
         cands = candidates(run_dir, stage_start, last, kept, agent.validation_candidates)
         if agent.validation_average and len(cands) > 1:
@@ -373,8 +373,9 @@ def finish(args, runner, cfg, agent, rank, run_dir: str, views, train_s: float, 
     else:
         final = runner.final_policy()
         if final == runner.best.path:
-            print(f"best training success {runner.best.rate:.3f} at iteration {runner.best.iteration} ({final}); the "
-                  f"last iteration ended at {training_success(stats, cfg.terrain.levels) or float('nan'):.3f}: "
+            last = training_success(stats, cfg.terrain.levels, runner.goals)
+            print(f"best training {runner.best.measure} {runner.best.rate:.3f} at iteration {runner.best.iteration} "
+                  f"({final}); the last iteration ended at {last or float('nan'):.3f}: "
                   "exporting the best")  # fmt: skip
     onnx_path = os.path.join(run_dir, "policy.onnx")
     err = runner.export(onnx_path)

@@ -67,6 +67,24 @@ def load_checkpoint(path: str, map_location: str = "cpu") -> dict:
     return check_rsl_rl_checkpoint(read_checkpoint(path, map_location), path)
 
 
+def policy_only(ckpt: dict) -> dict:
+    """A checkpoint without its training state: an rsl-rl checkpoint's actor (and iteration, infos), a skrl baseline
+    checkpoint's policy and observation normaliser. Both still load in ``evaluate``, ``export`` and ``play.py``."""
+    if "actor_state_dict" in ckpt:
+        return {k: ckpt[k] for k in ("actor_state_dict", "iter", "infos") if k in ckpt}
+    if "modules" in ckpt:
+        keep = {k: v for k, v in ckpt["modules"].items() if k in ("policy", "observation_preprocessor")}
+        return dict({k: v for k, v in ckpt.items() if k != "modules"}, modules=keep)
+    raise ValueError("not a training checkpoint of train.py or python -m hexnewton.apps.baselines")
+
+
+def save_policy_only(src: str, dst: str) -> None:
+    """``src``'s :func:`policy_only` saved as ``dst`` (a study keeps its results' policies, not their optimisers)."""
+    import torch
+
+    torch.save(policy_only(read_checkpoint(src)), dst)
+
+
 def load_into_runner(runner, ckpt: dict, load_cfg: dict | None = None) -> None:
     """``OnPolicyRunner.load`` for a checkpoint read by :func:`load_checkpoint` (rsl-rl's own reads the file again,
     with ``weights_only=False``): the models and, with ``load_cfg`` None, the optimiser and iteration. State dicts

@@ -27,26 +27,31 @@ from hexnewton.learning.ranks import Rank
 from hexnewton.learning.stopping import TrainingStopped, catch_stop_signals
 
 
-def progress_line(log_kwargs: dict, stats: dict, elapsed: float) -> str:
-    """One console line per iteration: the iteration, the last training episodes' outcome (``env.episode_stats()``),
-    the iteration's time and the run's."""
+def progress_line(log_kwargs: dict, stats: dict, elapsed: float, goals: bool = False) -> str:
+    """One console line per iteration: the iteration, the last training episodes' outcome (``env.episode_stats()``;
+    with ``goals``, random goals, the goals reached per episode in place of the success rate, which stays 0: reaching
+    a goal sets the next one), the iteration's time and the run's."""
     it, total = log_kwargs.get("it", 0), log_kwargs.get("total_it", 0)
     step_s = log_kwargs.get("collect_time", 0.0) + log_kwargs.get("learn_time", 0.0)
     level = f"  level {stats['mean_level']:.1f}" if "mean_level" in stats else ""
     if not stats.get("episodes"):  # no episode has ended yet: nothing to rate
         outcome = "no episode ended yet"
     else:
-        outcome = (f"success {stats['success_rate']:.3f}  fell {stats['fell_rate']:.3f}  off course "
+        reached = f"goals {stats['goals_reached']:.2f}" if goals else f"success {stats['success_rate']:.3f}"
+        outcome = (f"{reached}  fell {stats['fell_rate']:.3f}  off course "
                    f"{stats['off_course_rate']:.3f}  distance {stats['distance_m']:.2f} m")  # fmt: skip
     return f"iteration {it}/{total - 1}  {outcome}{level}  {step_s:.2f} s/it  {datetime.timedelta(seconds=int(elapsed))}"
 
 
-def training_success(stats: dict, levels: int) -> float | None:
+def training_success(stats: dict, levels: int, goals: bool = False) -> float | None:
     """The success rate of the last training episodes (``env.episode_stats()``) once at least a quarter of the env's
     window (``stats["window"]`` episodes) are in (with a curriculum: played on the last level, the terrain itself);
-    else None."""
+    else None. With ``goals`` (random goals, ``TaskConfig.random_goals``: an episode ends on a fall or its time limit,
+    never on a goal) the goals reached per episode."""
     key = "top_level_" if levels else ""
-    return float(stats[f"{key}success_rate"]) if stats.get(f"{key}episodes", 0) >= stats["window"] // 4 else None
+    if stats.get(f"{key}episodes", 0) < stats["window"] // 4:
+        return None
+    return float(stats["goals_reached" if goals else f"{key}success_rate"])
 
 
 class BestCheckpoint:
@@ -54,10 +59,12 @@ class BestCheckpoint:
     (:func:`training_success`), so that a run ends with a policy as good as its best even when its skill drifts
     down later (the flat CPU main job peaked at 0.945 near iteration 110 and ended at 0.869)."""
 
-    margin = 0.005  # a new best must beat the old one by this much (no save every iteration on a plateau)
-
-    def __init__(self, run_dir: str, levels: int):
-        self.path, self.levels = os.path.join(run_dir, "model_best.pt"), levels
+    def __init__(self, run_dir: str, levels: int, goals: bool = False):
+        self.path, self.levels, self.goals = os.path.join(run_dir, "model_best.pt"), levels, goals
+        # a new best must beat the old one by this much (no save every iteration on a plateau): 0.5 points of success,
+        # or 0.02 goals per episode (an episode of the navigate tasks reaches ~3)
+        self.margin = 0.02 if goals else 0.005
+        self.measure = "goals per episode" if goals else "success"
         self.rate, self.iteration = None, None
 
     def reset(self) -> None:
@@ -67,9 +74,9 @@ class BestCheckpoint:
             os.remove(self.path)
 
     def update(self, stats: dict, iteration: int, save) -> None:
-        rate = training_success(stats, self.levels)
+        rate = training_success(stats, self.levels, self.goals)
         if rate is not None and (self.rate is None or rate >= self.rate + self.margin):
-            save(self.path, infos={"best_success": rate})
+            save(self.path, infos={"best_goals" if self.goals else "best_success": rate})
             self.rate, self.iteration = rate, iteration
 
 
@@ -247,7 +254,8 @@ class HexRunner(RankedRunner):
         self.agent, self.meta = agent, meta
         self.run_dir = log_dir
         self.levels = env.cfg.terrain.levels
-        self.best = BestCheckpoint(log_dir or "", self.levels)
+        self.goals = env.cfg.task.random_goals
+        self.best = BestCheckpoint(log_dir or "", self.levels, self.goals)
         self._reduce = _sum_over_ranks(device) if rank.world_size > 1 else None
         if agent.deferred_episode_log:
             DeferredEpisodes(self.logger)  # its log flushes the iteration's episodes, then calls rsl-rl's
@@ -296,7 +304,7 @@ class HexRunner(RankedRunner):
             if self.rank.is_main:
                 print(startup.summary(), flush=True)
         if self.rank.is_main:
-            print(progress_line(kwargs, stats, time.time() - self._t0), flush=True)
+            print(progress_line(kwargs, stats, time.time() - self._t0, self.goals), flush=True)
             self.best.update(stats, self.current_learning_iteration, self.save)
         reason = stop_reason(self._time_up, stats, self.agent.target_success, self.levels, self._reduce)
         if reason:

@@ -86,16 +86,10 @@ def parse_log(text: str) -> dict:
     return out
 
 
-def actor_only(src: str, dst: str) -> None:
-    """The result's actor, normaliser and metadata (what evaluation, play and export load), as results/policies."""
-    import torch
-
-    ckpt = torch.load(src, map_location="cpu", weights_only=False)
-    torch.save({k: ckpt[k] for k in ("actor_state_dict", "iter", "infos")}, dst)
-
-
 def add(lease: str) -> list[str]:
     """Copy a lease's runs and evaluations into the study; returns the run names added."""
+    from hexnewton.learning.checkpoint import save_policy_only
+
     added = []
     for log in sorted(glob.glob(os.path.join(lease, "runs", "*.log"))):
         name = os.path.basename(log)[:-4]
@@ -114,7 +108,7 @@ def add(lease: str) -> list[str]:
             if os.path.exists(os.path.join(run, f)):
                 shutil.copy(os.path.join(run, f), os.path.join(dst, f))
         if os.path.exists(os.path.join(run, "model_result.pt")):
-            actor_only(os.path.join(run, "model_result.pt"), os.path.join(dst, "policy.pt"))
+            save_policy_only(os.path.join(run, "model_result.pt"), os.path.join(dst, "policy.pt"))
         added.append(name)
     for res in sorted(glob.glob(os.path.join(lease, "evals", "*", "results.json"))):
         job = os.path.dirname(res)

@@ -9,32 +9,41 @@
 # train_<t>.time, timing.json in the run), the navigation evaluation on 1000 unseen rounds per bearing and 1000 of the
 # square (deterministic action, the test seeds), the bundle, a headless video of three robots on the square; after the
 # flat task, its bundle in C MuJoCo through the same square, 100 rounds on the host's cores, beside Newton's (so a lease
-# that ends during navigate-rugged holds the flat task whole). Each step's outputs are packed into $OUT/<step>.tgz as
-# soon as they exist (a lost machine keeps what was polled).
+# that ends during navigate-rugged holds the flat task whole). Each step's outputs are packed into $NAV/<step>.tgz as
+# soon as they exist (a lost machine keeps what was polled): not the call's $OUT, which the device empties at
+# the start of every call.
+#
+# TASKS (default "flat rugged") picks the tasks; a task named in TRAINED is not trained again: its policy kept in the
+# study (studies/navigate/runs/<terrain>/policy.pt, build.py) is evaluated, exported and filmed.
 set -u
-OUT=${OUT:-/root/navigate} ROUNDS=${ROUNDS:-1000} S2S_ROUNDS=${S2S_ROUNDS:-100}
-mkdir -p "$OUT"
-pack() { tar czf "$OUT/$1.tgz" -C "$OUT" "${@:2}" 2>/dev/null; echo "$(date +%T) packed $1"; }
-for t in flat rugged; do
-  echo "$(date +%T) training navigate-$t"
-  /usr/bin/time -f "%e s from process start" -o "$OUT/train_$t.time" \
-    python train.py --task "navigate-$t" --log_dir "$OUT/logs" > "$OUT/train_$t.log" 2>&1
-  run=$(ls -d "$OUT/logs/hexnewton_navigate-$t"/*/ | tail -1)
-  ckpt="${run}model_result.pt"
-  mkdir -p "$OUT/keep" && cp "$ckpt" "$OUT/keep/navigate_$t.pt" && cp "${run}timing.json" "$OUT/keep/timing_$t.json"
-  pack "train_$t" "train_$t.log" "train_$t.time" "keep/navigate_$t.pt" "keep/timing_$t.json"
+NAV=${NAV:-/root/navigate} ROUNDS=${ROUNDS:-1000} S2S_ROUNDS=${S2S_ROUNDS:-100}
+NAV=$(mkdir -p "$NAV" && cd "$NAV" && pwd)
+pack() { tar czf "$NAV/$1.tgz" -C "$NAV" "${@:2}" 2>/dev/null; echo "$(date +%T) packed $1"; }
+for t in ${TASKS:-flat rugged}; do
+  if [[ " ${TRAINED:-} " == *" $t "* ]]; then
+    ckpt=studies/navigate/runs/$t/policy.pt
+    [ -f "$ckpt" ] || { echo "queue.sh: no $ckpt to evaluate" >&2; exit 1; }
+  else
+    echo "$(date +%T) training navigate-$t"
+    /usr/bin/time -f "%e s from process start" -o "$NAV/train_$t.time" \
+      python train.py --task "navigate-$t" --log_dir "$NAV/logs" > "$NAV/train_$t.log" 2>&1
+    run=$(ls -d "$NAV/logs/hexnewton_navigate-$t"/*/ | tail -1)
+    ckpt="${run}model_result.pt"
+    mkdir -p "$NAV/keep" && cp "$ckpt" "$NAV/keep/navigate_$t.pt" && cp "${run}timing.json" "$NAV/keep/timing_$t.json"
+    pack "train_$t" "train_$t.log" "train_$t.time" "keep/navigate_$t.pt" "keep/timing_$t.json"
+  fi
   echo "$(date +%T) evaluating navigate-$t"
   python -m hexnewton.apps.evaluate --navigate --controllers cpg_rl --checkpoint "cpg_rl=$ckpt" --terrains "$t" \
-    --rounds "$ROUNDS" --no-progress --out "$OUT/eval_$t" > "$OUT/eval_$t.log" 2>&1
-  python -m hexnewton.apps.export --checkpoint "$ckpt" --out "$OUT/bundle_$t" > "$OUT/export_$t.log" 2>&1
+    --rounds "$ROUNDS" --no-progress --out "$NAV/eval_$t" > "$NAV/eval_$t.log" 2>&1
+  python -m hexnewton.apps.export --checkpoint "$ckpt" --out "$NAV/bundle_$t" > "$NAV/export_$t.log" 2>&1
   MUJOCO_GL=egl python play.py --checkpoint "$ckpt" --waypoints 2,0 2,2 0,2 0,0 --num_envs 3 --steps 2000 \
-    --headless --video "$OUT/square_$t.mp4" --no-progress > "$OUT/video_$t.log" 2>&1
+    --headless --video "$NAV/square_$t.mp4" --no-progress > "$NAV/video_$t.log" 2>&1
   pack "eval_$t" "eval_$t" "eval_$t.log" "bundle_$t" "export_$t.log" "square_$t.mp4" "video_$t.log"
   [ "$t" = flat ] || continue
   echo "$(date +%T) sim2sim"
-  python -m hexnewton.apps.sim2sim "$OUT/bundle_flat" --terrains flat --rounds "$S2S_ROUNDS" --waypoints 2,0 2,2 0,2 \
-    0,0 --max_steps 4000 --newton "$OUT/eval_flat/results.json" --workers 0 --out "$OUT/s2s_flat" \
-    > "$OUT/s2s_flat.log" 2>&1
+  python -m hexnewton.apps.sim2sim "$NAV/bundle_flat" --terrains flat --rounds "$S2S_ROUNDS" --waypoints 2,0 2,2 0,2 \
+    0,0 --max_steps 4000 --newton "$NAV/eval_flat/results.json" --workers 0 --out "$NAV/s2s_flat" \
+    > "$NAV/s2s_flat.log" 2>&1
   pack s2s_flat s2s_flat s2s_flat.log
 done
 echo "$(date +%T) queue ended"

@@ -44,7 +44,7 @@ def test_the_measured_patch_is_the_tasks():
 
 FAKE_PYTHON = """#!/bin/bash
 # train.py: a run folder with a result and timing.json; the apps: their --out folder; every call noted in order
-echo "$*" >> "$OUT/calls"
+echo "$*" >> "$NAV/calls"
 args=("$@"); out= ld= task=
 for ((i = 0; i < $#; i++)); do case ${args[i]} in --out) out=${args[i+1]};; --log_dir) ld=${args[i+1]};;
   --task) task=${args[i+1]};; --video) touch "${args[i+1]}";; esac; done
@@ -60,11 +60,14 @@ def test_the_queue_finishes_the_flat_task_whole_before_the_rugged_one(tmp_path):
     before navigate-rugged starts, and every step's outputs are packed as they come."""
     import subprocess
 
-    bin_dir, out = tmp_path / "bin", tmp_path / "navigate"
+    bin_dir, out, call_out = tmp_path / "bin", tmp_path / "navigate", tmp_path / "call_out"
     bin_dir.mkdir()
+    call_out.mkdir()
     (bin_dir / "python").write_text(FAKE_PYTHON)
     (bin_dir / "python").chmod(0o755)
-    env = dict(os.environ, PATH=f"{bin_dir}:{os.environ['PATH']}", OUT=str(out), ROUNDS="4", S2S_ROUNDS="2")
+    # the device sets $OUT for every call and empties it at the next: the queue keeps its outputs in $NAV
+    env = dict(os.environ, PATH=f"{bin_dir}:{os.environ['PATH']}", NAV=str(out), OUT=str(call_out), ROUNDS="4",
+               S2S_ROUNDS="2")  # fmt: skip
     root = os.path.dirname(os.path.dirname(HERE))
     done = subprocess.run(["bash", "studies/navigate/queue.sh"], cwd=root, env=env, capture_output=True, text=True)
     assert done.returncode == 0 and done.stdout.rstrip().endswith("queue ended"), done.stdout + done.stderr
@@ -76,3 +79,26 @@ def test_the_queue_finishes_the_flat_task_whole_before_the_rugged_one(tmp_path):
     assert "--task navigate-flat" in calls[0] and "--task navigate-rugged" in calls[5]
     assert sorted(p.name for p in out.glob("*.tgz")) == ["eval_flat.tgz", "eval_rugged.tgz", "s2s_flat.tgz",
                                                           "train_flat.tgz", "train_rugged.tgz"]  # fmt: skip
+    assert not list(call_out.iterdir())
+
+
+def test_the_queue_evaluates_a_kept_policy_without_training_it(tmp_path):
+    """TASKS=rugged TRAINED=rugged: the study's kept policy is evaluated, exported and filmed, nothing is trained."""
+    import subprocess
+
+    bin_dir, out = tmp_path / "bin", tmp_path / "navigate"
+    bin_dir.mkdir()
+    (bin_dir / "python").write_text(FAKE_PYTHON)
+    (bin_dir / "python").chmod(0o755)
+    root = os.path.dirname(os.path.dirname(HERE))
+    env = dict(os.environ, PATH=f"{bin_dir}:{os.environ['PATH']}", NAV=str(out), TASKS="rugged", TRAINED="rugged")
+    done = subprocess.run(["bash", "studies/navigate/queue.sh"], cwd=root, env=env, capture_output=True, text=True)
+    if not os.path.exists(os.path.join(root, "studies/navigate/runs/rugged/policy.pt")):
+        assert done.returncode == 1 and "no studies/navigate/runs/rugged/policy.pt" in done.stderr
+        return
+    assert done.returncode == 0, done.stdout + done.stderr
+    calls = (out / "calls").read_text().splitlines()
+    assert [w[1] if w[0] == "-m" else w[0] for w in map(str.split, calls)] == [
+        "hexnewton.apps.evaluate", "hexnewton.apps.export", "play.py"]
+    assert all("studies/navigate/runs/rugged/policy.pt" in c for c in calls)
+    assert sorted(p.name for p in out.glob("*.tgz")) == ["eval_rugged.tgz"]

@@ -27,17 +27,6 @@ from hexnewton.analysis.curves import TAGS
 STORED_TAGS = (*TAGS, "Perf/wall_time_s", "Perf/collection_time", "Perf/learning_time")
 
 
-def policy_only(ckpt: dict) -> dict:
-    """A checkpoint without its training state: an rsl-rl checkpoint's actor (and iteration, infos), a skrl baseline
-    checkpoint's policy and observation normaliser. Both still load in ``evaluate`` and ``play.py``."""
-    if "actor_state_dict" in ckpt:
-        return {k: ckpt[k] for k in ("actor_state_dict", "iter", "infos") if k in ckpt}
-    if "modules" in ckpt:
-        keep = {k: v for k, v in ckpt["modules"].items() if k in ("policy", "observation_preprocessor")}
-        return dict({k: v for k, v in ckpt.items() if k != "modules"}, modules=keep)
-    raise ValueError("not a training checkpoint of train.py or python -m hexnewton.apps.baselines")
-
-
 def _copy_scalars(src: str, dest: str) -> int:
     """The :data:`STORED_TAGS` of the TensorBoard events in ``src`` rewritten into ``dest`` with their steps and wall
     times; returns the number of points."""
@@ -62,9 +51,7 @@ def _copy_scalars(src: str, dest: str) -> int:
 def store_run(done: str, dest_runs: str) -> str | None:
     """Copy the run that ``done`` (``<method>_s<seed>.done``) marks finished into ``dest_runs``: its config, its
     scalars and its last checkpoint's policy; None when the study already holds it."""
-    import torch
-
-    from hexnewton.learning.checkpoint import read_checkpoint
+    from hexnewton.learning.checkpoint import save_policy_only
 
     name = os.path.basename(done)[: -len(".done")]
     if os.path.exists(os.path.join(dest_runs, name + ".done")):
@@ -83,7 +70,7 @@ def store_run(done: str, dest_runs: str) -> str | None:
     os.makedirs(tmp)
     shutil.copy2(os.path.join(run, "config.json"), tmp)
     _copy_scalars(run, tmp)
-    torch.save(policy_only(read_checkpoint(ckpts[-1])), os.path.join(tmp, os.path.basename(ckpts[-1])))
+    save_policy_only(ckpts[-1], os.path.join(tmp, os.path.basename(ckpts[-1])))
     os.replace(tmp, out)
     shutil.copy2(done, os.path.join(dest_runs, name + ".done"))  # last: a run counts as stored once this exists
     return name

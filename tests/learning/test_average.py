@@ -52,3 +52,20 @@ def test_average_refuses_one_checkpoint_and_other_runs(tmp_path):
 
 def test_the_switch_is_off_by_default():
     assert AgentConfig().validation_average is False
+
+
+def test_policy_only_keeps_what_evaluation_loads(tmp_path):
+    """A study keeps a result's policy without its training state: the actor, iteration and metadata of an rsl-rl
+    checkpoint, the policy and normaliser of a skrl baseline's; anything else is one clear error."""
+    from hexnewton.learning.checkpoint import load_checkpoint, policy_only, save_policy_only
+
+    src, dst = str(tmp_path / "model_299.pt"), str(tmp_path / "policy.pt")
+    torch.save(_ckpt(0, 299), src)
+    save_policy_only(src, dst)
+    kept = load_checkpoint(dst)
+    assert sorted(kept) == ["actor_state_dict", "infos", "iter"] and kept["iter"] == 299
+    assert torch.equal(kept["actor_state_dict"]["mlp.0.weight"], _ckpt(0, 299)["actor_state_dict"]["mlp.0.weight"])
+    skrl = {"format": "hexnewton-skrl-1", "modules": {"policy": {"w": torch.ones(1)}, "value": {}, "optimizer": {}}}
+    assert sorted(policy_only(skrl)["modules"]) == ["policy"] and policy_only(skrl)["format"] == "hexnewton-skrl-1"
+    with pytest.raises(ValueError, match="not a training checkpoint"):
+        policy_only({"x": 1})

@@ -345,6 +345,25 @@ def test_best_checkpoint_keeps_the_best_iteration(tmp_path):
     assert training_success({**stats, "top_level_episodes": 3}, levels=10) is None
 
 
+def test_random_goals_train_toward_more_goals_per_episode(tmp_path):
+    """With random goals (the navigate tasks) an episode never ends on success: reaching a goal sets the next one. The
+    console line, model_best.pt and its validation candidate's reason follow the goals reached per episode."""
+    from hexnewton.learning.runner import BestCheckpoint, progress_line, training_success
+    from hexnewton.mdp.env import RING
+
+    stats = {"window": RING, "episodes": RING, "success_rate": 0.0, "goals_reached": 3.2, "fell_rate": 0.0,
+             "off_course_rate": 0.0, "distance_m": 0.5}  # fmt: skip
+    assert training_success(stats, levels=0, goals=True) == 3.2 and training_success(stats, levels=0) == 0.0
+    line = progress_line({"it": 9, "total_it": 300}, stats, 1.0, goals=True)
+    assert "goals 3.20" in line and "success" not in line
+    saved = []
+    best = BestCheckpoint(str(tmp_path), levels=0, goals=True)
+    save = lambda path, infos: saved.append(infos["best_goals"])  # noqa: E731
+    for it, goals in enumerate([0.1, 2.0, 2.01, 3.1, 2.5]):
+        best.update({**stats, "goals_reached": goals}, it, save)
+    assert saved == [0.1, 2.0, 3.1] and best.iteration == 3 and best.measure == "goals per episode"
+
+
 def test_cpu_validation_takes_minutes_unless_the_command_line_says_otherwise(capsys):
     """On the CPU a terrain task validates 8 rounds per candidate, not the 256 sized for a GPU, and says so; a
     command line that sets ``--agent.validation_rounds``, CUDA and the flat task's 16 keep theirs."""
