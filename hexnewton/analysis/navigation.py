@@ -224,25 +224,31 @@ def _num(v, digits: int = 1) -> str:
     return "—" if v is None else f"{v:.{digits}f}"
 
 
-def target_lines(results: dict) -> list[str]:
-    """Each target of :data:`TARGETS` with the measured share and whether it holds, per controller and terrain."""
+def target_checks(results: dict) -> list[dict]:
+    """Each target of :data:`TARGETS` that ``results`` (``{terrain: {controller: ...}}``) measure: terrain, controller,
+    what, the measured share (``got``), the line (``need``), ``at_least`` (a floor, else a ceiling) and ``met``."""
     out = []
     for terrain, per in results.items():
         want = TARGETS.get(terrain, {})
         for ctrl, r in per.items():
-            rows = [("goals at |bearing| <= 90 deg reached", r["bearings"]["near"]["reached"], want.get("near"), 1),
-                    ("goals at 135-180 deg reached", r["bearings"]["behind"]["reached"], want.get("behind"), 1),
-                    ("square completed", r["square"]["completed"], want.get("square"), 1),
-                    ("falls (bearings)", r["bearings"]["all"]["fall_rate"], TARGETS["falls"], -1),
-                    ("falls (square)", r["square"]["fall_rate"], TARGETS["falls"], -1)]  # fmt: skip
-            for what, got, need, sign in rows:
+            rows = [("goals at |bearing| <= 90 deg reached", r["bearings"]["near"]["reached"], want.get("near"), True),
+                    ("goals at 135-180 deg reached", r["bearings"]["behind"]["reached"], want.get("behind"), True),
+                    ("square completed", r["square"]["completed"], want.get("square"), True),
+                    ("falls (bearings)", r["bearings"]["all"]["fall_rate"], TARGETS["falls"], False),
+                    ("falls (square)", r["square"]["fall_rate"], TARGETS["falls"], False)]  # fmt: skip
+            for what, got, need, at_least in rows:
                 if need is None or got is None:
                     continue
-                ok = got >= need if sign > 0 else got <= need
-                rel = ">=" if sign > 0 else "<="
-                out.append(f"- {LABELS.get(ctrl, ctrl)} on {terrain}: {what} {_pct(got)} ({rel} {100 * need:g} %): "
-                           f"**{'met' if ok else 'not met'}**")  # fmt: skip
+                out.append(dict(terrain=terrain, controller=ctrl, what=what, got=got, need=need, at_least=at_least,
+                                met=bool(got >= need if at_least else got <= need)))  # fmt: skip
     return out
+
+
+def target_lines(results: dict) -> list[str]:
+    """Each target of :data:`TARGETS` with the measured share and whether it holds, per controller and terrain."""
+    return [f"- {LABELS.get(c['controller'], c['controller'])} on {c['terrain']}: {c['what']} {_pct(c['got'])} "
+            f"({'>=' if c['at_least'] else '<='} {100 * c['need']:g} %): **{'met' if c['met'] else 'not met'}**"
+            for c in target_checks(results)]  # fmt: skip
 
 
 def report_markdown(results: dict, meta: dict) -> str:

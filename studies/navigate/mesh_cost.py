@@ -2,7 +2,7 @@
 as its collision mesh (triangles, vertices), ``make_terrain`` and Newton's ``ModelBuilder.finalize`` on this machine's
 CPU, beside the rugged task's own curriculum terrain (10 lanes of 3 m) measured the same way.
 
-    python3 studies/navigate/mesh_cost.py [--out studies/navigate]
+    python3 studies/navigate/mesh_cost.py [--out studies/navigate/mesh]
 
 Each case runs in a fresh process (``--one NAME``): ``navigate-rugged`` as the task builds it (collision "mesh_boxes",
 watertight off), the same patch watertight (``TerrainConfig.watertight``, which skips finalize's mesh-boundary pass),
@@ -106,7 +106,7 @@ def _report(rows: list[dict], command: str, machine: str) -> str:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--out", default=os.path.dirname(os.path.abspath(__file__)))
+    ap.add_argument("--out", default=os.path.join(os.path.dirname(os.path.abspath(__file__)), "mesh"))
     ap.add_argument("--cases", nargs="+", default=list(CASES), choices=list(CASES))
     ap.add_argument("--one", help=argparse.SUPPRESS)
     ap.add_argument("--render", action="store_true", help="rewrite report.md from --out's results.json, no runs")

@@ -7,14 +7,14 @@
 #
 # For each task, navigate-flat then navigate-rugged: the one training command (its wall time from process start in
 # train_<t>.time, timing.json in the run), the navigation evaluation on 1000 unseen rounds per bearing and 1000 of the
-# square (deterministic action, the test seeds), the bundle, a headless video of three robots on the square; after the
-# flat task, its bundle in C MuJoCo through the same square, 100 rounds on the host's cores, beside Newton's (so a lease
-# that ends during navigate-rugged holds the flat task whole). Each step's outputs are packed into $NAV/<step>.tgz as
-# soon as they exist (a lost machine keeps what was polled): not the call's $OUT, which the device empties at
-# the start of every call.
+# square (deterministic action, the test seeds) and the bundle; after the flat task, its bundle in C MuJoCo through the
+# same square, 100 rounds on the host's cores, beside Newton's (so a lease that ends during navigate-rugged holds the
+# flat task whole). The square's video is made from the kept policy on a CPU (build.py video T). Each step's outputs
+# are packed into $NAV/<step>.tgz as soon as they exist (a lost machine keeps what was polled): not into the call's
+# $OUT, which the device empties at the start of every call.
 #
 # TASKS (default "flat rugged") picks the tasks; a task named in TRAINED is not trained again: its policy kept in the
-# study (studies/navigate/runs/<terrain>/policy.pt, build.py) is evaluated, exported and filmed.
+# study (studies/navigate/runs/<terrain>/policy.pt, build.py) is evaluated and exported.
 set -u
 NAV=${NAV:-/root/navigate} ROUNDS=${ROUNDS:-1000} S2S_ROUNDS=${S2S_ROUNDS:-100}
 NAV=$(mkdir -p "$NAV" && cd "$NAV" && pwd)
@@ -36,9 +36,7 @@ for t in ${TASKS:-flat rugged}; do
   python -m hexnewton.apps.evaluate --navigate --controllers cpg_rl --checkpoint "cpg_rl=$ckpt" --terrains "$t" \
     --rounds "$ROUNDS" --no-progress --out "$NAV/eval_$t" > "$NAV/eval_$t.log" 2>&1
   python -m hexnewton.apps.export --checkpoint "$ckpt" --out "$NAV/bundle_$t" > "$NAV/export_$t.log" 2>&1
-  MUJOCO_GL=egl python play.py --checkpoint "$ckpt" --waypoints 2,0 2,2 0,2 0,0 --num_envs 3 --steps 2000 \
-    --headless --video "$NAV/square_$t.mp4" --no-progress > "$NAV/video_$t.log" 2>&1
-  pack "eval_$t" "eval_$t" "eval_$t.log" "bundle_$t" "export_$t.log" "square_$t.mp4" "video_$t.log"
+  pack "eval_$t" "eval_$t" "eval_$t.log" "bundle_$t" "export_$t.log"
   [ "$t" = flat ] || continue
   echo "$(date +%T) sim2sim"
   python -m hexnewton.apps.sim2sim "$NAV/bundle_flat" --terrains flat --rounds "$S2S_ROUNDS" --waypoints 2,0 2,2 0,2 \

@@ -14,13 +14,13 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 
 
 def _saved() -> dict:
-    with open(os.path.join(HERE, "results.json")) as f:
+    with open(os.path.join(HERE, "mesh", "results.json")) as f:
         return json.load(f)
 
 
 def test_report_renders_the_results():
     saved = _saved()
-    with open(os.path.join(HERE, "report.md")) as f:
+    with open(os.path.join(HERE, "mesh", "report.md")) as f:
         assert f.read() == _report(saved["rows"], saved["command"], saved["machine"])
 
 
@@ -56,7 +56,7 @@ exit 0
 
 
 def test_the_queue_finishes_the_flat_task_whole_before_the_rugged_one(tmp_path):
-    """queue.sh with a stand-in python: navigate-flat is trained, evaluated, exported, filmed and run in C MuJoCo
+    """queue.sh with a stand-in python: navigate-flat is trained, evaluated, exported and run in C MuJoCo
     before navigate-rugged starts, and every step's outputs are packed as they come."""
     import subprocess
 
@@ -73,17 +73,16 @@ def test_the_queue_finishes_the_flat_task_whole_before_the_rugged_one(tmp_path):
     assert done.returncode == 0 and done.stdout.rstrip().endswith("queue ended"), done.stdout + done.stderr
     calls = (out / "calls").read_text().splitlines()
     steps = [w[1] if w[0] == "-m" else w[0] for w in map(str.split, calls)]  # the script or the module run
-    assert steps == ["train.py", "hexnewton.apps.evaluate", "hexnewton.apps.export", "play.py",
-                     "hexnewton.apps.sim2sim", "train.py", "hexnewton.apps.evaluate", "hexnewton.apps.export",
-                     "play.py"]  # fmt: skip
-    assert "--task navigate-flat" in calls[0] and "--task navigate-rugged" in calls[5]
+    assert steps == ["train.py", "hexnewton.apps.evaluate", "hexnewton.apps.export", "hexnewton.apps.sim2sim",
+                     "train.py", "hexnewton.apps.evaluate", "hexnewton.apps.export"]  # fmt: skip
+    assert "--task navigate-flat" in calls[0] and "--task navigate-rugged" in calls[4]
     assert sorted(p.name for p in out.glob("*.tgz")) == ["eval_flat.tgz", "eval_rugged.tgz", "s2s_flat.tgz",
                                                           "train_flat.tgz", "train_rugged.tgz"]  # fmt: skip
     assert not list(call_out.iterdir())
 
 
 def test_the_queue_evaluates_a_kept_policy_without_training_it(tmp_path):
-    """TASKS=rugged TRAINED=rugged: the study's kept policy is evaluated, exported and filmed, nothing is trained."""
+    """TASKS=rugged TRAINED=rugged: the study's kept policy is evaluated and exported, nothing is trained."""
     import subprocess
 
     bin_dir, out = tmp_path / "bin", tmp_path / "navigate"
@@ -93,12 +92,69 @@ def test_the_queue_evaluates_a_kept_policy_without_training_it(tmp_path):
     root = os.path.dirname(os.path.dirname(HERE))
     env = dict(os.environ, PATH=f"{bin_dir}:{os.environ['PATH']}", NAV=str(out), TASKS="rugged", TRAINED="rugged")
     done = subprocess.run(["bash", "studies/navigate/queue.sh"], cwd=root, env=env, capture_output=True, text=True)
-    if not os.path.exists(os.path.join(root, "studies/navigate/runs/rugged/policy.pt")):
-        assert done.returncode == 1 and "no studies/navigate/runs/rugged/policy.pt" in done.stderr
-        return
     assert done.returncode == 0, done.stdout + done.stderr
     calls = (out / "calls").read_text().splitlines()
     assert [w[1] if w[0] == "-m" else w[0] for w in map(str.split, calls)] == [
-        "hexnewton.apps.evaluate", "hexnewton.apps.export", "play.py"]
+        "hexnewton.apps.evaluate", "hexnewton.apps.export"]
     assert all("studies/navigate/runs/rugged/policy.pt" in c for c in calls)
     assert sorted(p.name for p in out.glob("*.tgz")) == ["eval_rugged.tgz"]
+
+
+def _build():
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("navigate_build", os.path.join(HERE, "build.py"))
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+TRAIN_LOG = """training task navigate-rugged: 4096 envs on cuda:0, 1500 iterations, logs in /root/navigate/logs/x
+start-up 38.7 s from process start: python and imports 15.3
+iteration 1009/1499  goals 0.31  fell 0.004  off course 0.000  distance 0.85 m  0.37 s/it  0:06:29
+finished at iteration 1010 after 390 s (the --max_minutes limit)
+deterministic validation, 256 rounds of the rugged course (seed 3000) per candidate, 31 s:
+     model_best.pt (best training goals per episode 0.331, iteration 870): goal 93.0 %, fell before the goal 0.4 % (in all 0.4 %), off course 0.0 %, pitch / roll var 46.0 / 18.0 deg²
+  -> model_1010.pt (last, iteration 1010): goal 95.3 %, fell before the goal 0.0 % (in all 0.0 %), off course 0.0 %, pitch / roll var 46.8 / 19.4 deg²
+462 s from process start to the exported result
+"""
+
+
+def test_the_train_log_gives_the_runs_time_and_its_choice():
+    info = _build().parse_train_log(TRAIN_LOG)
+    assert (info["task"], info["num_envs"], info["device"], info["max_iterations"]) == ("navigate-rugged", 4096,
+                                                                                        "cuda:0", 1500)
+    assert (info["startup_s"], info["train_s"], info["last_iteration"], info["wall_s_to_result"]) == (38.7, 390, 1010,
+                                                                                                       462)
+    assert info["stopped_by"] == "the --max_minutes limit" and info["validation_rounds"] == 256
+    best, last = info["candidates"]
+    assert (best["why"], best["iteration"], best["goal"], best["chosen"]) == (
+        "best training goals per episode 0.331", 870, 0.93, False)
+    assert (last["checkpoint"], last["goal"], last["fell_before_goal"], last["chosen"]) == ("model_1010.pt", 0.953,
+                                                                                            0.0, True)
+
+
+def test_the_committed_report_renders_what_the_study_keeps():
+    """report.md and results.json are build.py's rendering of runs/, eval/, sim2sim/ and media/; a task whose
+    evaluation is missing is listed as partial; every target line comes from the kept evaluations."""
+    build = _build()
+    res = build.load()
+    with open(os.path.join(HERE, "results.json")) as f:
+        assert json.load(f) == json.loads(json.dumps(res))
+    with open(os.path.join(HERE, "report.md")) as f:
+        assert f.read() == build.render(res)
+    for t in res["training"]:
+        assert os.path.getsize(os.path.join(HERE, "runs", t, "policy.pt")) < 2_000_000  # the policy alone
+    missing = [f"navigate-{t}: evaluation" for t in build.TASKS if t not in res["evaluation"]]
+    assert [p for p in res["partial"] if p.endswith("evaluation")] == missing
+    assert {c["terrain"] for c in res["targets"]} == set(res["evaluation"])
+
+
+def test_bad_input_is_one_line(tmp_path):
+    import subprocess
+    import sys
+
+    for args, says in ((["--add", str(tmp_path)], "no navigate outputs"), (["video", "moon"], "expected 'video TASK'")):
+        done = subprocess.run([sys.executable, os.path.join(HERE, "build.py"), *args], capture_output=True, text=True)
+        assert done.returncode == 1 and done.stderr.startswith("build.py: ") and says in done.stderr
+        assert len(done.stderr.strip().splitlines()) == 1
