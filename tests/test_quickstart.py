@@ -29,6 +29,7 @@ SERVERS = ("python -m hexnewton.apps.ros node", "tensorboard")
 #: (3 of 4 reach the goal on one 2-core machine, 4 on another), so "most" is 3 or 4
 SAYS = {"python train.py --list_tasks": r"complex",
         "python play.py --num_envs 4": r"first episodes ended: success [34]\b",
+        "python play.py --checkpoint results/policies/cpg_rl_navigate_flat.pt": r"reached 4\.0 of 4 goals",
         "python -m hexnewton.apps.deploy": r"\(ok, tolerance", "python -m hexnewton.apps.sim2sim": r"rugged"}
 
 

@@ -142,11 +142,19 @@ def first_episode_stats(pos: np.ndarray, rpy: np.ndarray, done: np.ndarray, stat
 
 
 def format_stats(terrain: str, s: dict, seconds: float) -> str:
+    """play.py's summary of :func:`first_episode_stats`: how far the first episodes walked along the course, or, where
+    the robots walk to goals (``goals_mean`` from :func:`~hexnewton.analysis.rollout.rollout`), how many they reached;
+    their roll and pitch, how they ended."""
     ended = ", ".join(f"{k} {v}" for k, v in s["ended"].items() if v) or "none"
+    if "goals_mean" in s:
+        of = f" of {s['goals_of']}" if s.get("goals_of") else ""
+        where = f"first episodes reached {s['goals_mean']:.1f}{of} goals (min {s['goals_min']})"
+    else:
+        where = (f"first episodes walked {s['distance_m']:.2f} m (min {s['distance_min_m']:.2f}), |y| drift "
+                 f"{s['lateral_drift_m']:.3f} m (max {s['lateral_drift_max_m']:.3f}), heading error "
+                 f"{s['heading_error_deg']:.1f} deg")  # fmt: skip
     return (
-        f"{terrain}: {s['envs']} robots, {seconds:.1f} s of control: first episodes walked {s['distance_m']:.2f} m "
-        f"(min {s['distance_min_m']:.2f}), |y| drift {s['lateral_drift_m']:.3f} m (max {s['lateral_drift_max_m']:.3f}), "
-        f"heading error {s['heading_error_deg']:.1f} deg\n"
+        f"{terrain}: {s['envs']} robots, {seconds:.1f} s of control: {where}\n"
         f"  |roll| {s['roll_mean_deg']:.1f} +- {s['roll_std_deg']:.1f} deg (max {s['roll_max_deg']:.1f}), "
         f"|pitch| {s['pitch_mean_deg']:.1f} +- {s['pitch_std_deg']:.1f} deg (max {s['pitch_max_deg']:.1f}); "
         f"first episodes ended: {ended}"

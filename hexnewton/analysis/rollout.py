@@ -12,6 +12,7 @@ import numpy as np
 
 from hexnewton.analysis.metrics import first_episode_stats
 from hexnewton.config import JOINT_NAMES, PARAM_NAMES, HexConfig, RandomizationConfig
+from hexnewton.mdp.status import SUCCESS
 from hexnewton.physics.reference import quat_rotate_inv_np
 
 EVAL_TERRAIN_SEED = 1000
@@ -191,10 +192,16 @@ def rollout(env, policy, steps: int, recorders: tuple = (), progress: bool = Tru
     status_log = np.zeros((steps, n), np.int32)
     ended = np.zeros(n, bool)
     last = steps
+    # goals to walk to (waypoints or random goals): each first episode's goals reached (the last waypoint's success)
+    task, count = env.cfg.task, env.goals.count
+    goals = np.zeros(n, np.int64) if (task.random_goals or count) else None
     for k, status, q, p, r in stepped(env, policy, steps, env.cfg.terrain.name, progress):
         pos[k], rpy[k], done[k], status_log[k] = p, r, status != 0, status
         for rec in recorders:
             rec.add(env, (k + 1) * env.cfg.task.control_dt, q, r, status != 0)
+        if goals is not None:
+            reached = np.where(status == SUCCESS, count, env.goals.reached.numpy())
+            goals = np.where(ended, goals, reached)
         ended |= status != 0
         if not recorders and ended.all():
             last = k + 1
@@ -202,6 +209,8 @@ def rollout(env, policy, steps: int, recorders: tuple = (), progress: bool = Tru
     env.world.check_contacts()
     stats = first_episode_stats(pos[:last], rpy[:last], done[:last], status_log[:last])
     stats["control_s"] = last * env.cfg.task.control_dt
+    if goals is not None:
+        stats.update(goals_mean=float(goals.mean()), goals_min=int(goals.min()), goals_of=count or None)
     return stats
 
 

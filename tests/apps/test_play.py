@@ -189,9 +189,23 @@ def test_waypoints_parse_negative_coordinates():
 @pytest.mark.slow  # end to end: 15 s or more on a 2-core CPU
 def test_play_walks_a_waypoint_course():
     """The fixed CPG walks straight: waypoints 0.3 m and 0.6 m ahead are reached in turn and the last ends the
-    episode as a success."""
+    episode as a success; the summary counts the goals reached, not the distance along a straight course."""
     proc = subprocess.run([sys.executable, "play.py", "--controller", "cpg", "--terrain", "flat", "--num_envs", "2",
                            "--steps", "150", "--device", "cpu", "--no-progress", "--viewer", "null", "--waypoints",
                            "0.3,0", "0.6,0"], capture_output=True, text=True, timeout=600, cwd=ROOT)  # fmt: skip
     assert proc.returncode == 0, proc.stderr[-3000:]
     assert "first episodes ended: success 2" in proc.stdout, proc.stdout
+    assert "first episodes reached 2.0 of 2 goals (min 2)" in proc.stdout and "heading error" not in proc.stdout
+
+
+def test_the_summary_counts_goals_where_robots_walk_to_goals():
+    from hexnewton.analysis.metrics import format_stats
+
+    base = {"envs": 3, "distance_m": 0.5, "distance_min_m": 0.4, "lateral_drift_m": 0.01, "lateral_drift_max_m": 0.02,
+            "heading_error_deg": 2.0, "roll_mean_deg": 1.0, "roll_std_deg": 0.5, "roll_max_deg": 3.0,
+            "pitch_mean_deg": 1.0, "pitch_std_deg": 0.5, "pitch_max_deg": 3.0, "ended": {"success": 3}}  # fmt: skip
+    assert "walked 0.50 m" in format_stats("flat", base, 10.0)
+    line = format_stats("flat", {**base, "goals_mean": 3.5, "goals_min": 2, "goals_of": None}, 20.0)
+    assert "first episodes reached 3.5 goals (min 2)" in line and "walked" not in line
+    line = format_stats("flat", {**base, "goals_mean": 4.0, "goals_min": 4, "goals_of": 4}, 20.0)
+    assert "reached 4.0 of 4 goals" in line
