@@ -3,11 +3,11 @@ the deterministic validation of a navigate run.
 
 - **Bearings**: one goal per round at 2 m (:data:`GOAL_DISTANCE`) at a bearing of 0, +-45, +-90, +-135 or 180 deg
   (:data:`BEARINGS_DEG`) from the robot's start heading, the rounds dealt evenly over the bearings; a round ends when
-  the robot comes within 0.5 m of its goal (reached), falls or runs out of time (:data:`BEARING_STEPS`). Per bearing:
+  the robot comes within 0.5 m of its goal (reached), falls or runs out of time (:data:`NAVIGATION_STEPS`). Per bearing:
   the share reached, the time to reach, the path walked over the straight line from the start to where it reached
   (1: straight), the falls.
 - **Square**: the waypoint course (2, 0), (2, 2), (0, 2), (0, 0) in the start frame (:data:`SQUARE`), each corner
-  within 0.5 m in turn, the last ending the round (:data:`SQUARE_STEPS`). The share of rounds that completed it, the
+  within 0.5 m in turn, the last ending the round (:data:`NAVIGATION_STEPS`). The share of rounds that completed it, the
   time to complete, the corners reached, the falls.
 
 Each round is one robot's first episode on the course of ``terrain`` as the navigate tasks lay it out
@@ -33,8 +33,17 @@ BEARINGS_DEG = (0, 45, -45, 90, -90, 135, -135, 180)
 GOAL_DISTANCE = 2.0
 #: the waypoint course: a 2 m square in the start frame [m]
 SQUARE = ((2.0, 0.0), (2.0, 2.0), (0.0, 2.0), (0.0, 0.0))
-#: the rounds' step limits (20 ms steps): 30 s for a 2 m goal, 80 s for the 8 m square
-BEARING_STEPS, SQUARE_STEPS = 1500, 4000
+#: the rounds' step limits (20 ms steps: a 2 m goal, the 8 m square) per terrain, three to eight times what the robot
+#: needs at its pace there. On flat ground it walks a 2 m goal in ~4 s and the square in ~17 s: 30 s and 80 s. On the
+#: 2 cm blocks it walks 3 m in 30-38 s (the shipped policy's straight rounds, studies/stable_gait/report.md), a 2 m goal
+#: in ~20-25 s and the square in ~80-100 s: 60 s and 240 s. Other terrains take the blocks' limits.
+NAVIGATION_STEPS = {"flat": (1500, 4000), "rugged": (3000, 12000)}
+
+
+def navigation_steps(terrain: str) -> tuple[int, int]:
+    """The step limits of a round toward a 2 m goal and of a round of the square on ``terrain``."""
+    return NAVIGATION_STEPS.get(terrain, NAVIGATION_STEPS["rugged"])
+
 #: the rounds' episode ends: no off-course end (a goal behind the robot is reached by turning)
 NAVIGATION_ENDS = ("nonfinite", "fell", "success", "timeout")
 #: the issue's targets (share of rounds): reached at |bearing| <= 90 and at 135-180 deg, the square completed, falls
@@ -151,9 +160,10 @@ def summarize_square(run: dict) -> dict:
 
 def evaluate_controller(controller: str, checkpoint: str | None, terrain: str, rounds: int, device: str | None,
                         seed: int, progress: bool | str = False, overrides: dict | None = None,
-                        steps: tuple[int, int] = (BEARING_STEPS, SQUARE_STEPS)) -> tuple[dict, dict]:  # fmt: skip
+                        steps: tuple[int, int] | None = None) -> tuple[dict, dict]:  # fmt: skip
     """Both protocols for one controller on one terrain: ``rounds`` rounds at each bearing, ``rounds`` rounds of the
-    square. Returns ({"bearings": summary, "square": summary}, the two runs' arrays for the figure)."""
+    square, with ``steps`` (a goal's, the square's; default :func:`navigation_steps`) control steps at most. Returns
+    ({"bearings": summary, "square": summary}, the two runs' arrays for the figure)."""
     from hexnewton.learning.checkpoint import trained_config
     from hexnewton.mdp.env import make_env
 
@@ -164,6 +174,7 @@ def evaluate_controller(controller: str, checkpoint: str | None, terrain: str, r
 
         trained = HexConfig()
     out, runs = {}, {}
+    steps = steps or navigation_steps(terrain)
     for name, n, goals, limit in (("bearings", rounds * len(BEARINGS_DEG), None, steps[0]),
                                   ("square", rounds, np.asarray(SQUARE), steps[1])):  # fmt: skip
         cfg = navigation_config(terrain, trained, n, device, seed, limit, overrides)

@@ -40,7 +40,8 @@ each distance. Outputs in ``--out``:
 ``--navigate``: the navigation evaluation instead (:mod:`hexnewton.analysis.navigation`): ``--rounds`` rounds at each
 of 8 bearings (a goal at 2 m) and ``--rounds`` rounds of the 2 m waypoint square per controller and terrain, on the
 navigate tasks' square patch; ``report.md``, ``results.json`` and ``fig_paths_<terrain>_<controller>.png``, the top view
-of the paths. ``--max_steps`` defaults to 1500 (a goal) and 4000 (the square) there.
+of the paths. ``--max_steps`` defaults to 1500 (a goal) and 4000 (the square) steps on flat ground, 3000 and 12000
+elsewhere (``analysis.navigation.NAVIGATION_STEPS``: the robot's pace on the blocks) there.
 
 Controllers: ``cpg`` (fixed parameters), ``cpg_rl`` and ``joint`` (rsl-rl checkpoints from ``train.py``),
 ``sac_cpg`` / ``td3_cpg`` / ``a2c_cpg`` (skrl checkpoints from ``python -m hexnewton.apps.baselines``, deterministic action
@@ -172,7 +173,7 @@ def parser() -> ArgumentParser:
     p.add_argument("--rounds", type=positive_int, default=25, help="rounds per controller and terrain (paper: 25)")
     p.add_argument("--max_steps", type=positive_int, default=None,
                    help=f"control steps per round (default: the episode limit, {TaskConfig.max_episode_steps}; with "
-                        "--navigate 1500 per goal, 4000 per square)")  # fmt: skip
+                        "--navigate per goal and per square: 1500 and 4000 on flat ground, 3000 and 12000 elsewhere)")
     p.add_argument("--navigate", action="store_true",
                    help="the navigation evaluation: goals at 2 m at bearings 0, +-45, +-90, +-135, 180 deg and the 2 m "
                         "waypoint square, --rounds of each, on the navigate tasks' patch of each terrain")  # fmt: skip
@@ -341,9 +342,10 @@ def evaluate_navigation(args, env_overrides: dict, argv: list[str]) -> int:
     device = resolve_device(args.device)
     os.makedirs(out)
     t0, progress = time.perf_counter(), False if args.no_progress else progress_mode()
-    steps = (args.max_steps or nav.BEARING_STEPS, args.max_steps or nav.SQUARE_STEPS)
     results: dict[str, dict[str, dict]] = {}
+    limits = {t: (args.max_steps, args.max_steps) if args.max_steps else nav.navigation_steps(t) for t in args.terrains}
     for terrain in args.terrains:
+        steps = limits[terrain]
         for ctrl in args.controllers:
             ck = None if ctrl in FIXED else checkpoint_for(checkpoints, ctrl, terrain)
             s, runs = nav.evaluate_controller(ctrl, ck, terrain, args.rounds, device, args.seed, progress,
@@ -357,7 +359,7 @@ def evaluate_navigation(args, env_overrides: dict, argv: list[str]) -> int:
     wall = time.perf_counter() - t0
     meta = {"device": device, "rounds per bearing and of the square": args.rounds,
             "bearings [deg]": list(nav.BEARINGS_DEG), "goal distance [m]": nav.GOAL_DISTANCE,
-            "square [m]": [list(c) for c in nav.SQUARE], "max_steps (goal, square)": list(steps),
+            "square [m]": [list(c) for c in nav.SQUARE], "max_steps (goal, square)": {t: list(v) for t, v in limits.items()},
             "goal radius [m]": TaskConfig.goal_radius, "actions": "deterministic (mean)", "overrides": env_overrides,
             "terrain_seed": args.seed, "reset_seed": args.seed + START_SEED_OFFSET,
             "command": "python -m hexnewton.apps.evaluate " + " ".join(argv), "wall_s": round(wall, 1)}

@@ -27,8 +27,10 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 TASKS = ("flat", "rugged")
 #: the bundle in C MuJoCo against Newton on the same square: within this many points of completed rounds
 SIM2SIM_POINTS = 5.0
-#: the square's video: the kept policy on the 2 m square, three robots, every second control step drawn
-VIDEO_ARGS = "--waypoints 2,0 2,2 0,2 0,0 --num_envs 3 --steps 1000 --video_speed 2 --headless"
+#: the square's video: the kept policy on the 2 m square, three robots, 500 frames: on flat ground 20 s of control,
+#: every second step drawn; on the blocks, where the robot walks the square in ~80-100 s, 90 s, every ninth step drawn
+VIDEO_ARGS = {"flat": "--waypoints 2,0 2,2 0,2 0,0 --num_envs 3 --steps 1000 --video_speed 2 --headless",
+              "rugged": "--waypoints 2,0 2,2 0,2 0,0 --num_envs 3 --steps 4500 --video_speed 9 --headless"}
 #: the video re-encoded for size (results/videos/report.md does the same)
 ENCODE = ["-c:v", "libx264", "-crf", "32", "-preset", "slow", "-pix_fmt", "yuv420p"]
 
@@ -106,9 +108,9 @@ def video(t: str) -> dict:
     media = os.path.join(HERE, "media")
     os.makedirs(media, exist_ok=True)
     raw, out = os.path.join(media, f".square_{t}_raw.mp4"), os.path.join(media, f"square_{t}.mp4")
-    command = f"python play.py --checkpoint {policy} {VIDEO_ARGS} --video out.mp4"
+    command = f"python play.py --checkpoint {policy} {VIDEO_ARGS[t]} --video out.mp4"
     t0 = time.time()
-    done = subprocess.run([sys.executable, "play.py", "--checkpoint", policy, *VIDEO_ARGS.split(), "--video", raw,
+    done = subprocess.run([sys.executable, "play.py", "--checkpoint", policy, *VIDEO_ARGS[t].split(), "--video", raw,
                            "--no-progress"], cwd=root, capture_output=True, text=True,
                           env=dict(os.environ, MUJOCO_GL=os.environ.get("MUJOCO_GL", "egl")))  # fmt: skip
     wall = time.time() - t0
@@ -116,10 +118,10 @@ def video(t: str) -> dict:
         raise RuntimeError(f"play.py failed: {(done.stderr or done.stdout).strip().splitlines()[-1]}")
     subprocess.run([imageio_ffmpeg.get_ffmpeg_exe(), "-y", "-loglevel", "error", "-i", raw, *ENCODE, out], check=True)
     os.remove(raw)
-    printed = [line for line in done.stdout.splitlines() if line.strip()]
+    printed = [line for line in done.stdout.splitlines() if line.startswith(("[", "  |"))]  # the rollout's summary
     path = os.path.join(media, "videos.json")
     videos = json.load(open(path)) if os.path.exists(path) else {}
-    videos[t] = {"command": command, "wall_s": round(wall, 1), "printed": printed[-3:],
+    videos[t] = {"command": command, "wall_s": round(wall, 1), "printed": printed,
                  "machine": f"{os.cpu_count()} CPU cores, device cpu, EGL", "encoded": "ffmpeg " + " ".join(ENCODE)}
     with open(path, "w") as f:
         json.dump(videos, f, indent=1)
@@ -150,7 +152,10 @@ def load() -> dict:
             with open(ev) as f:
                 d = json.load(f)
             r = d["results"][t]["cpg_rl"]
-            res["evaluation"][t] = {"command": d["meta"]["command"], "rounds": d["meta"]["rounds per bearing and of the square"],
+            meta = d["meta"]
+            limits = meta["max_steps (goal, square)"]  # per terrain, or one pair for every terrain
+            res["evaluation"][t] = {"command": meta["command"], "rounds": meta["rounds per bearing and of the square"],
+                                    "max_steps": limits[t] if isinstance(limits, dict) else limits,
                                     "bearings": r["bearings"], "square": r["square"]}  # fmt: skip
             res["targets"] += target_checks({t: {"cpg_rl": r}})
         s2s = os.path.join(HERE, "sim2sim", t, "results.json")
@@ -179,6 +184,9 @@ def _pct(v: float | None) -> str:
 
 
 def render(res: dict) -> str:
+    from hexnewton.config import TaskConfig
+
+    dt = TaskConfig().control_dt  # the evaluation's limits are in control steps
     lines = ["# Walking to any goal: navigate-flat and navigate-rugged", "",
              "`python studies/navigate/build.py` renders this report and results.json from what the study keeps: each "
              "task's training run (runs/T/: train.py's console, timing.json, the result's policy), its navigation "
@@ -208,13 +216,14 @@ def render(res: dict) -> str:
                      f"{r.get('stopped_by', '-')} | {pick} |")  # fmt: skip
     lines += ["", "## Goals at 2 m and the 2 m square (Newton)", "",
               "| task | goals at \\|bearing\\| <= 90 deg | at 135-180 deg | time to a goal [s] | path / straight | "
-              "falls | square completed | square time [s] | square falls | rounds | report |",
-              "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|"]  # fmt: skip
+              "falls | square completed | square time [s] | square falls | rounds | at most [s] (goal, square) | report |",
+              "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|"]  # fmt: skip
     for t, e in res["evaluation"].items():
         b, s = e["bearings"], e["square"]
         lines.append(f"| navigate-{t} | {_pct(b['near']['reached'])} | {_pct(b['behind']['reached'])} | "
                      f"{b['all']['time_s']:.1f} | {b['all']['path_ratio']:.2f} | {_pct(b['all']['fall_rate'])} | "
                      f"{_pct(s['completed'])} | {s['time_s']:.1f} | {_pct(s['fall_rate'])} | {e['rounds']} each | "
+                     f"{e['max_steps'][0] * dt:g}, {e['max_steps'][1] * dt:g} | "
                      f"[eval/{t}/report.md](eval/{t}/report.md) |")  # fmt: skip
     if res["evaluation"]:
         lines += ["", "Per bearing, and the command: each eval/T/report.md. The paths' top view: "

@@ -124,7 +124,7 @@ def test_evaluate_navigate_writes_its_report(tmp_path):
     data = json.loads((out / "results.json").read_text())
     r = data["results"]["flat"]["cpg"]
     assert set(r["bearings"]["per_bearing"]) == {str(b) for b in BEARINGS_DEG} and r["square"]["rounds"] == 1
-    assert data["meta"]["max_steps (goal, square)"] == [20, 20] and (out / "fig_paths_flat_cpg.png").stat().st_size
+    assert data["meta"]["max_steps (goal, square)"] == {"flat": [20, 20]} and (out / "fig_paths_flat_cpg.png").stat().st_size
     proc = subprocess.run(cmd[:4] + ["--sweep", "default", "--out", str(tmp_path / "x")], capture_output=True,
                           text=True, timeout=300, cwd=ROOT)  # fmt: skip
     assert proc.returncode == 2 and "--navigate runs the navigation evaluation alone" in proc.stderr
