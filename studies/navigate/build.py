@@ -90,6 +90,8 @@ def add(lease: str, revision: str | None) -> list[str]:
                 for f in glob.glob(os.path.join(folder, "*")):
                     if f.endswith((".md", ".json", ".png")):
                         shutil.copyfile(f, os.path.join(dst, os.path.basename(f)))
+                with open(os.path.join(dst, "lease.json"), "w") as f:
+                    json.dump({"revision": revision, "lease": os.path.basename(os.path.normpath(lease))}, f, indent=1)
                 got = True
         if got:
             taken.append(t)
@@ -162,8 +164,10 @@ def load() -> dict:
             r = d["results"][t]["cpg_rl"]
             meta = d["meta"]
             limits = meta["max_steps (goal, square)"]  # per terrain, or one pair for every terrain
+            lease = os.path.join(HERE, "eval", t, "lease.json")
+            revision = json.load(open(lease)).get("revision") if os.path.exists(lease) else None
             res["evaluation"][t] = {"command": meta["command"], "rounds": meta["rounds per bearing and of the square"],
-                                    "max_steps": limits[t] if isinstance(limits, dict) else limits,
+                                    "max_steps": limits[t] if isinstance(limits, dict) else limits, "revision": revision,
                                     "bearings": r["bearings"], "square": r["square"]}  # fmt: skip
             res["targets"] += target_checks({t: {"cpg_rl": r}})
         s2s = os.path.join(HERE, "sim2sim", t, "results.json")
@@ -224,14 +228,14 @@ def render(res: dict) -> str:
                      f"{r.get('stopped_by', '-')} | {pick} |")  # fmt: skip
     lines += ["", "## Goals at 2 m and the 2 m square (Newton)", "",
               "| task | goals at \\|bearing\\| <= 90 deg | at 135-180 deg | time to a goal [s] | path / straight | "
-              "falls | square completed | square time [s] | square falls | rounds | at most [s] (goal, square) | report |",
-              "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|"]  # fmt: skip
+              "falls | square completed | square time [s] | square falls | rounds | at most [s] (goal, square) | code | "
+              "report |", "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|---|"]  # fmt: skip
     for t, e in res["evaluation"].items():
         b, s = e["bearings"], e["square"]
         lines.append(f"| navigate-{t} | {_pct(b['near']['reached'])} | {_pct(b['behind']['reached'])} | "
                      f"{b['all']['time_s']:.1f} | {b['all']['path_ratio']:.2f} | {_pct(b['all']['fall_rate'])} | "
                      f"{_pct(s['completed'])} | {s['time_s']:.1f} | {_pct(s['fall_rate'])} | {e['rounds']} each | "
-                     f"{e['max_steps'][0] * dt:g}, {e['max_steps'][1] * dt:g} | "
+                     f"{e['max_steps'][0] * dt:g}, {e['max_steps'][1] * dt:g} | {e.get('revision') or '-'} | "
                      f"[eval/{t}/report.md](eval/{t}/report.md) |")  # fmt: skip
     if res["evaluation"]:
         lines += ["", "Per bearing, and the command: each eval/T/report.md. The paths' top view: "

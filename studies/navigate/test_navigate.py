@@ -158,3 +158,20 @@ def test_bad_input_is_one_line(tmp_path):
         done = subprocess.run([sys.executable, os.path.join(HERE, "build.py"), *args], capture_output=True, text=True)
         assert done.returncode == 1 and done.stderr.startswith("build.py: ") and says in done.stderr
         assert len(done.stderr.strip().splitlines()) == 1
+
+
+def test_add_keeps_an_evaluation_alone_with_its_code(tmp_path):
+    """A lease that only evaluated a kept policy (TASKS=rugged TRAINED=rugged): its evaluation is kept with the commit
+    it ran, the runs are left as they are."""
+    build = _build()
+    lease = tmp_path / "lease"
+    (lease / "eval_rugged").mkdir(parents=True)
+    (lease / "eval_rugged" / "results.json").write_text("{}")
+    (lease / "eval_rugged" / "report.md").write_text("# r")
+    (lease / "eval_rugged" / "stray.txt").write_text("x")
+    build.HERE = str(tmp_path / "study")
+    assert build.add(str(lease), "abc1234") == ["rugged"]
+    kept = tmp_path / "study" / "eval" / "rugged"
+    assert sorted(p.name for p in kept.iterdir()) == ["lease.json", "report.md", "results.json"]
+    assert json.loads((kept / "lease.json").read_text())["revision"] == "abc1234"
+    assert not (tmp_path / "study" / "runs").exists()
