@@ -36,8 +36,8 @@
 #   bash studies/device/gpu.sh report WHAT                      # Fig. 5a + Table 3 over seeds (studies/paper_comparison/compare.py)
 #                                                                # -> $OUT/WHAT/{report.md,results.json,fig5a.*}
 #   bash studies/device/gpu.sh busy                             # exit 0 while `methods` or `evals` jobs run
-#   bash studies/device/gpu.sh queue FILE                       # FILE (bash) in the background, detached (setsid),
-#        # from this folder: a lease's whole work in one queue, log in $QUEUE/log (default /root/queue)
+#   bash studies/device/gpu.sh queue FILE [FILE ...]            # the FILEs (bash) in turn in the background, detached
+#        # (setsid), from this folder: a lease's whole work in one queue, log in $QUEUE/log (default /root/queue)
 #   bash studies/device/gpu.sh poll SECONDS [PATH...]           # exit 3 at once where no queue was started (the call
 #        # landed on a fresh machine: the queue is lost); else until it ends (at most SECONDS), its log's last
 #        # $TAIL lines (30), then each PATH copied into $OUT (a quoted glob, '/root/cand/*', is expanded then)
@@ -310,16 +310,23 @@ busy)
   pgrep -f -- "gpu.sh _(methods|evals)" > /dev/null
   ;;
 queue)
-  file=${1:-}; q=${QUEUE:-/root/queue}
-  [ -f "$file" ] || { echo "gpu.sh queue: no file ${file:-(none given)}" >&2; exit 2; }
+  q=${QUEUE:-/root/queue}
+  [ $# -gt 0 ] || { echo "gpu.sh queue: no file (none given)" >&2; exit 2; }
+  for file in "$@"; do [ -f "$file" ] || { echo "gpu.sh queue: no file $file" >&2; exit 2; }; done
   if [ -f "$q/pid" ] && [ ! -f "$q/ended" ]; then
     echo "gpu.sh queue: a queue is running already ($q/log)" >&2; exit 1
   fi
-  file=$(cd "$(dirname "$file")" && pwd)/$(basename "$file")   # run in place: it finds its neighbours from its path
+  # the files in turn, each run in place (it finds its neighbours from its path); the queue's exit status is the
+  # last nonzero one
+  script="rc=0"
+  for file in "$@"; do
+    file=$(cd "$(dirname "$file")" && pwd)/$(basename "$file")
+    script+="; echo \"\$(date +%T) queue: $file\"; bash '$file' || rc=\$?"
+  done
   mkdir -p "$q" && rm -f "$q/ended"
-  nohup setsid bash -c "bash '$file'; echo \$? > '$q/ended'" > "$q/log" 2>&1 < /dev/null &
+  nohup setsid bash -c "$script; echo \$rc > '$q/ended'" > "$q/log" 2>&1 < /dev/null &
   echo $! > "$q/pid"
-  echo "started the queue $file in $PWD (log $q/log)"
+  echo "started the queue $* in $PWD (log $q/log)"
   ;;
 poll)
   limit=${1:?gpu.sh poll SECONDS [PATH...]}; shift; q=${QUEUE:-/root/queue}

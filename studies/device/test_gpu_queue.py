@@ -243,6 +243,23 @@ def test_queue_and_poll(tmp_path):
     assert missing.returncode == 2 and "no file" in missing.stderr
 
 
+def test_a_queue_of_several_files_runs_them_in_turn(tmp_path):
+    """gpu.sh queue A B: B starts when A has ended, whatever A's exit status; the queue's status is the last nonzero."""
+    env = dict(os.environ, OUT=str(tmp_path / "out"), QUEUE=str(tmp_path / "queue"))
+    order = tmp_path / "order.txt"
+    a, b = tmp_path / "a.sh", tmp_path / "b.sh"
+    a.write_text(f"sleep 1; echo a >> {order}; exit 4\n")
+    b.write_text(f"echo b >> {order}\n")
+    missing = subprocess.run(["bash", "studies/device/gpu.sh", "queue", str(a), str(tmp_path / "none.sh")], cwd=ROOT,
+                             env=env, capture_output=True, text=True)  # fmt: skip
+    assert missing.returncode == 2 and "no file" in missing.stderr and not order.exists()
+    for cmd in (["queue", str(a), str(b)], ["poll", "60"]):
+        done = subprocess.run(["bash", "studies/device/gpu.sh", *cmd], cwd=ROOT, env=env, check=True,
+                              capture_output=True, text=True)  # fmt: skip
+    assert "the queue ended (exit 4)" in done.stdout and f"queue: {b}" in done.stdout
+    assert order.read_text() == "a\nb\n"
+
+
 def test_sample_scaled_queue_on_two_gpus(tmp_path):
     """studies/device/sample_scaled.sh on a 2-GPU machine: the three seeds of the sample-scaled recipe and the recipe's
     seed 1, two runs at a time, each packed with its validation rounds; no scale-out on fewer than 4 GPUs."""
