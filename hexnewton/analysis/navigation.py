@@ -25,7 +25,7 @@ import math
 import numpy as np
 
 from hexnewton.analysis.rollout import CONTROLLERS, LABELS, START_SEED_OFFSET, controller_policy
-from hexnewton.analysis.rollout import read_controller_checkpoint, stepped
+from hexnewton.analysis.rollout import goals_reached, read_controller_checkpoint, stepped
 from hexnewton.mdp.status import FELL, NONFINITE, SUCCESS, TIMEOUT
 
 #: the bearings' goals: their bearings from the start heading [deg] and distance [m]
@@ -90,7 +90,7 @@ def run_goals(env, policy, waypoints: np.ndarray, max_steps: int, progress: bool
     ``rpy`` (T, N, 3) [rad] (NaN after the episode). ``progress``: as :func:`~hexnewton.analysis.rollout.stepped`'s."""
     env.set_waypoints(waypoints)
     env.reset()
-    n, k = env.num_envs, env.goals.count
+    n = env.num_envs
     yaw = env.goals.start_yaw.numpy().astype(np.float64)
     c, s = np.cos(yaw), np.sin(yaw)
     alive, goals = np.ones(n, bool), np.zeros(n, np.int64)
@@ -102,7 +102,7 @@ def run_goals(env, policy, waypoints: np.ndarray, max_steps: int, progress: bool
         pos.append(np.where(alive[:, None], here, np.nan).astype(np.float32))
         if keep_rpy:
             rpy.append(np.where(alive[:, None], r, np.nan))
-        goals = np.where(alive, np.where(st == SUCCESS, k, env.goals.reached.numpy()), goals)
+        goals = np.where(alive, goals_reached(env, st), goals)
         ended = alive & (st != 0)
         end[ended], steps[ended] = st[ended], t + 1
         alive &= ~ended

@@ -181,6 +181,12 @@ def stepped(env, policy, steps: int, description: str, progress: bool | str = Tr
             yield k, env.status.numpy(), q, pos, env.rpy.numpy().copy()
 
 
+def goals_reached(env, status: np.ndarray) -> np.ndarray:
+    """Each env's goals reached in the episode that this step's ``status`` ends or continues: the env's count, or where
+    the last waypoint ended the episode (success; the env has been reset since), all of the course's goals."""
+    return np.where(status == SUCCESS, env.goals.count, env.goals.reached.numpy())
+
+
 def rollout(env, policy, steps: int, recorders: tuple = (), progress: bool = True) -> dict:
     """Run ``policy(obs) -> actions`` for up to ``steps`` control steps; returns first-episode statistics.
     Each of ``recorders`` gets every step. Without recorders, the rollout ends as soon as every env's first
@@ -200,8 +206,7 @@ def rollout(env, policy, steps: int, recorders: tuple = (), progress: bool = Tru
         for rec in recorders:
             rec.add(env, (k + 1) * env.cfg.task.control_dt, q, r, status != 0)
         if goals is not None:
-            reached = np.where(status == SUCCESS, count, env.goals.reached.numpy())
-            goals = np.where(ended, goals, reached)
+            goals = np.where(ended, goals, goals_reached(env, status))
         ended |= status != 0
         if not recorders and ended.all():
             last = k + 1
