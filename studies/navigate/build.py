@@ -59,6 +59,12 @@ def parse_train_log(text: str) -> dict:
     return out
 
 
+def _note_lease(dst: str, lease: str, revision: str | None) -> None:
+    """lease.json beside what was kept in ``dst``: the commit the lease ran and the lease's folder name."""
+    with open(os.path.join(dst, "lease.json"), "w") as f:
+        json.dump({"revision": revision, "lease": os.path.basename(os.path.normpath(lease))}, f, indent=1)
+
+
 def add(lease: str, revision: str | None) -> list[str]:
     """Copy a lease's navigate outputs into the study; returns the tasks whose files were taken."""
     from hexnewton.learning.checkpoint import save_policy_only
@@ -78,8 +84,7 @@ def add(lease: str, revision: str | None) -> list[str]:
             if os.path.exists(timing):
                 shutil.copyfile(timing, os.path.join(dst, "timing.json"))
             save_policy_only(ckpt, os.path.join(dst, "policy.pt"))
-            with open(os.path.join(dst, "lease.json"), "w") as f:
-                json.dump({"revision": revision, "lease": os.path.basename(os.path.normpath(lease))}, f, indent=1)
+            _note_lease(dst, lease, revision)
             got = True
         for src, kind in ((f"eval_{t}", "eval"), (f"s2s_{t}", "sim2sim")):
             folder = os.path.join(lease, src)
@@ -90,8 +95,7 @@ def add(lease: str, revision: str | None) -> list[str]:
                 for f in glob.glob(os.path.join(folder, "*")):
                     if f.endswith((".md", ".json", ".png")):
                         shutil.copyfile(f, os.path.join(dst, os.path.basename(f)))
-                with open(os.path.join(dst, "lease.json"), "w") as f:
-                    json.dump({"revision": revision, "lease": os.path.basename(os.path.normpath(lease))}, f, indent=1)
+                _note_lease(dst, lease, revision)
                 got = True
         if got:
             taken.append(t)
