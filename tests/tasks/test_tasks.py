@@ -181,7 +181,7 @@ def test_navigate_tasks():
     paper's goal ahead and hip range."""
     import math
 
-    from hexnewton.tasks import NAVIGATE_GOALS, NAVIGATE_MINUTES, SIGNED_HIP, navigation_terrain
+    from hexnewton.tasks import NAVIGATE_EPISODE_STEPS, NAVIGATE_GOALS, NAVIGATE_MINUTES, SIGNED_HIP, navigation_terrain
 
     for name, ground in (("navigate-flat", "flat"), ("navigate-rugged", "rugged")):
         t = task(name)
@@ -194,7 +194,7 @@ def test_navigate_tasks():
         assert tc.rugged_x_max == tc.x_max and tc.rugged_half_width == tc.width / 2  # blocks all over (rugged)
         assert tc == navigation_terrain(ground) and t.env.randomization.enabled
         assert t.agent.max_minutes == NAVIGATE_MINUTES[ground] <= 7.0 and t.agent.validation_terrains == ()
-        assert t.env.task == TaskConfig(**NAVIGATE_GOALS)
+        assert t.env.task == TaskConfig(**{**NAVIGATE_GOALS, "max_episode_steps": NAVIGATE_EPISODE_STEPS[ground]})
     assert task("navigate-flat").env.cpg.a2_range == (0.0, 1.3) and task("navigate-rugged").env.cpg.a2_range == (0.9, 1.3)
     for name, t in TASKS.items():
         if not name.startswith("navigate"):
