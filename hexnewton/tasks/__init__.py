@@ -100,7 +100,8 @@ RECIPE_OBSERVATION = ObsConfig()
 PAPER_COURSES = ("rugged", "stepped", "complex")
 #: The navigate tasks' goals (ours, ``TaskConfig``; mdp/terms/goals.py): each at a bearing anywhere round the robot
 #: (-180..180 deg from its heading when set), 1-4 m away, inside +-4 m of the start; reaching one (0.5 m) sets the
-#: next; an episode (20 s, a few goals) ends on a fall or its time limit; every start heading (reset_yaw pi)
+#: next; an episode ends on a fall or its time limit (the terrain's, NAVIGATE_EPISODE_STEPS); every start heading
+#: (reset_yaw pi)
 NAVIGATE_GOALS = dict(random_goals=True, goal_bearing=math.pi, goal_distance_min=1.0, goal_distance_max=4.0,
                       goal_area=4.0, reset_yaw=math.pi, max_episode_steps=1000,
                       terminations=("nonfinite", "fell", "success", "timeout"), seed=1)  # fmt: skip

@@ -8,7 +8,8 @@ in this folder and rendered as report.md and results.json.
 ``--add`` takes from DIR what ``queue.sh`` leaves for a task T (flat, rugged): ``train_T.log`` (``train.py``'s console),
 ``keep/navigate_T.pt`` (the result, kept here as its policy alone: runs/T/policy.pt), ``keep/timing_T.json``,
 ``eval_T/`` (``evaluate --navigate``: report.md, results.json, the paths' figure; kept as eval/T/) and ``s2s_T/``
-(``sim2sim --waypoints``; kept as sim2sim/T/). A task whose evaluation is missing stays partial in the report.
+(``sim2sim --waypoints``; kept as sim2sim/T/). A task whose evaluation is missing stays partial in the report. A
+variant (:data:`VARIANTS`: a task trained with other flags) is kept as runs/NAME/, eval/NAME/ alike.
 """
 
 from __future__ import annotations
@@ -25,6 +26,11 @@ import time
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 TASKS = ("flat", "rugged")
+#: kept runs of a task with other settings than the task's, shown beside it and never among its targets: name ->
+#: (terrain, the flags that give it, what they change). rugged-20s: the training episode and budget of flat ground on
+#: the blocks, where a 20 s episode reaches 0.31 goals (docs/training.md, "Walking to any goal")
+VARIANTS = {"rugged-20s": ("rugged", "--env.task.max_episode_steps 1000 --agent.max_minutes 6.5",
+                           "20 s training episodes, 6.5 min of training")}
 #: the bundle in C MuJoCo against Newton on the same square: within this many points of completed rounds
 SIM2SIM_POINTS = 5.0
 #: the square's video: the kept policy on the 2 m square, three robots, 500 frames: on flat ground 20 s of control,
@@ -39,7 +45,8 @@ SHRINK = {"rugged": ["-vf", "scale=640:-2", "-c:v", "libx264", "-crf", "37", "-p
 
 def parse_train_log(text: str) -> dict:
     """What ``train.py`` printed: the task, envs and device, the start-up, why training stopped, the iterations, the
-    validation's candidates and choice, and the seconds from process start to the exported result."""
+    goals reached per episode in its last episodes, the validation's candidates and choice, and the seconds from process
+    start to the exported result."""
     out: dict = {"candidates": []}
     for line in text.splitlines():
         if m := re.match(r"training task (\S+): (\d+) envs on (\S+), (\d+) iterations", line):
@@ -54,6 +61,8 @@ def parse_train_log(text: str) -> dict:
                                           fell_before_goal=float(m[6]) / 100, chosen=bool(m[1])))  # fmt: skip
         elif m := re.match(r"deterministic validation, (\d+) rounds of the (\S+) course .* per candidate, (\d+) s", line):
             out.update(validation_rounds=int(m[1]), validation_s=float(m[3]))
+        elif m := re.match(r"last episodes: .*goals_reached ([\d.]+), episodes (\d+)", line):
+            out.update(goals_per_episode=float(m[1]), last_episodes=int(m[2]))
         elif m := re.match(r"(\d+) s from process start to the exported result", line):
             out["wall_s_to_result"] = float(m[1])
     return out
@@ -146,8 +155,9 @@ def load() -> dict:
     """Everything the study keeps, as results.json holds it."""
     from hexnewton.analysis.navigation import target_checks
 
-    res: dict = {"training": {}, "evaluation": {}, "sim2sim": {}, "targets": [], "partial": []}
-    for t in TASKS:
+    res: dict = {"training": {}, "evaluation": {}, "sim2sim": {}, "targets": [], "partial": [], "variants": {}}
+    for t in (*TASKS, *VARIANTS):
+        terrain = VARIANTS[t][0] if t in VARIANTS else t
         run = os.path.join(HERE, "runs", t)
         if os.path.exists(os.path.join(run, "train.log")):
             info = parse_train_log(open(os.path.join(run, "train.log")).read())
@@ -165,15 +175,23 @@ def load() -> dict:
         if os.path.exists(ev):
             with open(ev) as f:
                 d = json.load(f)
-            r = d["results"][t]["cpg_rl"]
+            r = d["results"][terrain]["cpg_rl"]
             meta = d["meta"]
             limits = meta["max_steps (goal, square)"]  # per terrain, or one pair for every terrain
             lease = os.path.join(HERE, "eval", t, "lease.json")
             revision = json.load(open(lease)).get("revision") if os.path.exists(lease) else None
             res["evaluation"][t] = {"command": meta["command"], "rounds": meta["rounds per bearing and of the square"],
-                                    "max_steps": limits[t] if isinstance(limits, dict) else limits, "revision": revision,
+                                    "max_steps": limits[terrain] if isinstance(limits, dict) else limits,
+                                    "revision": revision,
                                     "bearings": r["bearings"], "square": r["square"]}  # fmt: skip
-            res["targets"] += target_checks({t: {"cpg_rl": r}})
+            checks = target_checks({terrain: {"cpg_rl": r}})
+            if t in VARIANTS:
+                res["variants"][t] = {"terrain": terrain, "flags": VARIANTS[t][1], "changes": VARIANTS[t][2],
+                                      "targets": checks}  # fmt: skip
+            else:
+                res["targets"] += checks
+        if t in VARIANTS:  # beside its task: no bundle in C MuJoCo, nothing partial
+            continue
         s2s = os.path.join(HERE, "sim2sim", t, "results.json")
         if os.path.exists(s2s) and t in res["evaluation"]:
             with open(s2s) as f:
@@ -195,8 +213,31 @@ def load() -> dict:
     return res
 
 
+def _num(v: float | None) -> str:
+    return "-" if v is None else f"{v:.2f}"
+
+
 def _pct(v: float | None) -> str:
     return "-" if v is None else f"{100 * v:.1f} %"
+
+
+def _target_line(c: dict) -> str:
+    rel = ">=" if c["at_least"] else "<="
+    got, need = ((f"{c['got']:.1f}", f"{c['need']:g}") if c.get("unit") == "points"
+                 else (_pct(c["got"]), f"{100 * c['need']:g} %"))  # fmt: skip
+    return f"- navigate-{c['terrain']}: {c['what']} {got} ({rel} {need}): **{'met' if c['met'] else 'not met'}**"
+
+
+def _label(t: str) -> tuple[str, str]:
+    """A kept run's flags after ``--task`` (a variant's) and its name in the tables."""
+    if t in VARIANTS:
+        return " " + VARIANTS[t][1], f"navigate-{VARIANTS[t][0]}, {VARIANTS[t][2]}"
+    return "", f"navigate-{t}"
+
+
+def _figure(t: str) -> str:
+    """evaluate's top view of the paths, named for the terrain."""
+    return f"fig_paths_{VARIANTS[t][0] if t in VARIANTS else t}_cpg_rl.png"
 
 
 def render(res: dict) -> str:
@@ -211,40 +252,37 @@ def render(res: dict) -> str:
              "studies/navigate/README.md has the commands.", ""]  # fmt: skip
     if res["partial"]:
         lines += ["**Partial**: not measured yet: " + "; ".join(res["partial"]) + ".", ""]
-    lines += ["## Targets", ""]
-    for c in res["targets"]:
-        rel = ">=" if c["at_least"] else "<="
-        got, need = ((f"{c['got']:.1f}", f"{c['need']:g}") if c.get("unit") == "points"
-                     else (_pct(c["got"]), f"{100 * c['need']:g} %"))  # fmt: skip
-        lines.append(f"- navigate-{c['terrain']}: {c['what']} {got} ({rel} {need}): "
-                     f"**{'met' if c['met'] else 'not met'}**")  # fmt: skip
+    lines += ["## Targets", ""] + [_target_line(c) for c in res["targets"]]
+    for name, v in res["variants"].items():
+        lines += ["", f"The same lines for navigate-{v['terrain']} trained with `{v['flags']}` ({v['changes']}; "
+                  f"runs/{name}/, eval/{name}/), not the task's setting:", ""]  # fmt: skip
+        lines += [_target_line(c) for c in v["targets"]]
     lines += ["", "## Training: one command per task", "",
               "| task | device | code | from process start to the result [s] | start-up [s] | training [s] | "
-              "iterations | env-steps | stopped by | the result (validation: goals at 2 m, 8 bearings) |",
-              "|---|---|---|---:|---:|---:|---:|---:|---|---|"]  # fmt: skip
+              "iterations | env-steps | stopped by | goals per episode (last episodes) | the result (validation: goals "
+              "at 2 m, 8 bearings) |", "|---|---|---|---:|---:|---:|---:|---:|---|---:|---|"]  # fmt: skip
     for t, r in res["training"].items():
         chosen = next((c for c in r["candidates"] if c["chosen"]), None)
         pick = (f"{chosen['checkpoint']} ({chosen['why']}): {_pct(chosen['goal'])} of {r.get('validation_rounds')} "
                 f"rounds, fell {_pct(chosen['fell_before_goal'])}") if chosen else "-"  # fmt: skip
-        lines.append(f"| `python train.py --task {r['task']}` | {r.get('device_name')} | {r.get('revision') or '-'} | "
+        lines.append(f"| `python train.py --task {r['task']}{_label(t)[0]}` | {r.get('device_name')} | {r.get('revision') or '-'} | "
                      f"{r.get('wall_s_to_result', 0):.0f} | {r.get('startup_s', 0):.1f} | {r.get('train_s', 0):.0f} | "
                      f"{r.get('last_iteration', -1) + 1} of {r.get('max_iterations')} | {r.get('env_steps') or 0:,} | "
-                     f"{r.get('stopped_by', '-')} | {pick} |")  # fmt: skip
+                     f"{r.get('stopped_by', '-')} | {_num(r.get('goals_per_episode'))} | {pick} |")  # fmt: skip
     lines += ["", "## Goals at 2 m and the 2 m square (Newton)", "",
               "| task | goals at \\|bearing\\| <= 90 deg | at 135-180 deg | time to a goal [s] | path / straight | "
               "falls | square completed | square time [s] | square falls | rounds | at most [s] (goal, square) | code | "
               "report |", "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|---|"]  # fmt: skip
     for t, e in res["evaluation"].items():
         b, s = e["bearings"], e["square"]
-        lines.append(f"| navigate-{t} | {_pct(b['near']['reached'])} | {_pct(b['behind']['reached'])} | "
+        lines.append(f"| {_label(t)[1]} | {_pct(b['near']['reached'])} | {_pct(b['behind']['reached'])} | "
                      f"{b['all']['time_s']:.1f} | {b['all']['path_ratio']:.2f} | {_pct(b['all']['fall_rate'])} | "
                      f"{_pct(s['completed'])} | {s['time_s']:.1f} | {_pct(s['fall_rate'])} | {e['rounds']} each | "
                      f"{e['max_steps'][0] * dt:g}, {e['max_steps'][1] * dt:g} | {e.get('revision') or '-'} | "
                      f"[eval/{t}/report.md](eval/{t}/report.md) |")  # fmt: skip
     if res["evaluation"]:
         lines += ["", "Per bearing, and the command: each eval/T/report.md. The paths' top view: "
-                  + ", ".join(f"[eval/{t}/fig_paths_{t}_cpg_rl.png](eval/{t}/fig_paths_{t}_cpg_rl.png)"
-                              for t in res["evaluation"]) + "."]  # fmt: skip
+                  + ", ".join(f"[eval/{t}/{_figure(t)}](eval/{t}/{_figure(t)})" for t in res["evaluation"]) + "."]
     if res["sim2sim"]:
         lines += ["", "## The bundle in C MuJoCo through the same square", "",
                   "| task | rounds (MuJoCo / Newton) | completed | time [s] | falls | points apart | within "

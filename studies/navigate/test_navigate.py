@@ -113,6 +113,7 @@ TRAIN_LOG = """training task navigate-rugged: 4096 envs on cuda:0, 1500 iteratio
 start-up 38.7 s from process start: python and imports 15.3
 iteration 1009/1499  goals 0.31  fell 0.004  off course 0.000  distance 0.85 m  0.37 s/it  0:06:29
 finished at iteration 1010 after 390 s (the --max_minutes limit)
+last episodes: fell_rate 0.004, off_course_rate 0.000, success_rate 0.000, timeout_rate 0.996, nonfinite_rate 0.000, distance_m 0.851, length_steps 996.632, goals_reached 0.305, episodes 1024, window 1024
 deterministic validation, 256 rounds of the rugged course (seed 3000) per candidate, 31 s:
      model_best.pt (best training goals per episode 0.331, iteration 870): goal 93.0 %, fell before the goal 0.4 % (in all 0.4 %), off course 0.0 %, pitch / roll var 46.0 / 18.0 deg²
   -> model_1010.pt (last, iteration 1010): goal 95.3 %, fell before the goal 0.0 % (in all 0.0 %), off course 0.0 %, pitch / roll var 46.8 / 19.4 deg²
@@ -127,6 +128,7 @@ def test_the_train_log_gives_the_runs_time_and_its_choice():
     assert (info["startup_s"], info["train_s"], info["last_iteration"], info["wall_s_to_result"]) == (38.7, 390, 1010,
                                                                                                        462)
     assert info["stopped_by"] == "the --max_minutes limit" and info["validation_rounds"] == 256
+    assert (info["goals_per_episode"], info["last_episodes"]) == (0.305, 1024)
     best, last = info["candidates"]
     assert (best["why"], best["iteration"], best["goal"], best["chosen"]) == (
         "best training goals per episode 0.331", 870, 0.93, False)
@@ -147,7 +149,10 @@ def test_the_committed_report_renders_what_the_study_keeps():
         assert os.path.getsize(os.path.join(HERE, "runs", t, "policy.pt")) < 2_000_000  # the policy alone
     missing = [f"navigate-{t}: evaluation" for t in build.TASKS if t not in res["evaluation"]]
     assert [p for p in res["partial"] if p.endswith("evaluation")] == missing
-    assert {c["terrain"] for c in res["targets"]} == set(res["evaluation"])
+    assert {c["terrain"] for c in res["targets"]} == set(res["evaluation"]) - set(build.VARIANTS)
+    for name, v in res["variants"].items():  # a task trained with other flags: its lines beside, never the task's
+        assert name in build.VARIANTS and name in res["evaluation"] and name in res["training"]
+        assert {c["terrain"] for c in v["targets"]} == {build.VARIANTS[name][0]} and v["flags"] in build.render(res)
 
 
 def test_bad_input_is_one_line(tmp_path):
