@@ -164,7 +164,7 @@ def bench_train(terrain: str, num_envs: int, device: str, iterations: int, seed:
     import warp as wp
 
     from hexnewton.learning.episode_log import DeferredEpisodes
-    from hexnewton.learning.runner import RankedRunner, seed_everything
+    from hexnewton.learning.runner import RankedRunner, matmul_precision, seed_everything
     from hexnewton.mdp.env import make_env
 
     seed_everything(seed)
@@ -178,6 +178,7 @@ def bench_train(terrain: str, num_envs: int, device: str, iterations: int, seed:
     runner = RankedRunner(env, copy.deepcopy(tcfg), log_dir=logs.name, device=device, rank=rank)
     if (agent or AgentConfig()).deferred_episode_log:  # as train.py's runner books the finished episodes
         DeferredEpisodes(runner.logger)
+    matmul_precision((agent or AgentConfig()).tf32)  # as train.py's runner sets it
     runner.learn(2 if tcfg["torch_compile_mode"] else 1)  # capture, kernel loading, optimizer state, compile
     wall = _timed_learn(runner, env, iterations)
     rate = num_envs * tcfg["num_steps_per_env"] * iterations / wall

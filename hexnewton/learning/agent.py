@@ -160,6 +160,10 @@ class AgentConfig:
     #: on the device and read once per iteration (:mod:`hexnewton.learning.episode_log`), not with three host syncs
     #: every step; the same values logged. False: rsl-rl's own
     deferred_episode_log: bool = True
+    #: ours: the networks' float32 matrix products on TF32 tensor cores (``torch.set_float32_matmul_precision("high")``,
+    #: in the rollout's inference and the update; CUDA only, a 10-bit mantissa in the products' inputs). False: torch's
+    #: default, full float32 ("highest")
+    tf32: bool = False
     #: under torchrun with K ranks (:meth:`for_ranks`): ``mini_batches``: K times the mini-batches per rank (the
     #: mini-batch summed over the ranks stays one process's, K times the optimizer steps per iteration);
     #: ``iterations``: max_iterations, save_interval and the stages' first iterations divided by K (one process's

@@ -171,6 +171,14 @@ def close_group() -> None:
         td.destroy_process_group()
 
 
+def matmul_precision(tf32: bool) -> None:
+    """``AgentConfig.tf32``: the networks' float32 matrix products on TF32 tensor cores ("high"), else in full float32
+    ("highest", torch's default). Process-wide, as torch's setting is."""
+    import torch
+
+    torch.set_float32_matmul_precision("high" if tf32 else "highest")
+
+
 def seed_everything(seed: int) -> None:
     import torch
 
@@ -248,6 +256,7 @@ class HexRunner(RankedRunner):
 
     def __init__(self, env, agent, meta: dict, log_dir: str | None, device: str, rank: Rank = Rank()):
         train_cfg = agent.to_rsl_rl(env.num_envs, env.obs_groups)  # the critic reads every group the env emits
+        matmul_precision(agent.tf32)
         super().__init__(env, train_cfg, log_dir=log_dir, device=device, rank=rank)
         # the run's git/ folder records hexnewton's commit and diff (rsl-rl's default looks for its own repo)
         self.logger.git_status_repos = [os.path.dirname(os.path.abspath(__file__))]

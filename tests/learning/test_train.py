@@ -326,6 +326,27 @@ def test_progress_line_says_when_no_episode_has_ended():
     assert "success 0.500" in line
 
 
+def test_tf32_is_torchs_matmul_precision_and_off_by_default():
+    """--agent.tf32 sets torch's float32 matmul precision for the process ("high": TF32 tensor cores); off, the
+    full float32 torch starts with."""
+    from hexnewton.apps.train import _base_task, configs, parser
+    from hexnewton.learning.agent import AgentConfig
+    from hexnewton.learning.runner import matmul_precision
+
+    assert AgentConfig().tf32 is False
+    for argv, want in ((["--task", "flat"], False), (["--task", "flat", "--agent.tf32", "true"], True)):
+        base, _ = _base_task(argv)
+        assert configs(parser(base, False).parse_args(argv), base, None)[1].tf32 is want
+    before = torch.get_float32_matmul_precision()
+    try:
+        matmul_precision(True)
+        assert torch.get_float32_matmul_precision() == "high"
+        matmul_precision(False)
+        assert torch.get_float32_matmul_precision() == "highest"
+    finally:
+        torch.set_float32_matmul_precision(before)
+
+
 def test_best_checkpoint_keeps_the_best_iteration(tmp_path):
     """model_best.pt follows the training success once enough episodes are in (a quarter of the ring; with a
     curriculum, played on the last level), and only a real improvement saves again."""

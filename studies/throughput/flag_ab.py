@@ -1,0 +1,202 @@
+"""Training against the physics with one learner switch off and on, in turn on one GPU: each A/B of :data:`ABS` from
+what ``flag_ab.sh`` left in each lease's folder ``NAME/raw/DATE/`` (``off_N.json``, ``on_N.json``: ``bench --json``;
+``gpu.txt``, ``revision.txt``; a call that did not finish leaves only its ``.log``).
+
+    python studies/throughput/flag_ab.py [NAME ...]    # NAME/raw/ -> NAME/report.md, results.json (default: every A/B)
+    python studies/throughput/flag_ab.py --bench NAME  # the bench's arguments for off and on (flag_ab.sh reads them)
+
+Each call runs the complex task's physics alone and its training loop (``bench --task complex --mode sim ... train``)
+at 4096 and 16384 envs, alone on the GPU, in the order off, on, off, on. A switch is compared with its off state of
+the same lease: training env-steps per second, training as a share of the physics alone measured in the same call and,
+where the A/B profiles (``--profile``: a device sync around each phase), the iteration's phases.
+"""
+
+from __future__ import annotations
+
+import glob
+import json
+import math
+import os
+import statistics
+import sys
+
+STUDY = os.path.dirname(os.path.abspath(__file__))
+MODES = ("off", "on")
+#: the A/Bs: name (its folder) -> the switch (an AgentConfig flag), what is compared, what off and on mean, the bench's
+#: modes and whether the calls profile the iteration's phases
+ABS = {
+    "episode_log": dict(flag="agent.deferred_episode_log", title="rsl-rl's per-step episode bookkeeping against the "
+                        "deferred one", off="three host reads per env step", on="the default, one read per iteration",
+                        modes="sim env train", profile=False),
+    "tf32": dict(flag="agent.tf32", title="the networks' float32 matrix products in full float32 against TF32 tensor "
+                 "cores", off="the default, full float32", on="TF32 (`torch.set_float32_matmul_precision(\"high\")`)",
+                 modes="sim train", profile=True),
+}  # fmt: skip
+
+
+def bench_args(name: str, mode: str) -> str:
+    """The bench's arguments of A/B ``name`` in ``mode`` (off, on), without --json and --append."""
+    ab = ABS[name]
+    profile = " --profile" if ab["profile"] else ""
+    return (f"--task complex --num_envs 4096 16384 --mode {ab['modes']}{profile} --{ab['flag']} "
+            f"{'true' if mode == 'on' else 'false'}")  # fmt: skip
+
+
+def load_lease(folder: str) -> dict:
+    """One lease: per mode, the calls that finished (in their order), each with per env count the physics alone
+    (robot-s/s), the env step (where measured) and training (env-steps/s), training / physics, the iteration's seconds
+    and, where profiled, its phases [s]; the calls that left only a log (``unfinished``)."""
+    calls: dict = {m: [] for m in MODES}
+    unfinished = []
+    for log in sorted(glob.glob(os.path.join(folder, "*.log"))):
+        name = os.path.basename(log)[:-4]
+        mode = name.split("_")[0]
+        if mode not in MODES:
+            raise ValueError(f"{log}: not off_N.log or on_N.log")
+        path = os.path.join(folder, name + ".json")
+        if not os.path.exists(path):
+            unfinished.append(name)
+            continue
+        with open(path) as f:
+            d = json.load(f)
+        sim = {r["num_envs"]: r["robot_s_per_s"] for r in d["sim"]}
+        rows = {}
+        phases = {str(p["num_envs"]): {k: round(v, 5) for k, v in p.items() if k not in ("terrain", "num_envs")}
+                  for p in d.get("profile") or []}  # fmt: skip
+        for p in d["pipeline"]:
+            n = p["num_envs"]
+            env = p.get("env_steps_per_s")  # nan where the call did not time the env step
+            rows[str(n)] = {"sim_robot_s_per_s": round(sim[n]),
+                            "env_steps_per_s": round(env) if env is not None and math.isfinite(env) else None,
+                            "train_steps_per_s": round(p["train_steps_per_s"]),
+                            "train_over_sim": round(p["train_robot_s_per_s"] / sim[n], 4),
+                            "iteration_s": round(p["train_iteration_s"], 3)}  # fmt: skip
+            if str(n) in phases:
+                rows[str(n)]["phases_s"] = phases[str(n)]
+        calls[mode].append({"call": name, "device": d["device_name"], "rows": rows})
+    with open(os.path.join(folder, "gpu.txt")) as f:
+        gpu = f.read().strip()
+    revision = None
+    if os.path.exists(os.path.join(folder, "revision.txt")):
+        with open(os.path.join(folder, "revision.txt")) as f:
+            revision = f.read().strip()
+    return {"lease": os.path.basename(folder), "gpu": gpu, "revision": revision, "calls": calls,
+            "unfinished": unfinished, "effect": effect(calls)}  # fmt: skip
+
+
+def effect(calls: dict) -> dict:
+    """Per env count: each mode's mean training env-steps/s, training / physics and (where profiled) phases over its
+    calls, and the switch's change on against off (None where a mode has no call)."""
+    out = {}
+    envs = sorted({n for m in MODES for c in calls[m] for n in c["rows"]}, key=int)
+    for n in envs:
+        per = {}
+        for m in MODES:
+            rows = [c["rows"][n] for c in calls[m] if n in c["rows"]]
+            per[m] = {"calls": len(rows),
+                      "train_steps_per_s": round(statistics.mean(r["train_steps_per_s"] for r in rows)) if rows else None,
+                      "train_over_sim": round(statistics.mean(r["train_over_sim"] for r in rows), 4) if rows else None,
+                      "spread": round(max(r["train_steps_per_s"] for r in rows) / min(r["train_steps_per_s"] for r in rows)
+                                      - 1, 4) if rows else None}  # fmt: skip
+            profiled = [r["phases_s"] for r in rows if "phases_s" in r]
+            if profiled:
+                per[m]["phases_s"] = {k: round(statistics.mean(p[k] for p in profiled), 5) for k in profiled[0]}
+        both = all(per[m]["calls"] for m in MODES)
+        per["change"] = round(per["on"]["train_steps_per_s"] / per["off"]["train_steps_per_s"] - 1, 4) if both else None
+        out[n] = per
+    return out
+
+
+def load(name: str) -> dict:
+    raw = os.path.join(STUDY, name, "raw")
+    folders = sorted(d for d in glob.glob(os.path.join(raw, "*")) if os.path.isdir(d))
+    if not folders:
+        raise FileNotFoundError(f"no lease folders in {raw}")
+    return {"ab": name, **ABS[name], "leases": [load_lease(d) for d in folders]}
+
+
+def _k(v: float | None) -> str:
+    return "-" if v is None else f"{v:,.0f}"
+
+
+def _pct(v: float | None, sign: bool = False) -> str:
+    return "-" if v is None else (f"{100 * v:+.1f} %" if sign else f"{100 * v:.0f} %")
+
+
+def _phases(lease: dict) -> list[str]:
+    """The profiled phases per mode and env count, in ms per iteration (each timed with a sync around it)."""
+    rows = [(n, m, e[m]["phases_s"]) for n, e in lease["effect"].items() for m in MODES if "phases_s" in e[m]]
+    if not rows:
+        return []
+    names = list(rows[0][2])
+    lines = ["", "Phases of an iteration (`--profile`: a device sync around each, so they add up to more than an "
+             "unprofiled iteration), ms, the mean over the mode's calls:", "",
+             "| envs | mode | " + " | ".join(names) + " |", "|---:|---|" + "---:|" * len(names)]  # fmt: skip
+    for n, m, ph in rows:
+        lines.append(f"| {n} | {m} | " + " | ".join(f"{1e3 * ph[k]:.1f}" for k in names) + " |")
+    return lines
+
+
+def render(res: dict) -> str:
+    name = res["ab"]
+    command = "python -m hexnewton.apps.bench {args} --json DIR/{mode}_N.json"
+    lines = [f"# Training against the physics: {res['title']}", "",
+             f"`python studies/throughput/flag_ab.py {name}` writes this report and results.json from {name}/raw/ (a "
+             "folder per lease; `AB=" + name + " bash studies/device/gpu.sh queue studies/throughput/flag_ab.sh` makes "
+             "one). Each call, alone on the GPU, in the order off, on, off, on:", "",
+             "```bash", command.format(args=bench_args(name, "off"), mode="off") + f"   # off: {res['off']}",
+             command.format(args=bench_args(name, "on"), mode="on") + f"    # on: {res['on']}", "```", ""]  # fmt: skip
+    for lease in res["leases"]:
+        lines += [f"## {lease['lease']}: {lease['gpu']} (code {lease['revision'] or 'unknown'})", ""]
+        if lease["unfinished"]:
+            lines += [f"**Partial**: {', '.join(lease['unfinished'])} did not finish (the call was stopped before it wrote its results); the "
+                      "means below are over the calls that did.", ""]  # fmt: skip
+        lines += ["| call | envs | physics alone [robot-s/s] | env step [env-steps/s] | training [env-steps/s] | "
+                  "training / physics | s per iteration |", "|---|---:|---:|---:|---:|---:|---:|"]  # fmt: skip
+        order = sorted((c for m in MODES for c in lease["calls"][m]), key=lambda c: (c["call"][-1], c["call"]))
+        for c in order:
+            for n, r in c["rows"].items():
+                lines.append(f"| {c['call']} | {n} | {_k(r['sim_robot_s_per_s'])} | {_k(r['env_steps_per_s'])} | "
+                             f"{_k(r['train_steps_per_s'])} | {_pct(r['train_over_sim'])} | {r['iteration_s']:.2f} |")
+        lines += ["", "| envs | training off [env-steps/s] (calls, spread) | training on | change | training / physics "
+                  "off / on |", "|---:|---:|---:|---:|---|"]  # fmt: skip
+        for n, e in lease["effect"].items():
+            off, on = e["off"], e["on"]
+            lines.append(f"| {n} | {_k(off['train_steps_per_s'])} ({off['calls']}, {_pct(off['spread'], True)}) | "
+                         f"{_k(on['train_steps_per_s'])} ({on['calls']}, {_pct(on['spread'], True)}) | "
+                         f"**{_pct(e['change'], True)}** | {_pct(off['train_over_sim'])} / {_pct(on['train_over_sim'])} |")
+        lines += _phases(lease)
+        lines.append("")
+    return "\n".join(lines)
+
+
+def main() -> None:
+    import argparse
+
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("names", nargs="*", help=f"A/Bs to render (default: every one with a raw/ folder): {', '.join(ABS)}")
+    ap.add_argument("--bench", metavar="NAME", help="print the bench's arguments of NAME, off then on (two lines)")
+    args = ap.parse_args()
+    try:
+        for name in ([args.bench] if args.bench else args.names):
+            if name not in ABS:
+                raise ValueError(f"no A/B named {name!r}: {', '.join(ABS)}")
+        if args.bench:
+            print(bench_args(args.bench, "off"), bench_args(args.bench, "on"), sep="\n")
+            return
+        names = args.names or [n for n in ABS if os.path.isdir(os.path.join(STUDY, n, "raw"))]
+        for name in names:
+            res = load(name)
+            with open(os.path.join(STUDY, name, "results.json"), "w") as f:
+                json.dump(res, f, indent=1)
+            with open(os.path.join(STUDY, name, "report.md"), "w") as f:
+                f.write(render(res))
+            for lease in res["leases"]:
+                for n, e in lease["effect"].items():
+                    print(f"{name} {lease['lease']} {n} envs: training {_pct(e['change'], True)} on against off")
+    except (FileNotFoundError, ValueError, KeyError) as exc:
+        sys.exit(f"flag_ab.py: {exc}")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,97 @@
+"""studies/throughput/flag_ab.sh with a stand-in python: the bench alternates a learner switch off and on (off, on, off,
+on), each call with its own json, markdown and log; flag_ab.py renders each A/B's report from its raw calls."""
+
+import os
+import subprocess
+
+import pytest
+
+pytestmark = pytest.mark.slow  # a study's test: the CI line of its own (python -m pytest -q -m slow)
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+
+
+def _queue(tmp_path, ab: str) -> subprocess.CompletedProcess:
+    bin_dir = tmp_path / "bin"
+    bin_dir.mkdir(exist_ok=True)
+    (bin_dir / "python").write_text('#!/bin/bash\necho "$*" >> "$TP/calls"\n')
+    (bin_dir / "python").chmod(0o755)
+    env = dict(os.environ, PATH=f"{bin_dir}:{os.environ['PATH']}", TP=str(tmp_path), AB=ab)
+    root = os.path.dirname(os.path.dirname(HERE))
+    return subprocess.run(["bash", "studies/throughput/flag_ab.sh"], cwd=root, env=env, capture_output=True, text=True)
+
+
+@pytest.mark.parametrize("ab, flag, modes", [("episode_log", "--agent.deferred_episode_log", "sim env train"),
+                                             ("tf32", "--agent.tf32", "sim train --profile")])
+def test_the_queue_alternates_the_switch(tmp_path, ab, flag, modes):
+    done = _queue(tmp_path, ab)
+    assert done.returncode == 0 and done.stdout.rstrip().endswith("done"), done.stdout + done.stderr
+    calls = (tmp_path / "calls").read_text().splitlines()
+    assert [c.split(flag + " ")[1].split()[0] for c in calls] == ["false", "true"] * 2
+    assert all(f"--task complex --num_envs 4096 16384 --mode {modes} " in c for c in calls)
+    assert [c.split("--json ")[1].split()[0].rsplit("/", 1)[1] for c in calls] == [
+        "off_1.json", "on_1.json", "off_2.json", "on_2.json"]
+    assert sorted(p.name for p in (tmp_path / ab).glob("*.log")) == ["off_1.log", "off_2.log", "on_1.log", "on_2.log"]
+
+
+def test_an_unknown_ab_is_one_line(tmp_path):
+    done = _queue(tmp_path, "moon")
+    assert done.returncode == 2 and done.stderr.strip() == "flag_ab.py: no A/B named 'moon': episode_log, tf32"
+    assert not (tmp_path / "calls").exists()
+
+
+def _study():
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("flag_ab", os.path.join(HERE, "flag_ab.py"))
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+def test_the_effect_is_the_deferred_mean_over_the_per_step_one():
+    study = _study()
+    row = lambda steps, ratio: {"4096": {"train_steps_per_s": steps, "train_over_sim": ratio}}  # noqa: E731
+    calls = {"off": [{"rows": row(100, 0.6)}, {"rows": row(104, 0.62)}], "on": [{"rows": row(113, 0.66)}]}
+    e = study.effect(calls)["4096"]
+    assert e["off"]["train_steps_per_s"] == 102 and e["off"]["spread"] == 0.04 and e["on"]["calls"] == 1
+    assert e["change"] == round(113 / 102 - 1, 4) and e["off"]["train_over_sim"] == 0.61
+    assert study.effect({"off": calls["off"], "on": []})["4096"]["change"] is None
+
+
+def test_the_committed_report_renders_the_raw_calls():
+    """report.md and results.json are what flag_ab.py makes of episode_log/raw/ (a call that left only its log
+    makes the lease partial)."""
+    import json
+
+    study = _study()
+    res = study.load("episode_log")
+    with open(os.path.join(HERE, "episode_log", "results.json")) as f:
+        assert json.load(f) == json.loads(json.dumps(res))
+    with open(os.path.join(HERE, "episode_log", "report.md")) as f:
+        assert f.read() == study.render(res)
+    lease = res["leases"][0]
+    assert lease["unfinished"] == ["on_2"] and "**Partial**" in study.render(res)
+
+
+def test_profiled_calls_give_the_phases_per_mode(tmp_path):
+    """A profiled A/B (tf32): each call's phases kept per env count, their mean per mode, and the phases' table."""
+    import json
+
+    study = _study()
+    lease = tmp_path / "2026-01-01"
+    lease.mkdir()
+    (lease / "gpu.txt").write_text("NVIDIA H200, 580\n")
+    for call, update in (("off_1", 0.2), ("on_1", 0.1), ("off_2", 0.22)):
+        (lease / f"{call}.log").write_text("exit 0\n")
+        (lease / f"{call}.json").write_text(json.dumps({
+            "device_name": "NVIDIA H200", "sim": [{"num_envs": 16384, "robot_s_per_s": 14000.0}],
+            "pipeline": [{"num_envs": 16384, "env_steps_per_s": float("nan"), "train_steps_per_s": 500000.0,
+                          "train_robot_s_per_s": 10000.0, "train_iteration_s": 0.79}],
+            "profile": [{"terrain": "complex", "num_envs": 16384, "env.step": 0.57, "PPO update": update}]}))
+    got = study.load_lease(str(lease))
+    assert got["calls"]["off"][0]["rows"]["16384"]["env_steps_per_s"] is None
+    e = got["effect"]["16384"]
+    assert e["off"]["phases_s"] == {"env.step": 0.57, "PPO update": 0.21} and e["on"]["phases_s"]["PPO update"] == 0.1
+    text = study.render({"ab": "tf32", **study.ABS["tf32"], "leases": [got]})
+    assert "| 16384 | off | 570.0 | 210.0 |" in text and "--agent.tf32 true" in text
