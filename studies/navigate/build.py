@@ -265,7 +265,8 @@ def render(res: dict) -> str:
         chosen = next((c for c in r["candidates"] if c["chosen"]), None)
         pick = (f"{chosen['checkpoint']} ({chosen['why']}): {_pct(chosen['goal'])} of {r.get('validation_rounds')} "
                 f"rounds, fell {_pct(chosen['fell_before_goal'])}") if chosen else "-"  # fmt: skip
-        lines.append(f"| `python train.py --task {r['task']}{_label(t)[0]}` | {r.get('device_name')} | {r.get('revision') or '-'} | "
+        lines.append(f"| `python train.py --task {r['task']}{_label(t)[0]}` | {r.get('device_name')} | "
+                     f"{r.get('revision') or '-'} | "
                      f"{r.get('wall_s_to_result', 0):.0f} | {r.get('startup_s', 0):.1f} | {r.get('train_s', 0):.0f} | "
                      f"{r.get('last_iteration', -1) + 1} of {r.get('max_iterations')} | {r.get('env_steps') or 0:,} | "
                      f"{r.get('stopped_by', '-')} | {_num(r.get('goals_per_episode'))} | {pick} |")  # fmt: skip

@@ -164,7 +164,8 @@ def render(res: dict) -> str:
             off, on = e["off"], e["on"]
             lines.append(f"| {n} | {_k(off['train_steps_per_s'])} ({off['calls']}, {_pct(off['spread'], True)}) | "
                          f"{_k(on['train_steps_per_s'])} ({on['calls']}, {_pct(on['spread'], True)}) | "
-                         f"**{_pct(e['change'], True)}** | {_pct(off['train_over_sim'])} / {_pct(on['train_over_sim'])} |")
+                         f"**{_pct(e['change'], True)}** | {_pct(off['train_over_sim'])} / "
+                         f"{_pct(on['train_over_sim'])} |")
         lines += _phases(lease)
         lines.append("")
     return "\n".join(lines)
@@ -174,7 +175,8 @@ def main() -> None:
     import argparse
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("names", nargs="*", help=f"A/Bs to render (default: every one with a raw/ folder): {', '.join(ABS)}")
+    ap.add_argument("names", nargs="*",
+                    help=f"A/Bs to render (default: every one with a raw/ folder): {', '.join(ABS)}")
     ap.add_argument("--bench", metavar="NAME", help="print the bench's arguments of NAME, off then on (two lines)")
     args = ap.parse_args()
     try:
