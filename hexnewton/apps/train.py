@@ -114,6 +114,9 @@ def parser(base, resumed: bool) -> ArgumentParser:
     p.add_argument("--build_beside_imports", action=argparse.BooleanOptionalAction, default=True,
                    help="build the terrain and the physics model in a thread while torch and rsl-rl import (default; "
                         "--no-build_beside_imports: after them)")  # fmt: skip
+    p.add_argument("--build_scene_first", action=argparse.BooleanOptionalAction, default=True,
+                   help="with the build beside the imports: the terrain and the scene before them, only Newton's "
+                        "finalize beside them (default; --no-build_scene_first: all of it beside them)")  # fmt: skip
     p.add_argument("--headless", action="store_true",
                    help="Isaac Lab's flag, accepted: training never opens a window (--video renders off-screen)")
     p.add_argument("--video", action="store_true",
@@ -410,13 +413,14 @@ def main(argv: list[str] | None = None) -> int:
     from hexnewton import startup
 
     # the heavy imports one by one, so that the start-up line says where "python and imports" goes; the terrain and
-    # the physics model (NumPy and Newton, no torch) build in a thread meanwhile (--no-build_beside_imports: after)
+    # the scene (Python) are built before torch and rsl-rl import, Newton's finalize of the model (mostly NumPy, no
+    # torch) in a thread meanwhile (--no-build_scene_first: all three beside; --no-build_beside_imports: after)
     startup.timed_imports("warp", "newton", "hexnewton.physics.world")
     rank, cfg = rank_config(args, env_cfg)
     agent = device_validation(agent, cfg.sim.device, argv)
     from hexnewton.physics.world import ModelBuild
 
-    build = ModelBuild(cfg, beside=True) if args.build_beside_imports else None
+    build = ModelBuild(cfg, beside=True, scene_first=args.build_scene_first) if args.build_beside_imports else None
     startup.timed_imports("torch", "rsl_rl", "hexnewton.mdp.env", "hexnewton.learning.runner")
     check_outputs(args)
     from hexnewton.learning.runner import seed_everything

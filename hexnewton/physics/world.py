@@ -248,10 +248,12 @@ class ModelBuild:
     Made before anything loads a Warp module: it installs the shipped modules first. ``beside=False`` builds at once,
     marking the start-up phases terrain, scene and finalize; ``beside=True`` builds in a thread while the process goes
     on (``train.py`` imports torch and rsl-rl meanwhile), its phases kept as the note ``model_build_beside_s`` and the
-    wait for it marked as the phase "model build". :class:`World` takes it (``World(cfg, build=...)``); an error of
+    wait for it marked as the phase "model build". With ``scene_first`` (and ``beside``) the terrain and the scene,
+    Python that would share the interpreter lock with the imports, are built at once (their phases marked) and only
+    the finalize, mostly NumPy, goes to the thread. :class:`World` takes it (``World(cfg, build=...)``); an error of
     the build is raised there."""
 
-    def __init__(self, cfg: HexConfig, terrain: Terrain | None = None, beside: bool = False):
+    def __init__(self, cfg: HexConfig, terrain: Terrain | None = None, beside: bool = False, scene_first: bool = False):
         validate_sim(cfg.sim)
         self.cfg, self.device, self.beside = cfg, resolve_device(cfg.sim.device), beside
         startup.mark("python and imports")
@@ -265,32 +267,46 @@ class ModelBuild:
         self.since = live_kernel_ids() if compiles_generated(cfg.sim.precompile, is_cuda) else None
         self.seconds: dict[str, float] = {}
         self._terrain, self._out, self._error, self._last = terrain, None, None, time.time()
-        self._thread = None
+        self._thread, self._in_thread = None, False
+        if beside and scene_first:
+            self._build_scene()
         if beside:
+            self._in_thread = True
             self._thread = threading.Thread(target=self._build, name="hexnewton-model-build", daemon=True)
             self._thread.start()
         else:
             self._build()
 
     def _lap(self, name: str) -> None:
-        if self.beside:
+        if self._in_thread:
             now = time.time()
             self.seconds[name], self._last = round(now - self._last, 2), now
         else:
             startup.mark(name)
 
-    def _build(self) -> None:
+    def _build_scene(self) -> None:
         try:
-            terrain = self._terrain if self._terrain is not None else make_terrain(self.cfg.terrain)
+            self._terrain = self._terrain if self._terrain is not None else make_terrain(self.cfg.terrain)
             self._lap("terrain")
-            scene, spawn = build_scene(self.cfg, terrain)
+            self._scene = build_scene(self.cfg, self._terrain)
             self._lap("scene")
+        except BaseException as exc:  # raised where the result is taken
+            self._error = exc
+
+    def _build(self) -> None:
+        if not hasattr(self, "_scene"):
+            self._build_scene()
+        if self._error is not None:
+            return
+        try:
+            (scene, spawn), self._last = self._scene, time.time()
             with wp.ScopedDevice(self.device):
                 model = scene.finalize(device=self.device)
             self._lap("finalize")
-            self._out = terrain, model, spawn
+            self._out = self._terrain, model, spawn
         except BaseException as exc:  # raised in the thread that takes the result
             self._error = exc
+        del self._scene  # the builder's lists, not kept beside the model
 
     def result(self) -> tuple[Terrain, newton.Model, Spawn]:
         """The terrain, the finalized model and the spawn, once built (waits for a build beside)."""

@@ -281,13 +281,15 @@ def test_curriculum_stages_change_reflex_and_weights_in_one_run(tmp_path, capsys
 
 def test_training_reports_its_start_up_and_writes_timing(trained):
     """After the first iteration train.py prints where the start-up went (phases from the process's start), and the
-    run's timing.json records them with the training time and the result it exported. The terrain and the model are
-    built in a thread beside the imports (the default): the wait is a phase, the thread's own phases a note."""
+    run's timing.json records them with the training time and the result it exported. The terrain and the scene are
+    built before the imports, the model's finalize in a thread beside them (the default): the wait is a phase, the
+    thread's own phase a note."""
     logs, out = trained
     line = next(x for x in out.splitlines() if x.startswith("start-up "))
     for phase in ("python and imports", "model build", "solver", "first step and graph capture", "first iteration"):
         assert f"{phase} " in line
-    assert "; model built beside the imports: terrain " in line and ", finalize " not in line.split(";")[0]
+    assert ", terrain " in line.split(";")[0] and ", scene " in line.split(";")[0]
+    assert "; model built beside the imports: finalize " in line and ", finalize " not in line.split(";")[0]
     run_dir = glob.glob(str(logs / "hexnewton_flat" / "*"))[0]
     timing = json.load(open(os.path.join(run_dir, "timing.json")))
     assert timing["iterations"] == 2 and timing["env_steps"] == 2 * 16 * 24

@@ -204,9 +204,28 @@ def test_model_built_beside_is_the_model_built_at_once():
         World(HexConfig(sim=SimConfig(num_envs=N + 1, device="cpu")), build=build)
 
 
-def test_model_build_error_is_raised_where_the_world_takes_it():
+def test_model_build_with_the_scene_first_finalizes_beside():
+    """scene_first (train.py's default): the terrain and the scene built at once, their phases the command's; only the
+    finalize in the thread, its phase the note; the same world as built at once."""
+    from hexnewton import startup
+
+    cfg = HexConfig(sim=SimConfig(num_envs=N, device="cpu"),
+                    terrain=TerrainConfig(name="rugged", collision="mesh_boxes"))
+    startup.restart()
+    build = ModelBuild(cfg, beside=True, scene_first=True)
+    assert {"terrain", "scene"} <= set(startup.phases())
+    beside = World(cfg, build=build)
+    assert set(build.seconds) == {"finalize"} and startup.notes()["model_build_beside_s"] == build.seconds
+    assert "model build" in startup.phases() and "finalize" not in startup.phases()
+    at_once = World(cfg)
+    np.testing.assert_array_equal(beside.numpy_q(), at_once.numpy_q())
+    assert beside.model.shape_count == at_once.model.shape_count
+
+
+@pytest.mark.parametrize("scene_first", [False, True])
+def test_model_build_error_is_raised_where_the_world_takes_it(scene_first):
     bad = HexConfig(sim=SimConfig(num_envs=N, device="cpu"), terrain=TerrainConfig(name="rugged", block_size=-1.0))
-    build = ModelBuild(bad, beside=True)  # the thread fails; the process goes on
+    build = ModelBuild(bad, beside=True, scene_first=scene_first)  # the build fails; the process goes on
     with pytest.raises(ValueError):
         World(bad, build=build)
 

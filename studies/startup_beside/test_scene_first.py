@@ -1,0 +1,31 @@
+"""studies/startup_beside/scene_first.py: its report is the rendering of its measured runs, both modes alternating."""
+
+import json
+import os
+
+import pytest
+
+pytestmark = pytest.mark.slow  # a study's test: the CI line of its own (python -m pytest -q -m slow)
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+
+
+def _study():
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("scene_first", os.path.join(HERE, "scene_first.py"))
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+def test_the_committed_report_renders_the_runs():
+    study = _study()
+    with open(os.path.join(HERE, "scene_first", "results.json")) as f:
+        res = json.load(f)
+    with open(os.path.join(HERE, "scene_first", "report.md")) as f:
+        assert f.read() == study.report(res)
+    modes = [r["mode"] for r in res["runs"]]
+    assert modes == list(study.MODES) * (len(modes) // 2)  # alternating, each mode as often
+    for r in res["runs"]:  # scene_first: terrain and scene are the command's phases; else the thread's
+        assert ("scene" in r["phases_s"]) == (r["mode"] == "scene_first") and "finalize" in r["beside_s"]
