@@ -44,6 +44,16 @@ def measure(mode: str, num_envs: int, device: str) -> dict:
             "beside_s": got["notes"].get("model_build_beside_s", {}), "imports_s": got["notes"].get("imports_s", {})}
 
 
+def _machine(device: str) -> str:
+    """The CPU cores and, on a GPU, its name (nvidia-smi)."""
+    if device.startswith("cuda"):
+        done = subprocess.run(["nvidia-smi", "--query-gpu=name", "--format=csv,noheader"], capture_output=True,
+                              text=True)  # fmt: skip
+        if done.returncode == 0:
+            return f"{os.cpu_count()} CPU cores, {done.stdout.strip().splitlines()[0]}"
+    return f"{os.cpu_count()} CPU cores"
+
+
 def report(res: dict) -> str:
     lines = ["# The terrain and the scene first, the finalize beside the imports", "",
              f"`{res['command']}` ({res['machine']}; the complex task, {res['num_envs']} envs, device {res['device']}). "
@@ -81,7 +91,7 @@ def main() -> None:
         if not a.out or a.runs < 1:
             p.error("--out DIR and --runs >= 1 are needed")
         res = {"command": "python studies/startup_beside/scene_first.py " + " ".join(sys.argv[1:]),
-               "machine": f"{os.cpu_count()} CPU cores", "num_envs": a.num_envs, "device": a.device, "runs": []}
+               "machine": _machine(a.device), "num_envs": a.num_envs, "device": a.device, "runs": []}
         for _ in range(a.runs):
             for mode in MODES:
                 res["runs"].append(measure(mode, a.num_envs, a.device))
