@@ -418,7 +418,7 @@ def main(argv: list[str] | None = None) -> int:
     startup.timed_imports("warp", "newton", "hexnewton.physics.world")
     rank, cfg = rank_config(args, env_cfg)
     agent = device_validation(agent, cfg.sim.device, argv)
-    from hexnewton.physics.world import ModelBuild
+    from hexnewton.physics.model_build import ModelBuild
 
     build = ModelBuild(cfg, beside=True, scene_first=args.build_scene_first) if args.build_beside_imports else None
     startup.timed_imports("torch", "rsl_rl", "hexnewton.mdp.env", "hexnewton.learning.runner")

@@ -105,13 +105,14 @@ from hexnewton.physics.graphs import capture_graph
 from hexnewton.physics.precompile import compile_modules, loaded_variants, variant_names
 from hexnewton.physics.robot import BASE_Q
 from hexnewton.physics.terrain.heightmap import env_groups, group_offset_y
-from hexnewton.physics.world import ModelBuild, World
+from hexnewton.physics.model_build import ModelBuild
+from hexnewton.physics.world import World
 
 RING = 1024  # finished episodes the logged rates average over
 
 class HexapodEnv(VecEnv):
     """N hexapods, one terrain, the paper's observation, action, reward and terminations. ``build``: the world's
-    model built earlier (:class:`~hexnewton.physics.world.ModelBuild`, ``train.py`` beside its imports)."""
+    model built earlier (:class:`~hexnewton.physics.model_build.ModelBuild`, ``train.py`` beside its imports)."""
 
     def __init__(self, cfg: HexConfig, action_mode: str = "cpg", build: ModelBuild | None = None):
         if action_mode not in ACTION_MODES:

@@ -20,9 +20,6 @@ reports (warning or ``ContactOverflowError``); overflow never passes silently.
 from __future__ import annotations
 
 import logging
-import math
-import threading
-import time
 import warnings
 from collections.abc import Callable
 from dataclasses import dataclass, replace
@@ -36,18 +33,15 @@ from newton.solvers import SolverMuJoCo
 from hexnewton import startup
 from hexnewton.config import HexConfig, SimConfig
 from hexnewton.errors import HexnewtonError
-from hexnewton.physics.device import resolve_device
 from hexnewton.physics.graphs import capture_graph
+from hexnewton.physics.model_build import ModelBuild
 from hexnewton.physics.private_api import reduction_overflow
 from hexnewton.physics.precompile import (
-    compiles_generated,
-    install_shipped_modules,
-    live_kernel_ids,
     precompile,
     precompile_solver,
 )
-from hexnewton.physics.robot import BASE_Q, BASE_QD, NUM_JOINTS, build_hexapod, leg_bounds, stand_height
-from hexnewton.physics.terrain import Terrain, make_terrain, max_terrain_height_np
+from hexnewton.physics.robot import BASE_Q, BASE_QD, NUM_JOINTS, leg_bounds
+from hexnewton.physics.terrain import Terrain
 from hexnewton.physics.terrain.box_pairs import TerrainBoxPairs
 
 log = logging.getLogger("hexnewton")
@@ -63,26 +57,6 @@ NOT_CONVERGED_BITS = (1 << 9) | (1 << 10)
 
 class ContactOverflowError(HexnewtonError):
     pass
-
-
-MAX_ENVS = 1 << 20  # per device; an H100 holds 16384 envs in a few GB (studies/throughput/report.md)
-
-
-def validate_sim(cfg: SimConfig) -> None:
-    if not isinstance(cfg.num_envs, (int, np.integer)) or cfg.num_envs <= 0:
-        raise HexnewtonError(f"num_envs must be a positive integer, got {cfg.num_envs}")
-    if cfg.num_envs > MAX_ENVS:
-        raise HexnewtonError(f"num_envs {cfg.num_envs:,} exceeds the {MAX_ENVS:,} robots one device can hold")
-    if cfg.substeps < 1:
-        raise HexnewtonError(f"substeps must be >= 1, got {cfg.substeps}")
-    if not cfg.frame_dt > 0:
-        raise HexnewtonError(f"frame_dt must be > 0, got {cfg.frame_dt}")
-    for name in ("rigid_gap", "terrain_gap", "speculative_gap"):
-        value = getattr(cfg, name)
-        if value is not None and not (math.isfinite(value) and value >= 0):
-            raise HexnewtonError(f"sim.{name} must be a non-negative number of metres, got {value}")
-    if cfg.min_contact_pool < 0:
-        raise HexnewtonError(f"sim.min_contact_pool must be >= 0, got {cfg.min_contact_pool}")
 
 
 def contacts_per_world(cfg: SimConfig, num_envs: int) -> int:
@@ -198,126 +172,6 @@ class OverflowReport:
             names.append("terrain box pairs (terrain.collision boxes): a robot shape overlapped more boxes than its slots")
         return (f"contact buffers overflowed in {self.worlds} world(s), contacts were dropped: " + "; ".join(names)
                 + "; or lower sim.rigid_gap (fewer contact candidates)")
-
-
-@dataclass
-class Spawn:
-    """Where the scene stands its robots: env i at x = 0 in its own lane y_i (``xy`` (N, 2)), the lanes evenly spread
-    over +-spawn_y_spread so that the robots meet different blocks, its torso ``clearance`` above the highest terrain
-    within ``footprint`` of its lane (``z`` (N,))."""
-
-    xy: np.ndarray
-    z: np.ndarray
-    footprint: float
-    clearance: float
-
-
-def build_scene(cfg: HexConfig, terrain: Terrain) -> tuple[newton.ModelBuilder, Spawn]:
-    """The scene: ``cfg.sim.num_envs`` hexapods, each in its own world, standing at their :class:`Spawn`, and the shared
-    terrain."""
-    sim, n = cfg.sim, cfg.sim.num_envs
-    robot = build_hexapod(cfg.robot, gap=sim.rigid_gap)
-
-    scene = newton.ModelBuilder()
-    SolverMuJoCo.register_custom_attributes(scene)
-    scene.rigid_gap = sim.rigid_gap
-    scene.replicate(robot, n)
-    terrain_gap = sim.rigid_gap if sim.terrain_gap is None else sim.terrain_gap
-    ground_cfg = newton.ModelBuilder.ShapeConfig(mu=cfg.robot.friction, gap=terrain_gap)
-    terrain.add_to_builder(scene, ground_cfg)
-
-    xy = np.zeros((n, 2))
-    if n > 1:
-        xy[:, 1] = np.linspace(-sim.spawn_y_spread, sim.spawn_y_spread, n)
-    footprint = 0.5 * math.hypot(*cfg.robot.torso_size[:2]) + cfg.robot.hip_length + cfg.robot.femur_length
-    clearance = max(cfg.robot.spawn_height, stand_height(cfg.robot))
-    z = max_terrain_height_np(terrain.grid, xy[:, 0], xy[:, 1], footprint) + clearance
-    nq = BASE_Q + NUM_JOINTS
-    q = np.asarray(scene.joint_q, dtype=np.float32).reshape(n, nq)
-    q[:, 0:2] = xy
-    q[:, 2] = z
-    scene.joint_q[:] = q.reshape(-1).tolist()
-    return scene, Spawn(xy, z, footprint, clearance)
-
-
-class ModelBuild:
-    """The terrain and the finalized Newton model of ``cfg``: the height grid and its meshes, the scene
-    (:func:`build_scene`) and Newton's finalize, which for the curriculum's complex course is mostly NumPy over its
-    block mesh (the open-edge flags of ~1.1 M faces, ~10 s). None of it needs torch or rsl-rl.
-
-    Made before anything loads a Warp module: it installs the shipped modules first. ``beside=False`` builds at once,
-    marking the start-up phases terrain, scene and finalize; ``beside=True`` builds in a thread while the process goes
-    on (``train.py`` imports torch and rsl-rl meanwhile), its phases kept as the note ``model_build_beside_s`` and the
-    wait for it marked as the phase "model build". With ``scene_first`` (and ``beside``) the terrain and the scene,
-    Python that would share the interpreter lock with the imports, are built at once (their phases marked) and only
-    the finalize, mostly NumPy, goes to the thread. :class:`World` takes it (``World(cfg, build=...)``); an error of
-    the build is raised there."""
-
-    def __init__(self, cfg: HexConfig, terrain: Terrain | None = None, beside: bool = False, scene_first: bool = False):
-        validate_sim(cfg.sim)
-        self.cfg, self.device, self.beside = cfg, resolve_device(cfg.sim.device), beside
-        startup.mark("python and imports")
-        # the modules compiled ahead of time for this GPU (hexnewton/physics/aot/) into Warp's cache, before any loads
-        shipped = install_shipped_modules(self.device)
-        if shipped or "shipped_modules_installed" not in startup.notes():
-            startup.note("shipped_modules_installed", shipped)
-        startup.mark("shipped kernels")
-        # SimConfig.precompile "generated": the kernels mujoco_warp and Newton generate for this model come after these
-        is_cuda = wp.get_device(self.device).is_cuda
-        self.since = live_kernel_ids() if compiles_generated(cfg.sim.precompile, is_cuda) else None
-        self.seconds: dict[str, float] = {}
-        self._terrain, self._out, self._error, self._last = terrain, None, None, time.time()
-        self._thread, self._in_thread = None, False
-        if beside and scene_first:
-            self._build_scene()
-        if beside:
-            self._in_thread = True
-            self._thread = threading.Thread(target=self._build, name="hexnewton-model-build", daemon=True)
-            self._thread.start()
-        else:
-            self._build()
-
-    def _lap(self, name: str) -> None:
-        if self._in_thread:
-            now = time.time()
-            self.seconds[name], self._last = round(now - self._last, 2), now
-        else:
-            startup.mark(name)
-
-    def _build_scene(self) -> None:
-        try:
-            self._terrain = self._terrain if self._terrain is not None else make_terrain(self.cfg.terrain)
-            self._lap("terrain")
-            self._scene = build_scene(self.cfg, self._terrain)
-            self._lap("scene")
-        except BaseException as exc:  # raised where the result is taken
-            self._error = exc
-
-    def _build(self) -> None:
-        if not hasattr(self, "_scene"):
-            self._build_scene()
-        if self._error is not None:
-            return
-        try:
-            (scene, spawn), self._last = self._scene, time.time()
-            with wp.ScopedDevice(self.device):
-                model = scene.finalize(device=self.device)
-            self._lap("finalize")
-            self._out = self._terrain, model, spawn
-        except BaseException as exc:  # raised in the thread that takes the result
-            self._error = exc
-        del self._scene  # the builder's lists, not kept beside the model
-
-    def result(self) -> tuple[Terrain, newton.Model, Spawn]:
-        """The terrain, the finalized model and the spawn, once built (waits for a build beside)."""
-        if self._thread is not None:  # the wait, 0 if the build ended first
-            self._thread.join()
-            self._thread = None
-            startup.mark("model build")
-            startup.note("model_build_beside_s", self.seconds)
-        if self._error is not None:
-            raise self._error
-        return self._out
 
 
 class World:

@@ -23,7 +23,7 @@ import json, sys
 from hexnewton import startup
 startup.timed_imports("warp", "newton", "hexnewton.physics.world")
 from dataclasses import replace
-from hexnewton.physics.world import ModelBuild
+from hexnewton.physics.model_build import ModelBuild
 from hexnewton.tasks import task
 cfg = task("complex").env
 cfg = replace(cfg, sim=replace(cfg.sim, num_envs=int(sys.argv[1]), device=sys.argv[2]))

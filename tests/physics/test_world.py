@@ -14,7 +14,8 @@ from hexnewton.physics.cpg import CPGController
 from hexnewton.physics.device import resolve_device
 from hexnewton.physics.robot import stand_height
 from hexnewton.physics.terrain import max_terrain_height_np
-from hexnewton.physics.world import ContactOverflowError, ModelBuild, World, contacts_per_world
+from hexnewton.physics.model_build import ModelBuild
+from hexnewton.physics.world import ContactOverflowError, World, contacts_per_world
 
 N = 4
 
