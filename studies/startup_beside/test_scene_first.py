@@ -5,22 +5,14 @@ import os
 
 import pytest
 
+import scene_first as study  # this study's module (pytest puts the study's folder on sys.path)
+
 pytestmark = pytest.mark.slow  # a study's test: the CI line of its own (python -m pytest -q -m slow)
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 
 
-def _study():
-    import importlib.util
-
-    spec = importlib.util.spec_from_file_location("scene_first", os.path.join(HERE, "scene_first.py"))
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
-
-
 def test_the_committed_report_renders_the_runs():
-    study = _study()
     with open(os.path.join(HERE, "scene_first", "results.json")) as f:
         res = json.load(f)
     with open(os.path.join(HERE, "scene_first", "report.md")) as f:
