@@ -56,7 +56,8 @@ def _machine(device: str) -> str:
 
 def report(res: dict) -> str:
     lines = ["# The terrain and the scene first, the finalize beside the imports", "",
-             f"`{res['command']}` ({res['machine']}; the complex task, {res['num_envs']} envs, device {res['device']}). "
+             f"`{res['command']}` ({res['machine']}; the complex task, {res['num_envs']} envs, device "
+             f"{res['device']}). "
              "Each run a fresh process, in the order shown; the start-up as train.py orders it up to the model's "
              "being ready. Numbers: results.json.", "",
              "| run | mode | model ready [s] | imports after the build began [s] | terrain + scene [s] | the finalize "
@@ -65,7 +66,8 @@ def report(res: dict) -> str:
         ph, bs = r["phases_s"], r["beside_s"]
         main = ph.get("terrain", 0) + ph.get("scene", 0)
         side = bs.get("terrain", 0) + bs.get("scene", 0)
-        imports = sum(v for name, v in r["imports_s"].items() if name not in ("warp", "newton", "hexnewton.physics.world"))
+        before = ("warp", "newton", "hexnewton.physics.world")  # imported before the build began
+        imports = sum(v for name, v in r["imports_s"].items() if name not in before)
         lines.append(f"| {k} | {r['mode']} | {r['ready_s']:.1f} | {imports:.1f} | {main + side:.1f} "
                      f"({'before the imports' if main else 'beside them'}) | {bs.get('finalize', 0):.1f} | "
                      f"{ph.get('model build', 0):.1f} |")  # fmt: skip
