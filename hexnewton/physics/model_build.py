@@ -109,7 +109,7 @@ class ModelBuild:
         self.since = live_kernel_ids() if compiles_generated(cfg.sim.precompile, is_cuda) else None
         self.seconds: dict[str, float] = {}
         self._terrain, self._out, self._error, self._last = terrain, None, None, time.time()
-        self._thread, self._in_thread = None, False
+        self._thread, self._in_thread, self._scene = None, False, None
         if beside and scene_first:
             self._build_scene()
         if beside:
@@ -136,19 +136,19 @@ class ModelBuild:
             self._error = exc
 
     def _build(self) -> None:
-        if not hasattr(self, "_scene"):
+        if self._scene is None and self._error is None:
             self._build_scene()
         if self._error is not None:
             return
+        (scene, spawn), self._scene = self._scene, None  # the builder's lists, not kept beside the model
         try:
-            (scene, spawn), self._last = self._scene, time.time()
+            self._last = time.time()
             with wp.ScopedDevice(self.device):
                 model = scene.finalize(device=self.device)
             self._lap("finalize")
             self._out = self._terrain, model, spawn
         except BaseException as exc:  # raised in the thread that takes the result
             self._error = exc
-        del self._scene  # the builder's lists, not kept beside the model
 
     def result(self) -> tuple[Terrain, newton.Model, Spawn]:
         """The terrain, the finalized model and the spawn, once built (waits for a build beside)."""
