@@ -163,8 +163,7 @@ def bench_train(terrain: str, num_envs: int, device: str, iterations: int, seed:
     import torch
     import warp as wp
 
-    from hexnewton.learning.episode_log import DeferredEpisodes
-    from hexnewton.learning.runner import RankedRunner, matmul_precision, seed_everything
+    from hexnewton.learning.runner import RankedRunner, learner_settings, seed_everything
     from hexnewton.mdp.env import make_env
 
     seed_everything(seed)
@@ -172,13 +171,12 @@ def bench_train(terrain: str, num_envs: int, device: str, iterations: int, seed:
     used0 = _device_memory(device) if cuda else 0
     cfg = _config(terrain, num_envs, device, seed, sim, ground, base)
     env = make_env(cfg)
-    tcfg = (agent or AgentConfig()).to_rsl_rl(num_envs, env.obs_groups)
+    agent = agent or AgentConfig()
+    tcfg = agent.to_rsl_rl(num_envs, env.obs_groups)
     # a TensorBoard writer as in train.py: rsl-rl's logger only does its per-step bookkeeping with one
     logs = tempfile.TemporaryDirectory(prefix="hexnewton-bench-")
     runner = RankedRunner(env, copy.deepcopy(tcfg), log_dir=logs.name, device=device, rank=rank)
-    if (agent or AgentConfig()).deferred_episode_log:  # as train.py's runner books the finished episodes
-        DeferredEpisodes(runner.logger)
-    matmul_precision((agent or AgentConfig()).tf32)  # as train.py's runner sets it
+    learner_settings(runner, agent)  # as train.py's runner: the episode bookkeeping, the matmul precision
     runner.learn(2 if tcfg["torch_compile_mode"] else 1)  # capture, kernel loading, optimizer state, compile
     wall = _timed_learn(runner, env, iterations)
     rate = num_envs * tcfg["num_steps_per_env"] * iterations / wall

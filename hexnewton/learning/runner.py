@@ -179,6 +179,15 @@ def matmul_precision(tf32: bool) -> None:
     torch.set_float32_matmul_precision("high" if tf32 else "highest")
 
 
+def learner_settings(runner: OnPolicyRunner, agent) -> None:
+    """What ``AgentConfig`` sets on an rsl-rl runner beyond its config dict: the finished episodes booked on the device
+    (``deferred_episode_log``) and the networks' float32 matmul precision (``tf32``). :class:`HexRunner` and the
+    bench's runner alike."""
+    if agent.deferred_episode_log:
+        DeferredEpisodes(runner.logger)  # its log flushes the iteration's episodes, then calls rsl-rl's
+    matmul_precision(agent.tf32)
+
+
 def seed_everything(seed: int) -> None:
     import torch
 
@@ -256,7 +265,6 @@ class HexRunner(RankedRunner):
 
     def __init__(self, env, agent, meta: dict, log_dir: str | None, device: str, rank: Rank = Rank()):
         train_cfg = agent.to_rsl_rl(env.num_envs, env.obs_groups)  # the critic reads every group the env emits
-        matmul_precision(agent.tf32)
         super().__init__(env, train_cfg, log_dir=log_dir, device=device, rank=rank)
         # the run's git/ folder records hexnewton's commit and diff (rsl-rl's default looks for its own repo)
         self.logger.git_status_repos = [os.path.dirname(os.path.abspath(__file__))]
@@ -266,8 +274,7 @@ class HexRunner(RankedRunner):
         self.goals = env.cfg.task.random_goals
         self.best = BestCheckpoint(log_dir or "", self.levels, self.goals)
         self._reduce = _sum_over_ranks(device) if rank.world_size > 1 else None
-        if agent.deferred_episode_log:
-            DeferredEpisodes(self.logger)  # its log flushes the iteration's episodes, then calls rsl-rl's
+        learner_settings(self, agent)
         self._rsl_log, self.logger.log = self.logger.log, self._after_iteration
         self._rsl_init_writer, self.logger.init_logging_writer = self.logger.init_logging_writer, self._init_writer
         self._stage, self._time_up, self._t0 = None, False, time.time()

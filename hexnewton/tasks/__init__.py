@@ -103,8 +103,8 @@ PAPER_COURSES = ("rugged", "stepped", "complex")
 #: next; an episode ends on a fall or its time limit (the terrain's, NAVIGATE_EPISODE_STEPS); every start heading
 #: (reset_yaw pi)
 NAVIGATE_GOALS = dict(random_goals=True, goal_bearing=math.pi, goal_distance_min=1.0, goal_distance_max=4.0,
-                      goal_area=4.0, reset_yaw=math.pi, max_episode_steps=1000,
-                      terminations=("nonfinite", "fell", "success", "timeout"), seed=1)  # fmt: skip
+                      goal_area=4.0, reset_yaw=math.pi, terminations=("nonfinite", "fell", "success", "timeout"),
+                      seed=1)  # fmt: skip
 #: ours: a signed hip amplitude per side (CPGConfig.a1_range; the paper's tasks (0, 0.5)): a side's stride reverses,
 #: so the robot turns on the spot (A1_R = -A1_L); ``--env.cpg.a1_range 0 0.5`` switches it off
 SIGNED_HIP = (-0.5, 0.5)
@@ -232,7 +232,7 @@ def _navigate(terrain: str) -> HexConfig:
     cfg = _recipe(terrain)
     a2 = CPGConfig.a2_range if terrain == "flat" else cfg.cpg.a2_range
     return replace(cfg, terrain=navigation_terrain(terrain), cpg=replace(cfg.cpg, a1_range=SIGNED_HIP, a2_range=a2),
-                   task=TaskConfig(**{**NAVIGATE_GOALS, "max_episode_steps": NAVIGATE_EPISODE_STEPS[terrain]}))
+                   task=TaskConfig(**NAVIGATE_GOALS, max_episode_steps=NAVIGATE_EPISODE_STEPS[terrain]))
 
 
 def _navigate_agent(terrain: str) -> AgentConfig:
@@ -308,5 +308,5 @@ register(Task("navigate-rugged", "walk to goals in every direction on a 10 m squ
 __all__ = ["ACTION_MODES", "ASYMMETRIC_OBSERVATION", "FLAT_VALIDATION", "FOOT_CONTACT_RANGES", "LONG_STABLE_STAGES",
            "MARGIN_LANES", "MARGIN_RANDOMIZATION", "NAVIGATE_EPISODE_STEPS", "NAVIGATE_GOALS", "NAVIGATE_ITERATIONS",
            "NAVIGATE_MINUTES", "NAVIGATE_VALIDATION", "NAVIGATION_MARGIN", "PAPER_COURSES", "RECIPE_OBSERVATION",
-           "SIGNED_HIP", "STABLE_REWARD_STAGES", "STABLE_SHAPING", "STABLE_STAGES", "TASKS", "TERRAIN_VALIDATION", "Task", "course",
-           "navigation_terrain", "register", "task", "task_table"]
+           "SIGNED_HIP", "STABLE_REWARD_STAGES", "STABLE_SHAPING", "STABLE_STAGES", "TASKS", "TERRAIN_VALIDATION", "Task",
+           "course", "navigation_terrain", "register", "task", "task_table"]

@@ -68,6 +68,11 @@ def parse_train_log(text: str) -> dict:
     return out
 
 
+def _terrain(t: str) -> str:
+    """The terrain of a kept run: a task's own name, or a variant's terrain."""
+    return VARIANTS[t][0] if t in VARIANTS else t
+
+
 def _note_lease(dst: str, lease: str, revision: str | None) -> None:
     """lease.json beside what was kept in ``dst``: the commit the lease ran and the lease's folder name."""
     with open(os.path.join(dst, "lease.json"), "w") as f:
@@ -157,7 +162,7 @@ def load() -> dict:
 
     res: dict = {"training": {}, "evaluation": {}, "sim2sim": {}, "targets": [], "partial": [], "variants": {}}
     for t in (*TASKS, *VARIANTS):
-        terrain = VARIANTS[t][0] if t in VARIANTS else t
+        terrain = _terrain(t)
         run = os.path.join(HERE, "runs", t)
         if os.path.exists(os.path.join(run, "train.log")):
             info = parse_train_log(open(os.path.join(run, "train.log")).read())
@@ -231,13 +236,13 @@ def _target_line(c: dict) -> str:
 def _label(t: str) -> tuple[str, str]:
     """A kept run's flags after ``--task`` (a variant's) and its name in the tables."""
     if t in VARIANTS:
-        return " " + VARIANTS[t][1], f"navigate-{VARIANTS[t][0]}, {VARIANTS[t][2]}"
+        return " " + VARIANTS[t][1], f"navigate-{_terrain(t)}, {VARIANTS[t][2]}"
     return "", f"navigate-{t}"
 
 
 def _figure(t: str) -> str:
     """evaluate's top view of the paths, named for the terrain."""
-    return f"fig_paths_{VARIANTS[t][0] if t in VARIANTS else t}_cpg_rl.png"
+    return f"fig_paths_{_terrain(t)}_cpg_rl.png"
 
 
 def render(res: dict) -> str:
