@@ -39,7 +39,9 @@ ARM_FLAGS = {"recipe": "", "critic": "--env.obs.critic true",
              # each candidate on 1024 rounds per course, not 256: the falls line (0.5 %) within the estimate's noise
              "rounds1024": "--agent.validation_rounds 1024",
              # the rugged and stepped courses' lanes beside the complex course's: a third of the envs on each
-             "courses": "--env.terrain.lane_courses rugged stepped"}
+             "courses": "--env.terrain.lane_courses rugged stepped",
+             # the networks' float32 matrix products on TF32 tensor cores (studies/throughput/tf32: +10 % at 16384 envs)
+             "tf32": "--agent.tf32 true"}
 #: each arm in words, with its flags
 ARMS = {arm: f"{what} (`{ARM_FLAGS[arm] or '--task complex'}`)" for arm, what in (
     ("recipe", "the complex recipe"), ("critic", "+ the asymmetric critic"),
@@ -52,7 +54,9 @@ ARMS = {arm: f"{what} (`{ARM_FLAGS[arm] or '--task complex'}`)" for arm, what in
     ("rounds1024", "each candidate validated on 1024 rounds per course, not 256 (the choice's noise: at 256 rounds a "
                    "1 % fall share has a standard error of 0.6 points)"),
     ("courses", "the rugged and stepped courses trained beside the complex one (a lane group each, a third of the envs "
-                "on each; what it trains on, not what it sees): validation and the gate walk all three"))}
+                "on each; what it trains on, not what it sees): validation and the gate walk all three"),
+    ("tf32", "the networks' float32 matrix products on TF32 tensor cores, not in full float32 (a speed switch: the "
+             "gate asks whether it may become the default)"))}
 TERRAINS = ("rugged", "stepped", "complex")
 METRICS = ("success_3m", "fall_rate", "fall_rate_before_goal", "pitch_var_deg2", "roll_var_deg2")
 #: the gate's lines (1000 test rounds per terrain, deterministic action)
@@ -543,12 +547,16 @@ def verdict(res: dict) -> list[str]:
                    f"{first['evaluated']['rounds']} evaluated after, higher in {noise['higher_when_evaluated']} of "
                    f"{len(noise['runs'])}: at {first['chosen_on']['rounds']} rounds a 1 % fall share has a standard "
                    "error of 0.6 points, as large as the gate's line (the `rounds1024` arm).")
-    not_run = [a for a in ARMS if a not in arms]
+    gated = {a for r in runs.values() if is_gate(r["arm"]) for a in gate_arms(r["arm"])}   # gate-only arms: tf32
+    not_run = [a for a in ARMS if a not in arms and a not in gated]
     missing = [a for a in ARMS if a in arms and len(arms[a]["seeds"]) < 2]
     unevaluated = [n for n, r in runs.items() if r["arm"] in ARMS and len(r["result_on_validation"]) < len(TERRAINS)]
-    if not_run or missing or unevaluated:
+    untested = sorted({r["arm"] for r in runs.values() if is_gate(r["arm"]) and r["arm"] not in res["gates"]})
+    if not_run or missing or unevaluated or untested:
         out.append("- **Partial**: " + "; ".join(
             ([f"arms not run yet: {', '.join(not_run)}"] if not_run else [])
+            + [f"the gate `{g}`: seeds {', '.join(str(r['seed']) for r in runs.values() if r['arm'] == g)} of 1, 2, 3 "
+               "trained, its test rounds not run yet" for g in untested]
             + ([f"arms on one seed: {', '.join(missing)}"] if missing else [])
             + ([f"results not yet on 500 validation rounds per course: {', '.join(unevaluated)}"] if unevaluated
                else [])) + "." + ("" if res["gates"] else " The 3-seed gate waits for the chosen recipe."))

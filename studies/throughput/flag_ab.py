@@ -17,6 +17,7 @@ import glob
 import json
 import math
 import os
+import re
 import statistics
 import sys
 
@@ -107,12 +108,40 @@ def effect(calls: dict) -> dict:
     return out
 
 
+#: train.py's line for the candidate its validation chose
+CHOSEN = re.compile(r"^\s*-> (model_\w+\.pt) .*?: goal ([\d.]+) %, fell before the goal ([\d.]+) %", re.M)
+
+
+def load_command(folder: str) -> dict:
+    """One pair of the task's command, off and on, one after the other on one GPU (``NAME/command/DATE/MODE/``:
+    train.py's console ``train.log``, its run's ``timing.json`` and ``config.json``, ``command.txt``: the command as
+    run): per mode the seconds from process start to the result, to the first iteration, of training and of
+    validation, and the candidate validation chose."""
+    modes = {}
+    for m in MODES:
+        with open(os.path.join(folder, m, "timing.json")) as f:
+            t = json.load(f)
+        with open(os.path.join(folder, m, "command.txt")) as f:
+            command = f.read().strip()
+        with open(os.path.join(folder, m, "train.log")) as f:
+            chosen = CHOSEN.search(f.read())
+        modes[m] = {"command": command, "device": t["device_name"], "iterations": t["iterations"],
+                    "wall_s_to_result": round(t["wall_s_to_result"], 1),
+                    "first_iteration_s": round(t["first_iteration_s"], 1), "train_s": round(t["train_s"], 1),
+                    "validation_s": round(t["validation"]["seconds"], 1),
+                    "chosen": None if chosen is None else {"file": chosen[1], "goal": float(chosen[2]) / 100,
+                                                           "fell_before_goal": float(chosen[3]) / 100}}
+    return {"date": os.path.basename(folder), "modes": modes}
+
+
 def load(name: str) -> dict:
     raw = os.path.join(STUDY, name, "raw")
     folders = sorted(d for d in glob.glob(os.path.join(raw, "*")) if os.path.isdir(d))
     if not folders:
         raise FileNotFoundError(f"no lease folders in {raw}")
-    return {"ab": name, **ABS[name], "leases": [load_lease(d) for d in folders]}
+    commands = sorted(d for d in glob.glob(os.path.join(STUDY, name, "command", "*")) if os.path.isdir(d))
+    return {"ab": name, **ABS[name], "leases": [load_lease(d) for d in folders],
+            "commands": [load_command(d) for d in commands]}
 
 
 def _k(v: float | None) -> str:
@@ -168,7 +197,30 @@ def render(res: dict) -> str:
                          f"{_pct(on['train_over_sim'])} |")
         lines += _phases(lease)
         lines.append("")
-    return "\n".join(lines)
+    return "\n".join(lines + _commands(res))
+
+
+def _commands(res: dict) -> list[str]:
+    """The task's training command off and on, one after the other on one GPU (``command/DATE/``)."""
+    if not res.get("commands"):
+        return []
+    lines = ["## The complex command, off and on", "",
+             "The task's training command with the switch off and on, one after the other, each alone on the GPU "
+             f"(`studies/device/learner.sh`, its gate's runs; {res['ab']}/command/DATE/MODE/: the command, the "
+             "console, timing.json, config.json). One seed: how long the command takes, not what it learns (the "
+             "learner study's gate judges that). The validation's share of goals is averaged over the rugged, stepped "
+             "and complex courses, 256 rounds each (seed 3000):", "",
+             "| date | command | device | from process start [s] | first iteration [s] | training [s] (iterations) "
+             "| validation [s] | chosen: goal, fell before it |", "|---|---|---|---:|---:|---:|---:|---|"]
+    for c in res["commands"]:
+        for m, r in c["modes"].items():
+            ch = r["chosen"]
+            lines.append(f"| {c['date']} | `{r['command'].split('#')[0].strip()}` | {r['device']} | "
+                         f"{r['wall_s_to_result']:.1f} | "
+                         f"{r['first_iteration_s']:.1f} | {r['train_s']:.1f} ({r['iterations']}) | "
+                         f"{r['validation_s']:.1f} | " + ("-" if ch is None else f"{ch['file']}: "
+                         f"{100 * ch['goal']:.1f} %, {100 * ch['fell_before_goal']:.1f} %") + " |")
+    return lines + [""]
 
 
 def main() -> None:

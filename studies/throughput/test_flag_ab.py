@@ -95,3 +95,37 @@ def test_profiled_calls_give_the_phases_per_mode(tmp_path):
     assert e["off"]["phases_s"] == {"env.step": 0.57, "PPO update": 0.21} and e["on"]["phases_s"]["PPO update"] == 0.1
     text = study.render({"ab": "tf32", **study.ABS["tf32"], "leases": [got]})
     assert "| 16384 | off | 570.0 | 210.0 |" in text and "--agent.tf32 true" in text
+
+
+def test_the_command_pair_gives_times_and_the_chosen_candidate(tmp_path):
+    """command/DATE/{off,on}/: the command as run, timing.json and the console's chosen candidate, one row each."""
+    import json
+
+    study = _study()
+    pair = tmp_path / "2026-01-01"
+    for mode, chosen in (("off", "  -> model_299.pt (last, iteration 299): goal 94.8 %, fell before the goal 0.1 % "
+                                 "(in all 0.4 %), 3 m 97.4 %"), ("on", "     model_250.pt (saved, iteration 250): ")):
+        (pair / mode).mkdir(parents=True)
+        (pair / mode / "command.txt").write_text(f"python train.py --task complex --seed 1 # {mode}\n")
+        (pair / mode / "train.log").write_text(f"training task complex\n{chosen}\n")
+        (pair / mode / "timing.json").write_text(json.dumps({
+            "device_name": "NVIDIA H200", "iterations": 300, "wall_s_to_result": 201.06, "first_iteration_s": 30.14,
+            "train_s": 108.88, "validation": {"seconds": 60.71}}))
+    got = study.load_command(str(pair))["modes"]
+    assert got["off"]["chosen"] == {"file": "model_299.pt", "goal": 0.948, "fell_before_goal": 0.001}
+    assert got["on"]["chosen"] is None and got["on"]["wall_s_to_result"] == 201.1
+    text = "\n".join(study._commands({"ab": "tf32", "commands": [{"date": "2026-01-01", "modes": got}]}))
+    assert "| 2026-01-01 | `python train.py --task complex --seed 1` | NVIDIA H200 | 201.1 | 30.1 | 108.9 (300) | " \
+           "60.7 | model_299.pt: 94.8 %, 0.1 % |" in text
+
+
+def test_the_committed_tf32_report_renders_its_calls_and_commands():
+    import json
+
+    study = _study()
+    res = study.load("tf32")
+    with open(os.path.join(HERE, "tf32", "results.json")) as f:
+        assert json.load(f) == json.loads(json.dumps(res))
+    with open(os.path.join(HERE, "tf32", "report.md")) as f:
+        assert f.read() == study.render(res)
+    assert [sorted(c["modes"]) for c in res["commands"]] == [["off", "on"]]
