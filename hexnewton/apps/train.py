@@ -117,6 +117,9 @@ def parser(base, resumed: bool) -> ArgumentParser:
     p.add_argument("--build_scene_first", action=argparse.BooleanOptionalAction, default=True,
                    help="with the build beside the imports: the terrain and the scene before them, only Newton's "
                         "finalize beside them (default; --no-build_scene_first: all of it beside them)")  # fmt: skip
+    p.add_argument("--preload_kernels", action=argparse.BooleanOptionalAction, default=True,
+                   help="with the build beside the imports: load the Warp modules the world loads whatever its model "
+                        "while the finalize ends (default; --no-preload_kernels: after it)")  # fmt: skip
     p.add_argument("--headless", action="store_true",
                    help="Isaac Lab's flag, accepted: training never opens a window (--video renders off-screen)")
     p.add_argument("--video", action="store_true",
@@ -414,13 +417,15 @@ def main(argv: list[str] | None = None) -> int:
 
     # the heavy imports one by one, so that the start-up line says where "python and imports" goes; the terrain and
     # the scene (Python) are built before torch and rsl-rl import, Newton's finalize of the model (mostly NumPy, no
-    # torch) in a thread meanwhile (--no-build_scene_first: all three beside; --no-build_beside_imports: after)
+    # torch) in a thread meanwhile (--no-build_scene_first: all three beside; --no-build_beside_imports: after); the
+    # world's Warp modules load while the finalize ends (--no-preload_kernels: after it)
     startup.timed_imports("warp", "newton", "hexnewton.physics.world")
     rank, cfg = rank_config(args, env_cfg)
     agent = device_validation(agent, cfg.sim.device, argv)
     from hexnewton.physics.model_build import ModelBuild
 
-    build = ModelBuild(cfg, beside=True, scene_first=args.build_scene_first) if args.build_beside_imports else None
+    build = ModelBuild(cfg, beside=True, scene_first=args.build_scene_first,
+                       preload_kernels=args.preload_kernels) if args.build_beside_imports else None
     startup.timed_imports("torch", "rsl_rl", "hexnewton.mdp.env", "hexnewton.learning.runner")
     check_outputs(args)
     from hexnewton.learning.runner import seed_everything

@@ -18,7 +18,7 @@ from hexnewton import startup
 from hexnewton.config import HexConfig, SimConfig
 from hexnewton.errors import HexnewtonError
 from hexnewton.physics.device import resolve_device
-from hexnewton.physics.precompile import compiles_generated, install_shipped_modules, live_kernel_ids
+from hexnewton.physics.precompile import compiles_generated, install_shipped_modules, live_kernel_ids, preload
 from hexnewton.physics.robot import BASE_Q, NUM_JOINTS, build_hexapod, stand_height
 from hexnewton.physics.terrain import Terrain, make_terrain, max_terrain_height_np
 
@@ -92,12 +92,16 @@ class ModelBuild:
     on (``train.py`` imports torch and rsl-rl meanwhile), its phases kept as the note ``model_build_beside_s`` and the
     wait for it marked as the phase "model build". With ``scene_first`` (and ``beside``) the terrain and the scene,
     Python that would share the interpreter lock with the imports, are built at once (their phases marked) and only
-    the finalize, mostly NumPy, goes to the thread. :class:`World` takes it (``World(cfg, build=...)``); an error of
-    the build is raised there."""
+    the finalize, mostly NumPy, goes to the thread. With ``preload_kernels`` (and ``beside``), when the World takes
+    the model while the finalize still runs, the Warp modules it loads whatever its model
+    (:func:`~hexnewton.physics.precompile.preload`) are loaded meanwhile, marked as the phase "kernels beside the
+    build". :class:`World` takes it (``World(cfg, build=...)``); an error of the build is raised there."""
 
-    def __init__(self, cfg: HexConfig, terrain: Terrain | None = None, beside: bool = False, scene_first: bool = False):
+    def __init__(self, cfg: HexConfig, terrain: Terrain | None = None, beside: bool = False, scene_first: bool = False,
+                 preload_kernels: bool = False):
         validate_sim(cfg.sim)
         self.cfg, self.device, self.beside = cfg, resolve_device(cfg.sim.device), beside
+        self.preload_kernels = preload_kernels
         startup.mark("python and imports")
         # the modules compiled ahead of time for this GPU (hexnewton/physics/aot/) into Warp's cache, before any loads
         shipped = install_shipped_modules(self.device)
@@ -153,6 +157,9 @@ class ModelBuild:
     def result(self) -> tuple[Terrain, newton.Model, Spawn]:
         """The terrain, the finalized model and the spawn, once built (waits for a build beside)."""
         if self._thread is not None:  # the wait, 0 if the build ended first
+            if self.preload_kernels and self._thread.is_alive():
+                startup.note("kernels_beside_build", len(preload(self.device)))
+                startup.mark("kernels beside the build")
             self._thread.join()
             self._thread = None
             startup.mark("model build")

@@ -250,13 +250,26 @@ def variant_names(variants) -> list[str]:
     return sorted(name if block_dim is None else f"{name}@{block_dim}" for name, block_dim, _ in variants)
 
 
+def _load(device: str, module: wp.Module, block_dim: int | None) -> None:
+    wp.force_load(device=device, modules=[module], block_dim=block_dim, max_workers=0)
+
+
 def compile_modules(device: str, jobs: list[tuple[wp.Module, int | None]], max_workers: int | None = None) -> None:
     """Compile and load each (module, block size) of ``jobs`` on ``device``, one thread each (default: one per CPU
-    core); what Warp's cache holds is loaded from it."""
+    core); what Warp's cache holds is loaded from it. A job whose parallel load failed is loaded once more alone: one
+    module's load can mark another modified while a thread hashes it (Warp 1.19's ``Module.load`` then raises
+    ``KeyError`` on its cleared hashes, about 1 run in 12 of :func:`precompile_solver` on 2 CPU cores). A job that
+    fails alone too is logged and left to the first launch, which compiles whatever is not loaded."""
     with ThreadPoolExecutor(max_workers=_workers(max_workers)) as pool:
-        futures = [pool.submit(wp.force_load, device=device, modules=[m], block_dim=b, max_workers=0) for m, b in jobs]
-        for future in futures:
-            future.result()
+        futures = [(m, b, pool.submit(_load, device, m, b)) for m, b in jobs]
+    for module, block_dim, future in futures:
+        if future.exception() is None:
+            continue
+        try:
+            _load(device, module, block_dim)
+        except Exception as exc:  # noqa: BLE001 - an optimisation only: the first launch compiles what is missing
+            log.warning("precompile: %s (block size %s) did not load (%s: %s); it compiles at its first launch",
+                        module.name, block_dim, type(exc).__name__, exc)  # fmt: skip
 
 
 def precompile_solver(device: str, max_workers: int | None = None) -> list[str]:
@@ -270,6 +283,17 @@ def precompile_solver(device: str, max_workers: int | None = None) -> list[str]:
     modules = [user_modules[name] for name in SOLVER_MODULES if name in user_modules]
     compile_modules(device, [(m, None) for m in modules], max_workers)
     return [m.name for m in modules]
+
+
+def preload(device: str, max_workers: int | None = None) -> list[str]:
+    """The modules a World loads whatever its model, loaded now: :data:`SOLVER_MODULES` (:func:`precompile_solver`)
+    and :func:`imported_modules` at Warp's default block size (the variants :func:`precompile` also loads; the
+    model's generated kernels and other block sizes wait for the solver and the collision pipeline). ``ModelBuild``
+    runs it while Newton's finalize ends in its thread; returns the module names."""
+    names = precompile_solver(device, max_workers)
+    modules = imported_modules()
+    compile_modules(device, [(m, None) for m in modules], max_workers)
+    return names + [m.name for m in modules]
 
 
 def precompile(device: str, solver=None, since: set[int] | None = None, max_workers: int | None = None,

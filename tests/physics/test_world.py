@@ -223,6 +223,50 @@ def test_model_build_with_the_scene_first_finalizes_beside():
     assert beside.model.shape_count == at_once.model.shape_count
 
 
+def test_model_build_preloads_the_world_kernels_while_the_finalize_runs(monkeypatch):
+    """preload_kernels (train.py's default): when the World takes the model while the finalize still runs, the
+    modules it loads whatever its model are loaded meanwhile, as the phase "kernels beside the build"; off, never."""
+    import threading
+
+    from hexnewton import startup
+    from hexnewton.physics import model_build
+
+    cfg = HexConfig(sim=SimConfig(num_envs=N, device="cpu"), terrain=TerrainConfig(name="flat"))
+    release, loaded, build_model = threading.Event(), [], model_build.ModelBuild._build
+
+    def held_build(self):  # the finalize still running when the World takes the model
+        release.wait(60)
+        build_model(self)
+
+    def preload(device):
+        loaded.append(device)
+        release.set()
+        return ["a", "b"]
+
+    monkeypatch.setattr(model_build.ModelBuild, "_build", held_build)
+    monkeypatch.setattr(model_build, "preload", preload)
+    for on in (True, False):
+        startup.restart()
+        release.clear()
+        build = ModelBuild(cfg, beside=True, scene_first=True, preload_kernels=on)
+        if not on:
+            release.set()
+        World(cfg, build=build)
+        assert loaded == ["cpu"] and ("kernels beside the build" in startup.phases()) == on
+        assert startup.notes().get("kernels_beside_build") == (2 if on else None)
+
+
+def test_preload_loads_the_solver_and_step_modules():
+    from hexnewton.physics.precompile import SOLVER_MODULES, imported_modules, preload
+    from hexnewton.physics.private_api import warp_user_modules
+
+    names = preload("cpu")
+    assert names[: len(SOLVER_MODULES)] == list(SOLVER_MODULES)
+    assert {m.name for m in imported_modules()} <= set(names)
+    modules = warp_user_modules()
+    assert all(modules[n].execs for n in names if modules[n].kernels)
+
+
 @pytest.mark.parametrize("scene_first", [False, True])
 def test_model_build_error_is_raised_where_the_world_takes_it(scene_first):
     bad = HexConfig(sim=SimConfig(num_envs=N, device="cpu"), terrain=TerrainConfig(name="rugged", block_size=-1.0))
@@ -402,3 +446,29 @@ def test_solver_modules_compiled_before_the_solver_stay_current():
     assert all(before[name] for name in SOLVER_MODULES if user_modules[name].kernels)
     _world("flat").step(1)
     assert variants() == before
+
+
+def test_a_parallel_load_that_failed_is_loaded_once_more_alone(monkeypatch, caplog):
+    """compile_modules: a job whose parallel load raised (Warp's hashes cleared by another module's load) is loaded
+    again alone; one that fails alone too is logged and left to its first launch, never raised."""
+    from hexnewton.physics import precompile
+
+    calls, failing = [], {"once": 1, "always": 99}
+
+    def load(device, module, block_dim):
+        calls.append(module)
+        if failing.get(module, 0) > 0:
+            failing[module] -= 1
+            raise KeyError(1)
+
+    monkeypatch.setattr(precompile, "_load", load)
+
+    class Named(str):
+        name = property(lambda self: str(self))
+
+    jobs = [(Named("fine"), None), (Named("once"), None), (Named("always"), 256)]
+    with caplog.at_level("WARNING", logger="hexnewton"):
+        precompile.compile_modules("cpu", jobs, max_workers=2)
+    assert sorted(calls) == ["always", "always", "fine", "once", "once"]
+    assert [r.getMessage().split(" (")[0] for r in caplog.records] == ["precompile: always"]
+    assert "block size 256" in caplog.records[0].getMessage()
