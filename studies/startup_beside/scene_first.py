@@ -10,11 +10,11 @@ alternating, on this machine's CPU or GPU (the complex task, 4096 envs).
 
 from __future__ import annotations
 
-import argparse
 import json
-import os
 import subprocess
 import sys
+
+import alternate  # this study's shared runner (the script's folder is on sys.path)
 
 MODES = {"scene_first": True, "all_beside": False}
 #: one run: the start-up as train.py orders it, then its phases and notes as JSON on the last line
@@ -44,16 +44,6 @@ def measure(mode: str, num_envs: int, device: str) -> dict:
             "beside_s": got["notes"].get("model_build_beside_s", {}), "imports_s": got["notes"].get("imports_s", {})}
 
 
-def _machine(device: str) -> str:
-    """The CPU cores and, on a GPU, its name (nvidia-smi)."""
-    if device.startswith("cuda"):
-        done = subprocess.run(["nvidia-smi", "--query-gpu=name", "--format=csv,noheader"], capture_output=True,
-                              text=True)  # fmt: skip
-        if done.returncode == 0:
-            return f"{os.cpu_count()} CPU cores, {done.stdout.strip().splitlines()[0]}"
-    return f"{os.cpu_count()} CPU cores"
-
-
 def report(res: dict) -> str:
     lines = ["# The terrain and the scene first, the finalize beside the imports", "",
              f"`{res['command']}` ({res['machine']}; the complex task, {res['num_envs']} envs, device "
@@ -79,30 +69,7 @@ def report(res: dict) -> str:
 
 
 def main() -> None:
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    p.add_argument("--runs", type=int, default=2, help="runs per mode, alternating")
-    p.add_argument("--num_envs", type=int, default=4096)
-    p.add_argument("--device", default="cpu")
-    p.add_argument("--out", help="folder for results.json and report.md")
-    p.add_argument("--rebuild", metavar="DIR", help="report.md again from DIR/results.json")
-    a = p.parse_args()
-    if a.rebuild:
-        with open(os.path.join(a.rebuild, "results.json")) as f:
-            res = json.load(f)
-    else:
-        if not a.out or a.runs < 1:
-            p.error("--out DIR and --runs >= 1 are needed")
-        res = {"command": "python studies/startup_beside/scene_first.py " + " ".join(sys.argv[1:]),
-               "machine": _machine(a.device), "num_envs": a.num_envs, "device": a.device, "runs": []}
-        for _ in range(a.runs):
-            for mode in MODES:
-                res["runs"].append(measure(mode, a.num_envs, a.device))
-                print(json.dumps(res["runs"][-1]), flush=True)
-        os.makedirs(a.out, exist_ok=True)
-        with open(os.path.join(a.out, "results.json"), "w") as f:
-            json.dump(res, f, indent=1)
-    with open(os.path.join(a.rebuild or a.out, "report.md"), "w") as f:
-        f.write(report(res))
+    alternate.main("scene_first.py", __doc__, MODES, measure, report)
 
 
 if __name__ == "__main__":

@@ -1,4 +1,5 @@
-"""studies/startup_beside/scene_first.py: its report is the rendering of its measured runs, both modes alternating."""
+"""studies/startup_beside/scene_first.py: its reports (CPU, GPU) are the renderings of its measured runs, both modes
+alternating."""
 
 import json
 import os
@@ -12,10 +13,11 @@ pytestmark = pytest.mark.slow  # a study's test: the CI line of its own (python 
 HERE = os.path.dirname(os.path.abspath(__file__))
 
 
-def test_the_committed_report_renders_the_runs():
-    with open(os.path.join(HERE, "scene_first", "results.json")) as f:
+@pytest.mark.parametrize("folder", ["scene_first", "scene_first_gpu"])
+def test_the_committed_report_renders_the_runs(folder):
+    with open(os.path.join(HERE, folder, "results.json")) as f:
         res = json.load(f)
-    with open(os.path.join(HERE, "scene_first", "report.md")) as f:
+    with open(os.path.join(HERE, folder, "report.md")) as f:
         assert f.read() == study.report(res)
     modes = [r["mode"] for r in res["runs"]]
     assert modes == list(study.MODES) * (len(modes) // 2)  # alternating, each mode as often

@@ -1,0 +1,52 @@
+"""What this study's A/Bs share: runs in fresh processes, one mode after the other, alternating, on this machine's CPU
+or GPU, kept as results.json and rendered as report.md (scene_first.py, preload.py)."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+from typing import Callable
+
+
+def machine(device: str) -> str:
+    """The CPU cores and, on a GPU, its name (nvidia-smi)."""
+    if device.startswith("cuda"):
+        done = subprocess.run(["nvidia-smi", "--query-gpu=name", "--format=csv,noheader"], capture_output=True,
+                              text=True)  # fmt: skip
+        if done.returncode == 0:
+            return f"{os.cpu_count()} CPU cores, {done.stdout.strip().splitlines()[0]}"
+    return f"{os.cpu_count()} CPU cores"
+
+
+def main(script: str, doc: str, modes, measure: Callable[[str, int, str], dict], report: Callable[[dict], str],
+         argv: list[str] | None = None) -> None:
+    """The command line of ``script``: ``--runs`` per mode of ``modes``, alternating, each ``measure(mode,
+    num_envs, device)``, into ``--out`` (results.json, report.md); or ``--rebuild DIR``: report.md again."""
+    p = argparse.ArgumentParser(description=doc.splitlines()[0])
+    p.add_argument("--runs", type=int, default=2, help="runs per mode, alternating")
+    p.add_argument("--num_envs", type=int, default=4096)
+    p.add_argument("--device", default="cpu")
+    p.add_argument("--out", help="folder for results.json and report.md")
+    p.add_argument("--rebuild", metavar="DIR", help="report.md again from DIR/results.json")
+    a = p.parse_args(argv)
+    if a.rebuild:
+        with open(os.path.join(a.rebuild, "results.json")) as f:
+            res = json.load(f)
+    else:
+        if not a.out or a.runs < 1:
+            p.error("--out DIR and --runs >= 1 are needed")
+        args = sys.argv[1:] if argv is None else argv
+        res = {"command": f"python studies/startup_beside/{script} " + " ".join(args), "machine": machine(a.device),
+               "num_envs": a.num_envs, "device": a.device, "runs": []}  # fmt: skip
+        for _ in range(a.runs):
+            for mode in modes:
+                res["runs"].append(measure(mode, a.num_envs, a.device))
+                print(json.dumps(res["runs"][-1]), flush=True)
+        os.makedirs(a.out, exist_ok=True)
+        with open(os.path.join(a.out, "results.json"), "w") as f:
+            json.dump(res, f, indent=1)
+    with open(os.path.join(a.rebuild or a.out, "report.md"), "w") as f:
+        f.write(report(res))
