@@ -250,3 +250,24 @@ def test_one_seed_s_lines_on_the_validation_rounds():
     res = {"runs": {}, "arms": {}, "gates": {}, "seed_lines": sl, "choice_noise": {"runs": {}}}
     (line,) = [x for x in build.verdict(res) if "One seed's lines" in x]
     assert "of 3 results, 2 reach 3 m" in line and "1 do both (a_s1)" in line
+
+
+def test_the_tf32_gate_queue_trains_its_seeds_then_tests_the_kept_one(tmp_path):
+    """gate_tf32.sh: learner.sh (a stand-in logging its environment) once for the gate's seeds 2 and 3 with the tf32
+    arm's flags, then once for the kept seed's test rounds; TEST_KEPT= leaves the second out."""
+    import subprocess
+
+    fake = tmp_path / "learner.sh"
+    fake.write_text('echo "ARMS=[$ARMS] GATE=${GATE:-} SEEDS=${GATE_SEEDS:-} NAME=${GATE_NAME:-} '
+                    'FLAGS=${GATE_FLAGS:-} TEST_KEPT=${TEST_KEPT:-}" >> "$CALLS"\n')
+    calls = tmp_path / "calls"
+    env = {**os.environ, "LEARNER": str(fake), "CALLS": str(calls)}
+    queue = os.path.join(build.HERE, "gate_tf32.sh")
+    done = subprocess.run(["bash", queue], env=env, capture_output=True, text=True, timeout=60)
+    assert done.returncode == 0, done.stdout + done.stderr
+    assert calls.read_text().splitlines() == [
+        "ARMS=[] GATE=1 SEEDS=2 3 NAME=gate_tf32 FLAGS=--agent.tf32 true TEST_KEPT=",
+        "ARMS=[] GATE=0 SEEDS= NAME= FLAGS= TEST_KEPT=gate_tf32_s1"]
+    calls.unlink()
+    done = subprocess.run(["bash", queue], env={**env, "TEST_KEPT": ""}, capture_output=True, text=True, timeout=60)
+    assert done.returncode == 0 and len(calls.read_text().splitlines()) == 1
