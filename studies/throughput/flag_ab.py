@@ -17,7 +17,6 @@ import glob
 import json
 import math
 import os
-import re
 import statistics
 import sys
 
@@ -108,29 +107,31 @@ def effect(calls: dict) -> dict:
     return out
 
 
-#: train.py's line for the candidate its validation chose
-CHOSEN = re.compile(r"^\s*-> (model_\w+\.pt) .*?: goal ([\d.]+) %, fell before the goal ([\d.]+) %", re.M)
+def _chosen(validation: dict) -> dict | None:
+    """The candidate train.py's validation chose (timing.json's ``validation``), its file and shares; None without."""
+    chosen = validation.get("chosen")
+    cand = next((c for c in validation.get("candidates", []) if c.get("path") == chosen), None)
+    if cand is None:
+        return None
+    return {"file": os.path.basename(chosen), "goal": round(cand["goal"], 4),
+            "fell_before_goal": round(cand["fell_before_goal"], 4)}
 
 
 def load_command(folder: str) -> dict:
     """One pair of the task's command, off and on, one after the other on one GPU (``NAME/command/DATE/MODE/``:
-    train.py's console ``train.log``, its run's ``timing.json`` and ``config.json``, ``command.txt``: the command as
-    run): per mode the seconds from process start to the result, to the first iteration, of training and of
-    validation, and the candidate validation chose."""
+    ``command.txt``, the command as run; its run's ``timing.json`` and ``config.json``; train.py's console
+    ``train.log``): per mode the seconds from process start to the result, to the first iteration, of training and of
+    validation, and the candidate validation chose (timing.json's ``validation``)."""
     modes = {}
     for m in MODES:
         with open(os.path.join(folder, m, "timing.json")) as f:
             t = json.load(f)
         with open(os.path.join(folder, m, "command.txt")) as f:
             command = f.read().strip()
-        with open(os.path.join(folder, m, "train.log")) as f:
-            chosen = CHOSEN.search(f.read())
         modes[m] = {"command": command, "device": t["device_name"], "iterations": t["iterations"],
                     "wall_s_to_result": round(t["wall_s_to_result"], 1),
                     "first_iteration_s": round(t["first_iteration_s"], 1), "train_s": round(t["train_s"], 1),
-                    "validation_s": round(t["validation"]["seconds"], 1),
-                    "chosen": None if chosen is None else {"file": chosen[1], "goal": float(chosen[2]) / 100,
-                                                           "fell_before_goal": float(chosen[3]) / 100}}
+                    "validation_s": round(t["validation"]["seconds"], 1), "chosen": _chosen(t["validation"])}
     return {"date": os.path.basename(folder), "modes": modes}
 
 

@@ -98,19 +98,19 @@ def test_profiled_calls_give_the_phases_per_mode(tmp_path):
 
 
 def test_the_command_pair_gives_times_and_the_chosen_candidate(tmp_path):
-    """command/DATE/{off,on}/: the command as run, timing.json and the console's chosen candidate, one row each."""
+    """command/DATE/{off,on}/: the command as run and timing.json with the candidate its validation chose, one row
+    each (a validation that names no kept candidate gives none)."""
     import json
 
     study = _study()
     pair = tmp_path / "2026-01-01"
-    for mode, chosen in (("off", "  -> model_299.pt (last, iteration 299): goal 94.8 %, fell before the goal 0.1 % "
-                                 "(in all 0.4 %), 3 m 97.4 %"), ("on", "     model_250.pt (saved, iteration 250): ")):
+    cand = {"path": "/r/model_299.pt", "goal": 0.948, "fell_before_goal": 0.001}
+    for mode, chosen in (("off", "/r/model_299.pt"), ("on", "/r/model_250.pt")):
         (pair / mode).mkdir(parents=True)
         (pair / mode / "command.txt").write_text(f"python train.py --task complex --seed 1 # {mode}\n")
-        (pair / mode / "train.log").write_text(f"training task complex\n{chosen}\n")
         (pair / mode / "timing.json").write_text(json.dumps({
             "device_name": "NVIDIA H200", "iterations": 300, "wall_s_to_result": 201.06, "first_iteration_s": 30.14,
-            "train_s": 108.88, "validation": {"seconds": 60.71}}))
+            "train_s": 108.88, "validation": {"seconds": 60.71, "chosen": chosen, "candidates": [cand]}}))
     got = study.load_command(str(pair))["modes"]
     assert got["off"]["chosen"] == {"file": "model_299.pt", "goal": 0.948, "fell_before_goal": 0.001}
     assert got["on"]["chosen"] is None and got["on"]["wall_s_to_result"] == 201.1
