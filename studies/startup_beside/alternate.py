@@ -21,6 +21,15 @@ def machine(device: str) -> str:
     return f"{os.cpu_count()} CPU cores"
 
 
+def per_mode(res: dict, key: str, modes) -> dict[str, tuple[float, float, float]] | None:
+    """Each mode's mean, least and most of its runs' ``key``, in the order of ``modes``; None while a mode has no
+    run."""
+    values = {m: [r[key] for r in res["runs"] if r["mode"] == m] for m in modes}
+    if not all(values.values()):
+        return None
+    return {m: (sum(v) / len(v), min(v), max(v)) for m, v in values.items()}
+
+
 def main(script: str, doc: str, modes, measure: Callable[[str, int, str], dict], report: Callable[[dict], str],
          argv: list[str] | None = None) -> None:
     """The command line of ``script``: ``--runs`` per mode of ``modes``, alternating, each ``measure(mode,

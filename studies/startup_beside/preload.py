@@ -55,12 +55,11 @@ def report(res: dict) -> str:
         ph = r["phases_s"]
         lines.append(f"| {k} | {r['mode']} | {r['first_iteration_s']:.1f} | "
                      + " | ".join(f"{ph.get(p, 0.0):.1f}" for p in SHOWN) + f" | {r['finalize_s'] or 0:.1f} |")
-    times = {m: [r["first_iteration_s"] for r in res["runs"] if r["mode"] == m] for m in MODES}
-    if all(times.values()):
-        a, b = (sum(v) / len(v) for v in times.values())
-        span = {m: f"{min(v):.1f}-{max(v):.1f}" for m, v in times.items()}
-        lines += ["", f"Mean time to the first iteration: preload {a:.1f} s ({span['preload']}), after {b:.1f} s "
-                  f"({span['after']}): {a - b:+.1f} s."]  # fmt: skip
+    times = alternate.per_mode(res, "first_iteration_s", MODES)
+    if times:
+        (a, a_lo, a_hi), (b, b_lo, b_hi) = times.values()
+        lines += ["", f"Mean time to the first iteration: preload {a:.1f} s ({a_lo:.1f}-{a_hi:.1f}), after {b:.1f} s "
+                  f"({b_lo:.1f}-{b_hi:.1f}): {a - b:+.1f} s."]  # fmt: skip
     return "\n".join(lines) + "\n"
 
 

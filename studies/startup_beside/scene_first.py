@@ -61,9 +61,9 @@ def report(res: dict) -> str:
         lines.append(f"| {k} | {r['mode']} | {r['ready_s']:.1f} | {imports:.1f} | {main + side:.1f} "
                      f"({'before the imports' if main else 'beside them'}) | {bs.get('finalize', 0):.1f} | "
                      f"{ph.get('model build', 0):.1f} |")  # fmt: skip
-    means = {m: [r["ready_s"] for r in res["runs"] if r["mode"] == m] for m in MODES}
-    if all(means.values()):
-        a, b = (sum(v) / len(v) for v in means.values())
+    means = alternate.per_mode(res, "ready_s", MODES)
+    if means:
+        (a, _, _), (b, _, _) = means.values()
         lines += ["", f"Mean time to the model: scene_first {a:.1f} s, all_beside {b:.1f} s ({a - b:+.1f} s)."]
     return "\n".join(lines) + "\n"
 

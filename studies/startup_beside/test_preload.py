@@ -45,4 +45,5 @@ def test_the_gpu_queue_runs_each_ab_on_cuda(tmp_path):
                           text=True)  # fmt: skip
     assert done.returncode == 0 and done.stdout.rstrip().endswith("done"), done.stdout + done.stderr
     assert (tmp_path / "calls").read_text().splitlines() == [
-        f"studies/startup_beside/{s}.py --runs 2 --device cuda --out {tmp_path}/{s}" for s in ("scene_first", "preload")]
+        f"studies/startup_beside/{s}.py --runs 2 --device cuda --out {tmp_path}/{s}"
+        for s in ("scene_first", "preload")]
