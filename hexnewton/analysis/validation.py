@@ -15,7 +15,7 @@ from __future__ import annotations
 import glob
 import os
 import re
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -51,15 +51,19 @@ def candidates(run_dir: str, first_iteration: int, last: Candidate, best: Candid
     return sorted(chosen[:limit], key=lambda c: c.iteration)
 
 
-def _batched_policy(env, controller: str, cands: list[Candidate]):
-    """``policy(obs) -> actions``: candidate k's deterministic action for robots k, k + K, ..."""
+def candidate_rows(n: int, k: int) -> list[np.ndarray]:
+    """Each of ``k`` candidates' robots among ``n`` interleaved ones: candidate i drives robots i, i + k, ..."""
+    return [np.arange(i, n, k) for i in range(k)]
+
+
+def _batched_policy(env, controller: str, cands: list[Candidate], rows: list[np.ndarray]):
+    """``policy(obs) -> actions``: candidate k's deterministic action for its robots ``rows[k]``."""
     import torch
 
     from hexnewton.analysis.rollout import controller_policy, read_controller_checkpoint
 
-    k = len(cands)
     device = env.get_observations().device
-    rows = [torch.arange(i, env.num_envs, k, device=device) for i in range(k)]
+    rows = [torch.as_tensor(r, device=device) for r in rows]
     policies = [controller_policy(env, controller, c.path, read_controller_checkpoint(controller, c.path))
                 for c in cands]  # fmt: skip
 
@@ -85,8 +89,7 @@ def validate(cands: list[Candidate], controller: str, terrain, rounds: int, devi
     stability the last curriculum stage trains: the choice does not weigh it, the console and ``timing.json`` show
     it). A navigate run (random goals) walks the navigation's validation instead: one goal at 2 m per round, every
     bearing (:func:`hexnewton.analysis.navigation.validate_navigation`)."""
-    from hexnewton.analysis.rollout import (CONTROLLERS, START_SEED_OFFSET, progress_mode,
-                                            read_controller_checkpoint, stepped)
+    from hexnewton.analysis.rollout import CONTROLLERS, START_SEED_OFFSET, read_controller_checkpoint
     from hexnewton.learning.checkpoint import trained_config
     from hexnewton.mdp.env import make_env
     from hexnewton.tasks import course
@@ -98,17 +101,28 @@ def validate(cands: list[Candidate], controller: str, terrain, rounds: int, devi
 
         env = make_env(navigation_config(terrain, trained, rounds * k, device, VALIDATION_SEED, max_steps),
                        CONTROLLERS[controller])  # fmt: skip
-        shares, run = validate_navigation(env, _batched_policy(env, controller, cands), k)
-        pitch, roll = candidate_variances(run["rpy"], np.isfinite(run["pos"][..., 0]), k)
+        rows = candidate_rows(env.num_envs, k)
+        shares, run = validate_navigation(env, _batched_policy(env, controller, cands, rows), k)
+        pitch, roll = candidate_variances(run["rpy"], np.isfinite(run["pos"][..., 0]), rows)
         return [dict(r, pitch_var=pitch[i], roll_var=roll[i]) for i, r in enumerate(shares)]
-    goal = {} if goal_distance is None else {"goal_distance": goal_distance}
     cfg = course(terrain, trained, None, rounds * k, device, VALIDATION_SEED, seed=VALIDATION_SEED + START_SEED_OFFSET,
-                 **goal)  # fmt: skip
+                 **({} if goal_distance is None else {"goal_distance": goal_distance}))  # fmt: skip
+    rows = candidate_rows(cfg.sim.num_envs, k)
+    return _walk(cfg, controller, cands, rows, max_steps, f"validation of {k} candidates on {cfg.terrain.name}, "
+                 f"{rounds} rounds each")  # fmt: skip
+
+
+def _walk(cfg, controller: str, cands: list[Candidate], rows: list[np.ndarray], max_steps: int, where: str,
+          results: list[np.ndarray] | None = None) -> list[dict]:  # fmt: skip
+    """The candidates walk the env of ``cfg``, candidate i driving robots ``rows[i]``, until every round ended or
+    ``max_steps``; the shares and variances (:func:`validate`'s) of each robot set of ``results`` (None: ``rows``)."""
+    from hexnewton.analysis.rollout import CONTROLLERS, progress_mode, stepped
+    from hexnewton.mdp.env import make_env
+
     env = make_env(cfg, CONTROLLERS[controller])
-    policy = _batched_policy(env, controller, cands)
+    policy = _batched_policy(env, controller, cands, rows)
     pos, rpy, status = [], [], []
     finished = np.zeros(env.num_envs, bool)
-    where = f"validation of {k} candidates on {cfg.terrain.name}, {rounds} rounds each"
     for _, st, _, p, r in stepped(env, policy, max_steps, where, progress_mode()):
         pos.append(p[:, :2])
         rpy.append(r)
@@ -121,22 +135,69 @@ def validate(cands: list[Candidate], controller: str, terrain, rounds: int, devi
     m = round_metrics(np.stack(pos), rpy, status != 0, status, cfg.task.control_dt, (3.0,))
     end, walked = m["end"], m["reached"][0]
     early = (end == FELL) & (m["x_far"] < cfg.task.goal_distance + cfg.task.goal_radius)  # fell before the goal line
-    pitch, roll = candidate_variances(rpy, m["in_episode"], k)
-    return [{"goal": float((end[i::k] == SUCCESS).mean()), "walk_3m": float(walked[i::k].mean()),
-             "fell": float((end[i::k] == FELL).mean()), "fell_before_goal": float(early[i::k].mean()),
-             "off_course": float((end[i::k] == OFF_COURSE).mean()), "pitch_var": pitch[i], "roll_var": roll[i],
-             "rounds": int(end[i::k].size)} for i in range(k)]  # fmt: skip
+    rows = rows if results is None else results
+    pitch, roll = candidate_variances(rpy, m["in_episode"], rows)
+    return [{"goal": float((end[r] == SUCCESS).mean()), "walk_3m": float(walked[r].mean()),
+             "fell": float((end[r] == FELL).mean()), "fell_before_goal": float(early[r].mean()),
+             "off_course": float((end[r] == OFF_COURSE).mean()), "pitch_var": pitch[i], "roll_var": roll[i],
+             "rounds": int(r.size)} for i, r in enumerate(rows)]  # fmt: skip
 
 
-def candidate_variances(rpy: np.ndarray, in_episode: np.ndarray, k: int) -> tuple[list[float], list[float]]:
-    """Each of ``k`` interleaved candidates' (robots i, i + k, ...) body pitch and roll variance [deg²] over the
-    steps of its rounds' first episodes (``rpy`` (T, N, 3) roll, pitch, yaw [rad]; ``in_episode`` (T, N));
-    non-finite angles are left out, nan for none."""
+def together_config(terrains: list[str], trained, rounds: int, device: str | None,
+                    goal_distance: float | None = None):  # fmt: skip
+    """The env of :func:`validate_together`: the courses ``terrains`` (names) side by side along y, each one lane
+    group of a single lane as wide as a course's patch (``TerrainConfig.lane_courses``, ``levels`` 1: each course at
+    its full height, without a curriculum), ``rounds`` robots per course and candidate; returns the config and the
+    index in ``terrains`` of each lane group's course (a flat course, a ground plane, cannot lead the groups)."""
+    from hexnewton.analysis.rollout import START_SEED_OFFSET
+    from hexnewton.tasks import course
+
+    order = sorted(range(len(terrains)), key=lambda c: terrains[c] == "flat")
+    if terrains[order[0]] == "flat":
+        raise ValueError("validation side by side needs a course other than flat among the validation terrains")
+    cfg = course(terrains[order[0]], trained, None, rounds * len(terrains), device, VALIDATION_SEED,
+                 seed=VALIDATION_SEED + START_SEED_OFFSET,
+                 **({} if goal_distance is None else {"goal_distance": goal_distance}))  # fmt: skip
+    lanes = replace(cfg.terrain, levels=1, start_levels=1, lane_width=cfg.terrain.width,
+                    lane_courses=tuple(terrains[c] for c in order[1:]))  # fmt: skip
+    return replace(cfg, terrain=lanes), order
+
+
+def validate_together(cands: list[Candidate], controller: str, terrains: list[str], rounds: int,
+                      device: str | None, max_steps: int,
+                      goal_distance: float | None = None) -> dict[tuple[int, int], dict]:  # fmt: skip
+    """:func:`validate` of every candidate on every course of ``terrains`` (names) in one env
+    (:func:`together_config`): G courses and K candidates, robot i plays lane group i mod G and candidate
+    (i // G) mod K, ``rounds`` robots per pair. One env steps the G courses in about the time of one (the step of a
+    few thousand robots is bound by its kernels' latency, not their size). The rounds are not those of the courses
+    one by one: each course is its own lane group with its own block seed and its robots' starts spread over the
+    robots of all courses. Returns {(course index, candidate index): result}, as :func:`validate_share`."""
+    from hexnewton.analysis.rollout import read_controller_checkpoint
+    from hexnewton.learning.checkpoint import trained_config
+
+    k, g = len(cands), len(terrains)
+    trained = trained_config(read_controller_checkpoint(controller, cands[-1].path))
+    cfg, order = together_config(terrains, trained, rounds * k, device, goal_distance)
+    i = np.arange(cfg.sim.num_envs)
+    pairs = [(grp, c) for grp in range(g) for c in range(k)]
+    rows = [np.flatnonzero((i % g == grp) & ((i // g) % k == c)) for grp, c in pairs]
+    policy_rows = [np.flatnonzero((i // g) % k == c) for c in range(k)]
+    where = f"validation of {k} candidates on {course_names([terrains[c] for c in order])} side by side, {rounds} " \
+            "rounds each"  # fmt: skip
+    results = _walk(cfg, controller, cands, policy_rows, max_steps, where, rows)
+    return {(order[grp], c): r for (grp, c), r in zip(pairs, results)}
+
+
+def candidate_variances(rpy: np.ndarray, in_episode: np.ndarray,
+                        rows: list[np.ndarray]) -> tuple[list[float], list[float]]:  # fmt: skip
+    """Each robot set's (``rows``: one index array per candidate) body pitch and roll variance [deg²] over the steps
+    of its rounds' first episodes (``rpy`` (T, N, 3) roll, pitch, yaw [rad]; ``in_episode`` (T, N)); non-finite
+    angles are left out, nan for none."""
     out = []
     for axis in (1, 0):
         per = []
-        for i in range(k):
-            a = np.degrees(np.asarray(rpy[:, i::k, axis], np.float64))[in_episode[:, i::k]]
+        for r in rows:
+            a = np.degrees(np.asarray(rpy[:, r, axis], np.float64))[in_episode[:, r]]
             a = a[np.isfinite(a)]
             per.append(float(a.var()) if a.size else float("nan"))
         out.append(per)
@@ -156,12 +217,22 @@ def validation_share(candidates: int, courses: int, rank: int = 0, world_size: i
     return {course: mine} if mine else {}
 
 
+def side_by_side(terrains: list, world_size: int, together: bool) -> bool:
+    """Whether :func:`validate_share` walks ``terrains`` side by side in one env: ``together`` asked, one process,
+    more than one course, each named."""
+    return together and world_size == 1 and len(terrains) > 1 and all(isinstance(t, str) for t in terrains)
+
+
 def validate_share(cands: list[Candidate], controller: str, terrains: list, rounds: int, device: str | None,
                    max_steps: int, goal_distance: float | None = None, rank: int = 0,
-                   world_size: int = 1) -> dict[tuple[int, int], dict]:  # fmt: skip
+                   world_size: int = 1, together: bool = False) -> dict[tuple[int, int], dict]:  # fmt: skip
     """:func:`validate` of this rank's :func:`validation_share`, course by course: {(course index, candidate index):
     result}. Each candidate walks ``rounds`` rounds of the validation seeds; a share of the candidates takes its own
-    env of the same seeds (the rounds dealt differently among the candidates, as among those of one env)."""
+    env of the same seeds (the rounds dealt differently among the candidates, as among those of one env).
+    ``together`` (``AgentConfig.validation_together``): one process's courses (names) in one env instead
+    (:func:`validate_together`)."""
+    if side_by_side(terrains, world_size, together):
+        return validate_together(cands, controller, terrains, rounds, device, max_steps, goal_distance)
     out = {}
     for course, idx in validation_share(len(cands), len(terrains), rank, world_size).items():
         results = validate([cands[i] for i in idx], controller, terrains[course], rounds, device, max_steps,

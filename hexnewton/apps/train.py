@@ -287,7 +287,8 @@ def validate_result(runner, cfg, agent, run_dir: str | None, first_it: int, rank
     checkpoints. Every rank of a torchrun job calls it and validates its share (:func:`validation_share`) on its own
     GPU, where every rank reads rank 0's checkpoints (one host); else rank 0 validates them all. Returns on rank 0
     the candidates, each one's results and the seconds (None on the other ranks)."""
-    from hexnewton.analysis.validation import Candidate, candidates, combine_courses, course_names, validate_share
+    from hexnewton.analysis.validation import (Candidate, candidates, combine_courses, course_names, side_by_side,
+                                               validate_share)
     from hexnewton.learning.runner import share_objects
 
     cands = None
@@ -308,19 +309,21 @@ def validate_result(runner, cfg, agent, run_dir: str | None, first_it: int, rank
     ranks = rank.world_size if all(share_objects(all(os.path.isfile(c.path) for c in cands), cfg.sim.device)) else 1
     controller = "joint" if runner.meta["action_mode"] == "joint" else "cpg_rl"
     terrains = list(agent.validation_terrains) or [cfg.terrain]
+    together = side_by_side(terrains, ranks, agent.validation_together)
     if rank.is_main:
         names = [t if isinstance(t, str) else t.name for t in terrains]
         print(f"deterministic validation: {len(cands)} candidates, {agent.validation_rounds} rounds each on "
-              f"{course_names(names)}, at most {agent.validation_steps} control steps a round"
-              + (f", shared by {ranks} ranks" if ranks > 1 else ""), flush=True)  # fmt: skip
+              f"{course_names(names)}" + (" side by side in one env" if together else "") + ", at most "
+              f"{agent.validation_steps} control steps a round" + (f", shared by {ranks} ranks" if ranks > 1 else ""),
+              flush=True)  # fmt: skip
     mine = validate_share(cands, controller, terrains, agent.validation_rounds, cfg.sim.device,
-                          agent.validation_steps, cfg.task.goal_distance, rank.rank, ranks) \
+                          agent.validation_steps, cfg.task.goal_distance, rank.rank, ranks, agent.validation_together) \
         if rank.rank < ranks else {}  # fmt: skip
     shares = share_objects(mine, cfg.sim.device) if ranks > 1 else [mine]
     if not rank.is_main:
         return None
     results, per_course = combine_courses(cands, terrains, {k: v for share in shares for k, v in share.items()})
-    return {"candidates": cands, "results": results, "courses": per_course, "ranks": ranks,
+    return {"candidates": cands, "results": results, "courses": per_course, "ranks": ranks, "side_by_side": together,
             "seconds": time.time() - t0}
 
 
@@ -342,7 +345,7 @@ def choose_on_validation(runner, agent, run_dir: str, validated: dict) -> tuple[
     shutil.copyfile(cands[k].path, result)
     print(f"the result: {os.path.basename(cands[k].path)} ({cands[k].why}), kept as {result}")
     return result, {"seconds": seconds, "chosen": cands[k].path, "rounds": agent.validation_rounds,
-                    "courses": per_course, "ranks": validated["ranks"],
+                    "courses": per_course, "ranks": validated["ranks"], "side_by_side": validated["side_by_side"],
                     "candidates": [dict(r, path=c.path, iteration=c.iteration, why=c.why)
                                    for c, r in zip(cands, results)]}  # fmt: skip
 

@@ -152,6 +152,11 @@ class AgentConfig:
     #: the courses validated on (§3.1's, by name), each candidate judged on its shares averaged over them; empty: the
     #: task's own course
     validation_terrains: tuple[str, ...] = field(default=(), metadata={"choices": TERRAINS})
+    #: ours: the validation's courses side by side in one env (a lane group each, its own block seed;
+    #: ``analysis.validation.validate_together``), which steps them in about one course's time, not one env per course
+    #: one after another; a torchrun job deals its courses over its ranks either way. Off until the learner's gate
+    #: holds with it (studies/learner, arm ``together``)
+    validation_together: bool = False
     #: ours: one more candidate, the weight average of the last stage's candidates (actor, critic and their
     #: observation normalisers; :func:`hexnewton.learning.checkpoint.average_checkpoints`), kept as
     #: ``model_average.pt``

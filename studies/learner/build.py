@@ -41,7 +41,9 @@ ARM_FLAGS = {"recipe": "", "critic": "--env.obs.critic true",
              # the rugged and stepped courses' lanes beside the complex course's: a third of the envs on each
              "courses": "--env.terrain.lane_courses rugged stepped",
              # the networks' float32 matrix products on TF32 tensor cores (studies/throughput/tf32: +10 % at 16384 envs)
-             "tf32": "--agent.tf32 true"}
+             "tf32": "--agent.tf32 true",
+             # the three validation courses side by side in one env, not one env per course one after another
+             "together": "--agent.validation_together true"}
 #: each arm in words, with its flags
 ARMS = {arm: f"{what} (`{ARM_FLAGS[arm] or '--task complex'}`)" for arm, what in (
     ("recipe", "the complex recipe"), ("critic", "+ the asymmetric critic"),
@@ -56,7 +58,10 @@ ARMS = {arm: f"{what} (`{ARM_FLAGS[arm] or '--task complex'}`)" for arm, what in
     ("courses", "the rugged and stepped courses trained beside the complex one (a lane group each, a third of the envs "
                 "on each; what it trains on, not what it sees): validation and the gate walk all three"),
     ("tf32", "the networks' float32 matrix products on TF32 tensor cores, not in full float32 (a speed switch: the "
-             "gate asks whether it may become the default)"))}
+             "gate asks whether it may become the default)"),
+    ("together", "the validation's three courses side by side in one env (a lane group each, its own block seed), "
+                 "stepped in about one course's time (a speed switch: the gate asks whether it may become the "
+                 "default)"))}
 TERRAINS = ("rugged", "stepped", "complex")
 METRICS = ("success_3m", "fall_rate", "fall_rate_before_goal", "pitch_var_deg2", "roll_var_deg2")
 #: the gate's lines (1000 test rounds per terrain, deterministic action)

@@ -2,9 +2,10 @@
 train.py's tests (tests/learning/test_train.py)."""
 
 import numpy as np
+import pytest
 
-from hexnewton.analysis.validation import (Candidate, candidate_variances, candidates, choose, report_lines,
-                                           validation_share)
+from hexnewton.analysis.validation import (Candidate, candidate_rows, candidate_variances, candidates, choose,
+                                           report_lines, validation_share)
 
 
 def test_candidates_are_the_last_stage_newest_first_and_the_kept_ones(tmp_path):
@@ -52,13 +53,13 @@ def test_each_candidates_variance_is_over_its_own_rounds_first_episodes():
     rpy = rng.normal(0.0, 0.2, (t, n, 3))
     rpy[5, 4, 1] = np.nan
     in_episode = np.arange(t)[:, None] < rng.integers(1, t + 1, n)[None, :]
-    pitch, roll = candidate_variances(rpy.astype(np.float32), in_episode, k)
+    pitch, roll = candidate_variances(rpy.astype(np.float32), in_episode, candidate_rows(n, k))
     for i in range(k):
         for axis, got in ((1, pitch[i]), (0, roll[i])):
             ref = [np.degrees(rpy[s, e, axis]) for e in range(i, n, k) for s in range(t)
                    if in_episode[s, e] and np.isfinite(rpy[s, e, axis])]  # fmt: skip
             assert np.isclose(got, np.var(ref), rtol=1e-5)
-    assert np.isnan(candidate_variances(rpy, np.zeros((t, n), bool), k)[0][0])
+    assert np.isnan(candidate_variances(rpy, np.zeros((t, n), bool), candidate_rows(n, k))[0][0])
 
 
 def test_validation_on_several_courses_averages_each_candidates_shares(monkeypatch):
@@ -143,3 +144,74 @@ def test_shared_validation_gives_what_one_process_gives(monkeypatch):
         for r in range(world):
             merged.update(validation.validate_share(cands, "cpg_rl", terrains, 8, "cpu", 30, None, r, world))
         assert validation.combine_courses(cands, terrains, merged) == one
+
+
+def test_courses_side_by_side_are_each_course_in_its_own_lane_group():
+    """``validation_together``'s env: one lane group per course, each group's one lane the course's patch at its full
+    height (the course as ``evaluate`` builds it, with the group's block seed), a flat course never leading (a ground
+    plane); the robots spread evenly over the courses."""
+    from dataclasses import replace
+
+    from hexnewton.analysis.validation import VALIDATION_SEED, together_config
+    from hexnewton.config import HexConfig
+    from hexnewton.physics.terrain.heightmap import build_height_grid, env_groups, lane_config
+    from hexnewton.tasks import course
+
+    names = ["flat", "rugged", "stepped", "complex"]
+    cfg, order = together_config(names, HexConfig(), 6, "cpu")
+    assert [names[c] for c in order] == ["rugged", "stepped", "complex", "flat"]
+    assert cfg.sim.num_envs == 24 and cfg.terrain.levels == 1 and not cfg.randomization.enabled
+    assert np.bincount(env_groups(cfg.terrain, cfg.sim.num_envs)).tolist() == [6, 6, 6, 6]
+    for g, c in enumerate(order):
+        lane = lane_config(cfg.terrain, 0, g)
+        alone = course(names[c], None, None, 8, "cpu", VALIDATION_SEED).terrain
+        if names[c] != "flat":
+            assert np.array_equal(build_height_grid(lane).heights,
+                                  build_height_grid(replace(alone, seed=lane.seed)).heights), names[c]  # fmt: skip
+        assert (lane.name, lane.width, lane.rugged_half_width, lane.x_max) == \
+            (alone.name, alone.width, alone.rugged_half_width, alone.x_max)  # fmt: skip
+    with pytest.raises(ValueError, match="other than flat"):
+        together_config(["flat"], HexConfig(), 2, "cpu")
+
+
+def test_courses_side_by_side_give_every_course_and_candidate_its_rounds(monkeypatch):
+    """``validate_share(..., together=True)`` in one process: one env, robot i on course i mod G driven by candidate
+    (i // G) mod K, ``rounds`` robots per (course, candidate) pair, the results keyed by the courses' own order; under
+    torchrun, or with one course, course by course as before."""
+    from hexnewton.analysis import validation
+    from hexnewton.physics.terrain.heightmap import env_groups
+
+    seen = {}
+
+    def walk(cfg, controller, cands, rows, max_steps, where, results=None):
+        seen.update(cfg=cfg, rows=rows, results=results, where=where)
+        return [{"goal": float(i)} for i in range(len(results))]
+
+    monkeypatch.setattr(validation, "_walk", walk)
+    monkeypatch.setattr(validation, "validate", lambda cands, *a, **k: [{"goal": -1.0} for _ in cands])
+    cands = [Candidate(it, "results/policies/cpg_rl_complex.pt", "saved") for it in (1, 2, 3, 4)]
+    names = ["flat", "rugged", "complex"]
+    got = validation.validate_share(cands, "cpg_rl", names, 5, "cpu", 30, together=True)
+    n = seen["cfg"].sim.num_envs
+    groups = env_groups(seen["cfg"].terrain, n)
+    assert n == 60 and sorted(np.concatenate(seen["results"]).tolist()) == list(range(n))
+    assert "rugged, complex and flat courses side by side, 5 rounds each" in seen["where"]
+    for j, rows in enumerate(seen["results"]):
+        g, c = divmod(j, 4)
+        assert rows.size == 5 and (groups[rows] == g).all() and np.isin(rows, seen["rows"][c]).all()
+    # group 0 is rugged (names index 1), group 2 flat (index 0)
+    assert got[(1, 0)]["goal"] == 0.0 and got[(0, 3)]["goal"] == 11.0 and len(got) == 12
+    assert validation.validate_share(cands, "cpg_rl", names, 5, "cpu", 30, None, 0, 3, True)[(0, 0)]["goal"] == -1.0
+    assert validation.validate_share(cands, "cpg_rl", ["rugged"], 5, "cpu", 30, together=True)[(0, 0)]["goal"] == -1
+
+
+@pytest.mark.slow  # end to end: ~20 s on a 2-core CPU
+def test_courses_side_by_side_walk_each_course():
+    """The shipped policy on the rugged and stepped courses side by side, 2 rounds each: its robots on the stepped
+    course start on its flat run-up, those on the rugged course on blocks (body angles vary more)."""
+    from hexnewton.analysis.validation import validate_together
+
+    cands = [Candidate(1, "results/policies/cpg_rl_complex.pt", "shipped")]
+    got = validate_together(cands, "cpg_rl", ["stepped", "rugged"], 2, "cpu", 40)
+    assert sorted(got) == [(0, 0), (1, 0)] and all(r["rounds"] == 2 and r["fell"] == 0.0 for r in got.values())
+    assert got[(1, 0)]["pitch_var"] > got[(0, 0)]["pitch_var"]
