@@ -168,10 +168,11 @@ def validate_together(cands: list[Candidate], controller: str, terrains: list[st
                       goal_distance: float | None = None) -> dict[tuple[int, int], dict]:  # fmt: skip
     """:func:`validate` of every candidate on every course of ``terrains`` (names) in one env
     (:func:`together_config`): G courses and K candidates, robot i plays lane group i mod G and candidate
-    (i // G) mod K, ``rounds`` robots per pair. One env steps the G courses in about the time of one (the step of a
-    few thousand robots is bound by its kernels' latency, not their size). The rounds are not those of the courses
-    one by one: each course is its own lane group with its own block seed and its robots' starts spread over the
-    robots of all courses. Returns {(course index, candidate index): result}, as :func:`validate_share`."""
+    (i // G) mod K, ``rounds`` robots per pair. One env of 3072 robots steps the three courses in little more than
+    the time the rugged course's 1024 take alone (on an H100: 37.7 against 68.9 s one by one,
+    studies/throughput/validation). The rounds are not those of the courses one by one: each course is its own lane
+    group with its own block seed and its robots' starts spread over the robots of all courses. Returns
+    {(course index, candidate index): result}, as :func:`validate_share`."""
     from hexnewton.analysis.rollout import read_controller_checkpoint
     from hexnewton.learning.checkpoint import trained_config
 
