@@ -16,7 +16,7 @@ export PYTHONPATH=/opt/site:$PWD${PYTHONPATH:+:$PYTHONPATH} PYTHONUNBUFFERED=1
 TP=${TP:-/root/throughput}
 mkdir -p "$TP/ab"
 flags() { python studies/throughput/solver_ab.py --flags "$1"; }   # a variant's flags (solver_ab.py FLAGS)
-VARIANTS=${VARIANTS:-base iter5 ls4 cg sub3 sub2}
+VARIANTS=${VARIANTS:-base iter5 ls4 cg sub3 sub2 rows192}
 for v in $VARIANTS; do flags "$v" > /dev/null || exit 2; done
 nvidia-smi --query-gpu=name,driver_version --format=csv,noheader > "$TP/ab/gpu.txt"
 for v in $VARIANTS; do
