@@ -172,12 +172,15 @@ def validate_together(cands: list[Candidate], controller: str, terrains: list[st
     the time the rugged course's 1024 take alone (on an H100: 37.7 against 68.9 s one by one,
     studies/throughput/validation). The rounds are not those of the courses one by one: each course is its own lane
     group with its own block seed and its robots' starts spread over the robots of all courses. Returns
-    {(course index, candidate index): result}, as :func:`validate_share`."""
+    {(course index, candidate index): result}, as :func:`validate_share`. A navigate run (random goals) walks each
+    course's navigation validation one after another (:func:`validate`)."""
     from hexnewton.analysis.rollout import read_controller_checkpoint
     from hexnewton.learning.checkpoint import trained_config
 
     k, g = len(cands), len(terrains)
     trained = trained_config(read_controller_checkpoint(controller, cands[-1].path))
+    if trained.task.random_goals:
+        return validate_share(cands, controller, terrains, rounds, device, max_steps, goal_distance)
     cfg, order = together_config(terrains, trained, rounds * k, device, goal_distance)
     i = np.arange(cfg.sim.num_envs)
     pairs = [(grp, c) for grp in range(g) for c in range(k)]

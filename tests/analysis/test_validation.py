@@ -203,6 +203,11 @@ def test_courses_side_by_side_give_every_course_and_candidate_its_rounds(monkeyp
     assert got[(1, 0)]["goal"] == 0.0 and got[(0, 3)]["goal"] == 11.0 and len(got) == 12
     assert validation.validate_share(cands, "cpg_rl", names, 5, "cpu", 30, None, 0, 3, True)[(0, 0)]["goal"] == -1.0
     assert validation.validate_share(cands, "cpg_rl", ["rugged"], 5, "cpu", 30, together=True)[(0, 0)]["goal"] == -1
+    # a navigate run's validation (random goals) stays course by course
+    nav = [Candidate(1, "results/policies/cpg_rl_navigate_flat.pt", "saved")]
+    seen.clear()
+    assert validation.validate_share(nav, "cpg_rl", names, 5, "cpu", 30, together=True) == \
+        {(c, 0): {"goal": -1.0} for c in range(3)} and not seen  # fmt: skip
 
 
 @pytest.mark.slow  # end to end: ~20 s on a 2-core CPU
