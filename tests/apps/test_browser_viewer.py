@@ -6,11 +6,12 @@ viser it skips, saying which is missing (CI installs them: .ci/run)."""
 
 import importlib.util
 import os
-import select
+import queue
 import shutil
 import socket
 import subprocess
 import sys
+import threading
 import time
 
 import numpy as np
@@ -25,15 +26,31 @@ SAND, ORANGE = ((95, 85, 65), (235, 225, 205)), ((150, 70, 0), (255, 175, 90))
 SCENE = np.s_[160:, :460]
 
 
-def _drain(proc) -> list[str]:
-    """The output ``proc`` has written so far (without waiting for more)."""
-    lines = []
-    while select.select([proc.stdout], [], [], 0.1)[0]:
-        line = proc.stdout.readline()
-        if not line:
-            break
-        lines.append(line)
+def _lines(proc) -> queue.Queue:
+    """``proc``'s stdout lines as a thread reads them (None at its end): a ``select`` on the pipe would miss the lines
+    that an earlier ``readline`` left in the file's buffer (viser's banner and the address can come in one read)."""
+    lines: queue.Queue = queue.Queue()
+
+    def read():
+        for line in proc.stdout:
+            lines.put(line)
+        lines.put(None)
+
+    threading.Thread(target=read, daemon=True).start()
     return lines
+
+
+def _drain(lines: queue.Queue) -> list[str]:
+    """The lines read so far (without waiting for more)."""
+    out = []
+    while True:
+        try:
+            line = lines.get_nowait()
+        except queue.Empty:
+            return out
+        if line is None:
+            return out
+        out.append(line)
 
 
 def _helper():
@@ -62,18 +79,19 @@ def _free_port() -> int:
         return s.getsockname()[1]
 
 
-def _wait_for_line(proc, prefix: str, timeout: float) -> str:
-    """The first stdout line of ``proc`` that starts with ``prefix`` (what came before it on failure)."""
+def _wait_for_line(lines: queue.Queue, prefix: str, timeout: float) -> str:
+    """The first line of ``lines`` (:func:`_lines`) that starts with ``prefix`` (what came before it on failure)."""
     seen, end = [], time.time() + timeout
     while time.time() < end:
-        ready, _, _ = select.select([proc.stdout], [], [], 1.0)
-        if ready:
-            line = proc.stdout.readline()
-            if not line and proc.poll() is not None:
-                break
-            seen.append(line)
-            if line.startswith(prefix):
-                return line
+        try:
+            line = lines.get(timeout=1.0)
+        except queue.Empty:
+            continue
+        if line is None:
+            break
+        seen.append(line)
+        if line.startswith(prefix):
+            return line
     raise AssertionError(f"no '{prefix}' line within {timeout} s:\n" + "".join(seen[-30:]))
 
 
@@ -91,9 +109,9 @@ def test_play_in_a_browser_draws_the_walking_robots(tmp_path):
            "90000", "--device", "cpu", "--viewer", "viser", "--port", str(port), "--no-progress"]
     proc = subprocess.Popen(cmd, cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
                             env=dict(os.environ, PYTHONUNBUFFERED="1"))  # fmt: skip
-    driver = None
+    driver, lines = None, _lines(proc)
     try:
-        line = _wait_for_line(proc, "viewer viser: open ", 600)
+        line = _wait_for_line(lines, "viewer viser: open ", 600)
         url = line.split("open ", 1)[1].split()[0]
         assert url == f"http://127.0.0.1:{port}"
         helper = _helper()
@@ -117,7 +135,7 @@ def test_play_in_a_browser_draws_the_walking_robots(tmp_path):
 
             for name, img in (("first", first), ("second", second)):
                 Image.fromarray(img.astype(np.uint8)).save(os.path.join(str(tmp_path), f"{name}.png"))
-            print(f"screenshots in {tmp_path}; play.py: " + "".join(_drain(proc))[-2000:])
+            print(f"screenshots in {tmp_path}; play.py: " + "".join(_drain(lines))[-2000:])
         assert changed > 0.002, f"the page did not change while the robots walked ({changed:.4f} of its pixels)"
         sand = max(_share(img, *SAND) for img in (first, second))
         orange = max(_share(img, *ORANGE) for img in (first, second))
