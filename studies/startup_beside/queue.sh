@@ -2,7 +2,8 @@
 # A queue for one GPU (`bash studies/device/gpu.sh queue studies/startup_beside/queue.sh`): each A/B of $STEPS (default
 # "scene_first preload": scene_first.py, ~2 min; preload.py, train.py to its first iteration, ~4 min) there, the complex
 # task at 4096 envs, 2 runs per mode alternating -> $TP/<step>/{results.json,report.md}; "gil" (gil.py, ~1 min: the
-# finalize and the interpreter lock, the imports alone; REVISION=COMMIT names the tree's commit). Then from the next call:
+# finalize and the interpreter lock, the imports alone; REVISION=COMMIT names the tree's commit). Then from the next
+# call:
 # `tar czf $OUT/startup.tgz -C $TP scene_first preload`; here each folder becomes studies/startup_beside/<step>_gpu/.
 set -u
 cd "$(dirname "$0")/../.."
