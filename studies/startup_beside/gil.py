@@ -107,9 +107,9 @@ def measure(args) -> dict:
     gpu = "cpu"
     if args.device.startswith("cuda"):
         gpu = wp.get_device(args.device).name
-    rev = args.revision or subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True,
-                                          text=True).stdout.strip()  # fmt: skip
-    return {"command": " ".join(["python", *sys.argv]), "revision": rev or "unknown", "device": gpu,
+    from hexnewton.analysis.report import git_rev
+
+    return {"command": " ".join(["python", *sys.argv]), "revision": git_rev(), "device": gpu,
             "cpus": os.cpu_count(), "machine": platform.processor() or platform.machine(), "numpy": np.__version__,
             "task": args.task, "num_envs": args.num_envs, "finalize_alone_s": alone, "finalize_beside_s": out["s"],
             "loop_alone_per_s": rate_alone, "loop_beside_per_s": n / s, "loop_beside_s": s,
@@ -164,7 +164,6 @@ def main(argv=None) -> int:
     p.add_argument("--device", default="cpu")
     p.add_argument("--num_envs", type=int, default=4096)
     p.add_argument("--task", default="complex", help="the task whose model is finalized")
-    p.add_argument("--revision", help="the code's commit, where the tree has no git history (a device call's copy)")
     args = p.parse_args(argv)
     if args.rebuild:
         path = os.path.join(args.rebuild, "raw.json")

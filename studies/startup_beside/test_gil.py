@@ -33,23 +33,27 @@ def test_a_missing_folder_is_one_line_and_exit_2(tmp_path):
 
 
 def test_the_queue_runs_it_once_on_cuda_with_the_revision(tmp_path):
+    """The queue passes HEXNEWTON_GIT_REV on: where a device call's tree has no git history,
+    ``hexnewton.analysis.report.git_rev`` reads the commit from it."""
     bin_dir = tmp_path / "bin"
     bin_dir.mkdir()
-    (bin_dir / "python").write_text('#!/bin/bash\necho "$*" >> "$TP/calls"\n')
+    (bin_dir / "python").write_text('#!/bin/bash\necho "$* $HEXNEWTON_GIT_REV" >> "$TP/calls"\n')
     (bin_dir / "python").chmod(0o755)
     env = dict(os.environ, PATH=f"{bin_dir}:{os.environ['PATH']}", TP=str(tmp_path), STEPS="preload gil",
-               REVISION="abc1234")  # fmt: skip
+               HEXNEWTON_GIT_REV="abc1234")  # fmt: skip
     done = subprocess.run(["bash", "studies/startup_beside/queue.sh"], cwd=ROOT, env=env, capture_output=True,
                           text=True)  # fmt: skip
     assert done.returncode == 0 and done.stdout.rstrip().endswith("done"), done.stdout + done.stderr
     assert (tmp_path / "calls").read_text().splitlines() == [
-        f"studies/startup_beside/preload.py --runs 2 --device cuda --out {tmp_path}/preload",
-        f"studies/startup_beside/gil.py --device cuda --revision abc1234 --out {tmp_path}/gil"]
+        f"studies/startup_beside/preload.py --runs 2 --device cuda --out {tmp_path}/preload abc1234",
+        f"studies/startup_beside/gil.py --device cuda --out {tmp_path}/gil abc1234"]
 
 
 def test_a_short_measurement_on_the_cpu(tmp_path):
-    assert study.main(["--out", str(tmp_path), "--task", "flat", "--num_envs", "8", "--revision", "test"]) == 0
+    from hexnewton.analysis.report import git_rev
+
+    assert study.main(["--out", str(tmp_path), "--task", "flat", "--num_envs", "8"]) == 0
     raw = json.loads((tmp_path / "raw.json").read_text())
-    assert raw["task"] == "flat" and raw["revision"] == "test" and list(raw["imports_alone"]["modules_s"]) == \
+    assert raw["task"] == "flat" and raw["revision"] == git_rev() and list(raw["imports_alone"]["modules_s"]) == \
         list(study.IMPORTS)  # fmt: skip
     assert "| the finalize alone [s] |" in (tmp_path / "report.md").read_text()

@@ -39,22 +39,23 @@ def test_a_missing_folder_is_one_line_and_exit_2(tmp_path):
 def test_the_queue_calls_the_study_with_its_revision(tmp_path):
     bin_dir = tmp_path / "bin"
     bin_dir.mkdir()
-    (bin_dir / "python").write_text('#!/bin/bash\necho "$*" >> "$TP/calls"\n')
+    (bin_dir / "python").write_text('#!/bin/bash\necho "$* $HEXNEWTON_GIT_REV" >> "$TP/calls"\n')
     (bin_dir / "python").chmod(0o755)
-    env = dict(os.environ, PATH=f"{bin_dir}:{os.environ['PATH']}", TP=str(tmp_path), REVISION="abc1234")
+    env = dict(os.environ, PATH=f"{bin_dir}:{os.environ['PATH']}", TP=str(tmp_path), HEXNEWTON_GIT_REV="abc1234")
     done = subprocess.run(["bash", "studies/throughput/validation_ab.sh"], cwd=ROOT, env=env, capture_output=True,
                           text=True)  # fmt: skip
     assert done.returncode == 0 and done.stdout.rstrip().endswith("done"), done.stdout + done.stderr
     assert (tmp_path / "calls").read_text().split() == [
-        "studies/throughput/validation_ab.py", "--out", f"{tmp_path}/validation_ab", "--repeats", "1", "--revision",
-        "abc1234"]
+        "studies/throughput/validation_ab.py", "--out", f"{tmp_path}/validation_ab", "--repeats", "1", "abc1234"]
 
 
 def test_a_short_measurement_on_the_cpu(tmp_path):
     """Both modes, one repeat, 2 candidates of 2 rounds per course, 10 control steps: every course's shares in both."""
     assert validation_ab.main(["--out", str(tmp_path), "--device", "cpu", "--candidates", "2", "--rounds", "2",
-                               "--steps", "10", "--repeats", "1", "--revision", "test"]) == 0  # fmt: skip
+                               "--steps", "10", "--repeats", "1"]) == 0  # fmt: skip
     raw = json.loads((tmp_path / "raw.json").read_text())
-    assert [r["mode"] for r in raw["runs"]] == ["one_by_one", "side_by_side"] and raw["revision"] == "test"
+    from hexnewton.analysis.report import git_rev
+
+    assert [r["mode"] for r in raw["runs"]] == ["one_by_one", "side_by_side"] and raw["revision"] == git_rev()
     assert all(sorted(r["courses"]) == ["complex", "rugged", "stepped"] for r in raw["runs"])
     assert "| rugged |" in (tmp_path / "report.md").read_text()

@@ -2,7 +2,7 @@
 (``AgentConfig.validation_together``), in one process on one GPU, with train.py's validation of the complex recipe:
 4 candidates, 256 rounds each per course, the rugged, stepped and complex courses, at most 3000 control steps.
 
-    python studies/throughput/validation_ab.py --out DIR [--device cuda] [--revision REV]   # measure and report
+    python studies/throughput/validation_ab.py --out DIR [--device cuda]   # measure and report
     python studies/throughput/validation_ab.py --rebuild DIR       # DIR/raw.json -> report.md, results.json
 
 Every candidate is the same checkpoint (the shipped complex policy by default): what is timed is the validation, and
@@ -18,7 +18,6 @@ import argparse
 import json
 import os
 import statistics
-import subprocess
 import sys
 import time
 
@@ -27,6 +26,7 @@ COURSES = ("rugged", "stepped", "complex")
 
 
 def measure(args) -> dict:
+    from hexnewton.analysis.report import git_rev
     from hexnewton.analysis.validation import Candidate, combine_courses, validate_share
 
     cands = [Candidate(i, args.checkpoint, "the same checkpoint") for i in range(args.candidates)]
@@ -46,9 +46,7 @@ def measure(args) -> dict:
     import torch
 
     gpu = torch.cuda.get_device_name() if args.device.startswith("cuda") else "cpu"
-    rev = args.revision or subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True,
-                                          text=True).stdout.strip()  # fmt: skip
-    return {"device": gpu, "revision": rev or "unknown", "checkpoint": args.checkpoint, "candidates": args.candidates,
+    return {"device": gpu, "revision": git_rev(), "checkpoint": args.checkpoint, "candidates": args.candidates,
             "rounds": args.rounds, "steps": args.steps, "command": " ".join(["python", *sys.argv]), "runs": runs}
 
 
@@ -106,7 +104,6 @@ def main(argv=None) -> int:
     p.add_argument("--rounds", type=int, default=256)
     p.add_argument("--steps", type=int, default=3000)
     p.add_argument("--repeats", type=int, default=2)
-    p.add_argument("--revision", help="the code's commit, where the tree has no git history (a device call's copy)")
     args = p.parse_args(argv)
     if args.rebuild:
         path = os.path.join(args.rebuild, "raw.json")
