@@ -84,16 +84,17 @@ def verdicts(sims: dict, evals: dict) -> dict:
             continue
         speed = {t: sims[v][t]["robot_s_per_s"] / sims[BASE][t]["robot_s_per_s"] - 1 for t in sims[v]}
         overflow = [t for t in sims[v] if sims[v][t]["overflow"] != "none"]
-        lines, missing = {}, []
+        lines, fixed, missing = {}, {}, []
         for t in TERRAINS:
-            a, b = evals.get(BASE, {}).get(t, {}).get("cpg_rl"), evals.get(v, {}).get(t, {}).get("cpg_rl")
-            if a is None or b is None:
+            a, b = evals.get(BASE, {}).get(t, {}), evals.get(v, {}).get(t, {})
+            if "cpg_rl" not in a or "cpg_rl" not in b:
                 missing.append(t)
                 continue
-            ds = 100 * (b["success_3m"] - a["success_3m"])
-            df = 100 * (b["fall_rate_before_goal"] - a["fall_rate_before_goal"])
-            lines[t] = {"success_points": round(ds, 2), "falls_before_goal_points": round(df, 2),
-                        "holds": abs(ds) <= SUCCESS_TOL and df <= FALLS_TOL}
+            lines[t] = deltas(a["cpg_rl"], b["cpg_rl"])
+            lines[t]["holds"] = (abs(lines[t]["success_points"]) <= SUCCESS_TOL
+                                 and lines[t]["falls_before_goal_points"] <= FALLS_TOL)
+            if "cpg" in a and "cpg" in b:   # the fixed CPG on the same rounds: not judged, the physics' own witness
+                fixed[t] = deltas(a["cpg"], b["cpg"])
         failed = [t for t, x in lines.items() if not x["holds"]]
         if failed:
             verdict = "not kept: the A/B fails on " + ", ".join(failed)
@@ -104,8 +105,14 @@ def verdicts(sims: dict, evals: dict) -> dict:
         else:
             verdict = "kept"
         out[v] = {"speedup": {t: round(s, 4) for t, s in speed.items()}, "overflow": overflow, "ab": lines,
-                  "ab_missing": missing, "verdict": verdict}
+                  "fixed_cpg": fixed, "ab_missing": missing, "verdict": verdict}
     return out
+
+
+def deltas(a: dict, b: dict) -> dict:
+    """Success at 3 m and falls before the goal under a variant (``b``) against the defaults (``a``) [points]."""
+    return {"success_points": round(100 * (b["success_3m"] - a["success_3m"]), 2),
+            "falls_before_goal_points": round(100 * (b["fall_rate_before_goal"] - a["fall_rate_before_goal"]), 2)}
 
 
 def pct(x: float) -> str:
@@ -113,7 +120,7 @@ def pct(x: float) -> str:
 
 
 def report(res: dict) -> str:
-    lines = ["# The solver's settings against the defaults, one H200", "",
+    lines = ["# The solver's settings against the defaults, one GPU", "",
              "`bash studies/device/gpu.sh queue studies/throughput/solver_ab.sh` (`VARIANTS=\"base ...\"`: the "
              "defaults and the variants, on one machine in one lease); `python studies/throughput/solver_ab.py` writes "
              "this file and results.json from raw/ (a folder per lease). A variant is judged against the defaults "
@@ -165,9 +172,20 @@ def report(res: dict) -> str:
                          + (f"; not finished on {', '.join(x['ab_missing'])}" if x["ab_missing"] else "")
                          + (" (not needed for this verdict)." if x["ab_missing"] and x["verdict"].startswith("not kept")
                             else "."))
+            moved = {t: d for t, d in x.get("fixed_cpg", {}).items() if abs(d["success_points"]) > SUCCESS_TOL
+                     or abs(d["falls_before_goal_points"]) > FALLS_TOL}
+            if moved:
+                lines.append("  The fixed CPG on the same rounds, which no training adapted to either physics: "
+                             + "; ".join(f"{t}: success {d['success_points']:+.1f}, falls before the goal "
+                                         f"{d['falls_before_goal_points']:+.1f} points" for t, d in moved.items())
+                             + f". {PHYSICS_MOVES}.")
             lines += capped_note(le["sim"], v)
     return "\n".join(lines) + "\n"
 
+
+#: what a fixed CPG that moves beyond the tolerances under a variant says
+PHYSICS_MOVES = ("The variant's physics is not the defaults' made faster: every committed evaluation, the paper "
+                 "comparison's baselines among them, would shift with it")
 
 #: what the worlds at the iteration cap say under a variant, beside its counts
 CAPPED_MEANS = {

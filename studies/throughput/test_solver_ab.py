@@ -39,6 +39,17 @@ def test_quality_overflow_speed_and_missing_rounds_each_decide():
     assert part["verdict"] == "partial: the A/B lacks complex, rugged, stepped"
 
 
+def test_the_fixed_cpg_is_a_witness_not_a_judge():
+    def both(policy, fixed):
+        return {t: {"cpg_rl": ev(policy, 0.001)[t]["cpg_rl"], "cpg": ev(fixed, 0.02)[t]["cpg_rl"]} for t in ab.TERRAINS}
+
+    v = ab.verdicts({"base": sim(100), "v": sim(120)}, {"base": both(0.98, 0.40), "v": both(0.98, 0.34)})["v"]
+    assert v["verdict"] == "kept" and v["fixed_cpg"]["rugged"]["success_points"] == pytest.approx(-6.0)
+    res = {"leases": [{"lease": "L", "gpu": "G", "flags": {"base": "", "v": "--x"},
+                       "sim": {"base": sim(100), "v": sim(120)}, "eval": {}, "verdicts": {"v": v}}]}
+    assert "The fixed CPG on the same rounds" in ab.report(res) and ab.PHYSICS_MOVES in ab.report(res)
+
+
 def test_the_committed_report_is_what_raw_gives():
     res = ab.load(os.path.join(ab.HERE, "raw"))
     with open(os.path.join(ab.HERE, "report.md")) as f:
@@ -52,3 +63,4 @@ def test_the_queue_reads_each_variants_flags_from_the_study(capsys):
         queue = f.read()
     assert "solver_ab.py --flags" in queue and "--env.sim" not in queue.split("flags()")[0]
     assert f"VARIANTS=${{VARIANTS:-{' '.join(ab.FLAGS)}}}" in queue   # the default: every variant
+    assert "for v in ${EVAL_VARIANTS:-$VARIANTS}; do" in queue   # the A/B rounds: every variant unless named
