@@ -7,7 +7,8 @@ from what ``solver_ab.sh`` left in each lease's folder ``solver_ab/raw/DATE/`` (
 
 A variant is kept only if it is faster and, on every terrain, the shipped policy's success at 3 m is within 1 point of
 the defaults' and its falls before the goal line within 0.5 points (the issue's A/B). A terrain whose evaluations did
-not finish under both settings leaves the A/B partial.
+not finish under both settings leaves the A/B partial. The fixed CPG's rounds under both settings are reported beside
+the verdict, not judged: where they move beyond the same tolerances, the variant's physics is not the defaults'.
 """
 
 from __future__ import annotations
