@@ -57,9 +57,12 @@ evaluate() {   # NAME TERRAIN ROUNDS CHECKPOINT [MORE evaluate FLAGS]
   echo "exit $?" >> "$EVALS/${name}_$t.log"
 }
 test_rounds() {   # NAME=CHECKPOINT...: each (one without its checkpoint is said and left out), the shipped policy and
-  local t spec   # the fixed CPG on 1000 test rounds per terrain of $TEST_TERRAINS (the evaluate default seed), at once
+  # the fixed CPG (as STEM_shipped, STEM the first name's gate: gate_tf32 for gate_tf32_s2) on 1000 test rounds per
+  # terrain of $TEST_TERRAINS (the evaluate default seed), all at once
+  local t spec stem=${1%%=*}
+  stem=${stem%_s[0-9]*}
   for t in ${TEST_TERRAINS:-complex rugged stepped}; do
-    evaluate gate_shipped "$t" 1000 results/policies/cpg_rl_complex.pt --controllers cpg cpg_rl &
+    evaluate "${stem:-gate}_shipped" "$t" 1000 results/policies/cpg_rl_complex.pt --controllers cpg cpg_rl &
     for spec in "$@"; do
       if [ -f "${spec#*=}" ]; then evaluate "${spec%%=*}" "$t" 1000 "${spec#*=}" &
       else echo "learner.sh: ${spec%%=*} has no checkpoint ${spec#*=}: left out of the $t test rounds"; fi

@@ -7,7 +7,7 @@ the same lease, judged on validation rounds (seed 3000) by the deterministic act
 LEASE holds what ``studies/device/learner.sh collect`` brings back (``cat learner.tgz.* | tar xzf - -C LEASE``):
 ``runs/NAME.log`` with its run folder (``runs/NAME/<date_time>/{config.json,timing.json,model_result.pt}``, or
 ``runs/<date_time>/`` as ``gpu.sh pack`` writes it) and ``evals/JOB/results.json`` (``JOB``: ``NAME_TERRAIN`` for a
-run's result, ``shipped_TERRAIN`` / ``gate_shipped_TERRAIN`` for the shipped policy beside the fixed CPG on the
+run's result, ``shipped_TERRAIN`` / ``STEM_shipped_TERRAIN`` for the shipped policy beside the fixed CPG on the
 validation / test rounds). The gate's runs are ``gate_s1`` ... ``gate_s3``. The study keeps
 per run its console log, config, timing and the result's actor (``runs/NAME/``), and per evaluation its report.
 """
@@ -129,6 +129,8 @@ def add(lease: str) -> list[str]:
 
 
 WORD = {True: "yes", False: "**no**", None: "not measured"}
+#: the references of test rounds not measured yet
+NO_REF = {"shipped": {}, "fixed_cpg": {}}
 
 
 def _metrics(s: dict) -> dict:
@@ -169,15 +171,18 @@ def study_runs(leases: list[dict]) -> dict:
 def collect() -> dict:
     leases = json.load(open(os.path.join(HERE, "leases.json")))
     runs = study_runs(leases)
-    fixed: dict = {k: {"shipped": {}, "fixed_cpg": {}} for k in ("validation", "test")}
+    # the validation rounds' references are shared; each gate's test rounds have their own, measured in its lease
+    # (``STEM_shipped``: the same policy's rounds differ between machines and code revisions)
+    fixed: dict = {"validation": {"shipped": {}, "fixed_cpg": {}}, "test": {}}
     for res in sorted(glob.glob(os.path.join(HERE, "evals", "*", "results.json"))):
         job = os.path.basename(os.path.dirname(res))
         d = json.load(open(res))
         name, terrain = job.rsplit("_", 1)
         rows, rounds = d["results"][terrain], d["meta"]["rounds"]
         test = d["meta"]["terrain_seed"] != 3000  # validation rounds: seed 3000; the rest are test rounds
-        if name in ("shipped", "gate_shipped"):
-            ref = fixed["test" if test else "validation"]
+        if name == "shipped" or name.endswith("_shipped"):
+            ref = fixed["validation"] if not test else fixed["test"].setdefault(
+                name[:-len("_shipped")], {k: {} for k in NO_REF})
             ref["shipped"][terrain] = {**_metrics(rows["cpg_rl"]), "rounds": rounds}
             ref["fixed_cpg"][terrain] = {**_metrics(rows["cpg"]), "rounds": rounds,
                                          "physics": d["meta"]["fixed_cpg_physics"]}
@@ -216,13 +221,14 @@ def choice_noise(runs: dict, terrain: str = "rugged") -> dict:
 def falls_line(runs: dict, fixed: dict) -> dict:
     """Per course: how many of the study's results (every arm's and gate's run, on the validation rounds) fall before
     the goal in no more than the gate's share of the rounds, which, and the shipped policy's share on the same rounds
-    and on the test rounds. The gate asks it of all three seeds at once."""
+    and on the recipe's gate's test rounds. The gate asks it of all three seeds at once."""
     line, out = GATE["fall_rate_before_goal_max"], {}
     for t in TERRAINS:
         got = {n: r["result_on_validation"][t]["fall_rate_before_goal"] for n, r in runs.items()
                if t in r["result_on_validation"]}
         met = sorted(n for n, v in got.items() if v <= line)
-        shipped = {k: fixed[k]["shipped"].get(t, {}).get("fall_rate_before_goal") for k in ("validation", "test")}
+        shipped = {k: ref["shipped"].get(t, {}).get("fall_rate_before_goal")
+                   for k, ref in (("validation", fixed["validation"]), ("test", fixed["test"].get("gate", NO_REF)))}
         out[t] = {"results": len(got), "met": met, "share_met": round(len(met) / len(got), 4) if got else None,
                   "shipped_validation": shipped["validation"], "shipped_test": shipped["test"]}
     return {"line": line, "courses": out}
@@ -240,9 +246,10 @@ def seed_lines(runs: dict) -> dict:
 
 
 def gates(runs: dict, test: dict) -> dict:
-    """Every gate the study ran (``gate``: the recipe's; ``gate_ARM-ARM``: with those arms' flags), as ``gate``."""
+    """Every gate the study ran (``gate``: the recipe's; ``gate_ARM-ARM``: with those arms' flags), as ``gate``,
+    each against the references of its own test rounds (``test[stem]``)."""
     stems = sorted({r["arm"] for r in runs.values() if is_gate(r["arm"])})
-    return {stem: g for stem in stems if (g := gate(runs, test, stem)) is not None}
+    return {stem: g for stem in stems if (g := gate(runs, test.get(stem, NO_REF), stem)) is not None}
 
 
 def summarise(runs: dict) -> dict:
@@ -430,12 +437,12 @@ def report(res: dict) -> str:
         ("shipped `cpg_rl_complex`", val["shipped"]), ("fixed CPG", val["fixed_cpg"])]
     lines += terrain_rows(rows, rounds=True)
     for stem, g in res["gates"].items():
-        test = fixed["test"]
+        test = fixed["test"].get(stem, NO_REF)
         command = " ".join(["python train.py --task complex --seed N"] + ([g["flags"]] if g["flags"] else []))
         lines += ["", f"## {gate_title(g)}", "", f"`{command}`"
                   f" (runs `{stem}_sN`), one after another and alone on the GPU; 1000 test rounds per terrain "
                   "(the evaluate default seed), deterministic action, the shipped policy and the fixed CPG on the "
-                  "same rounds.", "",
+                  "same rounds in the same lease.", "",
                   "| policy | terrain | 3 m | falls before the goal | falls | pitch / roll var [deg²] |",
                   "|---|---|---:|---:|---:|---:|"]
         rows = [(n, r["result_on_test"]) for n, r in runs.items() if r["arm"] == stem] + [

@@ -104,10 +104,17 @@ def test_each_gate_is_named_by_its_arms_and_judged_on_its_own_runs(capsys):
     runs = {f"{stem}_s{k}": {"arm": stem, "seed": k, "wall_s": 230.0, "result_on_test": per(s)}
             for stem, s in (("gate", 0.9), ("gate_settle", 0.99)) for k in (1, 2, 3)}
     runs["settle_s1"] = {"arm": "settle", "seed": 1, "wall_s": 230.0, "result_on_test": per(0.5)}
-    test = {"shipped": per(0.98), "fixed_cpg": {t: {**per(0.4)[t], "pitch_var_deg2": 30.0, "roll_var_deg2": 30.0}
-                                                for t in build.TERRAINS}}
-    g = build.gates(runs, test)
+    ref = {"shipped": per(0.98), "fixed_cpg": {t: {**per(0.4)[t], "pitch_var_deg2": 30.0, "roll_var_deg2": 30.0}
+                                               for t in build.TERRAINS}}
+    g = build.gates(runs, {"gate": ref, "gate_settle": ref})
     assert list(g) == ["gate", "gate_settle"] and g["gate"]["holds"] is False and g["gate_settle"]["holds"]
+    # each gate against the references of its own lease: the shipped policy better there, the median line fails;
+    # none measured, the lines against them are not measured
+    median = "median >= the shipped policy's, rugged"
+    other = build.gates(runs, {"gate": ref, "gate_settle": {**ref, "shipped": per(0.995)}})["gate_settle"]
+    assert other["holds"] is False and other["lines"][median] is False
+    other = build.gates(runs, {"gate": ref})["gate_settle"]
+    assert other["holds"] is None and other["lines"][median] is None
     assert g["gate_settle"]["flags"] == build.ARM_FLAGS["settle"] and g["gate"]["flags"] == ""
     res = {"runs": {}, "arms": {}, "gates": g, "choice_noise": build.choice_noise({})}
     line = next(v for v in build.verdict(res) if "`settle`" in v)
@@ -170,6 +177,8 @@ def test_the_queue_runs_the_gate_alone_then_the_arms_beside_its_test_rounds(tmp_
     assert "--agent.validation_rounds 1024" in trains[2] and "'desired_kl':0.004" in trains[0]
     first_eval = next(i for i, ln in enumerate(lines) if ln.startswith("hexnewton.apps.evaluate"))
     assert lines.index(trains[1]) < first_eval   # the seeds ran before any evaluation
+    outs = {ln.split("--out ")[1].split()[0].rsplit("/", 1)[1] for ln in lines if "cpg_rl_complex.pt" in ln}
+    assert outs == {f"gate_settle_shipped_{t}" for t in build.TERRAINS}   # the references named by their gate
     refused = subprocess.run(["bash", queue], env={**env, "ARMS_AFTER_GATE": "1"}, cwd=root, capture_output=True,
                              text=True, timeout=60)
     assert refused.returncode == 2 and "needs GATE=1" in refused.stderr
@@ -225,7 +234,7 @@ def test_the_falls_line_counts_the_results_at_or_below_it():
     runs = {"a_s1": {"result_on_validation": {"rugged": v(0.0), "complex": v(0.0)}},
             "a_s2": {"result_on_validation": {"rugged": v(0.012), "complex": v(0.005)}},
             "b_s1": {"result_on_validation": {"rugged": v(0.006)}}}
-    fixed = {"validation": {"shipped": {"rugged": v(0.002)}}, "test": {"shipped": {"rugged": v(0.005)}}}
+    fixed = {"validation": {"shipped": {"rugged": v(0.002)}}, "test": {"gate": {"shipped": {"rugged": v(0.005)}}}}
     fl = build.falls_line(runs, fixed)
     assert fl["line"] == 0.005
     assert fl["courses"]["rugged"] == {"results": 3, "met": ["a_s1"], "share_met": 0.3333,

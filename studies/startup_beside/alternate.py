@@ -30,12 +30,23 @@ def per_mode(res: dict, key: str, modes) -> dict[str, tuple[float, float, float]
     return {m: (sum(v) / len(v), min(v), max(v)) for m, v in values.items()}
 
 
+def warmup_note(res: dict, key: str, what: str) -> list[str]:
+    """The report's lines on the warm-up runs (``--warmup``), their ``key`` beside: none where there were none."""
+    runs = res.get("warmup") or []
+    if not runs:
+        return []
+    return [f"Before them {len(runs)} warm-up run(s) of `{runs[0]['mode']}`, kept apart and out of the means "
+            f"(results.json `warmup`): {what} " + ", ".join(f"{r[key]:.1f}" for r in runs) + " s.", ""]
+
+
 def main(script: str, doc: str, modes, measure: Callable[[str, int, str], dict], report: Callable[[dict], str],
          argv: list[str] | None = None) -> None:
     """The command line of ``script``: ``--runs`` per mode of ``modes``, alternating, each ``measure(mode,
     num_envs, device)``, into ``--out`` (results.json, report.md); or ``--rebuild DIR``: report.md again."""
     p = argparse.ArgumentParser(description=doc.splitlines()[0])
     p.add_argument("--runs", type=int, default=2, help="runs per mode, alternating")
+    p.add_argument("--warmup", type=int, default=0,
+                   help="runs of the first mode before them, kept apart (results.json 'warmup'), not in the means")
     p.add_argument("--num_envs", type=int, default=4096)
     p.add_argument("--device", default="cpu")
     p.add_argument("--out", help="folder for results.json and report.md")
@@ -49,7 +60,10 @@ def main(script: str, doc: str, modes, measure: Callable[[str, int, str], dict],
             p.error("--out DIR and --runs >= 1 are needed")
         args = sys.argv[1:] if argv is None else argv
         res = {"command": f"python studies/startup_beside/{script} " + " ".join(args), "machine": machine(a.device),
-               "num_envs": a.num_envs, "device": a.device, "runs": []}  # fmt: skip
+               "num_envs": a.num_envs, "device": a.device, "warmup": [], "runs": []}  # fmt: skip
+        for _ in range(a.warmup):  # a fresh machine's first process pays for its caches: not either mode's cost
+            res["warmup"].append(measure(next(iter(modes)), a.num_envs, a.device))
+            print(json.dumps(res["warmup"][-1]), flush=True)
         for _ in range(a.runs):
             for mode in modes:
                 res["runs"].append(measure(mode, a.num_envs, a.device))

@@ -49,6 +49,7 @@ def report(res: dict) -> str:
              f"--device {res['device']}`, with `--no-preload_kernels` for `after`). Each run a fresh process, in the "
              "order shown; the phases are the run's timing.json (`startup_phases_s`), 0 where a run has none. "
              "Numbers: results.json.", "",
+             *alternate.warmup_note(res, "first_iteration_s", "the first iteration at"),
              "| run | mode | first iteration [s] | " + " | ".join(SHOWN) + " | the finalize, beside [s] |",
              "|---|---|---:|" + "---:|" * (len(SHOWN) + 1)]  # fmt: skip
     for k, r in enumerate(res["runs"], 1):

@@ -50,6 +50,7 @@ def report(res: dict) -> str:
              f"{res['device']}). "
              "Each run a fresh process, in the order shown; the start-up as train.py orders it up to the model's "
              "being ready. Numbers: results.json.", "",
+             *alternate.warmup_note(res, "ready_s", "the model ready at"),
              "| run | mode | model ready [s] | imports after the build began [s] | terrain + scene [s] | the finalize "
              "[s] | the wait for it [s] |", "|---|---|---:|---:|---:|---:|---:|"]  # fmt: skip
     for k, r in enumerate(res["runs"], 1):

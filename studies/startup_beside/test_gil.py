@@ -45,7 +45,7 @@ def test_the_queue_runs_it_once_on_cuda_with_the_revision(tmp_path):
                           text=True)  # fmt: skip
     assert done.returncode == 0 and done.stdout.rstrip().endswith("done"), done.stdout + done.stderr
     assert (tmp_path / "calls").read_text().splitlines() == [
-        f"studies/startup_beside/preload.py --runs 2 --device cuda --out {tmp_path}/preload abc1234",
+        f"studies/startup_beside/preload.py --runs 2 --warmup 1 --device cuda --out {tmp_path}/preload abc1234",
         f"studies/startup_beside/gil.py --device cuda --out {tmp_path}/gil abc1234"]
 
 

@@ -45,5 +45,25 @@ def test_the_gpu_queue_runs_each_ab_on_cuda(tmp_path):
                           text=True)  # fmt: skip
     assert done.returncode == 0 and done.stdout.rstrip().endswith("done"), done.stdout + done.stderr
     assert (tmp_path / "calls").read_text().splitlines() == [
-        f"studies/startup_beside/{s}.py --runs 2 --device cuda --out {tmp_path}/{s}"
+        f"studies/startup_beside/{s}.py --runs 2 --warmup 1 --device cuda --out {tmp_path}/{s}"
         for s in ("scene_first", "preload")]
+
+
+def test_warm_up_runs_are_kept_apart_from_the_means(tmp_path):
+    """--warmup N: N runs of the first mode before the alternating ones, in results.json's ``warmup`` and the report's
+    note, not in the runs or the means (a fresh machine's first process pays for its caches)."""
+    import alternate
+
+    calls = []
+
+    def fake(mode, num_envs, device):
+        calls.append(mode)
+        return {"mode": mode, "first_iteration_s": 30.0 if len(calls) == 1 else 20.0, "phases_s": {},
+                "finalize_s": 1.0, "modules_preloaded": 27 if mode == "preload" else None}
+
+    alternate.main("preload.py", study.__doc__, study.MODES, fake, study.report,
+                   ["--runs", "1", "--warmup", "1", "--out", str(tmp_path)])
+    res = json.loads((tmp_path / "results.json").read_text())
+    assert calls == ["preload", "preload", "after"] and len(res["warmup"]) == 1 and len(res["runs"]) == 2
+    text = (tmp_path / "report.md").read_text()
+    assert "1 warm-up run(s) of `preload`" in text and "30.0 s" in text and "preload 20.0 s" in text
