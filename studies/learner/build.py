@@ -479,6 +479,25 @@ def gate_title(g: dict) -> str:
     return "The gate" + (f" with {' + '.join(f'`{a}`' for a in g['arms'])}" if g["arms"] else " for the recipe")
 
 
+def against_recipe(runs: dict, stem: str, g: dict, recipe: dict, terrain: str = "rugged") -> str:
+    """A gate's failing lines against the recipe's gate's, and its seeds' falls on ``terrain`` beside the recipe's
+    (each seed's share of the test rounds that ended in a fall anywhere, and before the goal)."""
+    fails = {k for k, v in g["lines"].items() if v is False}
+    theirs = {k for k, v in recipe["lines"].items() if v is False}
+
+    def falls(arm: str, key: str) -> str:
+        seeds = sorted((r["seed"], r["result_on_test"].get(terrain, {}).get(key)) for r in runs.values()
+                       if r["arm"] == arm)
+        return " / ".join("—" if v is None else f"{100 * v:.1f}" for _, v in seeds) + " %"
+
+    other = sorted(fails - theirs)
+    return (f"- **{gate_title(g)} against the recipe's**: {len(fails & theirs)} of the recipe's {len(theirs)} failing "
+            "lines fail, " + (f"{len(other)} other ({'; '.join(other)})" if other else "no other")
+            + f"; on the {terrain} course its seeds fall in {falls(stem, 'fall_rate')} of the test rounds against "
+            f"{falls('gate', 'fall_rate')} (before the goal {falls(stem, 'fall_rate_before_goal')} against "
+            f"{falls('gate', 'fall_rate_before_goal')}).")
+
+
 def verdict(res: dict) -> list[str]:
     """Each change against the recipe, from results.json: the chosen candidates' goal share (the validation's first
     key), their falls before the goal line (its second) and the candidates' spread; what the study still lacks."""
@@ -518,6 +537,10 @@ def verdict(res: dict) -> list[str]:
                    f"{len(lines) - len(unmeasured)} of {len(lines)} lines measured"
                    + (f"; fails: {'; '.join(failed)}" if failed else "")
                    + (f"; not measured yet: {'; '.join(unmeasured)}" if unmeasured else "") + ".")
+    recipe = res["gates"].get("gate")
+    for stem, g in res["gates"].items():
+        if stem != "gate" and recipe is not None:
+            out.append(against_recipe(runs, stem, g, recipe))
     paid = paying(arms)
     if paid and gate_name(paid) not in res["gates"]:
         worst = []   # each paid arm's results on the validation rounds, against the gate's falls line

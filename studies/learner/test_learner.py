@@ -280,3 +280,21 @@ def test_the_tf32_gate_queue_trains_its_seeds_then_tests_the_kept_one(tmp_path):
     calls.unlink()
     done = subprocess.run(["bash", queue], env={**env, "TEST_KEPT": ""}, capture_output=True, text=True, timeout=60)
     assert done.returncode == 0 and len(calls.read_text().splitlines()) == 1
+
+
+def test_a_gate_is_set_beside_the_recipes_lines_and_falls():
+    """against_recipe: which of the recipe's failing lines a gate fails too and which others, and both gates' seeds'
+    falls on the rugged course."""
+    def run(arm, seed, falls, before):
+        return {"arm": arm, "seed": seed, "result_on_test": {"rugged": {"fall_rate": falls,
+                                                                        "fall_rate_before_goal": before}}}
+
+    runs = {"gate_s2": run("gate", 2, 0.02, 0.01), "gate_s1": run("gate", 1, 0.01, 0.0),
+            "gate_tf32_s1": run("gate_tf32", 1, 0.05, 0.03)}
+    recipe = {"arms": [], "lines": {"a": False, "b": False, "c": True}}
+    g = {"arms": ["tf32"], "lines": {"a": False, "b": True, "c": False}}
+    line = build.against_recipe(runs, "gate_tf32", g, recipe)
+    assert line.startswith("- **The gate with `tf32` against the recipe's**: 1 of the recipe's 2 failing lines fail, "
+                           "1 other (c); on the rugged course its seeds fall in 5.0 % of the test rounds against "
+                           "1.0 / 2.0 % (before the goal 3.0 % against 0.0 / 1.0 %)")
+    assert "no other" in build.against_recipe(runs, "gate_tf32", {**g, "lines": {"a": False}}, recipe)
