@@ -173,7 +173,7 @@ def collect() -> dict:
     runs = study_runs(leases)
     # the validation rounds' references are shared; each gate's test rounds have their own, measured in its lease
     # (``STEM_shipped``: the same policy's rounds differ between machines and code revisions)
-    fixed: dict = {"validation": {"shipped": {}, "fixed_cpg": {}}, "test": {}}
+    fixed: dict = {"validation": {k: {} for k in NO_REF}, "test": {}}
     for res in sorted(glob.glob(os.path.join(HERE, "evals", "*", "results.json"))):
         job = os.path.basename(os.path.dirname(res))
         d = json.load(open(res))
