@@ -168,6 +168,14 @@ def study_runs(leases: list[dict]) -> dict:
     return runs
 
 
+def raw_missing() -> str:
+    """'' when every kept run (``runs/NAME/``) has its console log; else the first run folder without one."""
+    for d in sorted(glob.glob(os.path.join(HERE, "runs", "*", ""))):
+        if not os.path.isfile(os.path.join(d, "train.log")):
+            return os.path.relpath(os.path.join(d, "train.log"), HERE)
+    return ""
+
+
 def collect() -> dict:
     leases = json.load(open(os.path.join(HERE, "leases.json")))
     runs = study_runs(leases)
@@ -627,6 +635,12 @@ def main(argv: list[str] | None = None) -> int:
             print(f"build.py: {args.add} has no runs/ folder", file=sys.stderr)
             return 2
         print("added:", ", ".join(add(args.add)) or "nothing")
+    missing = raw_missing()
+    if missing:
+        print(f"build.py: the raw runs are not in the tree ({missing}, removed in issue 92): restore them with `git "
+              "restore --source df27913 --worktree -- studies/learner/runs` or rerun the lease (README, Raw runs)",
+              file=sys.stderr)
+        return 2
     res = collect()
     with open(os.path.join(HERE, "results.json"), "w") as f:
         json.dump(res, f, indent=1)

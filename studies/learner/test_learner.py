@@ -31,9 +31,14 @@ def test_parse_log_reads_the_validation_block():
 
 
 def test_the_report_regenerates_from_the_kept_runs(tmp_path):
-    res = build.collect()
     kept = json.load(open(os.path.join(build.HERE, "results.json")))
-    assert res == kept, "results.json is stale: python studies/learner/build.py"
+    if build.raw_missing():  # the raw runs left the tree (issue 92): the committed results.json renders report.md
+        res = kept
+        assert build.main([]) == 2  # build.py says what is missing, writes nothing
+        assert json.load(open(os.path.join(build.HERE, "results.json"))) == kept
+    else:
+        res = build.collect()
+        assert res == kept, "results.json is stale: python studies/learner/build.py"
     assert open(os.path.join(build.HERE, "report.md")).read() == build.report(res)
     for name, r in res["runs"].items():
         chosen = [c for c in r["validation"]["candidates"] if c["chosen"]]

@@ -140,9 +140,15 @@ def test_the_committed_report_renders_what_the_study_keeps():
     """report.md and results.json are build.py's rendering of runs/, eval/, sim2sim/ and media/; a task whose
     evaluation is missing is listed as partial; every target line comes from the kept evaluations."""
     build = _build()
-    res = build.load()
     with open(os.path.join(HERE, "results.json")) as f:
-        assert json.load(f) == json.loads(json.dumps(res))
+        kept = json.load(f)
+    if build.raw_missing():  # the console logs left the tree (issue 92): the committed results.json renders report.md
+        res = kept
+        with pytest.raises(RuntimeError, match="removed in issue 92"):
+            build.build()
+    else:
+        res = build.load()
+        assert kept == json.loads(json.dumps(res))
     with open(os.path.join(HERE, "report.md")) as f:
         assert f.read() == build.render(res)
     for t in res["training"]:
