@@ -16,16 +16,71 @@ NEGATIVE_VALUE = re.compile(r"^-\d*\.?\d+([eE][-+]?\d+)?(,-?\d*\.?\d+([eE][-+]?\
 
 
 class ArgumentParser(argparse.ArgumentParser):
-    """argparse, but a usage error is one line (``prog: error: ...``) and exit status 2, and an ``X,Y`` pair with a
-    negative X is a value (argparse's own test for a negative number, widened)."""
+    """argparse, but a usage error is one line (``prog: error: ...``) and exit status 2, an ``X,Y`` pair with a
+    negative X is a value (argparse's own test for a negative number, widened), and a flag is spelt out in full: no
+    prefix matching (``allow_abbrev=False``: ``--num_env 4`` is not ``--num_envs 4``), an unknown flag is one line
+    naming the closest known one (:func:`unknown_flag`)."""
 
     def __init__(self, *args, **kwargs):
+        kwargs.setdefault("allow_abbrev", False)  # subparsers (add_parser) are built by this class too
         super().__init__(*args, **kwargs)
         self._negative_number_matcher = NEGATIVE_VALUE
 
     def error(self, message: str):  # noqa: D102
-        sys.stderr.write(f"{self.prog}: error: {message}\n")
+        argv = self.__dict__.pop("_argv", None)
+        flag = self._unknown_flag(argv)  # an unknown flag goes before any other error (a required flag's, ...)
+        sys.stderr.write(f"{self.prog}: error: {unknown_flag(flag, self.flags(argv)) if flag else message}\n")
         sys.exit(2)
+
+    def parse_args(self, args=None, namespace=None):  # noqa: D102
+        self._argv = list(sys.argv[1:] if args is None else args)
+        try:
+            return super().parse_args(args, namespace)
+        finally:
+            self.__dict__.pop("_argv", None)
+
+    def flags(self, argv: list[str] | None = None) -> list[str]:
+        """Every option string of this parser and of the subcommand ``argv`` names (every subcommand's without
+        one)."""
+        out = list(self._option_string_actions)
+        for action in self._actions:
+            if isinstance(action, argparse._SubParsersAction):
+                chosen = next((a for a in argv or () if a in action.choices), None)
+                for sub in [action.choices[chosen]] if chosen else action.choices.values():
+                    out += [f for f in (sub.flags() if isinstance(sub, ArgumentParser) else sub._option_string_actions)
+                            if f not in out]  # fmt: skip
+        return out
+
+    def _unknown_flag(self, argv: list[str] | None) -> str | None:
+        """The first word of ``argv`` that is written as a flag but is none of :meth:`flags` (None without one), up
+        to ``--`` or an option that takes the rest of the line (``--ros-args``)."""
+        known = self.flags(argv)
+        actions = {**self._option_string_actions}
+        for action in self._actions:
+            if isinstance(action, argparse._SubParsersAction):
+                for sub in action.choices.values():
+                    actions.update(sub._option_string_actions)
+        for word in argv or ():
+            if word == "--" or (word in actions and actions[word].nargs == argparse.REMAINDER):
+                return None
+            if word.startswith("-") and word != "-" and not NEGATIVE_VALUE.match(word):
+                if word.split("=", 1)[0] not in known:
+                    return word
+        return None
+
+
+def unknown_flag(flag: str, known: list[str]) -> str:
+    """The one-line error for ``flag`` (``--name`` or ``--name=value``) that no option of ``known`` is: the known flag
+    it abbreviates, else the closest by spelling (difflib), else where the flags are listed."""
+    import difflib
+
+    name = flag.split("=", 1)[0]
+    longs = [k for k in known if k.startswith("--")] if name.startswith("--") else list(known)
+    prefixed = [k for k in longs if k.startswith(name)]
+    close = difflib.get_close_matches(name, prefixed, n=1, cutoff=0) or difflib.get_close_matches(name, longs, n=1,
+                                                                                                 cutoff=0.6)
+    hint = f"did you mean {close[0]}?" if close else "--help lists the flags"
+    return f"unknown flag {name} ({hint})"
 
 
 def positive_int(text: str) -> int:
@@ -63,6 +118,34 @@ def check_writable(path: str, ext: str) -> None:
     parent = os.path.dirname(os.path.abspath(path))
     if not os.path.isdir(parent) or not os.access(parent, os.W_OK):
         raise ValueError(f"cannot write {path}: {parent} is not a writable directory")
+
+
+def check_checkpoint_file(path: str, flag: str = "--checkpoint") -> None:
+    """Fail in one line if ``path`` is a directory: a checkpoint is a ``.pt`` file. Where the directory holds
+    ``model_*.pt`` checkpoints (a run's folder; or runs below it, an experiment's or a ``--log_dir``), the line names
+    the newest run's result as ``play.py`` chooses it: ``model_result.pt``, else ``model_best.pt``, else the last
+    iteration's."""
+    if not os.path.isdir(path):
+        return
+    import glob
+
+    def result(run_dir: str) -> str | None:
+        names = {os.path.basename(m) for m in glob.glob(os.path.join(run_dir, "model_*.pt"))}
+        numbered = [n for n in names if re.fullmatch(r"model_\d+\.pt", n)]
+        kept = [n for n in ("model_result.pt", "model_best.pt") if n in names]
+        if not names:
+            return None
+        name = kept[0] if kept else max(numbered, key=lambda n: int(n[6:-3])) if numbered else max(names)
+        return os.path.join(run_dir, name)
+
+    newest = result(path)
+    if newest is None:  # runs below it (an experiment's folder, a --log_dir): the last by name, named by start time
+        below = glob.glob(os.path.join(path, "*")) + glob.glob(os.path.join(path, "*", "*"))
+        found = [r for r in map(result, sorted(filter(os.path.isdir, below), key=os.path.basename)) if r]
+        newest = found[-1] if found else None
+    hint = f"; the newest there: {flag} {newest}" if newest else " (it holds no model_*.pt)"
+    raise ValueError(f"{flag} {path} is a directory: expected a checkpoint file (.pt, a run's model_<iteration>.pt or "
+                     f"model_result.pt){hint}")
 
 
 def check_new_dir(path: str, files: tuple[str, ...] = ()) -> None:

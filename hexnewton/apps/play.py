@@ -51,6 +51,7 @@ from hexnewton.apps.cli import (
     add_browser_args,
     add_config_args,
     announce_browser,
+    check_checkpoint_file,
     check_writable,
     config_overrides,
     positive_int,
@@ -220,6 +221,8 @@ def play_course(args, ground, first: bool, trained: HexConfig, ckpt: dict | None
 
 def main(argv: list[str] | None = None) -> int:
     args = parser().parse_args(argv)
+    if args.checkpoint:
+        check_checkpoint_file(args.checkpoint)  # a run's folder: one line naming its result, before anything else
     check_outputs(args)
     choose_checkpoint(args)
     trained, courses, ckpt, task = read_policy(args)
