@@ -8,7 +8,8 @@ The task's environment config (``--env.<section>.<field>`` overrides it as in ``
 the algorithm's preset (``--agent.<field>`` overrides it; ``--task T --algo A --help`` lists the fields with their
 values). The budget: ``--total_steps`` env-steps over all envs (default: what the task's PPO recipe collects with
 the same number of envs, max_iterations x num_steps_per_env x num_envs) and ``--max_minutes`` of wall time, whichever
-ends first. Details: ``hexnewton/learning/baselines/`` (``__init__.py``; the presets in ``config.py``).
+ends first. Details: ``hexnewton/learning/baselines/`` (``__init__.py``; the presets in ``config.py``). It needs skrl,
+the ``baselines`` extra (``pip install -e ".[baselines]"``); without it the command says so in one line, exit status 2.
 """
 
 from __future__ import annotations
@@ -64,12 +65,13 @@ def parser(base, algo: str | None, preset: str) -> ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> int:
-    from hexnewton.learning.baselines import LABELS, agent_config
+    from hexnewton.learning.baselines import LABELS, agent_config, require_skrl
     from hexnewton.tasks import task
 
     name, algo, preset = _chosen(argv)
     base = task(name)
     args = parser(base, algo, preset).parse_args(argv)
+    skrl = require_skrl()  # the baselines extra: one line naming the install where it is missing (--help needs none)
     if base.action_mode != "cpg":
         raise ValueError(f"task {base.name} sets joint targets: SAC-/TD3-/A2C-CPG act through the CPG (pure DRL trains "
                          f"with python train.py --task {base.name})")  # fmt: skip
@@ -86,7 +88,6 @@ def main(argv: list[str] | None = None) -> int:
 
     check_log_dir(args.log_dir)
 
-    import skrl
     from skrl.utils import set_seed
 
     from hexnewton.learning.baselines import BaselineTrainer, Budget, make_agent, wrap_env

@@ -40,6 +40,9 @@ time; ``hexnewton.analysis.curves`` plots against both); ``model_<vector step>.p
 (``torch.load(weights_only=True)``), the task, algorithm, configs, action mode, observation and action sizes under
 ``infos["hexnewton"]`` as for CPG_RL, so ``play.py`` and ``hexnewton.apps.evaluate`` (controllers ``sac_cpg``,
 ``td3_cpg``, ``a2c_cpg``) load them by path. With ``skrl_stats`` skrl's own losses and Q values go to ``skrl/``.
+
+skrl is optional (the ``baselines`` extra: ``pip install -e ".[baselines]"``): nothing imports it before a baseline is
+built (``requirement``: :func:`require_skrl`, a one-line error naming the install where it is missing).
 """
 
 from hexnewton.learning.baselines.agents import deterministic_action, make_agent
@@ -65,9 +68,10 @@ from hexnewton.learning.baselines.config import (
 )
 from hexnewton.learning.baselines.env import wrap_env
 from hexnewton.learning.baselines.models import make_models
+from hexnewton.learning.baselines.requirement import INSTALL, require_skrl
 from hexnewton.learning.baselines.trainer import BaselineTrainer, Budget, stage_changes
 
-__all__ = ["A2CConfig", "ALGOS", "BaselineConfig", "BaselineTrainer", "Budget", "CONTROLLERS", "FORMAT", "LABELS",
-           "NetworkConfig", "PRESETS", "SACConfig", "TD3Config", "agent_config", "check_baseline_checkpoint",
+__all__ = ["A2CConfig", "ALGOS", "BaselineConfig", "BaselineTrainer", "Budget", "CONTROLLERS", "FORMAT", "INSTALL",
+           "LABELS", "NetworkConfig", "PRESETS", "SACConfig", "TD3Config", "agent_config", "check_baseline_checkpoint",
            "config_from_dict", "deterministic_action", "load_baseline_checkpoint", "load_baseline_policy",
-           "make_agent", "make_models", "save_checkpoint", "stage_changes", "wrap_env"]
+           "make_agent", "make_models", "require_skrl", "save_checkpoint", "stage_changes", "wrap_env"]

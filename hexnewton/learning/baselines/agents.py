@@ -4,12 +4,14 @@ from __future__ import annotations
 
 from hexnewton.learning.baselines.config import BaselineConfig
 from hexnewton.learning.baselines.models import make_models
+from hexnewton.learning.baselines.requirement import require_skrl
 
 
 def make_agent(algo: str, cfg: BaselineConfig, observation_space, action_space, device, num_envs: int,
                training: bool = True, run_dir: str | None = None):
     """skrl's agent of ``algo`` with ``cfg`` on ``device``; with ``training`` its memory (replay buffer or rollout
     storage for ``num_envs`` envs) and, with ``cfg.skrl_stats``, its TensorBoard writer in ``run_dir/skrl``."""
+    require_skrl()
     from skrl.agents.torch import ExperimentCfg
     from skrl.memories.torch import RandomMemory
     from skrl.resources.preprocessors.torch import RunningStandardScaler

@@ -3,6 +3,10 @@
 
 def wrap_env(env):
     """``HexapodEnv`` (an rsl-rl VecEnv of device tensors) as skrl's torch ``Wrapper`` (:class:`SkrlVecEnv`)."""
+    from hexnewton.learning.baselines.requirement import require_skrl
+
+    require_skrl()
+
     import gymnasium
     import numpy as np
     from skrl.envs.wrappers.torch import Wrapper

@@ -6,6 +6,7 @@ from __future__ import annotations
 import math
 
 from hexnewton.learning.baselines.config import BaselineConfig
+from hexnewton.learning.baselines.requirement import require_skrl
 
 LOG_STD_RANGE = (-20.0, 2.0)  # SAC's log std, as skrl's GaussianMixin clips it
 
@@ -124,6 +125,7 @@ def _critic_classes(cfg: BaselineConfig, spaces: dict) -> tuple[type, type]:
 
 def make_models(algo: str, cfg: BaselineConfig, observation_space, action_space, device) -> dict:
     """skrl models of ``algo``: ``policy`` and the critics (with targets) or the value network."""
+    require_skrl()
     spaces = dict(observation_space=observation_space, action_space=action_space, device=device)
     SquashedGaussianActor, TanhActor, GaussianActor = _actor_classes(cfg, spaces)
     QCritic, ValueCritic = _critic_classes(cfg, spaces)
