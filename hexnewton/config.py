@@ -145,6 +145,12 @@ class TerrainConfig:
     climb: int = 1
     # robots start evenly spread over levels 0 .. start_levels - 1 (legged_gym: max_init_terrain_level)
     start_levels: int = 1
+    # ours: where a training episode on the lanes starts along its lane: x drawn uniform in [0, start_progress] m
+    # ahead of the lane's start, toward the same goal (``TaskConfig.goal_distance`` ahead of the lane's start), at the
+    # spawn height above the ground there; a robot moves down a lane after walking less than half of its own way. More,
+    # shorter episodes per robot, each lane's far ground met more often (studies/curriculum). 0: every episode starts
+    # at the lane's start; evaluation and play always do.
+    start_progress: float = 0.0
     # ours: courses trained beside this one. With levels = L > 0 and lane_courses = (c1, ...), the grid holds one group
     # of L lanes per course side by side along y (this terrain's first, then c1, ...; each as ``name`` would be, with
     # its own block seeds), and env i plays group i mod (1 + len(lane_courses)) on its curriculum level. (): this
@@ -537,10 +543,10 @@ def terrain_for_goal(terrain: TerrainConfig, goal_distance: float) -> TerrainCon
 
 def without_lanes(terrain: TerrainConfig, **fields) -> TerrainConfig:
     """``terrain`` as one course, no curriculum: no lanes and nothing only lanes use (``start_levels``,
-    ``past_share``, ``lane_courses``), then ``fields``."""
+    ``start_progress``, ``past_share``, ``lane_courses``), then ``fields``."""
     from dataclasses import replace
 
-    return replace(terrain, levels=0, start_levels=1, past_share=0.0, lane_courses=(), **fields)
+    return replace(terrain, levels=0, start_levels=1, start_progress=0.0, past_share=0.0, lane_courses=(), **fields)
 
 
 def _as_tuples(v):

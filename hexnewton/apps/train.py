@@ -377,6 +377,9 @@ def finish(args, runner, cfg, agent, rank, run_dir: str, views, train_s: float, 
               "wall_s_to_result": None}  # fmt: skip
     stats = runner.env.episode_stats()
     print("last episodes: " + ", ".join(f"{k} {v}" if isinstance(v, int) else f"{k} {v:.3f}" for k, v in stats.items()))
+    if runner.lanes is not None:  # what training saw of its curriculum
+        timing["curriculum"] = runner.lanes.summary()
+        print(runner.lanes.verdict())
     if validated is not None:
         final, timing["validation"] = choose_on_validation(runner, agent, run_dir, validated)
     else:

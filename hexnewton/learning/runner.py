@@ -22,15 +22,17 @@ from hexnewton import startup
 from hexnewton.learning.agent import apply_stage, stage_at
 from hexnewton.learning.checkpoint import load_checkpoint, load_into_runner
 from hexnewton.learning.episode_log import DeferredEpisodes
+from hexnewton.learning.lanes import LaneLog
 from hexnewton.learning.policy import export_onnx
 from hexnewton.learning.ranks import Rank
 from hexnewton.learning.stopping import TrainingStopped, catch_stop_signals
 
 
-def progress_line(log_kwargs: dict, stats: dict, elapsed: float, goals: bool = False) -> str:
+def progress_line(log_kwargs: dict, stats: dict, elapsed: float, goals: bool = False, lanes: str = "") -> str:
     """One console line per iteration: the iteration, the last training episodes' outcome (``env.episode_stats()``;
     with ``goals``, random goals, the goals reached per episode in place of the success rate, which stays 0: reaching
-    a goal sets the next one), the iteration's time and the run's."""
+    a goal sets the next one), the curriculum's mean level and ``lanes`` (``LaneLog.line``: the top lane's share of
+    the stage's episodes, the episodes per robot), the iteration's time and the run's."""
     it, total = log_kwargs.get("it", 0), log_kwargs.get("total_it", 0)
     step_s = log_kwargs.get("collect_time", 0.0) + log_kwargs.get("learn_time", 0.0)
     level = f"  level {stats['mean_level']:.1f}" if "mean_level" in stats else ""
@@ -40,7 +42,8 @@ def progress_line(log_kwargs: dict, stats: dict, elapsed: float, goals: bool = F
         reached = f"goals {stats['goals_reached']:.2f}" if goals else f"success {stats['success_rate']:.3f}"
         outcome = (f"{reached}  fell {stats['fell_rate']:.3f}  off course "
                    f"{stats['off_course_rate']:.3f}  distance {stats['distance_m']:.2f} m")  # fmt: skip
-    return f"iteration {it}/{total - 1}  {outcome}{level}  {step_s:.2f} s/it  {datetime.timedelta(seconds=int(elapsed))}"
+    return (f"iteration {it}/{total - 1}  {outcome}{level}{lanes}  {step_s:.2f} s/it  "
+            f"{datetime.timedelta(seconds=int(elapsed))}")
 
 
 def training_success(stats: dict, levels: int, goals: bool = False) -> float | None:
@@ -273,6 +276,7 @@ class HexRunner(RankedRunner):
         self.levels = env.cfg.terrain.levels
         self.goals = env.cfg.task.random_goals
         self.best = BestCheckpoint(log_dir or "", self.levels, self.goals)
+        self.lanes = LaneLog(env) if self.levels else None  # what training saw of its curriculum (learning/lanes.py)
         self._reduce = _sum_over_ranks(device) if rank.world_size > 1 else None
         learner_settings(self, agent)
         self._rsl_log, self.logger.log = self.logger.log, self._after_iteration
@@ -319,8 +323,15 @@ class HexRunner(RankedRunner):
             self.first_iteration_s = startup.since_start()
             if self.rank.is_main:
                 print(startup.summary(), flush=True)
+        lanes = ""
+        if self.lanes is not None:
+            self.lanes.update()
+            lanes = self.lanes.line()
+            if self.rank.is_main and self.logger.writer is not None:
+                for tag, value in self.lanes.scalars().items():
+                    self.logger.writer.add_scalar(tag, value, self.current_learning_iteration)
         if self.rank.is_main:
-            print(progress_line(kwargs, stats, time.time() - self._t0, self.goals), flush=True)
+            print(progress_line(kwargs, stats, time.time() - self._t0, self.goals, lanes), flush=True)
             self.best.update(stats, self.current_learning_iteration, self.save)
         reason = stop_reason(self._time_up, stats, self.agent.target_success, self.levels, self._reduce)
         if reason:
@@ -343,6 +354,8 @@ class HexRunner(RankedRunner):
                     group["lr"] = value
         self.meta["config"] = dataclasses.asdict(self.env.cfg)  # checkpoints carry the gain they run with
         self.best.reset()
+        if self.lanes is not None:
+            self.lanes.new_stage(index + 1, iteration)
         if self.rank.is_main:
             print(f"iteration {iteration}: curriculum stage {index + 2} of {len(stages) + 1}: {line}", flush=True)
 

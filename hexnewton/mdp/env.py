@@ -63,6 +63,7 @@ from hexnewton.mdp.events import (
     bookkeeping_kernel,
     curriculum_kernel,
     delay_actions_kernel,
+    lane_count_kernel,
     observation_noise_kernel,
     placement_kernel,
     push_kernel,
@@ -104,7 +105,7 @@ from hexnewton.physics.cpg import CPGController, joint_actions_kernel
 from hexnewton.physics.graphs import capture_graph
 from hexnewton.physics.precompile import compile_modules, loaded_variants, variant_names
 from hexnewton.physics.robot import BASE_Q
-from hexnewton.physics.terrain.heightmap import env_groups, group_offset_y
+from hexnewton.physics.terrain.heightmap import course_names, env_groups, group_offset_y
 from hexnewton.physics.model_build import ModelBuild
 from hexnewton.physics.world import World
 
@@ -209,6 +210,10 @@ class HexapodEnv(VecEnv):
             self._played = wp.clone(self.level)  # the lane each episode is played on (past_share: drawn ones)
             offset = world.spawn_xy[:, 1] + group_offset_y(cfg.terrain, env_groups(cfg.terrain, n))  # lane_courses
             self._lane_offset = wp.array(offset.astype(np.float32), device=dev)
+            # every finished episode counted on its lane group and lane (episodes, successes): lanes.py reads it
+            self._group = wp.array(env_groups(cfg.terrain, n), dtype=wp.int32, device=dev)
+            self.lane_groups = course_names(cfg.terrain)
+            self._lane_counts = wp.zeros((len(self.lane_groups) * cfg.terrain.levels, 2), dtype=wp.int32, device=dev)
             wp.launch(placement_kernel, dim=n,
                       inputs=[self.level, cfg.terrain.levels, cfg.terrain.lane_width, self._lane_offset,
                               self.height_field, world.footprint, world.spawn_clearance],
@@ -331,7 +336,7 @@ class HexapodEnv(VecEnv):
         if self.cpg is not None:
             arrays += [self.cpg.params, self.cpg.params_target, self.cpg.state]
         if self.level is not None:
-            arrays += [self.level, self._played, self.lane, self.lane_z]
+            arrays += [self.level, self._played, self.lane, self.lane_z, self._lane_counts]
         if self.randomized:
             arrays += [self._prev_actions]
         if self.critic_obs is not None:
@@ -419,6 +424,10 @@ class HexapodEnv(VecEnv):
             outputs=[self.episode_steps, self.done, self.done_u8, self.time_out, self._cursor, self._ring,
                      self._nonfinite_total], device=self.device,
         )  # fmt: skip
+        if self.level is not None:
+            wp.launch(lane_count_kernel, dim=self.num_envs,
+                      inputs=[self.status, self._played, self._group, self.cfg.terrain.levels],
+                      outputs=[self._lane_counts], device=self.device)  # fmt: skip
 
     def _keep_last_state(self) -> None:
         """The state at the end of the step, before finished envs are reset (``last_q`` ...: play.py records it)."""
@@ -437,7 +446,8 @@ class HexapodEnv(VecEnv):
         w, t, tc = self.world, self.cfg.task, self.cfg.terrain
         wp.launch(
             curriculum_kernel, dim=self.num_envs,
-            inputs=[self.status, w.joint_q_wp, self.start, self.goals.course, t.goal_distance, tc.levels, tc.climb,
+            inputs=[self.status, w.joint_q_wp, self.start, self.goals.course, self.goals.goal, t.goal_distance,
+                    tc.start_progress > 0.0, tc.levels, tc.climb,
                     strict_from(tc),
                     tc.lane_width, self._lane_offset, self.height_field, w.footprint, w.spawn_clearance,
                     tc.levels_past, tc.past_share, t.seed + 7919, self.counter],
@@ -448,7 +458,9 @@ class HexapodEnv(VecEnv):
         t, w, m = self.cfg.task, self.world, mask if mask is not None else self._all
         wp.launch(reset_envs_kernel, dim=self.num_envs,
                   inputs=[m, self.lane, self.lane_z, w.stand_pose, w.joint_lower, w.joint_upper, t.reset_lateral,
-                          t.reset_yaw, t.reset_joint_noise, t.seed, self.counter, config_params(TaskParams, t),
+                          t.reset_yaw, t.reset_joint_noise, self.cfg.terrain.start_progress if self.level is not None
+                          else 0.0, self.height_field, w.footprint, w.spawn_clearance, t.seed, self.counter,
+                          config_params(TaskParams, t),
                           self.goals.struct()],
                   outputs=[w.joint_q_wp, w.joint_qd_wp, w.joint_target_wp, self.prev_xy], device=self.device)
         wp.launch(advance_counter_kernel, dim=1, inputs=[self.counter], device=self.device)
@@ -516,6 +528,17 @@ class HexapodEnv(VecEnv):
                        top_level_episodes=int(count))  # fmt: skip
         return out
 
+    def lane_counts(self) -> np.ndarray | None:
+        """Host copy (syncs) of the episodes finished per curriculum lane since the env was built: (groups, levels, 2)
+        int (groups ``lane_groups``; columns episodes, successes). None without a curriculum."""
+        if self.level is not None:
+            return self._lane_counts.numpy().reshape(len(self.lane_groups), -1, 2).astype(np.int64)
+
+    def lane_levels(self) -> np.ndarray | None:
+        """Host copy (syncs) of each env's level and lane group: (num_envs, 2) int. None without a curriculum."""
+        if self.level is not None:
+            return np.stack([self.level.numpy(), self._group.numpy()], axis=1).astype(np.int64)
+
     def set_waypoints(self, points) -> None:
         """Each env's waypoint course in its start frame [m] from the next reset on (``reset()``: now), in place of
         the task's goals: (K, 2) for every env or (N, K, 2), one course per env; K = 0: the task's own goals again."""
@@ -558,6 +581,10 @@ def make_env(cfg: HexConfig, action_mode: str = "cpg", build: ModelBuild | None 
     if not 0 <= lo < hi <= knee:
         raise HexnewtonError(f"cpg.a2_range must satisfy 0 <= LO < HI <= {knee:.3g} (the knee's limit above the "
                              f"standing pose), got {lo:g} {hi:g}")  # fmt: skip
+    way, progress = cfg.task.goal_distance - cfg.task.goal_radius, cfg.terrain.start_progress
+    if progress and (not progress < way or cfg.task.random_goals or cfg.task.waypoints):
+        raise HexnewtonError(f"terrain.start_progress must be below goal_distance - goal_radius = {way:g} m, on a "
+                             f"straight task (one goal ahead), got {progress:g}")
     if not 0 < cfg.reward.stability_tilt < math.pi / 2:
         raise HexnewtonError("reward.stability_tilt must lie in (0, pi/2) rad")
     if not cfg.cpg.param_tau >= 0:

@@ -25,8 +25,9 @@ When an env's episode ends (status != 0), before it is reset (:func:`curriculum_
 - success (the goal reached, i.e. ``goal_distance - goal_radius`` walked): ``TerrainConfig.climb`` levels up (1 by
   default); an env that solves the last level goes to a random level, so every level keeps being visited (as
   legged_gym does);
-- fell, off course or timed out having walked less than half of ``goal_distance`` along the goal's course (x on the
-  straight tasks): one level down
+- fell, off course or timed out having walked less than half of ``goal_distance`` (with
+  ``TerrainConfig.start_progress``, of the episode's own way from its start to its goal) along the goal's course (x on
+  the straight tasks): one level down
   (never below 0); otherwise the level stays; on the lanes past the course with ``TerrainConfig.past_down`` "miss"
   (levels from ``strict_from`` on), any of these: one level down;
 - nonfinite (blown-up physics): the level stays;
@@ -35,6 +36,9 @@ With ``TerrainConfig.past_share`` = s > 0, each new episode is played with proba
 drawn evenly among the P, whatever the level (which it does not change); the others on the level's lane.
 With ``TerrainConfig.lane_courses``, the lanes form one group of L per course, side by side along y, and env i plays
 group i mod the groups' count throughout: its fixed lateral offset holds its group's offset.
+Every finished episode is also counted on the lane it was played on (:func:`lane_count_kernel`: episodes and
+successes per lane group and lane, since the env was built), which the training log reads once per iteration
+(``hexnewton.learning.lanes``).
 The env's lane start moves to the new (or drawn) level's lane centre (plus the env's own fixed lateral offset), at
 ``spawn_height`` above the highest terrain under the robot's footprint there; the reset then places the
 robot there. :func:`placement_kernel` does the placement alone (at construction).
@@ -43,7 +47,10 @@ Resets (:func:`reset_envs_kernel`)
 ----------------------------------
 For every env selected by ``mask``, back to the env's start lane with the randomisation the task asks for
 (``TaskConfig.reset_lateral``, ``reset_yaw``, ``reset_joint_noise``):
-- the base goes to (lane_x, lane_y + U(-lateral, lateral)) at height ``spawn_z``, with yaw U(-yaw, yaw);
+- the base goes to (lane_x, lane_y + U(-lateral, lateral)) at height ``spawn_z``, with yaw U(-yaw, yaw); with
+  ``TerrainConfig.start_progress`` = p > 0 (one draw more, after the others) to lane_x + U(0, p), at the spawn
+  clearance above the highest ground under the robot's footprint there, its goal still ``goal_distance`` ahead of
+  lane_x;
 - the joints go to the standing pose + U(-joint, joint), clipped to the limits, at rest;
 - the joint targets are set to that pose;
 - ``start`` receives the new base (x, y) and the goals' ``start_yaw`` its heading: the episode's start, the frame of a
@@ -71,6 +78,7 @@ import warp as wp
 
 from hexnewton.mdp.status import NONFINITE, SUCCESS, TIMEOUT
 from hexnewton.mdp.terms import TERMINATIONS, Goals, HeightField, TaskParams, max_terrain_height, set_goal
+from hexnewton.mdp.terms.goals import course_to
 from hexnewton.physics.robot import BASE_QD
 from hexnewton.physics.world import World
 
@@ -233,7 +241,9 @@ def curriculum_kernel(
     joint_q: wp.array2d[wp.float32],
     start: wp.array[wp.vec2],
     course: wp.array[wp.vec2],
+    goal: wp.array[wp.vec2],
     goal_distance: float,
+    own_way: bool,
     levels: int,
     climb: int,
     strict_from: int,
@@ -264,8 +274,12 @@ def curriculum_kernel(
             lv = wp.min(int(wp.randf(rng) * float(levels)), levels - 1)
         else:
             lv = wp.min(lv + climb, levels - 1)
-    elif lv >= strict_from or walked(joint_q, start, course, e) < 0.5 * goal_distance:
-        lv = wp.max(lv - 1, 0)
+    else:
+        way = goal_distance
+        if own_way:  # episodes that start part of the way along (TerrainConfig.start_progress): their own way
+            way = wp.length(goal[e] - start[e])
+        if lv >= strict_from or walked(joint_q, start, course, e) < 0.5 * way:
+            lv = wp.max(lv - 1, 0)
     level[e] = lv
     play = lv
     if past_share > 0.0 and wp.randf(rng) < past_share:  # this episode on a lane past the course, drawn evenly
@@ -301,6 +315,38 @@ def placement_kernel(
     spawn_z[e] = p[2]
 
 
+@wp.kernel
+def lane_count_kernel(
+    status: wp.array[wp.int32],
+    played: wp.array[wp.int32],
+    group: wp.array[wp.int32],
+    levels: int,
+    counts: wp.array2d[wp.int32],
+):
+    """Every finished episode (status != 0) counted on the lane it was played on, in its env's lane group: row
+    ``group * levels + lane``, column 0 the episodes, 1 those that reached the goal (what training saw, per lane)."""
+    e = wp.tid()
+    st = status[e]
+    if st == 0:
+        return
+    row = group[e] * levels + played[e]
+    wp.atomic_add(counts, row, 0, 1)
+    if st == SUCCESS:
+        wp.atomic_add(counts, row, 1, 1)
+
+
+def lane_count_reference(status, played, group, levels: int, groups: int) -> np.ndarray:
+    """Float64-free twin of :func:`lane_count_kernel` (integer counts): (groups * levels, 2) episodes and successes of
+    this step's finished episodes per (group, lane) row."""
+    status, played, group = np.asarray(status), np.asarray(played), np.asarray(group)
+    out = np.zeros((groups * levels, 2), np.int64)
+    done = status != 0
+    rows = group[done] * levels + played[done]
+    np.add.at(out[:, 0], rows, 1)
+    np.add.at(out[:, 1], rows[status[done] == SUCCESS], 1)
+    return out
+
+
 def start_levels(num_envs: int, start_levels: int) -> np.ndarray:
     """Initial levels: envs spread evenly over 0 .. start_levels - 1."""
     return (np.arange(num_envs) * start_levels // max(num_envs, 1)).astype(np.int32)
@@ -313,16 +359,18 @@ def strict_from(cfg) -> int:
 
 
 def curriculum_reference(status, walked, level, goal_distance, levels, random_level, strict_from=None, climb=1,
-                         played=None):
+                         played=None, way=None):
     """Float64 reference of :func:`curriculum_kernel`'s level update (``walked`` along the goal's course from the
     start: x - start x on the straight tasks; ``random_level``
     (N,) stands in for the kernel's draw where an env solves the last level; ``strict_from`` and ``climb`` as the
     kernel's, None: ``levels``; ``played`` (N,): the lane each episode was played on, None: its level; one drawn
-    past the course leaves the level as it is). Returns the new levels."""
+    past the course leaves the level as it is; ``way`` (N,): each episode's own way from its start to its goal
+    (``own_way``), None: ``goal_distance``). Returns the new levels."""
     status, walked, level = np.asarray(status), np.asarray(walked, np.float64), np.asarray(level, np.int64)
     strict = level >= (levels if strict_from is None else strict_from)
     up = np.where(level + 1 >= levels, random_level, np.minimum(level + climb, levels - 1))
-    down = np.where(strict | (walked < 0.5 * goal_distance), np.maximum(level - 1, 0), level)
+    half = 0.5 * (goal_distance if way is None else np.asarray(way, np.float64))
+    down = np.where(strict | (walked < half), np.maximum(level - 1, 0), level)
     new = np.where(status == SUCCESS, up, down)
     keep = (status == 0) | (status == NONFINITE)
     if played is not None:
@@ -345,6 +393,10 @@ def reset_envs_kernel(
     lateral: float,
     yaw: float,
     joint_noise: float,
+    progress: float,
+    hf: HeightField,
+    footprint: float,
+    spawn_height: float,
     seed: int,
     counter: wp.array[wp.int32],
     task: TaskParams,
@@ -376,12 +428,21 @@ def reset_envs_kernel(
             joint_target[e, 7 + 3 * leg + k] = q
     for i in range(joint_qd.shape[1]):
         joint_qd[e, i] = 0.0
+    u_bearing = wp.randf(rng)
+    u_distance = wp.randf(rng)
+    x0 = x
+    if progress > 0.0:  # part of the way along the lane (TerrainConfig.start_progress), above the ground there
+        x = x0 + progress * wp.randf(rng)
+        joint_q[e, 0] = x
+        joint_q[e, 2] = max_terrain_height(hf, x, y, footprint) + spawn_height
     goals.start[e] = wp.vec2(x, y)
     goals.start_yaw[e] = a
     goals.reached[e] = 0
-    u_bearing = wp.randf(rng)
-    u_distance = wp.randf(rng)
     set_goal(goals, task, e, 0, x, y, a, u_bearing, u_distance)
+    if progress > 0.0 and goals.waypoint_count == 0 and not task.random_goals:  # the lane's goal, ahead of its start
+        g = wp.vec2(x0 + task.goal_distance, y)
+        goals.goal[e] = g
+        goals.course[e] = course_to(x, y, g)
     prev_xy[e] = wp.vec2(x, y)
 
 

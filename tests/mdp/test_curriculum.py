@@ -10,7 +10,8 @@ import warp as wp
 
 from hexnewton.config import HexConfig, SimConfig, TaskConfig, TerrainConfig
 from hexnewton.mdp.env import make_env
-from hexnewton.mdp.events import curriculum_kernel, curriculum_reference, placement_kernel, start_levels, strict_from
+from hexnewton.mdp.events import (curriculum_kernel, curriculum_reference, lane_count_kernel, lane_count_reference,
+                                  placement_kernel, start_levels, strict_from)
 from hexnewton.mdp.status import NONFINITE, SUCCESS
 from hexnewton.mdp.terms import height_field_from_grid
 from hexnewton.physics.terrain import build_height_grid, max_terrain_height_np, terrain_height_np
@@ -106,9 +107,10 @@ def test_bad_curriculum_config(bad, message):
     assert message in str(err.value)
 
 
-@pytest.mark.parametrize(("strict", "climb", "share"),
-                         [(None, 1, 0.0), (3, 1, 0.0), (None, 2, 0.0), (None, 1, 0.5)])
-def test_curriculum_kernel_matches_reference(strict, climb, share):
+@pytest.mark.parametrize(("strict", "climb", "share", "own_way"),
+                         [(None, 1, 0.0, False), (3, 1, 0.0, False), (None, 2, 0.0, False), (None, 1, 0.5, False),
+                          (None, 1, 0.0, True)])  # fmt: skip
+def test_curriculum_kernel_matches_reference(strict, climb, share, own_way):
     """``strict`` (``strict_from``, the first lane past the course with ``past_down`` "miss"): None, none; ``climb``:
     lanes up per goal; ``share``: ``past_share`` over the last two lanes (the episodes that ended on a drawn lane keep
     their level; the next ones are drawn with that probability)."""
@@ -131,13 +133,16 @@ def test_curriculum_kernel_matches_reference(strict, climb, share):
     q[:, :2] = start + walked[:, None] * course + across[:, None] * np.stack([-course[:, 1], course[:, 0]], axis=1)
     offset = rng.uniform(-0.3, 0.3, n).astype(np.float32)
     lane_in = np.full((n, 2), 9.0, np.float32)
+    # each episode's goal (own_way: start_progress, the episode's own way from its start to its goal halves)
+    goal_xy = (start + rng.uniform(1.0, goal, n)[:, None] * course).astype(np.float32)
     arr = lambda a, dt=None: wp.array(a, dtype=dt, device=DEV) if dt else wp.array(a, device=DEV)  # noqa: E731
     past = 2
     played = np.where(rng.random(n) < share, rng.integers(levels - past, levels, n), level).astype(np.int32)
     level_wp, lane_wp, z_wp = arr(level), arr(lane_in, wp.vec2), arr(np.full(n, 9.0, np.float32))
     played_wp = arr(played)
     wp.launch(curriculum_kernel, dim=n,
-              inputs=[arr(status), arr(q), arr(start, wp.vec2), arr(course, wp.vec2), goal, levels, climb,
+              inputs=[arr(status), arr(q), arr(start, wp.vec2), arr(course, wp.vec2), arr(goal_xy, wp.vec2), goal,
+                      own_way, levels, climb,
                       levels if strict is None else strict,
                       cfg.lane_width, arr(offset), hf, footprint, clearance, past, share, 3,
                       arr(np.array([5], np.int32))],
@@ -146,7 +151,8 @@ def test_curriculum_kernel_matches_reference(strict, climb, share):
     top = (status == SUCCESS) & (level == levels - 1) & (played == level)
     assert top.any() and np.all((got[top] >= 0) & (got[top] < levels))
     walked_along = ((q[:, :2].astype(np.float64) - start) * course).sum(axis=1)
-    want = curriculum_reference(status, walked_along, level, goal, levels, got, strict, climb, played)
+    way = np.linalg.norm(goal_xy.astype(np.float64) - start, axis=1) if own_way else None
+    want = curriculum_reference(status, walked_along, level, goal, levels, got, strict, climb, played, way)
     np.testing.assert_array_equal(got, want)
     moved = (status != 0) & (status != NONFINITE)
     # the next episode: on a lane past the course drawn with probability share, else on the level's lane
@@ -161,7 +167,8 @@ def test_curriculum_kernel_matches_reference(strict, climb, share):
     np.testing.assert_array_equal(played_next[moved], got[moved])
     up = (status == SUCCESS) & (level + 1 < levels)
     np.testing.assert_array_equal(got[up], np.minimum(level[up] + climb, levels - 1))
-    missed = (status != 0) & (status != SUCCESS) & (status != NONFINITE) & (walked >= 0.5 * goal) & (level >= 3)
+    half = 0.5 * (way if own_way else goal)
+    missed = (status != 0) & (status != SUCCESS) & (status != NONFINITE) & (walked >= half) & (level >= 3)
     assert missed.any()
     np.testing.assert_array_equal(got[missed], level[missed] - 1 if strict else level[missed])
     y = lane_center_y(cfg, got) + offset
@@ -284,3 +291,47 @@ def test_env_places_each_env_on_its_course():
     centre = lane_center_y(cfg.terrain, env.level.numpy(), env_groups(cfg.terrain, 6))
     assert np.all(np.abs(env.start.numpy()[:, 1] - centre) <= cfg.sim.spawn_y_spread + cfg.task.reset_lateral + 1e-5)
     assert len(np.unique(np.round(centre, 3))) >= 3
+
+
+def test_lane_count_kernel_matches_reference():
+    """Every finished episode counted on its lane group and played lane, successes apart (random states)."""
+    rng = np.random.default_rng(4)
+    n, levels, groups = 700, 6, 3
+    status = rng.integers(0, 6, n).astype(np.int32)
+    played = rng.integers(0, levels, n).astype(np.int32)
+    group = rng.integers(0, groups, n).astype(np.int32)
+    start = rng.integers(0, 50, (groups * levels, 2)).astype(np.int32)
+    counts = wp.array(start, device=DEV)
+    wp.launch(lane_count_kernel, dim=n, inputs=[wp.array(status, device=DEV), wp.array(played, device=DEV),
+                                               wp.array(group, device=DEV), levels], outputs=[counts], device=DEV)
+    want = start + lane_count_reference(status, played, group, levels, groups)
+    np.testing.assert_array_equal(counts.numpy(), want)
+    added = want - start
+    assert added[:, 1].sum() == (status == SUCCESS).sum() and added[:, 0].sum() == (status != 0).sum()
+
+
+def test_start_progress_places_episodes_along_the_lane():
+    """``start_progress``: each reset starts x in [0, p] ahead of its lane's start, above the ground there, toward the
+    lane's goal (goal_distance ahead of the lane's start); the lane counts add up to the finished episodes."""
+    p = 2.0
+    cfg = HexConfig(terrain=TerrainConfig(name="complex", levels=4, start_levels=4, lane_width=1.0,
+                                          start_progress=p),
+                    sim=SimConfig(num_envs=32, device=DEV), task=TaskConfig(seed=3))  # fmt: skip
+    env = make_env(cfg)
+    lane = env.lane.numpy()
+    start, goal = env.goals.start.numpy(), env.goals.goal.numpy()
+    ahead = start[:, 0] - lane[:, 0]
+    assert np.all((ahead >= 0) & (ahead <= p)) and ahead.std() > 0.3
+    np.testing.assert_allclose(goal[:, 0], lane[:, 0] + cfg.task.goal_distance, atol=1e-5)
+    grid = env.world.terrain.grid
+    z = max_terrain_height_np(grid, start[:, 0], start[:, 1], env.world.footprint) + env.world.spawn_clearance
+    np.testing.assert_allclose(env.world.joint_q_wp.numpy()[:, 2], z, atol=1e-5)
+    assert (z > 0.05).any()  # some start on the stairs, above their treads
+    for _ in range(40):
+        env.step(torch.zeros(env.num_envs, env.num_actions))
+    counts = env.lane_counts()
+    assert counts.shape == (1, 4, 2) and counts[..., 0].sum() == int(env._cursor.numpy()[0])
+    with pytest.raises(Exception, match="start_progress must be below"):
+        make_env(replace(cfg, terrain=replace(cfg.terrain, start_progress=3.0)))
+    with pytest.raises(ValueError, match="start_progress 1.0 needs a curriculum"):
+        build_height_grid(TerrainConfig(name="rugged", start_progress=1.0))

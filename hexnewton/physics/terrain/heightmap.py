@@ -108,6 +108,8 @@ def validate_config(cfg: TerrainConfig) -> None:
     _multiple(cfg.width / 2, res, "width / 2", "query_resolution")
     _require(int(cfg.levels) == cfg.levels and cfg.levels >= 0, f"levels must be an integer >= 0, got {cfg.levels!r}")
     _require(cfg.levels or cfg.past_share == 0.0, f"past_share {cfg.past_share} needs a curriculum (levels > 0)")
+    _require(cfg.levels or cfg.start_progress == 0.0,
+             f"start_progress {cfg.start_progress} needs a curriculum (levels > 0)")
     _require(cfg.levels or not cfg.lane_courses,
              f"lane_courses ({' '.join(cfg.lane_courses)}) needs a curriculum (levels > 0)")
     if cfg.levels:
@@ -116,6 +118,8 @@ def validate_config(cfg: TerrainConfig) -> None:
         _require(math.isfinite(cfg.lane_width) and cfg.lane_width > 0,
                  f"lane_width must be positive, got {cfg.lane_width!r}")
         _require(int(cfg.climb) == cfg.climb and cfg.climb >= 1, f"climb must be an integer >= 1, got {cfg.climb!r}")
+        _require(math.isfinite(cfg.start_progress) and 0.0 <= cfg.start_progress < cfg.x_max,
+                 f"start_progress must be in [0, x_max = {cfg.x_max:g}) m, got {cfg.start_progress!r}")
         _check_levels_past(cfg)
         _require(cfg.name != "flat" or not cfg.lane_courses,
                  "lane_courses beside a flat terrain (a ground plane): name another course, flat among lane_courses")
