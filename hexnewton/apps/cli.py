@@ -18,8 +18,8 @@ NEGATIVE_VALUE = re.compile(r"^-\d*\.?\d+([eE][-+]?\d+)?(,-?\d*\.?\d+([eE][-+]?\
 class ArgumentParser(argparse.ArgumentParser):
     """argparse, but a usage error is one line (``prog: error: ...``) and exit status 2, an ``X,Y`` pair with a
     negative X is a value (argparse's own test for a negative number, widened), and a flag is spelt out in full: no
-    prefix matching (``allow_abbrev=False``: ``--num_env 4`` is not ``--num_envs 4``), an unknown flag is one line
-    naming the closest known one (:func:`unknown_flag`)."""
+    prefix matching (``allow_abbrev=False``: the start of a flag's name is no flag), an unknown flag is one line naming
+    the closest known one (:func:`unknown_flag`)."""
 
     def __init__(self, *args, **kwargs):
         kwargs.setdefault("allow_abbrev", False)  # subparsers (add_parser) are built by this class too
@@ -70,7 +70,7 @@ class ArgumentParser(argparse.ArgumentParser):
 
 
 def unknown_flag(flag: str, known: list[str]) -> str:
-    """The one-line error for ``flag`` (``--name`` or ``--name=value``) that no option of ``known`` is: the known flag
+    """The one-line error for ``flag`` (its word, with or without ``=VALUE``) that no option of ``known`` is: the flag
     it abbreviates, else the closest by spelling (difflib), else where the flags are listed."""
     import difflib
 
