@@ -262,10 +262,21 @@ def course_names(names: list[str]) -> str:
     return f"the {names[0]} course" if len(names) == 1 else f"the {', '.join(names[:-1])} and {names[-1]} courses"
 
 
-def choose(cands: list[Candidate], results: list[dict]) -> int:
-    """The index of the result: the most goals, then the fewest falls before the goal line, then the later."""
-    return max(range(len(cands)), key=lambda i: (results[i]["goal"], -results[i]["fell_before_goal"],
-                                                  cands[i].iteration))  # fmt: skip
+def choose(cands: list[Candidate], results: list[dict], per_course: dict[str, list[dict]] | None = None,
+           rank: str = "mean", fall_weight: float = 2.0) -> int:
+    """The index of the result. ``rank`` "mean" (``results``: the shares averaged over the courses): the most goals,
+    then the fewest falls before the goal line, then the later. "worst" (``per_course``: each course's results): the
+    highest score goal - ``fall_weight`` x fell_before_goal on the worst course among those where some candidate
+    misses a goal, then the highest such score averaged over them, then the later."""
+    if rank == "mean":
+        return max(range(len(cands)), key=lambda i: (results[i]["goal"], -results[i]["fell_before_goal"],
+                                                      cands[i].iteration))  # fmt: skip
+    if rank != "worst" or per_course is None:
+        raise ValueError(f"validation rank must be 'mean' or 'worst' (with each course's results), got {rank!r}")
+    scores = np.array([[r["goal"] - fall_weight * r["fell_before_goal"] for r in rows] for rows in per_course.values()])
+    informative = ~np.all(np.array([[r["goal"] for r in rows] for rows in per_course.values()]) >= 1.0, axis=1)
+    s = scores[informative] if informative.any() else scores
+    return max(range(len(cands)), key=lambda i: (s[:, i].min(), s[:, i].mean(), cands[i].iteration))
 
 
 def report_lines(cands: list[Candidate], results: list[dict], chosen: int) -> list[str]:

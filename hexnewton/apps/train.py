@@ -333,9 +333,12 @@ def choose_on_validation(runner, agent, run_dir: str, validated: dict) -> tuple[
     from hexnewton.analysis.validation import VALIDATION_SEED, choose, course_names, report_lines
 
     cands, results, per_course = validated["candidates"], validated["results"], validated["courses"]
-    k = choose(cands, results)
+    k = choose(cands, results, per_course, agent.validation_rank, agent.validation_fall_weight)
     seconds = validated["seconds"]
     how = " (shares averaged over the courses)" if len(per_course) > 1 else ""
+    if agent.validation_rank == "worst":
+        how += (f"; ranked by the worst course's goal share less {agent.validation_fall_weight:g} x its falls before "
+                "the goal line")
     shared = f" on {validated['ranks']} ranks" if validated["ranks"] > 1 else ""
     lines = report_lines(cands, results, k)
     print(f"deterministic validation, {agent.validation_rounds} rounds of {course_names(list(per_course))} (seed "

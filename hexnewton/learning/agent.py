@@ -157,6 +157,12 @@ class AgentConfig:
     #: one after another; a torchrun job deals its courses over its ranks either way. Off until the learner's gate
     #: holds with it (studies/learner, arm ``together``)
     validation_together: bool = False
+    #: ours: how the candidates are ranked. "mean": the goal share averaged over the courses, then the fewest falls
+    #: before the goal line; "worst": the worst course's goal share less ``validation_fall_weight`` x its falls before
+    #: the goal line (a course on which every candidate reaches every goal does not count), then the same averaged over
+    #: the courses (``analysis.validation.choose``): what the gate judges, each course on its own
+    validation_rank: str = field(default="mean", metadata={"choices": ("mean", "worst")})
+    validation_fall_weight: float = 2.0
     #: ours: one more candidate, the weight average of the last stage's candidates (actor, critic and their
     #: observation normalisers; :func:`hexnewton.learning.checkpoint.average_checkpoints`), kept as
     #: ``model_average.pt``
@@ -188,6 +194,8 @@ class AgentConfig:
             raise ValueError("agent.target_success must lie in (0, 1]")
         if self.validation_rounds < 0:
             raise ValueError("agent.validation_rounds must be 0 (off) or positive")
+        if not (self.validation_fall_weight >= 0 and self.validation_fall_weight < float("inf")):
+            raise ValueError("agent.validation_fall_weight must be a finite number >= 0")
         for name in ("num_steps_per_env", "max_iterations", "save_interval", "validation_candidates",
                      "validation_steps"):  # fmt: skip
             if getattr(self, name) <= 0:

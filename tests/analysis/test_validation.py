@@ -220,3 +220,20 @@ def test_courses_side_by_side_walk_each_course():
     got = validate_together(cands, "cpg_rl", ["stepped", "rugged"], 2, "cpu", 40)
     assert sorted(got) == [(0, 0), (1, 0)] and all(r["rounds"] == 2 and r["fell"] == 0.0 for r in got.values())
     assert got[(1, 0)]["pitch_var"] > got[(0, 0)]["pitch_var"]
+
+
+def test_choose_worst_course_with_falls_weighted():
+    """``validation_rank worst``: the worst informative course's goal share less 2 x its falls before the goal line
+    decides; a course every candidate walks whole (stepped here) does not count; "mean" keeps the averaged shares."""
+    cands = [Candidate(100 + i, f"model_{100 + i}.pt", "saved") for i in range(3)]
+    row = lambda goal, fell: {"goal": goal, "fell_before_goal": fell}  # noqa: E731
+    per = {"rugged": [row(0.99, 0.010), row(0.97, 0.002), row(0.98, 0.000)],
+           "stepped": [row(1.0, 0.0), row(1.0, 0.0), row(1.0, 0.0)],
+           "complex": [row(0.99, 0.0), row(0.99, 0.0), row(0.975, 0.0)]}
+    mean = [{k: float(np.mean([per[t][i][k] for t in per])) for k in ("goal", "fell_before_goal")} for i in range(3)]
+    assert choose(cands, mean) == 0  # the most goals on average, its falls a tie-break only
+    # worst course: 0.99 - 0.02 = 0.970, 0.97 - 0.004 = 0.966, min(0.98, 0.975) = 0.975
+    assert choose(cands, mean, per, "worst", 2.0) == 2
+    assert choose(cands, mean, per, "worst", 0.0) == 0  # without the weight: 0.99 on its worst course
+    with pytest.raises(ValueError, match="validation rank"):
+        choose(cands, mean, None, "worst")
