@@ -2,7 +2,8 @@
 # The curriculum study's lease on one GPU (`bash studies/device/gpu.sh queue studies/curriculum/queue.sh`; the chunk
 # calls and the install first: studies/device/README.md). In order:
 # 1. a short warm-up run (the kernels Warp compiles for this code, once, not in every run);
-# 2. every arm of $ARMS (studies/curriculum/arms.py) on every seed of $SEEDS, all at once on the GPU
+# 2. every arm of $ARMS (studies/curriculum/arms.py) on every seed of $SEEDS and the recipe on $RECIPE_SEEDS (1: what
+#    its curriculum saw, counted as the arms' are), all at once on the GPU
 #    (`python train.py --task complex --seed N FLAGS`, candidates.sh: each run packed, its result on $VAL_ROUNDS
 #    validation rounds per course, seed 3000, deterministic action); their times are shared, not timed;
 # 3. beside them, on the same validation rounds: the recipe's kept results $KEPT (studies/learner/runs/NAME/policy.pt),
@@ -37,6 +38,7 @@ for seed in $SEEDS; do
     specs="$specs|${arm}_s$seed@0:--task complex --seed $seed $f"
   done
 done
+for seed in ${RECIPE_SEEDS-1}; do specs="$specs|recipe_s$seed@0:--task complex --seed $seed"; done   # its lane counts
 IFS='|' read -r -a list <<< "${specs#|}"
 OUT=$RUNS_OUT LIMIT=${LIMIT:-1500} VAL_ROUNDS=$VAL_ROUNDS bash studies/device/candidates.sh "${list[@]}" \
   > "$RUNS/candidates.log" 2>&1 &
