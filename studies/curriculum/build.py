@@ -1,0 +1,196 @@
+"""The curriculum study's results.json and report.md from what it holds (studies/curriculum/README.md).
+
+    python studies/curriculum/build.py --add LEASE    # a lease's files (queue.sh collect, unpacked) into the study
+    python studies/curriculum/build.py                # results.json and report.md again from runs/ and evals/
+
+A lease's folder holds ``runs/NAME/<stamp>/timing.json`` (with its ``curriculum`` block: what training saw) and
+``config.json``, and ``evals/JOB/results.json`` (each result, the shipped policy with the fixed CPG, and the recipe's
+kept results on the same validation rounds). ``--add`` copies the timings, configs and evaluations into
+``runs/LEASE_DATE/`` and ``evals/LEASE_DATE/`` of the study (small JSON files; the checkpoints and consoles stay out).
+"""
+
+from __future__ import annotations
+
+import argparse
+import glob
+import json
+import os
+import re
+import shutil
+import sys
+
+import numpy as np
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, HERE)
+from arms import ARMS  # noqa: E402
+
+COURSES = ("rugged", "stepped", "complex")
+METRICS = ("success_3m", "fall_rate_before_goal", "fall_rate", "pitch_var_deg2", "roll_var_deg2")
+#: the target of "experience that reaches the hardest ground": every seed >= this share of its last stage's finished
+#: episodes on the top lane
+TOP_TARGET = 0.20
+RUN = re.compile(r"^(?P<arm>[a-z0-9]+)_s(?P<seed>\d+)$")
+
+
+def add(lease: str) -> str:
+    """Copy a lease's small files into the study under the lease's date; returns that name."""
+    timings = glob.glob(os.path.join(lease, "runs", "*", "*", "timing.json"))
+    if not timings:
+        raise SystemExit(f"build.py: no runs/*/*/timing.json under {lease}")
+    stamp = os.path.basename(os.path.dirname(sorted(timings)[0]))[:10]
+    name = os.path.basename(os.path.normpath(lease)) if not re.match(r"\d{4}-\d\d-\d\d$", stamp) else stamp
+    for path in timings:
+        run = os.path.basename(os.path.dirname(os.path.dirname(path)))
+        dest = os.path.join(HERE, "runs", name, run)
+        os.makedirs(dest, exist_ok=True)
+        for f in ("timing.json", "config.json"):
+            src = os.path.join(os.path.dirname(path), f)
+            if os.path.exists(src):
+                shutil.copyfile(src, os.path.join(dest, f))
+    for path in glob.glob(os.path.join(lease, "evals", "*", "results.json")):
+        dest = os.path.join(HERE, "evals", name, os.path.basename(os.path.dirname(path)))
+        os.makedirs(dest, exist_ok=True)
+        shutil.copyfile(path, os.path.join(dest, "results.json"))
+    return name
+
+
+def _eval(lease: str, job: str, course: str, who: str = "cpg_rl") -> dict | None:
+    path = os.path.join(HERE, "evals", lease, f"{job}_{course}", "results.json")
+    if not os.path.exists(path):
+        return None
+    r = json.load(open(path))["results"][course].get(who)
+    return None if r is None else {m: r[m] for m in METRICS} | {"rounds": r["rounds"]}
+
+
+def collect() -> dict:
+    leases = {}
+    for lease_dir in sorted(glob.glob(os.path.join(HERE, "runs", "*"))):
+        lease = os.path.basename(lease_dir)
+        runs = {}
+        for run_dir in sorted(glob.glob(os.path.join(lease_dir, "*"))):
+            name = os.path.basename(run_dir)
+            m = RUN.match(name)
+            timing = json.load(open(os.path.join(run_dir, "timing.json")))
+            cur = timing.get("curriculum", {})
+            runs[name] = {"arm": m["arm"] if m else name, "seed": int(m["seed"]) if m else None,
+                          "flags": ARMS.get(m["arm"], ("?",))[0] if m else "?",
+                          "top_lane_share_last_stage": cur.get("last_stage", {}).get("top_lane_share"),
+                          "last_stage_episodes": cur.get("last_stage", {}).get("episodes"),
+                          "top_lane_share_run": cur.get("run", {}).get("top_lane_share"),
+                          "episodes_per_robot": cur.get("episodes_per_robot"),
+                          "mean_level_end": cur.get("mean_level_end"),
+                          "lanes_last_stage": cur.get("last_stage", {}).get("lanes_top_first"),
+                          "wall_s_to_result": timing.get("wall_s_to_result"), "device": timing.get("device_name"),
+                          "validation": {t: _eval(lease, name, t) for t in COURSES}}  # fmt: skip
+        refs = {"shipped": {t: _eval(lease, "shipped", t) for t in COURSES},
+                "fixed_cpg": {t: _eval(lease, "shipped", t, "cpg") for t in COURSES}}
+        for job in sorted({os.path.basename(p).rsplit("_", 1)[0]
+                           for p in glob.glob(os.path.join(HERE, "evals", lease, "recipe_*"))}):  # fmt: skip
+            refs[job] = {t: _eval(lease, job, t) for t in COURSES}
+        leases[lease] = {"runs": runs, "references": refs}
+    return leases
+
+
+def arms_table(leases: dict) -> dict:
+    """Per arm: its seeds' top-lane shares, whether every seed meets the target, the seeds' validation medians and the
+    log-falls mean (log(falls before the goal + 0.1 %), the verdict's scale)."""
+    out = {}
+    for lease in leases.values():
+        for run in lease["runs"].values():
+            out.setdefault(run["arm"], []).append(run)
+    table = {}
+    for arm, runs in out.items():
+        shares = [r["top_lane_share_last_stage"] for r in runs if r["top_lane_share_last_stage"] is not None]
+        row = {"seeds": len(runs), "top_lane_shares": shares,
+               "every_seed_meets_top_target": bool(shares) and min(shares) >= TOP_TARGET,
+               "episodes_per_robot": [r["episodes_per_robot"] for r in runs]}  # fmt: skip
+        for t in COURSES:
+            vals = [r["validation"][t] for r in runs if r["validation"][t]]
+            if vals:
+                row[t] = {"success_3m_median": float(np.median([v["success_3m"] for v in vals])),
+                          "fall_before_goal_median": float(np.median([v["fall_rate_before_goal"] for v in vals])),
+                          "log_falls_mean": float(np.mean([np.log(v["fall_rate_before_goal"] + 0.001) for v in vals]))}
+        row["verdict"] = "partial: fewer than 6 seeds, no quality verdict" if len(runs) < 6 else "seeds enough"
+        table[arm] = row
+    return table
+
+
+def fmt(v, pct=True):
+    if v is None:
+        return "-"
+    return f"{100 * v:.1f}" if pct else f"{v:.1f}"
+
+
+def report(results: dict) -> str:
+    lines = ["# The curriculum study: experience that reaches the top lane", "",
+             "How the robots meet the complex recipe's terrain curriculum, arm by arm (`python train.py --task complex "
+             "--seed N FLAGS`), with what each run's training saw (`timing.json`'s `curriculum`: the share of the last "
+             "stage's finished episodes on the top lane, lane 10 of 10, the course itself) beside its result on the "
+             "validation rounds (seed 3000, deterministic action), against the shipped policy, the fixed CPG and the "
+             "recipe's kept results on the same rounds in the same lease. Generated by `python "
+             "studies/curriculum/build.py` from results.json.", ""]
+    for arm, (flags, what) in ARMS.items():
+        lines.append(f"- `{arm}`: {what} (`{flags or '--task complex'}`)")
+    lines.append("")
+    for lease, data in results["leases"].items():
+        lines += [f"## Lease {lease}", "",
+                  "| run | top lane, last stage | episodes/robot | mean lane at end | " + " | ".join(
+                      f"{t} 3 m | {t} falls before goal" for t in COURSES) + " | rugged pitch / roll var |",
+                  "|---|---|---|---|" + "---|---|" * len(COURSES) + "---|"]
+        rows = list(data["runs"].items()) + [(k, {"validation": v}) for k, v in data["references"].items()]
+        for name, r in rows:
+            v = r["validation"]
+            rug = v.get("rugged") or {}
+            lines.append(f"| {name} | {fmt(r.get('top_lane_share_last_stage'))} % | "
+                         f"{fmt(r.get('episodes_per_robot'), False)} | {fmt(r.get('mean_level_end'), False)} | "
+                         + " | ".join(f"{fmt((v.get(t) or {}).get('success_3m'))} | "
+                                      f"{fmt((v.get(t) or {}).get('fall_rate_before_goal'))}" for t in COURSES)
+                         + f" | {fmt(rug.get('pitch_var_deg2'), False)} / {fmt(rug.get('roll_var_deg2'), False)} |")
+        lines.append("")
+    lines += ["## Arms", "", f"Target: every seed >= {TOP_TARGET:.0%} of its last stage's finished episodes on the top "
+              "lane. A quality verdict needs >= 6 seeds an arm (log(falls before the goal + 0.1 %)).", "",
+              "| arm | seeds | top lane, last stage (each seed) | every seed >= target | " + " | ".join(
+                  f"{t} 3 m median | {t} falls median" for t in COURSES) + " | verdict |",
+              "|---|---|---|---|" + "---|---|" * len(COURSES) + "---|"]
+    for arm, row in results["arms"].items():
+        lines.append(f"| {arm} | {row['seeds']} | " + ", ".join(f"{100 * s:.0f} %" for s in row["top_lane_shares"])
+                     + f" | {'yes' if row['every_seed_meets_top_target'] else 'no'} | "
+                     + " | ".join(f"{fmt(row.get(t, {}).get('success_3m_median'))} | "
+                                  f"{fmt(row.get(t, {}).get('fall_before_goal_median'))}" for t in COURSES)
+                     + f" | {row['verdict']} |")
+    mc = results.get("gate_mc")
+    if mc:
+        cols = ("median_3m", "pooled_falls", "worst_seed", "rugged_variance", "gate")
+        lines += ["", "## The gate, checked by Monte Carlo", "", f"`{mc['command']}` ({mc['draws']} draws of "
+                  f"{mc['seeds']} seeds; model in gate_mc.py's docstring): the share of draws passing each line.", "",
+                  "| recipe | " + " | ".join(cols) + " |", "|---|" + "---|" * len(cols)]
+        for name, s in mc["scenarios"].items():
+            lines.append(f"| {name} | " + " | ".join(f"{100 * s[c]:.1f} %" for c in cols) + " |")
+        lines += ["", f"Sound (as good >= 80 %, twice the falls <= 20 %): {'yes' if mc['sound'] else 'no'}."]
+    return "\n".join(lines) + "\n"
+
+
+def main(argv: list[str] | None = None) -> int:
+    p = argparse.ArgumentParser(description=__doc__, allow_abbrev=False)
+    p.add_argument("--add", metavar="LEASE", help="a lease's unpacked folder (queue.sh collect)")
+    a = p.parse_args(argv)
+    if a.add:
+        if not os.path.isdir(a.add):
+            print(f"build.py: {a.add} is not a folder", file=sys.stderr)
+            return 2
+        print(f"added lease {add(a.add)}")
+    leases = collect()
+    mc_path = os.path.join(HERE, "gate_mc.json")
+    results = {"command": "python studies/curriculum/build.py", "top_target": TOP_TARGET, "leases": leases,
+               "arms": arms_table(leases), "gate_mc": json.load(open(mc_path)) if os.path.exists(mc_path) else None}
+    with open(os.path.join(HERE, "results.json"), "w") as f:
+        json.dump(results, f, indent=1)
+    with open(os.path.join(HERE, "report.md"), "w") as f:
+        f.write(report(results))
+    print(f"{len(leases)} lease(s), arms: {', '.join(results['arms']) or 'none'}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
