@@ -168,6 +168,16 @@ def study_runs(leases: list[dict]) -> dict:
     return runs
 
 
+def kept_runs() -> dict:
+    """The study's runs as the arms' choice reads them: parsed from the kept console logs (``study_runs``) where the
+    tree holds every one; else, the raw runs having left the tree (issue 92), the committed results.json's ``runs``
+    (the numbers build.py parsed from those logs)."""
+    if not raw_missing() and glob.glob(os.path.join(HERE, "runs", "*", "train.log")):
+        return study_runs([])
+    with open(os.path.join(HERE, "results.json")) as f:
+        return json.load(f)["runs"]
+
+
 def raw_missing() -> str:
     """'' when every kept run (``runs/NAME/``) has its console log; else the first run folder without one."""
     for d in sorted(glob.glob(os.path.join(HERE, "runs", "*", ""))):
@@ -334,8 +344,9 @@ def gate(runs: dict, test: dict, stem: str = "gate") -> dict | None:
 
 
 def paid_arms(run_dirs: list[str]) -> list[str]:
-    """The changes that paid: the study's runs and those of ``run_dirs`` (NAME.log each), against the recipe."""
-    runs = study_runs([])
+    """The changes that paid: the study's runs (``kept_runs``) and those of ``run_dirs`` (NAME.log each), against the
+    recipe."""
+    runs = kept_runs()
     for d in run_dirs:
         for log in sorted(glob.glob(os.path.join(d, "*_s[0-9].log"))):
             name = os.path.basename(log)[:-4]

@@ -50,9 +50,40 @@ def test_a_change_pays_only_with_more_goals_and_no_more_falls():
     assert build.pays({"mean_chosen_goal": 0.95, "mean_chosen_fell_before_goal": 0.008}, base)
     assert not build.pays({"mean_chosen_goal": 0.95, "mean_chosen_fell_before_goal": 0.01}, base)
     assert not build.pays({"mean_chosen_goal": 0.92, "mean_chosen_fell_before_goal": 0.0}, base)
-    arms, paid = build.summarise(build.study_runs([])), build.paid_arms([])
+    # the study's own arms: from the kept logs where the tree holds them, else from the committed results.json
+    arms, paid = build.summarise(build.kept_runs()), build.paid_arms([])
+    with open(os.path.join(build.HERE, "results.json")) as f:
+        assert arms == json.load(f)["arms"]
     assert all(build.pays(arms[a], arms["recipe"]) and build.complete(arms[a], arms["recipe"]) for a in paid)
     assert build.choose([]) == build.arms_flags(paid)
+
+
+def test_the_choice_reads_the_committed_runs_without_the_raw_ones(tmp_path, monkeypatch):
+    """kept_runs: the runs parsed from runs/NAME/train.log while every kept run has its log; with none in the tree
+    (issue 92) the committed results.json's runs, so --choose and --gate-name still judge the study; a lease's runs
+    (--runs DIR) join them, and a study without recipe runs has nothing to compare with."""
+    (tmp_path / "runs" / "recipe_s1").mkdir(parents=True)
+    (tmp_path / "runs" / "recipe_s1" / "config.json").write_text("{}")   # the raw log gone, its config kept
+    kept = {"runs": {"recipe_s1": {"arm": "recipe", "seed": 1, "validation": {"candidates": [
+        {"file": "model_250.pt", "goal": 0.9, "fell_before_goal": 0.004, "chosen": True}], "goal_spread": 0.0}}}}
+    (tmp_path / "results.json").write_text(json.dumps(kept))
+    monkeypatch.setattr(build, "HERE", str(tmp_path))
+    assert build.raw_missing() and build.kept_runs() == kept["runs"]
+    lease = tmp_path / "lease"
+    lease.mkdir()
+    (lease / "settle_s1.log").write_text(LOG)   # goal 92.3 %, falls 0.4 %: more goals, no more falls
+    (lease / "critic_s1.log").write_text(LOG.replace("goal 92.3 %, fell before the goal 0.4 %",
+                                                     "goal 92.3 %, fell before the goal 0.5 %"))
+    assert build.paid_arms([str(lease)]) == ["settle"]
+    assert build.main(["--gate-name", "--runs", str(lease)]) == 0
+    (tmp_path / "runs" / "recipe_s1" / "train.log").write_text(LOG.replace("goal 92.3 %", "goal 99.0 %"))
+    assert not build.raw_missing() and build.kept_runs()["recipe_s1"]["validation"]["chosen"] == "model_250.pt"
+    assert build.paid_arms([str(lease)]) == []   # the log's recipe (99 %) now, not results.json's
+    (tmp_path / "results.json").write_text(json.dumps({"runs": {}}))
+    (tmp_path / "runs" / "recipe_s1" / "train.log").unlink()
+    with pytest.raises(ValueError, match="no recipe runs"):
+        build.paid_arms([str(lease)])
+    assert build.main(["--choose"]) == 2
 
 
 def test_arms_that_paid_give_each_flag_once(monkeypatch):

@@ -48,8 +48,12 @@ def load_lease(folder: str) -> dict:
     and, where profiled, its phases [s]; the calls that left only a log (``unfinished``)."""
     calls: dict = {m: [] for m in MODES}
     unfinished = []
-    for log in sorted(glob.glob(os.path.join(folder, "*.log"))):
-        name = os.path.basename(log)[:-4]
+    # a call's json without its log is a finished call whose console left the tree (issue 92): a call that left only
+    # its log (unfinished) is told by the logs alone (``logs_missing``)
+    names = {os.path.basename(p)[:-4] for p in glob.glob(os.path.join(folder, "*.log"))} | {
+        os.path.basename(p)[:-5] for p in glob.glob(os.path.join(folder, "*.json"))}
+    for name in sorted(names):
+        log = os.path.join(folder, name + ".log")
         mode = name.split("_")[0]
         if mode not in MODES:
             raise ValueError(f"{log}: not off_N.log or on_N.log")
@@ -133,6 +137,15 @@ def load_command(folder: str) -> dict:
                     "first_iteration_s": round(t["first_iteration_s"], 1), "train_s": round(t["train_s"], 1),
                     "validation_s": round(t["validation"]["seconds"], 1), "chosen": _chosen(t["validation"])}
     return {"date": os.path.basename(folder), "modes": modes}
+
+
+def logs_missing(name: str) -> str:
+    """'' when every call of A/B ``name`` (``NAME/raw/DATE/MODE_N.json``) has its console log beside it; else the first
+    log missing. Without the logs a call that never wrote its json (the lease's ``unfinished``) cannot be told."""
+    for path in sorted(glob.glob(os.path.join(STUDY, name, "raw", "*", "*.json"))):
+        if not os.path.isfile(path[:-5] + ".log"):
+            return os.path.relpath(path[:-5] + ".log", STUDY)
+    return ""
 
 
 def load(name: str) -> dict:
@@ -241,6 +254,12 @@ def main() -> None:
             return
         names = args.names or [n for n in ABS if os.path.isdir(os.path.join(STUDY, n, "raw"))]
         for name in names:
+            missing = logs_missing(name)
+            if missing:
+                raise FileNotFoundError(
+                    f"the raw calls' console logs are not in the tree ({missing}, removed in issue 92): restore them "
+                    f"with `git restore --source df27913 --worktree -- studies/throughput/{name}/raw` (its "
+                    "results.json and report.md stay as committed)")
             res = load(name)
             with open(os.path.join(STUDY, name, "results.json"), "w") as f:
                 json.dump(res, f, indent=1)

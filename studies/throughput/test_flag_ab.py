@@ -59,19 +59,62 @@ def test_the_effect_is_the_deferred_mean_over_the_per_step_one():
     assert study.effect({"off": calls["off"], "on": []})["4096"]["change"] is None
 
 
-def test_the_committed_report_renders_the_raw_calls():
-    """report.md and results.json are what flag_ab.py makes of episode_log/raw/ (a call that left only its log
-    makes the lease partial)."""
+def _committed(study, name: str) -> dict:
+    """The committed results.json of A/B ``name``, checked against what flag_ab.py makes of NAME/raw/ now: all of it
+    where the calls' console logs are in the tree; without them (issue 92: ``git restore --source df27913 --worktree
+    -- studies/throughput/NAME/raw`` brings them back) every number from the kept call jsons, and the calls that
+    left only a log (``unfinished``, which only the logs tell) as committed. report.md renders it."""
     import json
 
+    with open(os.path.join(HERE, name, "results.json")) as f:
+        kept = json.load(f)
+    got = json.loads(json.dumps(study.load(name)))
+    if study.logs_missing(name):
+        assert [le["unfinished"] for le in got["leases"]] == [[] for _ in kept["leases"]]
+        for le, k in zip(got["leases"], kept["leases"]):
+            le["unfinished"] = k["unfinished"]
+    assert got == kept, f"{name}/results.json is stale: python studies/throughput/flag_ab.py {name}"
+    with open(os.path.join(HERE, name, "report.md")) as f:
+        assert f.read() == study.render(kept)
+    return kept
+
+
+def test_the_committed_report_renders_the_raw_calls():
+    """report.md renders the committed results.json, whose numbers are what flag_ab.py makes of episode_log/raw/'s
+    calls (a call that left only its log makes the lease partial)."""
     study = _study()
-    res = study.load("episode_log")
-    with open(os.path.join(HERE, "episode_log", "results.json")) as f:
-        assert json.load(f) == json.loads(json.dumps(res))
-    with open(os.path.join(HERE, "episode_log", "report.md")) as f:
-        assert f.read() == study.render(res)
+    res = _committed(study, "episode_log")
     lease = res["leases"][0]
     assert lease["unfinished"] == ["on_2"] and "**Partial**" in study.render(res)
+
+
+def test_without_the_logs_flag_ab_writes_nothing(tmp_path, monkeypatch):
+    """A lease whose call jsons lack their console logs: the finished calls still load, but flag_ab.py refuses to
+    rewrite the report (an unfinished call, a log alone, cannot be told) and says how to get the logs back."""
+    import json
+    import sys
+
+    study = _study()
+    lease = tmp_path / "episode_log" / "raw" / "2026-01-01"
+    lease.mkdir(parents=True)
+    (lease / "gpu.txt").write_text("NVIDIA H100, 580\n")
+    bench = {"device_name": "NVIDIA H100", "sim": [{"num_envs": 4096, "robot_s_per_s": 1000.0}],
+             "pipeline": [{"num_envs": 4096, "env_steps_per_s": 9.0, "train_steps_per_s": 90.0,
+                           "train_robot_s_per_s": 600.0, "train_iteration_s": 1.0}]}
+    for call in ("off_1", "on_1"):
+        (lease / f"{call}.json").write_text(json.dumps(bench))
+    (lease / "on_1.log").write_text("exit 0\n")
+    monkeypatch.setattr(study, "STUDY", str(tmp_path))
+    assert study.logs_missing("episode_log") == os.path.join("episode_log", "raw", "2026-01-01", "off_1.log")
+    got = study.load("episode_log")["leases"][0]
+    assert [c["call"] for m in study.MODES for c in got["calls"][m]] == ["off_1", "on_1"] and not got["unfinished"]
+    monkeypatch.setattr(sys, "argv", ["flag_ab.py", "episode_log"])
+    with pytest.raises(SystemExit) as exc:
+        study.main()
+    assert "git restore --source df27913 --worktree -- studies/throughput/episode_log/raw" in str(exc.value.code)
+    assert not (tmp_path / "episode_log" / "results.json").exists()
+    (lease / "off_1.log").write_text("exit 0\n")
+    assert study.logs_missing("episode_log") == ""
 
 
 def test_profiled_calls_give_the_phases_per_mode(tmp_path):
@@ -120,12 +163,6 @@ def test_the_command_pair_gives_times_and_the_chosen_candidate(tmp_path):
 
 
 def test_the_committed_tf32_report_renders_its_calls_and_commands():
-    import json
-
     study = _study()
-    res = study.load("tf32")
-    with open(os.path.join(HERE, "tf32", "results.json")) as f:
-        assert json.load(f) == json.loads(json.dumps(res))
-    with open(os.path.join(HERE, "tf32", "report.md")) as f:
-        assert f.read() == study.render(res)
+    res = _committed(study, "tf32")
     assert [sorted(c["modes"]) for c in res["commands"]] == [["off", "on"]]
