@@ -3,6 +3,7 @@
     python studies/paper_comparison/compare.py --study studies/paper_comparison                   # report from a kept study
     python studies/paper_comparison/compare.py --study studies/paper_comparison --add LEASE/methods LEASE/method_evals
     python studies/paper_comparison/compare.py --runs RUNS --evals EVALS --out report_dir          # report from loose folders
+    python studies/paper_comparison/compare.py --study studies/paper_comparison --from_results     # verdict, report.md
 
 ``--runs`` holds one experiment folder per training run, named ``<method>_s<seed>`` (``cpg_rl``, ``paper``, ``joint``
 from ``train.py --task complex / paper / complex-joint``; ``sac_cpg``, ``td3_cpg``, ``a2c_cpg`` from
@@ -18,6 +19,10 @@ report is then written into DIR itself. Writes: ``report.md`` (what is still mis
 leases; the budget each run used; Table 3 for the deterministic and the sampled action; Fig. 5a), ``results.json``
 (every number), ``fig5a_env_steps.png`` and ``fig5a_wall_time.png`` with their ``.csv``
 (:func:`hexnewton.analysis.curves.plot_fig5a`).
+
+``--from_results`` (with ``--study``) writes the verdict (``results.json`` ``verdict``) and ``report.md`` again from
+the study's ``results.json`` alone: every number and figure stays as it is, and the runs' TensorBoard events, which
+the tracked study does not hold (its README, "Raw runs"), are not read. A full report refuses a run without them.
 """
 
 from __future__ import annotations
@@ -326,6 +331,27 @@ def _resolve_folders(args) -> list[dict]:
     return leases
 
 
+def from_results(study: str) -> int:
+    """The verdict and ``report.md`` of ``study`` again from its ``results.json`` alone (``--from_results``): the
+    numbers, the figures and the other keys stay as they are."""
+    path = os.path.join(study, "results.json")
+    if not os.path.isfile(path):
+        raise ValueError(f"no results.json in {study}")
+    with open(path) as f:
+        res = json.load(f)
+    res["verdict"] = claims(res, label)
+    figs = {"env_steps": [n for n in ("fig5a_env_steps.png",) if os.path.isfile(os.path.join(study, n))],
+            "wall_time": sorted(os.path.basename(p) for p in glob.glob(os.path.join(study, "fig5a_wall_time_*.png")))}
+    with open(path, "w") as f:
+        json.dump(res, f, indent=1)
+    discussion = os.path.join(study, "discussion.md")
+    text = open(discussion).read() if os.path.isfile(discussion) else None
+    with open(os.path.join(study, "report.md"), "w") as f:
+        f.write(report_markdown(res, figs if figs["env_steps"] or figs["wall_time"] else {}, text))
+    print(f"verdict and report.md in {study}/ from its results.json ({len(res['verdict'])} claims)")
+    return 0
+
+
 def main(argv: list[str] | None = None) -> int:
     p = ArgumentParser(prog="python studies/paper_comparison/compare.py", description=__doc__.split("\n")[0])
     p.add_argument("--study", default=None, help="a study folder kept across leases (runs/, evals/, leases.json); the "
@@ -339,13 +365,26 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--seeds", type=positive_int, default=3, help="seeds a complete study has per method (default 3)")
     p.add_argument("--terrains", nargs="+", default=["rugged", "stepped", "complex"],
                    help="terrains a complete study evaluates (default rugged stepped complex)")
+    p.add_argument("--from_results", action="store_true",
+                   help="with --study: the verdict and report.md again from the study's results.json alone (no runs "
+                        "or evaluations read; every number and figure stays)")  # fmt: skip
     args = p.parse_args(argv)
+    if args.from_results:
+        if args.study is None or args.add or args.runs or args.evals or args.out:
+            raise ValueError("--from_results takes --study DIR alone")
+        return from_results(args.study)
     leases = _resolve_folders(args)
     if args.evals is not None and not os.path.isdir(args.evals):
         raise ValueError(f"not a folder: {args.evals}")
     from store import read_done
 
     runs = find_runs(args.runs)
+    bare = [os.path.relpath(d, args.runs) for seeds in runs.values() for d in seeds.values()
+            if not glob.glob(os.path.join(d, "events.out.tfevents.*"))]  # fmt: skip
+    if bare:
+        raise ValueError(f"{len(bare)} runs without TensorBoard events under {args.runs} (first: {bare[0]}): Fig. 5a "
+                         "and the budgets need them; --study DIR --from_results writes the verdict and report.md from "
+                         "results.json alone")  # fmt: skip
     budgets = {}
     for m, seeds in runs.items():
         for s, d in seeds.items():

@@ -89,8 +89,9 @@ def test_study_of_two_methods_is_stored_and_reported(tmp_path, capsys):
     # the verdict: each claim worded by its numbers, every number read from results.json
     assert {v["verdict"] for v in res["verdict"]} <= {"holds", "holds in part", "does not hold"}
     assert {v["claim"].split(" (")[0] for v in res["verdict"]} >= {
-        "CPG_RL converges faster than SAC-CPG and A2C-CPG", "CPG_RL completes every task: 100 % at every distance on "
-        "every terrain"}  # fmt: skip
+        "CPG_RL converges faster than SAC-CPG on skrl's untuned `scale` preset and A2C-CPG on CPG_RL's PPO settings, "
+        "untuned for A2C", "CPG_RL completes every task: 100 % at every distance on every terrain"}  # fmt: skip
+    assert "## Tuned and preset" in report.split("## Verdict")[0]
     section = report.split("## Verdict")[1].split("\n## ")[0]
     assert section.count("\n- **") == len(res["verdict"])
     assert_numbers_from(section, res)
@@ -205,3 +206,44 @@ def test_fig5a_and_table3_over_seeds(tmp_path, capsys):
     # runs with no recorded GPU (no .done beside them) share one wall-time figure
     assert (out / "fig5a_env_steps.png").stat().st_size > 10000
     assert (out / "fig5a_wall_time_unrecorded.png").stat().st_size > 10000
+
+
+def test_the_kept_report_is_what_its_results_write(tmp_path):
+    """The study's report.md and verdict are what ``--from_results`` writes from its results.json, every number of the
+    verdict is one of results.json, and a claim about a baseline on settings not chosen for it names them."""
+    import os
+    import shutil
+
+    from verdict import ON
+
+    here = os.path.dirname(os.path.abspath(__file__))
+    study = tmp_path / "study"
+    study.mkdir()
+    for name in os.listdir(here):
+        if name in ("results.json", "discussion.md") or name.startswith("fig5a_") and name.endswith(".png"):
+            shutil.copy(os.path.join(here, name), study / name)
+    assert main(["--study", str(study), "--from_results"]) == 0
+    with open(os.path.join(here, "report.md")) as f:
+        assert (study / "report.md").read_text() == f.read()
+    with open(os.path.join(here, "results.json")) as f:
+        assert json.loads((study / "results.json").read_text()) == json.load(f)
+    res = json.loads((study / "results.json").read_text())
+    report = (study / "report.md").read_text()
+    assert_numbers_from(report.split("## Verdict")[1].split("\n## ")[0], res)
+    named = 0
+    for v in res["verdict"]:
+        for method, name in (("sac_cpg", "SAC-CPG"), ("td3_cpg", "TD3-CPG"), ("a2c_cpg", "A2C-CPG")):
+            if name in v["claim"]:
+                assert ON[method] in v["claim"], (method, v["claim"])
+                named += 1
+    assert named >= 5
+
+
+def test_a_study_without_its_runs_events_refuses_a_full_report(tmp_path):
+    run_dir = tmp_path / "runs" / "cpg_rl_s1" / "r"
+    run_dir.mkdir(parents=True)
+    (run_dir / "config.json").write_text("{}")
+    with pytest.raises(ValueError, match="without TensorBoard events .* --from_results"):
+        main(["--runs", str(tmp_path / "runs"), "--out", str(tmp_path / "out")])
+    with pytest.raises(ValueError, match="--from_results takes --study DIR alone"):
+        main(["--from_results", "--runs", str(tmp_path / "runs")])
