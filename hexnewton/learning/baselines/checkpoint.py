@@ -58,7 +58,7 @@ def load_baseline_policy(env, path: str, controller: str, stochastic: bool = Fal
         raise ValueError(f"{path} expects {meta.get('num_obs')} observations and {meta.get('num_actions')} actions; "
                          f"this environment has {env.num_obs} and {env.num_actions}")  # fmt: skip
     skrl_env = wrap_env(env)
-    device = env._obs_t.device
+    device = env.device_torch
     agent = make_agent(algo, config_from_dict(algo, meta.get("baseline")), skrl_env.observation_space,
                        skrl_env.action_space, device, env.num_envs, training=False)  # fmt: skip
     for name in ("policy", "observation_preprocessor"):
