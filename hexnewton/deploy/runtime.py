@@ -13,7 +13,9 @@ Per control step (``control_dt``, 20 ms by default) :meth:`Controller.step` take
 - the base orientation quaternion (x, y, z, w);
 - the goal relative to the robot in its heading frame (:func:`target_in_heading_frame`), or instead the robot's planar
   pose from odometry (x, y, yaw; ``pose``), from which the controller forms it toward the goal it keeps
-  (:meth:`Controller.set_goal`, in the odometry frame: a navigate bundle is steered by moving its goal);
+  (:meth:`Controller.set_goal`, in the odometry frame: a navigate bundle is steered by moving its goal; or a course of
+  waypoints from the start poses, :meth:`Controller.set_course`, walked goal by goal with :meth:`Controller.next_goal`,
+  the simulator's own switch: the episode's rules are :mod:`hexnewton.deploy.rules`', shared with the simulator);
 - the highest terrain within ±30 cm minus the ground under the robot (0 without a terrain sensor);
 - for a policy that observes it (``gyro`` in its layout: ``ObsConfig.gyro``), the base angular velocity in the body
   frame, the IMU's gyro [rad/s].
