@@ -129,8 +129,8 @@ def bench_env(terrain: str, num_envs: int, device: str, steps: int, seed: int = 
 
     cfg = _config(terrain, num_envs, device, seed, sim, ground, base)
     env = make_env(cfg)
-    gen = torch.Generator(device=env._obs_t.device).manual_seed(seed)
-    actions = torch.rand((8, num_envs, env.num_actions), generator=gen, device=env._obs_t.device) * 2 - 1
+    gen = torch.Generator(device=env.device_torch).manual_seed(seed)
+    actions = torch.rand((8, num_envs, env.num_actions), generator=gen, device=env.device_torch) * 2 - 1
     for k in range(max(steps // 10, 2)):  # capture + warm-up
         env.step(actions[k % 8])
     wp.synchronize_device(env.device)

@@ -7,15 +7,17 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import replace
+from types import SimpleNamespace
 
 import numpy as np
 
 from hexnewton.analysis.metrics import round_metrics, summarize
 from hexnewton.analysis.rollout import EVAL_TERRAIN_SEED, START_SEED_OFFSET
 from hexnewton.config import CPGConfig, RobotConfig, SimConfig, TaskConfig, TerrainConfig, terrain_for_goal
+from hexnewton.deploy import rules
 from hexnewton.deploy.mjcf import SENSORS_PER_ROBOT, build_model
 from hexnewton.deploy.runtime import FORMAT, Controller
-from hexnewton.mdp.status import FELL, NONFINITE, OFF_COURSE, RUNNING, SUCCESS, TIMEOUT
+from hexnewton.deploy.rules import RUNNING, SUCCESS
 from hexnewton.physics.reference import quat_to_rpy_np
 from hexnewton.physics.robot.geometry import footprint, leg_bounds, spawn_clearance
 
@@ -112,28 +114,19 @@ def start_poses(rounds: int, seed: int, task: TaskConfig | None = None, spread: 
 def episode_status(qpos: np.ndarray, qvel: np.ndarray, ground: np.ndarray, start_xy: np.ndarray, steps: int,
                    task: TaskConfig, goal: np.ndarray | None = None, course: np.ndarray | None = None,
                    last: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
-    """The episode ends of ``mdp/terms/terminations.py`` (TERMINATIONS, first match wins; those of
-    ``task.terminations``, the blow-up always) for robots (N, 25) / (N, 24) after ``steps`` control steps: (status
-    codes (N,), roll / pitch / yaw (N, 3)). Quaternions are MuJoCo's (w, x, y, z). ``goal`` (N, 2), its ``course``
-    (N, 2) and ``last`` (N,), whether it is the episode's last (``mdp/terms/goals.py``): None, the paper's goal
+    """The episode ends (the shared rule, :func:`hexnewton.deploy.rules.episode_status`, which the env's Warp kernel
+    is tested against: those of ``task.terminations``, the blow-up always) for MuJoCo robots (N, 25) / (N, 24) after
+    ``steps`` control steps: (status codes (N,), roll / pitch / yaw (N, 3)). Quaternions are MuJoCo's (w, x, y, z).
+    ``goal`` (N, 2), its ``course`` (N, 2) and ``last`` (N,), whether it is the episode's last: None, the paper's goal
     ``goal_distance`` ahead of ``start_xy`` along +x, the last."""
+    n = len(qpos)
     if goal is None:
-        goal, course = start_xy + [task.goal_distance, 0.0], np.tile([1.0, 0.0], (len(qpos), 1))
-    last = np.ones(len(qpos), bool) if last is None else np.asarray(last, bool)
-    finite = np.isfinite(qpos).all(axis=1) & np.isfinite(qvel).all(axis=1)
-    quat = np.where(finite[:, None], qpos[:, [4, 5, 6, 3]], [0.0, 0.0, 0.0, 1.0])
-    rpy = quat_to_rpy_np(quat)
-    with np.errstate(invalid="ignore"):
-        blown = ~finite | (np.linalg.norm(qvel[:, :3], axis=1) > task.max_base_speed) | \
-            (np.abs(qvel[:, 6:]) > task.max_joint_speed).any(axis=1)
-        fell = (qpos[:, 2] - ground < task.min_height) | (np.abs(rpy[:, :2]) > task.max_tilt).any(axis=1)
-        off = np.abs((qpos[:, 1] - goal[:, 1]) * course[:, 0] - (qpos[:, 0] - goal[:, 0]) * course[:, 1]) > task.max_abs_y
-        won = last & (np.hypot(goal[:, 0] - qpos[:, 0], goal[:, 1] - qpos[:, 1]) < task.goal_radius)
-    late = np.full(len(qpos), steps >= task.max_episode_steps)
-    ends = {"fell": (fell, FELL), "off_course": (off, OFF_COURSE), "success": (won, SUCCESS), "timeout": (late, TIMEOUT)}
-    rows = [ends[name] for name in ends if name in task.terminations]
-    status = np.select([blown] + [r[0] for r in rows], [NONFINITE] + [r[1] for r in rows], RUNNING)
-    return status, np.where((status == NONFINITE)[:, None], 0.0, rpy)
+        goal, course = start_xy + [task.goal_distance, 0.0], np.tile([1.0, 0.0], (n, 1))
+    last = np.ones(n, bool) if last is None else np.asarray(last, bool)
+    joint_q = np.concatenate([qpos[:, :3], qpos[:, [4, 5, 6, 3]], qpos[:, 7:]], axis=1)  # the quaternion as x y z w
+    goals = SimpleNamespace(goal=goal, course=course, left=np.where(last, 0, 1))
+    inputs = rules.EndInputs(joint_q, qvel, np.full(n, steps - 1), goals, ground, task)
+    return rules.episode_status(inputs, task.terminations)
 
 
 class Rounds:
@@ -201,44 +194,49 @@ class Rounds:
         return replace(navigation_terrain(terrain), seed=seed)
 
     def _first_goals(self) -> None:
-        """Each robot's goals in the world (``course`` (N, K, 2): the one ahead, or the waypoints in its start frame)
-        and their ground heights, the first of them set (:meth:`_set_goals`)."""
+        """Each robot's goals (the one ahead, or the waypoints in its start frame) set in the runtime from its start
+        (``Controller.set_course``, the env's rule), with the ground under each (``course`` (N, K, 2) in the world,
+        ``course_z`` (N, K))."""
+        pose = np.c_[self.start, self.start_yaw]
         if self.course_points is None:
-            world = (self.start + [self.task.goal_distance, 0.0])[:, None]
+            self.course = (self.start + [self.task.goal_distance, 0.0])[:, None]
         else:
-            c, s = np.cos(self.start_yaw)[:, None], np.sin(self.start_yaw)[:, None]
-            w = self.course_points[None]
-            world = np.stack([self.start[:, :1] + c * w[..., 0] - s * w[..., 1],
-                              self.start[:, 1:] + s * w[..., 0] + c * w[..., 1]], axis=-1)  # fmt: skip
-        self.course = world
-        self.course_z = np.array([[self.scan.height(x, y) for x, y in row] for row in world])
-        self.leg = np.zeros(self.n, np.int64)  # the goal each robot walks to now (goals reached before it)
-        self.goal, self.goal_z, self.line = np.zeros((self.n, 2)), np.zeros(self.n), np.tile([1.0, 0.0], (self.n, 1))
-        self._set_goals(self.start, np.ones(self.n, bool))
+            w = np.broadcast_to(self.course_points, (self.n, *self.course_points.shape))
+            self.course = rules.waypoints_world(self.start, self.start_yaw, w)
+        self.course_z = np.array([[self.scan.height(x, y) for x, y in row] for row in self.course])
+        self.ctrl.set_course(pose, self.course_points, self.course_z, self.task.goal_distance, self.task.goal_radius)
 
-    def _set_goals(self, xy: np.ndarray, which: np.ndarray) -> None:
-        """Robots ``which``: goal number ``leg`` of their course, its line from ``xy`` (+x for the one ahead), whether
-        it is the last; the runtime gets every robot's goal (``Controller.set_goal``)."""
-        k = np.minimum(self.leg, self.course.shape[1] - 1)
-        goal, goal_z = self.course[np.arange(self.n), k], self.course_z[np.arange(self.n), k]
-        self.goal[which], self.goal_z[which] = goal[which], goal_z[which]
-        if self.course_points is not None:
-            d = goal - xy
-            norm = np.hypot(d[:, 0], d[:, 1])
-            line = np.where((norm > 1e-6)[:, None], d / np.maximum(norm, 1e-6)[:, None], [1.0, 0.0])
-            self.line[which] = line[which]
-        self.final = self.leg >= self.course.shape[1] - 1
-        self.ctrl.set_goal(self.goal[:, 0], self.goal[:, 1], self.goal_z)
+    @property
+    def goal(self) -> np.ndarray:
+        """Each robot's goal now (N, 2) in the world."""
+        return self.ctrl.goals.goal
+
+    @property
+    def goal_z(self) -> np.ndarray:
+        """The ground under each robot's goal (N,)."""
+        return self.ctrl.goal[:, 2]
+
+    @property
+    def line(self) -> np.ndarray:
+        """The unit vector (N, 2) of each goal's course line (+x for the one ahead)."""
+        return self.ctrl.goals.course
+
+    @property
+    def final(self) -> np.ndarray:
+        """Whether each robot's goal is its last (N,)."""
+        return self.ctrl.goals.left == 0
+
+    @property
+    def leg(self) -> np.ndarray:
+        """The goal each robot walks to now (the goals reached before it) (N,)."""
+        return self.ctrl.goals.reached
 
     def next_goals(self, status: np.ndarray) -> None:
-        """Robots still walking within ``goal_radius`` of a goal that is not their last: the next waypoint, as the
-        env's goal switch (``mdp/terms/goals.py``)."""
-        q = self.d.qpos.reshape(self.n, 25)[:, :2]
-        near = np.hypot(self.goal[:, 0] - q[:, 0], self.goal[:, 1] - q[:, 1]) < self.task.goal_radius
-        switch = self.alive & (status == RUNNING) & ~self.final & near
-        if switch.any():
-            self.leg[switch] += 1
-            self._set_goals(q, switch)
+        """Robots still walking within ``goal_radius`` of a goal that is not their last: the next waypoint, by the
+        env's goal switch (``Controller.next_goal``, the shared rule)."""
+        q = self.d.qpos.reshape(self.n, 25)
+        pose = np.c_[q[:, :2], quat_to_rpy_np(q[:, [4, 5, 6, 3]])[:, 2]]
+        self.ctrl.next_goal(pose, self.alive & (status == RUNNING))
 
     def _show_only(self, k: int) -> None:
         """Robot ``k``'s geoms in group 0, the others' in group 3 (hidden by the viewer's and renderer's defaults)."""

@@ -13,7 +13,9 @@ Per control step (``control_dt``, 20 ms by default) :meth:`Controller.step` take
 - the base orientation quaternion (x, y, z, w);
 - the goal relative to the robot in its heading frame (:func:`target_in_heading_frame`), or instead the robot's planar
   pose from odometry (x, y, yaw; ``pose``), from which the controller forms it toward the goal it keeps
-  (:meth:`Controller.set_goal`, in the odometry frame: a navigate bundle is steered by moving its goal);
+  (:meth:`Controller.set_goal`, in the odometry frame: a navigate bundle is steered by moving its goal; or a course of
+  waypoints from the start poses, :meth:`Controller.set_course`, walked goal by goal with :meth:`Controller.next_goal`,
+  the simulator's own switch: the episode's rules are :mod:`hexnewton.deploy.rules`', shared with the simulator);
 - the highest terrain within ±30 cm minus the ground under the robot (0 without a terrain sensor);
 - for a policy that observes it (``gyro`` in its layout: ``ObsConfig.gyro``), the base angular velocity in the body
   frame, the IMU's gyro [rad/s].
@@ -46,8 +48,12 @@ import json
 import math
 import os
 
+from types import SimpleNamespace
+
 import numpy as np
 
+from hexnewton.config import TaskConfig
+from hexnewton.deploy import rules
 from hexnewton.physics.reference import (
     hopf_cpg_reference,
     initial_cpg_state,
@@ -142,6 +148,7 @@ class Controller:
                                                                  ("hold", 1))}  # fmt: skip
         self.last_actions = np.zeros((self.n, int(spec["num_actions"])))  # the observation's ``last_action``
         self.goal = None  # (N, 3): the goal's ground point in the odometry frame (set_goal)
+        self.goals = None  # rules.Goals: the episode's course (set_course), None for a goal of set_goal
         self.reset()
 
     def reset(self, mask=None) -> None:
@@ -171,6 +178,56 @@ class Controller:
             raise ValueError(f"set_goal: finite x, y, ground_z, numbers or one per robot ({self.n}), got shape "
                              f"{g.shape}")  # fmt: skip
         self.goal = np.broadcast_to(g.reshape(-1, 3), (self.n, 3)).copy()
+        self.goals = None
+
+    def set_course(self, pose, waypoints=None, ground_z=None, goal_distance=None, goal_radius=None) -> None:
+        """The episode's goals as the simulator sets them (the shared rule, :mod:`hexnewton.deploy.rules`) for robots
+        starting at their planar poses ``pose`` (N, 3) in the odometry frame (x, y [m], yaw [rad]): the ``waypoints``
+        ((K, 2) for every robot or (N, K, 2)) of a course in each start frame (x along the start heading) in turn, the
+        last ending the episode; or, none given, the one goal ``goal_distance`` ahead along the frame's +x (None: the
+        bundle's ``goal_distance``). ``ground_z`` (N, K): the ground under each goal (None: 0); ``goal_radius``: within
+        it a goal is reached (None: the bundle's, else ``TaskConfig``'s). Sets the first goal; :meth:`next_goal` gives
+        the next ones, ``goals`` holds the course (its ``course`` line, ``left`` after this one, ``reached``)."""
+        p = np.asarray(pose, np.float64).reshape(self.n, 3)
+        w = None if waypoints is None else np.asarray(waypoints, np.float64)
+        if w is not None and (w.ndim not in (2, 3) or w.shape[-1] != 2 or not np.isfinite(w).all()):
+            raise ValueError(f"set_course: waypoints (K, 2) or ({self.n}, K, 2) finite x, y [m], got shape {w.shape}")
+        self.goals = rules.start_goals(p[:, :2], p[:, 2], w)
+        k = max(self.goals.waypoint_count, 1)
+        self.goal_ground = np.zeros((self.n, k)) if ground_z is None else np.broadcast_to(
+            np.asarray(ground_z, np.float64).reshape(-1, k), (self.n, k)).copy()  # fmt: skip
+        if goal_distance is None:
+            goal_distance = self.spec.get("goal_distance", TaskConfig.goal_distance)
+        if goal_radius is None:
+            goal_radius = self.spec.get("goal_radius", TaskConfig.goal_radius)
+        self._rule = SimpleNamespace(random_goals=False, goal_distance=float(goal_distance),
+                                     goal_radius=float(goal_radius))  # fmt: skip
+        zero = np.zeros(self.n)
+        self.goals.goal, self.goals.course, self.goals.left = rules.set_goal(
+            self.goals, self._rule, np.zeros(self.n, np.int64), p[:, 0], p[:, 1], p[:, 2], zero, zero)
+        self._course_goal()
+
+    def _course_goal(self) -> None:
+        """:attr:`goal` from the course's current goal and the ground under it."""
+        k = np.minimum(self.goals.reached, self.goal_ground.shape[1] - 1)
+        self.goal = np.c_[self.goals.goal, self.goal_ground[np.arange(self.n), k]]
+
+    def next_goal(self, pose, running=None) -> np.ndarray:
+        """Robots still walking (``running`` (N,) bool, default all) within ``goal_radius`` of a goal of the course
+        (:meth:`set_course`) that is not their last get the next one, as the simulator's goal switch
+        (:func:`hexnewton.deploy.rules.goal_switch`); ``pose`` (N, 3): their planar poses. Returns which switched."""
+        if self.goals is None:
+            raise ValueError("no course: call set_course(pose, waypoints) first")
+        p = np.asarray(pose, np.float64).reshape(self.n, 3)
+        run = np.ones(self.n, bool) if running is None else np.asarray(running, bool)
+        zero = np.zeros(self.n)
+        out = rules.goal_switch(np.where(run, rules.RUNNING, rules.NONFINITE), p[:, 0], p[:, 1], p[:, 2], self.goals,
+                                self._rule, zero, zero)  # fmt: skip
+        if out["switched"].any():
+            self.goals.goal, self.goals.course, self.goals.left, self.goals.reached = (
+                out[k] for k in ("goal", "course", "left", "reached"))
+            self._course_goal()
+        return out["switched"]
 
     def target_from_pose(self, pose, base_z=None) -> np.ndarray:
         """The observation's target (N, 3) toward the goal of :meth:`set_goal` from the robots' planar poses ``pose``

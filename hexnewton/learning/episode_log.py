@@ -7,12 +7,15 @@ while the next step's policy inference and env launch are queued. :class:`Deferr
 the device and notes each step's finished episodes there; :meth:`DeferredEpisodes.flush` (once per iteration, before
 rsl-rl's ``Logger.log`` reads them) copies them to the host in one read and extends the logger's buffers with the
 same values, in the same order (step by step, env by env), as rsl-rl's own bookkeeping would have. Nothing the
-learner computes changes; what the logger writes is the same.
+learner computes changes; what the logger writes is the same. The Logger's methods and buffers it uses are those of
+``rsl_rl_private.py`` (checked against the pinned rsl-rl).
 """
 
 from __future__ import annotations
 
 import torch
+
+from hexnewton.learning.rsl_rl_private import replace_logger_method
 
 
 class DeferredEpisodes:
@@ -21,8 +24,8 @@ class DeferredEpisodes:
 
     def __init__(self, logger):
         self.logger = logger
-        self._rsl_process, logger.process_env_step = logger.process_env_step, self.process_env_step
-        self._rsl_log, logger.log = logger.log, self.log
+        self._rsl_process = replace_logger_method(logger, "process_env_step", self.process_env_step)
+        self._rsl_log = replace_logger_method(logger, "log", self.log)
         self._done: list[torch.Tensor] = []
         self._returns: list[torch.Tensor] = []
         self._lengths: list[torch.Tensor] = []

@@ -58,7 +58,7 @@ def fixed_cpg_actions(env, gait: str = "default", params: np.ndarray | None = No
     lo, hi = env.cfg.cpg.param_ranges()
     p = env.cfg.cpg.fixed_params(gait) if params is None else env.cfg.cpg.with_posture(params)
     a = np.broadcast_to(np.clip(params_to_actions(p, lo, hi), -1.0, 1.0), (env.num_envs, len(lo)))
-    return torch.tensor(np.ascontiguousarray(a), dtype=torch.float32, device=env._obs_t.device)
+    return torch.tensor(np.ascontiguousarray(a), dtype=torch.float32, device=env.device_torch)
 
 
 def policy_checkpoint(path: str) -> tuple[dict, str]:
@@ -94,7 +94,7 @@ def load_runner(env, path: str, action_mode: str, ckpt: dict | None = None):
     check_compatible(ckpt, path, env.num_obs, env.num_actions, action_mode)
     tcfg = checkpoint_agent(ckpt).to_rsl_rl(env.num_envs, env.obs_groups)
     with contextlib.redirect_stdout(io.StringIO()):  # rsl-rl prints both networks in full
-        runner = PolicyRunner(env, copy.deepcopy(tcfg), log_dir=None, device=str(env._obs_t.device))
+        runner = PolicyRunner(env, copy.deepcopy(tcfg), log_dir=None, device=str(env.device_torch))
     # the actor alone: full training checkpoints and actor-only policy files (results/policies) both load
     load_into_runner(runner, ckpt, {"actor": True})
     return runner
@@ -125,7 +125,7 @@ def load_policy(env, path: str, action_mode: str, stochastic: bool = False, expe
     if stochastic and expected:
         raise ValueError("choose sampled (--stochastic) or expected (--expected) actions, not both")
     runner = load_runner(env, path, action_mode, ckpt)
-    device = str(env._obs_t.device)
+    device = str(env.device_torch)
     policy = runner.get_inference_policy(device=device)
     if stochastic:
         return lambda obs: policy(obs, stochastic_output=True)

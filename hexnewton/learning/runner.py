@@ -25,6 +25,7 @@ from hexnewton.learning.episode_log import DeferredEpisodes
 from hexnewton.learning.lanes import LaneLog
 from hexnewton.learning.policy import export_onnx
 from hexnewton.learning.ranks import Rank
+from hexnewton.learning.rsl_rl_private import replace_logger_method, set_git_status_repos
 from hexnewton.learning.stopping import TrainingStopped, catch_stop_signals
 
 
@@ -270,7 +271,7 @@ class HexRunner(RankedRunner):
         train_cfg = agent.to_rsl_rl(env.num_envs, env.obs_groups)  # the critic reads every group the env emits
         super().__init__(env, train_cfg, log_dir=log_dir, device=device, rank=rank)
         # the run's git/ folder records hexnewton's commit and diff (rsl-rl's default looks for its own repo)
-        self.logger.git_status_repos = [os.path.dirname(os.path.abspath(__file__))]
+        set_git_status_repos(self.logger, [os.path.dirname(os.path.abspath(__file__))])
         self.agent, self.meta = agent, meta
         self.run_dir = log_dir
         self.levels = env.cfg.terrain.levels
@@ -279,8 +280,8 @@ class HexRunner(RankedRunner):
         self.lanes = LaneLog(env) if self.levels else None  # what training saw of its curriculum (learning/lanes.py)
         self._reduce = _sum_over_ranks(device) if rank.world_size > 1 else None
         learner_settings(self, agent)
-        self._rsl_log, self.logger.log = self.logger.log, self._after_iteration
-        self._rsl_init_writer, self.logger.init_logging_writer = self.logger.init_logging_writer, self._init_writer
+        self._rsl_log = replace_logger_method(self.logger, "log", self._after_iteration)  # rsl_rl_private.py
+        self._rsl_init_writer = replace_logger_method(self.logger, "init_logging_writer", self._init_writer)
         self._stage, self._time_up, self._t0 = None, False, time.time()
         self.first_iteration_s = None  # seconds from the process's start to the end of the first iteration
         startup.mark("runner")

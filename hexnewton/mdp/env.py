@@ -198,7 +198,7 @@ class HexapodEnv(VecEnv):
         self._ring_t = wp.to_torch(self._ring)
         self._steps_t = wp.to_torch(self.episode_steps)
         self._nonfinite_t = wp.to_torch(self._nonfinite_total)
-        self._overflow_frames_t = torch.zeros((), device=self._obs_t.device)  # frames with dropped contacts
+        self._overflow_frames_t = torch.zeros((), device=self.device_torch)  # frames with dropped contacts
 
     def _curriculum_buffers(self) -> None:
         """Each env's curriculum level (``TerrainConfig.levels`` > 0; None without a curriculum), placed on its lane."""
@@ -220,6 +220,11 @@ class HexapodEnv(VecEnv):
                       outputs=[self.lane, self.lane_z], device=dev)  # fmt: skip
 
     # ------------------------------------------------------------------ rsl-rl VecEnv API
+    @property
+    def device_torch(self) -> torch.device:
+        """The torch device of the env's tensors, where actions go (``device``: its name, Warp's and rsl-rl's)."""
+        return self._obs_t.device
+
     @property
     def episode_length_buf(self) -> torch.Tensor:
         return self._steps_t
@@ -248,7 +253,7 @@ class HexapodEnv(VecEnv):
         groups = {"policy": self._obs_t.clone()}
         if self.critic_obs is not None:
             groups["critic"] = self._critic_t.clone()
-        return TensorDict(groups, batch_size=[self.num_envs], device=self._obs_t.device)
+        return TensorDict(groups, batch_size=[self.num_envs], device=self.device_torch)
 
     def step(self, actions: torch.Tensor) -> tuple[TensorDict, torch.Tensor, torch.Tensor, dict]:
         """One control step of every env: ``actions`` copied into the step's buffer, then, in one captured graph

@@ -9,7 +9,9 @@ and its version, when an upgrade moves one.
 - the flag Newton's contact reduction raises when it drops candidates (:func:`reduction_overflow`; ``Contacts``
   keeps it as one slot of ``contact_counters``, whose layout it does not document);
 - Warp's struct type (``WarpStruct``, :func:`warp_struct_type`), for the MDP's configuration structs: ``wp.struct``
-  makes one, ``warp.types.type_is_struct`` tests for one, no public name holds the class.
+  makes one, ``warp.types.type_is_struct`` tests for one, no public name holds the class;
+- Newton's mesh boundary flags, which ``ModelBuilder.finalize`` computes for each mesh shape: the studies time them
+  (:func:`time_mesh_boundary_flags`; studies/startup_mesh, studies/navigate).
 
 What each name is for is said where it is used (``precompile.py``, ``device.py``, ``world.py``,
 ``mdp/terms/structs.py``)."""
@@ -30,6 +32,8 @@ SOLVER_MODULES = ("mujoco_warp._src.smooth", "mujoco_warp._src.set_const", "newt
 #: Newton's collision modules whose generated kernels its narrow phase launches with its own block sizes on CUDA
 NARROW_PHASE_SOURCES = ("newton._src.geometry.narrow_phase", "newton._src.geometry.contact_reduction_global")
 CONTACT_REDUCTION = "newton._src.geometry.contact_reduction_global"
+#: Newton's module whose ``compute_mesh_boundary_flags`` ``ModelBuilder.finalize`` imports for each mesh shape
+MESH_BOUNDARY_FLAGS = "newton._src.geometry.sdf_contact"
 
 
 def warp_user_modules() -> dict:
@@ -71,3 +75,30 @@ def export_reduced_contacts_block_dim() -> int:
     from newton._src.geometry.contact_reduction_global import EXPORT_REDUCED_CONTACTS_BLOCK_DIM
 
     return EXPORT_REDUCED_CONTACTS_BLOCK_DIM
+
+
+def time_mesh_boundary_flags(seconds: list):
+    """From now on every call of Newton's ``compute_mesh_boundary_flags`` (``ModelBuilder.finalize``, once per mesh
+    shape) appends its CPU seconds to ``seconds``; returns Newton's own function (:func:`untime_mesh_boundary_flags`
+    puts it back)."""
+    import importlib
+    import time
+
+    module = importlib.import_module(MESH_BOUNDARY_FLAGS)
+    real = module.compute_mesh_boundary_flags
+
+    def timed(mesh):
+        t = time.process_time()
+        out = real(mesh)
+        seconds.append(time.process_time() - t)
+        return out
+
+    module.compute_mesh_boundary_flags = timed
+    return real
+
+
+def untime_mesh_boundary_flags(real) -> None:
+    """Newton's ``compute_mesh_boundary_flags`` (what :func:`time_mesh_boundary_flags` returned) back in place."""
+    import importlib
+
+    importlib.import_module(MESH_BOUNDARY_FLAGS).compute_mesh_boundary_flags = real

@@ -29,22 +29,14 @@ CASES = {"navigate-rugged": ("navigate-rugged", False), "navigate-rugged waterti
 def _one(case: str) -> dict:
     import newton
     import warp as wp
-    from newton._src.geometry import sdf_contact
 
+    from hexnewton.physics.private_api import time_mesh_boundary_flags
     from hexnewton.physics.terrain import make_terrain
     from hexnewton.tasks import task
 
     wp.init()
     boundary = []
-    real = sdf_contact.compute_mesh_boundary_flags
-
-    def timed(mesh):  # the builder imports it from sdf_contact at finalize time
-        t = time.process_time()
-        out = real(mesh)
-        boundary.append(time.process_time() - t)
-        return out
-
-    sdf_contact.compute_mesh_boundary_flags = timed
+    time_mesh_boundary_flags(boundary)  # Newton's ModelBuilder.finalize computes them per mesh shape
     name, watertight = CASES[case]
     cfg = replace(task(name).env.terrain, watertight=watertight)
     t0, c0 = time.perf_counter(), time.process_time()

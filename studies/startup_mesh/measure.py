@@ -26,23 +26,15 @@ def _one(name: str) -> list[dict]:
     import newton
     import numpy as np
     import warp as wp
-    from newton._src.geometry import sdf_contact
 
+    from hexnewton.physics.private_api import time_mesh_boundary_flags
     from hexnewton.physics.terrain import build_height_grid, make_terrain
     from hexnewton.physics.terrain.mesh import _merge_close_heights, grid_to_mesh
     from hexnewton.tasks import task
 
     wp.init()
     boundary_s = []
-    real = sdf_contact.compute_mesh_boundary_flags
-
-    def timed(mesh):  # the builder imports it from sdf_contact at finalize time
-        t = time.process_time()
-        out = real(mesh)
-        boundary_s.append(time.process_time() - t)
-        return out
-
-    sdf_contact.compute_mesh_boundary_flags = timed
+    time_mesh_boundary_flags(boundary_s)  # Newton's ModelBuilder.finalize computes them per mesh shape
     base = task(name).env.terrain
     grid = build_height_grid(base)
     h = grid.heights.astype(np.float32)

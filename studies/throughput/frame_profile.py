@@ -84,8 +84,8 @@ def profile(task_name: str, num_envs: int, steps: int, warmup: int, seed: int) -
     t = task(task_name)
     cfg = replace(t.env, sim=replace(t.env.sim, num_envs=num_envs, device="cuda", use_graph=False))
     env = make_env(cfg, t.action_mode)
-    gen = torch.Generator(device=env._obs_t.device).manual_seed(seed)
-    actions = torch.rand((8, num_envs, env.num_actions), generator=gen, device=env._obs_t.device) * 2 - 1
+    gen = torch.Generator(device=env.device_torch).manual_seed(seed)
+    actions = torch.rand((8, num_envs, env.num_actions), generator=gen, device=env.device_torch) * 2 - 1
     env.reset()
     for k in range(warmup):  # loads every module, fills the contact buffers
         env.step(actions[k % 8])

@@ -40,6 +40,9 @@ def test_vecenv_api(env):
     assert obs["policy"].shape == (6, 59) and torch.isfinite(obs["policy"]).all()
     assert rew.shape == (6,) and rew.dtype == torch.float32
     assert done.shape == (6,) and extras["time_outs"].shape == (6,)
+    # the torch device, public: the env's tensors are on it, and rsl-rl's VecEnv.device names it
+    assert isinstance(env.device_torch, torch.device) and obs["policy"].device == rew.device == env.device_torch
+    assert torch.device(str(env.device)) == env.device_torch
     assert all(k.count("/") == 1 and v.dim() == 0 for k, v in extras["log"].items())
     assert {f"Reward/{t}" for t in REWARD_NAMES} <= set(extras["log"])
     # rsl-rl's learn(init_at_random_ep_len=True) assigns a new tensor: it must reach the Warp buffer

@@ -76,3 +76,30 @@ def test_a_moved_name_fails_with_one_clear_line():
     exc = ImportError("No module named 'newton._src.sim.collide'")
     line = _moved("newton._src.sim.collide", exc)
     assert "\n" not in line and f"newton {version('newton')}" in line and "private_api.py" in line
+
+
+def test_mesh_boundary_flags_are_timed_where_the_builder_finds_them():
+    """Newton's ``compute_mesh_boundary_flags`` is where ``ModelBuilder.finalize`` imports it from at finalize time;
+    timed, a call of it is counted, and Newton's own comes back."""
+    import inspect
+
+    import numpy as np
+    import warp as wp
+
+    try:
+        module = importlib.import_module(private_api.MESH_BOUNDARY_FLAGS)
+        real = module.compute_mesh_boundary_flags
+        builder = importlib.import_module("newton._src.sim.builder")
+    except (ImportError, AttributeError) as exc:
+        pytest.fail(_moved(private_api.MESH_BOUNDARY_FLAGS + ".compute_mesh_boundary_flags", exc))
+    assert "from ..geometry.sdf_contact import compute_mesh_boundary_flags" in inspect.getsource(builder), \
+        f"newton {version('newton')}'s ModelBuilder.finalize no longer imports it from sdf_contact"  # fmt: skip
+    seconds: list = []
+    assert private_api.time_mesh_boundary_flags(seconds) is real
+    try:
+        points = wp.array(np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0]], np.float32), dtype=wp.vec3, device="cpu")
+        mesh = wp.Mesh(points=points, indices=wp.array(np.array([0, 1, 2], np.int32), device="cpu"))
+        module.compute_mesh_boundary_flags(mesh)
+    finally:
+        private_api.untime_mesh_boundary_flags(real)
+    assert len(seconds) == 1 and module.compute_mesh_boundary_flags is real

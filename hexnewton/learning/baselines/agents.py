@@ -5,6 +5,7 @@ from __future__ import annotations
 from hexnewton.learning.baselines.config import BaselineConfig
 from hexnewton.learning.baselines.models import make_models
 from hexnewton.learning.baselines.requirement import require_skrl
+from hexnewton.learning.baselines.skrl_private import preprocess_observations
 
 
 def make_agent(algo: str, cfg: BaselineConfig, observation_space, action_space, device, num_envs: int,
@@ -68,7 +69,7 @@ def make_agent(algo: str, cfg: BaselineConfig, observation_space, action_space, 
 def deterministic_action(algo: str, agent, observations):
     """The action a trained agent runs: SAC's tanh(mean), TD3's actor, A2C's mean clipped to [-1, 1]; observations
     through the agent's normaliser."""
-    inputs = {"observations": agent._observation_preprocessor(observations), "states": None}
+    inputs = {"observations": preprocess_observations(agent, observations), "states": None}
     actions, outputs = agent.policy.act(inputs, role="policy")
     if algo == "td3":
         return actions
@@ -77,6 +78,6 @@ def deterministic_action(algo: str, agent, observations):
 
 def sampled_action(algo: str, agent, observations):
     """An action sampled as in training, without TD3's exploration noise (TD3's actor is deterministic)."""
-    inputs = {"observations": agent._observation_preprocessor(observations), "states": None}
+    inputs = {"observations": preprocess_observations(agent, observations), "states": None}
     actions, _ = agent.policy.act(inputs, role="policy")
     return actions.clamp(-1.0, 1.0)

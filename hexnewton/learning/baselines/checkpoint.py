@@ -8,6 +8,7 @@ import os
 from hexnewton.learning.baselines.agents import deterministic_action, make_agent, sampled_action
 from hexnewton.learning.baselines.config import ALGOS, CONTROLLERS, LABELS, config_from_dict
 from hexnewton.learning.baselines.env import wrap_env
+from hexnewton.learning.baselines.skrl_private import module_state
 
 FORMAT = "hexnewton-skrl-2.1"
 
@@ -17,7 +18,7 @@ def save_checkpoint(path: str, agent, meta: dict, env_steps: int, timestep: int)
     temporary file and renamed (atomic)."""
     import torch
 
-    modules = {name: agent._get_internal_value(m) for name, m in agent.checkpoint_modules.items() if m is not None}
+    modules = {name: module_state(agent, m) for name, m in agent.checkpoint_modules.items() if m is not None}
     torch.save({"format": FORMAT, "algo": meta["algo"], "modules": modules, "env_steps": int(env_steps),
                 "timestep": int(timestep), "infos": {"hexnewton": meta}}, path + ".tmp")  # fmt: skip
     os.replace(path + ".tmp", path)
@@ -58,7 +59,7 @@ def load_baseline_policy(env, path: str, controller: str, stochastic: bool = Fal
         raise ValueError(f"{path} expects {meta.get('num_obs')} observations and {meta.get('num_actions')} actions; "
                          f"this environment has {env.num_obs} and {env.num_actions}")  # fmt: skip
     skrl_env = wrap_env(env)
-    device = env._obs_t.device
+    device = env.device_torch
     agent = make_agent(algo, config_from_dict(algo, meta.get("baseline")), skrl_env.observation_space,
                        skrl_env.action_space, device, env.num_envs, training=False)  # fmt: skip
     for name in ("policy", "observation_preprocessor"):

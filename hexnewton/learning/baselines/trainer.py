@@ -113,7 +113,7 @@ class BaselineTrainer:
         agent.init(trainer_cfg=self.trainer_cfg)
         agent.enable_training_mode(True)
         writer = SummaryWriter(log_dir=self.run_dir)
-        returns = EpisodeReturns(self.hex_env.num_envs, self.hex_env._obs_t.device)
+        returns = EpisodeReturns(self.hex_env.num_envs, self.hex_env.device_torch)
         handlers = catch_stop_signals()
         t0 = time.monotonic()
         deadline = t0 + 60.0 * budget.max_minutes if budget.max_minutes else math.inf

@@ -1,6 +1,7 @@
 """Goals (ours; the MDP's command): each env's goal, stored per env in :class:`Goals`, which every term reads; where the
 first goal of an episode and each next one lie (:func:`set_goal`); the switch to the next goal
-(:func:`goal_switch_kernel`); their float64 twins.
+(:func:`goal_switch_kernel`); their float64 twins, the episode's one NumPy definition of its goals in
+``hexnewton/deploy/rules.py`` (which the robot runtime and C MuJoCo's closed loop share).
 
 The paper's task has one goal, ``TaskConfig.goal_distance`` ahead of the start along +x, whose reaching ends the episode
 (§2.4.4 (3)). The terms read, per env:
@@ -40,6 +41,7 @@ import math
 import numpy as np
 import warp as wp
 
+from hexnewton.deploy import rules
 from hexnewton.mdp.status import RUNNING
 from hexnewton.mdp.terms.structs import TaskParams
 from hexnewton.physics.cpg import quat_to_rpy
@@ -81,17 +83,8 @@ def goal_from_draws(x: float, y: float, yaw: float, u_bearing: float, u_distance
     return wp.vec2(wp.clamp(x + ox, start[0] - a, start[0] + a), wp.clamp(y + oy, start[1] - a, start[1] + a))
 
 
-def goal_from_draws_np(x, y, yaw, u_bearing, u_distance, start, task) -> np.ndarray:
-    """Float64 :func:`goal_from_draws` for all envs: (N, 2)."""
-    x, y, start = np.asarray(x, np.float64), np.asarray(y, np.float64), np.asarray(start, np.float64)
-    bearing = np.asarray(yaw, np.float64) + task.goal_bearing * (2.0 * np.asarray(u_bearing, np.float64) - 1.0)
-    r = task.goal_distance_min + (task.goal_distance_max - task.goal_distance_min) * np.asarray(u_distance, np.float64)
-    ox, oy = r * np.cos(bearing), r * np.sin(bearing)
-    a = task.goal_area
-    ox = np.where(np.abs(x + ox - start[:, 0]) > a, -ox, ox)
-    oy = np.where(np.abs(y + oy - start[:, 1]) > a, -oy, oy)
-    return np.stack([np.clip(x + ox, start[:, 0] - a, start[:, 0] + a), np.clip(y + oy, start[:, 1] - a, start[:, 1] + a)],
-                    axis=1)  # fmt: skip
+#: float64 :func:`goal_from_draws` for all envs: (N, 2), the shared rule's
+goal_from_draws_np = rules.goal_from_draws
 
 
 @wp.func
@@ -105,10 +98,7 @@ def course_to(x: float, y: float, goal: wp.vec2) -> wp.vec2:
     return out
 
 
-def course_to_np(x, y, goal) -> np.ndarray:
-    d = np.asarray(goal, np.float64) - np.stack([np.asarray(x, np.float64), np.asarray(y, np.float64)], axis=1)
-    n = np.hypot(d[:, 0], d[:, 1])
-    return np.where((n > 1e-6)[:, None], d / np.where(n > 1e-6, n, 1.0)[:, None], [1.0, 0.0])
+course_to_np = rules.course_to
 
 
 @wp.func
@@ -137,22 +127,9 @@ def set_goal(goals: Goals, task: TaskParams, env: int, k: int, x: float, y: floa
         goals.left[env] = 0
 
 
-def set_goal_np(goals, task, k, x, y, yaw, u_bearing, u_distance) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Float64 :func:`set_goal` for all envs (``goals`` with :class:`Goals`' fields as NumPy arrays, ``k`` (N,)):
-    (goal (N, 2), course (N, 2), left (N,))."""
-    x, y, k = np.asarray(x, np.float64), np.asarray(y, np.float64), np.asarray(k)
-    n = int(goals.waypoint_count)
-    if n > 0:
-        w = np.asarray(goals.waypoints, np.float64)[np.arange(len(k)), np.minimum(k, n - 1)]
-        s, a = np.asarray(goals.start, np.float64), np.asarray(goals.start_yaw, np.float64)
-        c, sn = np.cos(a), np.sin(a)
-        g = np.stack([s[:, 0] + c * w[:, 0] - sn * w[:, 1], s[:, 1] + sn * w[:, 0] + c * w[:, 1]], axis=1)
-        return g, course_to_np(x, y, g), np.maximum(n - 1 - k, 0)
-    if task.random_goals:
-        g = goal_from_draws_np(x, y, yaw, u_bearing, u_distance, goals.start, task)
-        return g, course_to_np(x, y, g), np.full(len(x), -1)
-    g = np.stack([x + task.goal_distance, y], axis=1)
-    return g, np.tile([1.0, 0.0], (len(x), 1)), np.zeros(len(x), np.int64)
+#: float64 :func:`set_goal` for all envs (``goals`` with :class:`Goals`' fields as NumPy arrays, ``k`` (N,)):
+#: (goal (N, 2), course (N, 2), left (N,)), the shared rule's
+set_goal_np = rules.set_goal
 
 
 @wp.func
@@ -177,9 +154,7 @@ def off_line(goals: Goals, env: int, px: float, py: float) -> float:
     return (py - g[1]) * c[0] - (px - g[0]) * c[1]
 
 
-def off_line_np(goals, px, py) -> np.ndarray:
-    c, g = np.asarray(goals.course, np.float64), np.asarray(goals.goal, np.float64)
-    return (np.asarray(py, np.float64) - g[:, 1]) * c[:, 0] - (np.asarray(px, np.float64) - g[:, 0]) * c[:, 1]
+off_line_np = rules.off_line
 
 
 @wp.kernel
@@ -205,18 +180,12 @@ def goal_switch_kernel(status: wp.array[wp.int32], joint_q: wp.array2d[wp.float3
 
 def goal_switch_reference(status, joint_q, goals, task, u_bearing, u_distance) -> dict[str, np.ndarray]:
     """Float64 :func:`goal_switch_kernel` (``goals`` with :class:`Goals`' fields as NumPy arrays; ``u_bearing``,
-    ``u_distance`` (N,) stand in for the kernel's draws): the new ``goal``, ``course``, ``left`` and ``reached``, and
-    ``switched`` (N,), the envs that got their next goal."""
+    ``u_distance`` (N,) stand in for the kernel's draws): the shared rule (``hexnewton.deploy.rules.goal_switch``) at
+    the envs' base positions and headings; the new ``goal``, ``course``, ``left`` and ``reached``, and ``switched``
+    (N,), the envs that got their next goal."""
     q = np.asarray(joint_q, np.float64)
-    goal, course = np.asarray(goals.goal, np.float64), np.asarray(goals.course, np.float64)
-    left, reached = np.asarray(goals.left), np.asarray(goals.reached)
-    near = np.hypot(goal[:, 0] - q[:, 0], goal[:, 1] - q[:, 1]) < task.goal_radius
-    switched = (np.asarray(status) == RUNNING) & (left != 0) & near
-    yaw = quat_to_rpy_np(q[:, 3:7])[:, 2]
-    g, c, lf = set_goal_np(goals, task, reached + 1, q[:, 0], q[:, 1], yaw, u_bearing, u_distance)
-    pick = switched[:, None]
-    return {"goal": np.where(pick, g, goal), "course": np.where(pick, c, course), "left": np.where(switched, lf, left),
-            "reached": np.where(switched, reached + 1, reached), "switched": switched}
+    return rules.goal_switch(status, q[:, 0], q[:, 1], quat_to_rpy_np(q[:, 3:7])[:, 2], goals, task, u_bearing,
+                             u_distance)  # fmt: skip
 
 
 def goals_from_host(device: str, goal, course, left, reached=None, start=None, start_yaw=None,

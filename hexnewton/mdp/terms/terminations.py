@@ -1,5 +1,6 @@
 """Episode ends (§2.4.4): ``TERMINATIONS``, one :class:`Termination` row per status code, its fused kernel
-(:func:`make_status_kernel`) and its float64 reference (:func:`episode_status_np`).
+(:func:`make_status_kernel`) and its float64 reference (:func:`episode_status_np`), the episode's one NumPy definition
+of its ends in ``hexnewton/deploy/rules.py`` (which the robot runtime and C MuJoCo's closed loop share).
 
 The status codes and their names live in ``hexnewton/mdp/status.py``. The rows, in the order the kernel checks them
 (the first that holds is the env's status; 0, running, if none does):
@@ -19,15 +20,14 @@ import functools
 from dataclasses import dataclass
 from typing import Callable
 
-import numpy as np
 import warp as wp
 
+from hexnewton.deploy import rules
 from hexnewton.mdp.status import FELL, NONFINITE, OFF_COURSE, RUNNING, STATUS_NAMES, SUCCESS, TIMEOUT
-from hexnewton.mdp.terms.goals import Goals, goal_reached, off_line, off_line_np
+from hexnewton.mdp.terms.goals import Goals, goal_reached, off_line
 from hexnewton.mdp.terms.ground import HeightField, terrain_height
 from hexnewton.mdp.terms.structs import TaskParams, choose
 from hexnewton.physics.cpg import quat_to_rpy
-from hexnewton.physics.reference import quat_to_rpy_np
 
 
 @wp.struct
@@ -66,28 +66,13 @@ def end_frame(inputs: EndInputs, env: int) -> EndFrame:
     return frame
 
 
-@dataclass(frozen=True)
-class EndFrameNp:
-    """:class:`EndFrame` for all envs, in float64; ``finite`` marks the envs whose state is all finite."""
-
-    px: np.ndarray
-    py: np.ndarray
-    pz: np.ndarray
-    rpy: np.ndarray  # (N, 3)
-    finite: np.ndarray
-
-
-def end_frame_np(inputs) -> EndFrameNp:
-    """Float64 :func:`end_frame`; ``inputs`` has :class:`EndInputs`' fields as NumPy arrays, with ``ground`` (N,), the
-    terrain under each base, in place of ``hf``, and ``task`` a ``TaskConfig``."""
-    jq, jqd = np.asarray(inputs.joint_q, np.float64), np.asarray(inputs.joint_qd, np.float64)
-    finite = np.isfinite(jq).all(axis=1) & np.isfinite(jqd).all(axis=1)
-    rpy = quat_to_rpy_np(np.where(finite[:, None], jq[:, 3:7], [0.0, 0.0, 0.0, 1.0]))
-    return EndFrameNp(px=jq[:, 0], py=jq[:, 1], pz=jq[:, 2], rpy=rpy, finite=finite)
+#: float64 end frame of all envs (``inputs`` with :class:`EndInputs`' fields as NumPy arrays, ``ground`` (N,), the
+#: terrain under each base, in place of ``hf``, and ``task`` a ``TaskConfig``): the shared rule's
+EndFrameNp, end_frame_np = rules.EndFrame, rules.end_frame
 
 
 # ----------------------------------------------------------------------------------------------------
-# the conditions: one Warp function per env and one NumPy function for all envs
+# the conditions: one Warp function per env; their float64 twins are hexnewton/deploy/rules.py's
 # ----------------------------------------------------------------------------------------------------
 
 
@@ -109,13 +94,6 @@ def nonfinite(inputs: EndInputs, frame: EndFrame) -> bool:
     return not finite
 
 
-def nonfinite_np(inputs, frame):
-    jqd = np.asarray(inputs.joint_qd, np.float64)
-    with np.errstate(invalid="ignore"):
-        runaway = (np.linalg.norm(jqd[:, :3], axis=1) > inputs.task.max_base_speed) | (
-            np.abs(jqd[:, 6:]) > inputs.task.max_joint_speed
-        ).any(axis=1)
-    return ~frame.finite | runaway
 
 
 @wp.func
@@ -126,10 +104,6 @@ def fell(inputs: EndInputs, frame: EndFrame) -> bool:
     return low or wp.abs(frame.rpy[0]) > lim or wp.abs(frame.rpy[1]) > lim
 
 
-def fell_np(inputs, frame):
-    lim = inputs.task.max_tilt
-    low = frame.pz - inputs.ground < inputs.task.min_height
-    return low | (np.abs(frame.rpy[:, 0]) > lim) | (np.abs(frame.rpy[:, 1]) > lim)
 
 
 @wp.func
@@ -138,8 +112,6 @@ def left_course(inputs: EndInputs, frame: EndFrame) -> bool:
     return wp.abs(off_line(inputs.goals, frame.env, frame.px, frame.py)) > inputs.task.max_abs_y
 
 
-def left_course_np(inputs, frame):
-    return np.abs(off_line_np(inputs.goals, frame.px, frame.py)) > inputs.task.max_abs_y
 
 
 @wp.func
@@ -149,10 +121,6 @@ def success(inputs: EndInputs, frame: EndFrame) -> bool:
     return last and goal_reached(inputs.goals, frame.env, frame.px, frame.py, inputs.task.goal_radius)
 
 
-def success_np(inputs, frame):
-    goal = np.asarray(inputs.goals.goal, np.float64)
-    near = np.hypot(goal[:, 0] - frame.px, goal[:, 1] - frame.py) < inputs.task.goal_radius
-    return near & (np.asarray(inputs.goals.left) == 0)
 
 
 @wp.func
@@ -161,8 +129,6 @@ def timeout(inputs: EndInputs, frame: EndFrame) -> bool:
     return inputs.episode_steps[frame.env] + 1 >= inputs.task.max_episode_steps
 
 
-def timeout_np(inputs, frame):
-    return np.asarray(inputs.episode_steps) + 1 >= inputs.task.max_episode_steps
 
 
 # ----------------------------------------------------------------------------------------------------
@@ -176,7 +142,7 @@ class Termination:
 
     code: int
     func: wp.Function  # (EndInputs, EndFrame) -> bool for one env
-    reference: Callable  # float64 NumPy (inputs namespace, end_frame_np) -> (N,) bool
+    reference: Callable  # its rule in deploy/rules.py: float64 NumPy (inputs namespace, end_frame_np) -> (N,) bool
 
     @property
     def name(self) -> str:
@@ -184,12 +150,13 @@ class Termination:
 
 
 TERMINATIONS = (
-    Termination(NONFINITE, nonfinite, nonfinite_np),
-    Termination(FELL, fell, fell_np),
-    Termination(OFF_COURSE, left_course, left_course_np),
-    Termination(SUCCESS, success, success_np),
-    Termination(TIMEOUT, timeout, timeout_np),
+    Termination(NONFINITE, nonfinite, rules.nonfinite),
+    Termination(FELL, fell, rules.fell),
+    Termination(OFF_COURSE, left_course, rules.left_course),
+    Termination(SUCCESS, success, rules.success),
+    Termination(TIMEOUT, timeout, rules.timeout),
 )
+assert [(t.name, t.code, t.reference) for t in TERMINATIONS] == list(rules.ENDS), "the shared rules' ends, in order"
 assert sorted(t.code for t in TERMINATIONS) == list(range(1, len(STATUS_NAMES))), "one row per status code"
 
 
@@ -233,10 +200,7 @@ episode_status_kernel = make_status_kernel()
 
 
 def episode_status_np(inputs, names: tuple[str, ...] | None = None):
-    """Float64 reference of :func:`make_status_kernel`'s kernel (inputs as in :func:`end_frame_np`): (status, rpy)."""
+    """Float64 reference of :func:`make_status_kernel`'s kernel (inputs as in :func:`end_frame_np`): (status, rpy), the
+    shared rule's (``hexnewton.deploy.rules.episode_status``)."""
     table = TERMINATIONS if names is None else choose(TERMINATIONS, names, "task.terminations")
-    frame = end_frame_np(inputs)
-    with np.errstate(invalid="ignore"):
-        hits = [t.reference(inputs, frame) for t in table]
-    status = np.select(hits, [t.code for t in table], RUNNING)
-    return status, np.where((status == NONFINITE)[:, None], 0.0, frame.rpy)
+    return rules.episode_status(inputs, tuple(t.name for t in table))
