@@ -31,7 +31,7 @@ def _one(case: str) -> dict:
     import warp as wp
     from newton._src.geometry import sdf_contact
 
-    from hexnewton.physics.terrain import make_terrain
+    from hexnewton.terrain import make_terrain
     from hexnewton.tasks import task
 
     wp.init()

@@ -26,8 +26,8 @@ from hexnewton.mdp.status import FELL, NONFINITE, OFF_COURSE, RUNNING, STATUS_NA
 from hexnewton.mdp.terms.goals import Goals, goal_reached, off_line, off_line_np
 from hexnewton.mdp.terms.ground import HeightField, terrain_height
 from hexnewton.mdp.terms.structs import TaskParams, choose
-from hexnewton.physics.cpg import quat_to_rpy
-from hexnewton.physics.reference import quat_to_rpy_np
+from hexnewton.kernels.cpg import quat_to_rpy
+from hexnewton.kernels.reference import quat_to_rpy_np
 
 
 @wp.struct
