@@ -122,8 +122,8 @@ import warp as wp
 
 from hexnewton.config import CPGConfig, RobotConfig
 from hexnewton.kernels.reference import initial_cpg_state
-from hexnewton.robot import BASE_Q, leg_bounds
 from hexnewton.kernels.world import as_mask
+from hexnewton.robot import BASE_Q, leg_bounds
 
 # ----------------------------------------------------------------------------------------------------
 # actions -> parameters

@@ -100,11 +100,11 @@ from hexnewton.mdp.terms import (
     reward_weights,
 )
 from hexnewton.physics.graphs import capture_graph
+from hexnewton.physics.model_build import ModelBuild
 from hexnewton.physics.precompile import compile_modules, loaded_variants, variant_names
+from hexnewton.physics.world import World
 from hexnewton.robot import BASE_Q
 from hexnewton.terrain.heightmap import course_names, env_groups, group_offset_y
-from hexnewton.physics.model_build import ModelBuild
-from hexnewton.physics.world import World
 
 RING = 1024  # finished episodes the logged rates average over
 

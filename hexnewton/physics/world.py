@@ -33,13 +33,6 @@ from newton.solvers import SolverMuJoCo
 from hexnewton import startup
 from hexnewton.config import HexConfig, SimConfig
 from hexnewton.errors import HexnewtonError
-from hexnewton.physics.graphs import capture_graph
-from hexnewton.physics.model_build import ModelBuild
-from hexnewton.physics.private_api import reduction_overflow
-from hexnewton.physics.precompile import (
-    precompile,
-    precompile_solver,
-)
 from hexnewton.kernels.world import (
     OVERFLOW_BOX_PAIRS,
     OVERFLOW_CONTACT_REDUCTION,
@@ -49,6 +42,13 @@ from hexnewton.kernels.world import (
     nonfinite_envs_kernel,
     spawn_pose_kernel,
     zero_world_rows_kernel,
+)
+from hexnewton.physics.graphs import capture_graph
+from hexnewton.physics.model_build import ModelBuild
+from hexnewton.physics.private_api import reduction_overflow
+from hexnewton.physics.precompile import (
+    precompile,
+    precompile_solver,
 )
 from hexnewton.robot import BASE_Q, BASE_QD, NUM_JOINTS, leg_bounds
 from hexnewton.terrain import Terrain
