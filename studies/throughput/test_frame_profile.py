@@ -45,8 +45,8 @@ def test_the_loaded_kernels_name_their_modules():
     import hexnewton.kernels.cpg  # noqa: F401  (its kernels)
 
     modules = fp.kernel_modules()
-    ours = {m for m in modules.values() if m.startswith("hexnewton.physics")}
-    assert ours, "no hexnewton.physics kernel found among the live wp.Kernel objects"
+    ours = {m for m in modules.values() if m.startswith("hexnewton.kernels")}
+    assert ours, "no hexnewton.kernels kernel found among the live wp.Kernel objects"
 
 
 def test_without_a_gpu_it_says_so_in_one_line(capsys):
