@@ -164,10 +164,10 @@ class TerrainConfig:
     # fewer mesh lookups per robot (none on stepped): 5 % more robot-s/s on complex, 36 % on stepped at 16384 envs
     # on an H100 (studies/time_to_skill/report.md, "Terrain contact"). "boxes": every rectangle of equal-height
     # cells one static box, each 2 cm rugged block one (~50,000 on rugged, the whole patch, as in the C MuJoCo
-    # model), each robot shape paired only with the boxes under it (physics/terrain/box_pairs.py): the box edges
+    # model), each robot shape paired only with the boxes under it (terrain/box_pairs.py): the box edges
     # MuJoCo's feet meet (studies/sim2sim/wedge/report.md).
     collision: str = field(default="mesh_boxes", metadata={"choices": TERRAIN_COLLISIONS})
-    # ours: terrain meshes without T-junctions (physics/terrain/mesh.py): every quad edge split at the vertices on it,
+    # ours: terrain meshes without T-junctions (terrain/mesh.py): every quad edge split at the vertices on it,
     # so each edge lies in exactly two triangles and Newton's finalize skips its mesh-boundary pass (complex task,
     # CPU: finalize 7.8 -> 2.9 CPU s, studies/startup_mesh), for 55 % more triangles of the same surface (nearly all
     # in walls) and twice the mesh build. Newton then signs mesh distances by ray parity instead of pseudo-normals
@@ -239,7 +239,7 @@ class SimConfig:
 PARAM_NAMES = ("omega", "A1_R", "A1_L") + tuple(f"A2_{leg}" for leg in LEG_NAMES) + tuple(
     f"A3_{leg}" for leg in LEG_NAMES
 )
-#: The body-posture parameters (``CPGConfig.posture``, physics/cpg.py), after the 15.
+#: The body-posture parameters (``CPGConfig.posture``, kernels/cpg.py), after the 15.
 POSTURE_NAMES = ("P_h", "P_p", "P_r")
 #: Oscillator of each leg (R1, R2, R3, L1, L2, L3): tripod {R1, L2, R3} on 0, {L1, R2, L3} on 1 (§2.2).
 LEG_OSCILLATOR = (0, 1, 0, 1, 0, 1)
@@ -283,16 +283,16 @@ class CPGConfig:
     # (0, 0.8) keep their ranges: play, evaluate, export and --resume read them from the checkpoint.
     a2_range: tuple[float, float] = (0.0, 1.3)
     a3_range: tuple[float, float] = (0.0, 0.8)  # ankle tuck; 0.15 + 0.8 < pi/3 keeps it inside the limit
-    # ours: body posture (physics/cpg.py), three more parameters after the 15: knee offsets [rad] for height
+    # ours: body posture (kernels/cpg.py), three more parameters after the 15: knee offsets [rad] for height
     # (P_h) and for pitch and roll (P_p, P_r: +-range at the front/rear and right/left legs). Off: the paper's 15
     # parameters; --env.cpg.posture true turns it on. The knee's standing angle is 0.15 above its lower limit.
     posture: bool = False
     posture_height_range: tuple[float, float] = (-0.15, 0.15)
     posture_tilt_range: tuple[float, float] = (-0.3, 0.3)
     # ours: levelling reflex gain [rad of knee per rad of body tilt] on the posture's tilt terms, at every substep
-    # (physics/cpg.py); 0 = off. Only with ``posture``.
+    # (kernels/cpg.py); 0 = off. Only with ``posture``.
     posture_reflex: float = 0.0
-    # ours: a way out for a caught foot (physics/cpg.py, "Stuck response"; studies/sim2sim/wedge/report.md): a robot
+    # ours: a way out for a caught foot (kernels/cpg.py, "Stuck response"; studies/sim2sim/wedge/report.md): a robot
     # whose goal distance, read from the policy's own target observation, fell by less than stuck_progress [m] over
     # the last stuck_window control steps walks the next stuck_hold control steps with stuck_lift [rad] more knee
     # amplitude A2 on every leg; then, and while it still gains no ground, again. 0 = off.
@@ -377,7 +377,7 @@ class TaskConfig:
     reset_joint_noise: float = 0.05  # [rad]
     seed: int = 0
     # ours: the pure-DRL action mode's joint targets, standing pose + joint_action_scale * action [rad], clipped
-    # to the limits (physics/cpg.py); 0 spans each joint's whole limit range with the actions
+    # to the limits (kernels/cpg.py); 0 spans each joint's whole limit range with the actions
     joint_action_scale: float = 0.5
     # the episode ends this task checks, rows of mdp/terms/terminations.py's TERMINATIONS in their order (nonfinite
     # always)

@@ -21,8 +21,10 @@ MAX_MODULE_LINES = 600
 #: console scripts
 COMMAND_LINE_HELPERS = {"hexnewton.apps.cli", "hexnewton.apps.console"}
 #: the layers, bottom up: a module imports modules of its own layer or of layers below it ("" is the package's root:
-#: configuration, errors, start-up timing)
-LAYERS = ("", "physics", "deploy", "mdp", "learning", "tasks", "analysis", "apps")
+#: configuration, errors, start-up timing). The physics level is four rooms, one-way among themselves too: the robot's
+#: description and builder (``robot``), the terrains (``terrain``), the step's kernels beside their NumPy twins
+#: (``kernels``: the CPG and mapping, the world's, the events'), the batched world (``physics``)
+LAYERS = ("", "robot", "terrain", "kernels", "physics", "deploy", "mdp", "learning", "tasks", "analysis", "apps")
 HEAVY = ("warp", "newton")
 
 

@@ -49,7 +49,7 @@ def bench_one(terrain: str, num_envs: int, device: str, frames: int, sim: SimCon
     with the fixed gait scaled by a random factor in [0.7, 1.3]; contact overflow checked after the timed frames."""
     import warp as wp
 
-    from hexnewton.physics.cpg import CPGController
+    from hexnewton.kernels.cpg import CPGController
     from hexnewton.physics.world import World
 
     cfg = _config(terrain, num_envs, device, seed, sim, ground, base)

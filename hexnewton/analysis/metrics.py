@@ -20,7 +20,7 @@ def round_metrics(pos: np.ndarray, rpy: np.ndarray, done: np.ndarray, status: np
     """Per-round metrics of each env's first episode.
 
     ``pos`` (T, N, 2+) x, y relative to the round's start; ``rpy`` (T, N, 3) [rad]; ``done`` (T, N) the
-    episode ended at that step; ``status`` (T, N) why (``physics.reference`` status codes); ``dt`` the control
+    episode ended at that step; ``status`` (T, N) why (``kernels.reference`` status codes); ``dt`` the control
     period. Returns arrays over the N rounds: ``reached`` (D, N) bool, ``time_to`` (D, N) [s] (nan if not
     reached), ``y_dev`` (N,) [m], ``end`` (N,) status code (0 = still running at the last step),
     ``steps`` (N,), ``x_far`` (N,) [m] the farthest x of each first episode (-inf if none), and ``in_episode`` (T, N),

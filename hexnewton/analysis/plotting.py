@@ -8,9 +8,9 @@ import numpy as np
 import warp as wp
 
 from hexnewton.config import LEG_NAMES, HexConfig
-from hexnewton.physics.cpg import hopf_cpg_kernel, mapping_kernel
-from hexnewton.physics.reference import initial_cpg_state
-from hexnewton.physics.robot import leg_bounds
+from hexnewton.kernels.cpg import hopf_cpg_kernel, mapping_kernel
+from hexnewton.kernels.reference import initial_cpg_state
+from hexnewton.robot import leg_bounds
 
 
 def gait_trajectory(cfg: HexConfig, cycles: float = 2.0, device: str = "cpu"):

@@ -13,7 +13,7 @@ import numpy as np
 from hexnewton.analysis.metrics import first_episode_stats
 from hexnewton.config import JOINT_NAMES, PARAM_NAMES, HexConfig, RandomizationConfig
 from hexnewton.mdp.status import SUCCESS
-from hexnewton.physics.reference import quat_rotate_inv_np
+from hexnewton.kernels.reference import quat_rotate_inv_np
 
 EVAL_TERRAIN_SEED = 1000
 EVAL_RESET_SEED = 2000

@@ -18,8 +18,8 @@ from hexnewton.deploy import rules
 from hexnewton.deploy.mjcf import SENSORS_PER_ROBOT, build_model
 from hexnewton.deploy.runtime import FORMAT, Controller
 from hexnewton.deploy.rules import RUNNING, SUCCESS
-from hexnewton.physics.reference import quat_to_rpy_np
-from hexnewton.physics.robot.geometry import footprint, leg_bounds, spawn_clearance
+from hexnewton.kernels.reference import quat_to_rpy_np
+from hexnewton.robot.geometry import footprint, leg_bounds, spawn_clearance
 
 #: the terrain reading's window, as the training observation's (``mdp.terms.observations.H_HALF_EXTENT``) [m]
 H_HALF_EXTENT = 0.3
@@ -146,7 +146,7 @@ class Rounds:
                  robot: RobotConfig | None = None, task: TaskConfig | None = None, robots=None, waypoints=None):
         import mujoco
 
-        from hexnewton.physics.terrain.heightmap import build_height_grid
+        from hexnewton.terrain.heightmap import build_height_grid
 
         keep = np.arange(rounds) if robots is None else np.asarray(robots, dtype=np.int64)
         if keep.ndim != 1 or keep.size == 0 or keep.min() < 0 or keep.max() >= rounds:

@@ -51,7 +51,7 @@ from hexnewton.analysis.scaling import rate_rows, scaling_markdown, scaling_rows
 from hexnewton.apps.cli import ArgumentParser, add_config_args, config_overrides, positive_int, run, terrain_name
 from hexnewton.config import TERRAINS, SimConfig, TerrainConfig, apply_overrides
 from hexnewton.learning.agent import AgentConfig
-from hexnewton.physics.terrain import validate_config
+from hexnewton.terrain import validate_config
 
 
 def pipeline_table(sim_results: list[BenchResult], results: list[PipelineResult]) -> str:

@@ -37,7 +37,7 @@ def controller_spec(env, checkpoint: str, action_std: list[float] | None) -> dic
     for a Beta policy)."""
     from hexnewton.analysis.report import git_rev
     from hexnewton.mdp.terms import H_HALF_EXTENT, OBS_LAYOUT
-    from hexnewton.physics.robot import leg_bounds
+    from hexnewton.robot import leg_bounds
 
     cfg = env.cfg
     lo, hi = cfg.cpg.param_ranges()

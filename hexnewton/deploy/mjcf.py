@@ -1,7 +1,7 @@
 """The hexapod and the paper's terrains as a C MuJoCo model (MJCF), written from the project's own descriptions.
 
-The robot comes from :class:`~hexnewton.config.RobotConfig` through :mod:`hexnewton.physics.robot.geometry`, the same functions
-the Newton articulation is built from (:func:`hexnewton.physics.robot.hexapod.build_hexapod`), not converted from Newton's
+The robot comes from :class:`~hexnewton.config.RobotConfig` through :mod:`hexnewton.robot.geometry`, the same functions
+the Newton articulation is built from (:func:`hexnewton.robot.hexapod.build_hexapod`), not converted from Newton's
 model: a free torso box and per leg (R1, R2, R3, L1, L2, L3) the bodies coxa -> femur -> tibia on hinge joints hip ->
 knee -> ankle with the Newton robot's frames, axes, masses, inertias, limits and armature; collision capsules on femur
 and tibia, a foot sphere, the torso box (no self-collision). Each joint has a MuJoCo position actuator with Newton's
@@ -9,8 +9,8 @@ PD drive: kp = ``joint_ke``, kv = ``joint_kd``, force clamped to ``effort_limit`
 (``SENSORS_PER_ROBOT`` values): the torso's orientation (``framequat`` at an IMU site on the torso origin), 18
 ``jointpos`` / 18 ``jointvel`` encoders and the IMU's ``gyro`` (the torso's angular velocity in its own frame).
 
-The terrain comes from the height grid (:func:`hexnewton.physics.terrain.heightmap.build_height_grid`): every strip of constant
-height across the patch (run-ups, stair treads, landings) is one box (:func:`hexnewton.physics.terrain.parts.split_strips`),
+The terrain comes from the height grid (:func:`hexnewton.terrain.heightmap.build_height_grid`): every strip of constant
+height across the patch (run-ups, stair treads, landings) is one box (:func:`hexnewton.terrain.parts.split_strips`),
 every rugged block is one box, all down to a common bottom; flat ground is a plane. Boxes keep the risers vertical,
 where a MuJoCo heightfield would interpolate them into ramps. A heightfield copy of the grid (its vertices at the cell
 centres, so a vertical ray through a cell centre hits that cell's height) takes the height scanner's ray casts
@@ -28,7 +28,7 @@ import math
 import numpy as np
 
 from hexnewton.config import LEG_NAMES, RobotConfig
-from hexnewton.physics.robot.geometry import (
+from hexnewton.robot.geometry import (
     PITCH_AXIS,
     box_inertia,
     hip_axis,
@@ -40,8 +40,8 @@ from hexnewton.physics.robot.geometry import (
     torso_mass,
     validate,
 )
-from hexnewton.physics.terrain.heightmap import HeightGrid
-from hexnewton.physics.terrain.parts import split_strips
+from hexnewton.terrain.heightmap import HeightGrid
+from hexnewton.terrain.parts import split_strips
 
 #: geom group of the scanner's heightfield (hidden in the viewer's default groups 0-2)
 SCANNER_GROUP = 5

@@ -24,7 +24,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from hexnewton.physics.reference import quat_to_rpy_np
+from hexnewton.kernels.reference import quat_to_rpy_np
 
 RUNNING, FELL, OFF_COURSE, SUCCESS, TIMEOUT, NONFINITE = 0, 1, 2, 3, 4, 5
 STATUS_NAMES = ("running", "fell", "off_course", "success", "timeout", "nonfinite")

@@ -39,7 +39,7 @@ once per control step (``act(observe(...))``), then :meth:`Controller.substep` w
 A controller with the stuck response (``stuck_lift`` in controller.json, ``CPGConfig.stuck_*``) lifts every knee higher
 while the robot stops gaining ground: :meth:`Controller.set_actions` then takes the observed goal as well (``step``
 passes it).
-The maths is the float64 reference of the simulator's kernels (``hexnewton.physics.reference``).
+The maths is the float64 reference of the simulator's kernels (``hexnewton.kernels.reference``).
 """
 
 from __future__ import annotations
@@ -54,7 +54,7 @@ import numpy as np
 
 from hexnewton.config import TaskConfig
 from hexnewton.deploy import rules
-from hexnewton.physics.reference import (
+from hexnewton.kernels.reference import (
     hopf_cpg_reference,
     initial_cpg_state,
     mapping_reference,

@@ -13,13 +13,14 @@ from __future__ import annotations
 
 import glob
 import os
+from importlib import resources
 
 from hexnewton.config import HexConfig, config_from_dict
 from hexnewton.learning.agent import AgentConfig, agent_from_dict, legacy_agent
 
-#: What ``python play.py`` plays when nothing was trained yet.
-SHIPPED_POLICY = os.path.normpath(os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "results",
-                                               "policies", "cpg_rl_complex.pt"))  # fmt: skip
+#: What ``python play.py`` plays when nothing was trained yet: package data (``hexnewton/assets/``, which
+#: ``results/policies/cpg_rl_complex.pt`` links to), so an installed wheel has it too.
+SHIPPED_POLICY = str(resources.files("hexnewton").joinpath("assets", "policies", "cpg_rl_complex.pt"))
 
 
 def read_checkpoint(path: str, map_location: str = "cpu"):

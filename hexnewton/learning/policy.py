@@ -53,7 +53,7 @@ def fixed_cpg_actions(env, gait: str = "default", params: np.ndarray | None = No
     expressed as (constant) policy actions."""
     import torch
 
-    from hexnewton.physics.reference import params_to_actions
+    from hexnewton.kernels.reference import params_to_actions
 
     lo, hi = env.cfg.cpg.param_ranges()
     p = env.cfg.cpg.fixed_params(gait) if params is None else env.cfg.cpg.with_posture(params)

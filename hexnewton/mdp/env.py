@@ -4,11 +4,11 @@ One ``step(actions)`` is one control step (``TaskConfig.control_dt``). Apart fro
 single captured graph (a CUDA graph on GPU, Warp's capture on CPU) of Warp kernels on preallocated arrays, through
 five files:
 
-    [latency, pushes (mdp/events.py)] -> actions to CPG parameters (physics/cpg.py)
-    -> [CPG + mapping (physics/cpg.py) + physics (physics/world.py)] x frames x substeps
+    [latency, pushes (kernels/events.py)] -> actions to CPG parameters (kernels/cpg.py)
+    -> [CPG + mapping (kernels/cpg.py) + physics (physics/world.py)] x frames x substeps
     -> episode ends, rewards, the goal switch (mdp/terms/) -> done flags and the episode ring (mdp/events.py)
     -> [curriculum lane change (mdp/events.py)] -> resets of finished envs (mdp/events.py, physics/world.py)
-    -> observations (mdp/terms/) [+ noise (mdp/events.py)]
+    -> observations (mdp/terms/) [+ noise (kernels/events.py)]
 
 The bracketed parts run with ``RandomizationConfig.enabled`` and ``TerrainConfig.levels``; the per-env physical draws
 are ``events.randomize_physics``, once, when the env is built. With ``ObsConfig.critic`` the observations also hold
@@ -32,7 +32,7 @@ Finished envs auto-reset. ``extras["time_outs"]`` marks time-limit ends. ``extra
 
 Action modes:
 - ``cpg`` (15 actions): omega, A1[2], A2[6], A3[6], each scaled to its range (the paper's CPG_RL);
-  with ``CPGConfig.posture`` (ours, physics/cpg.py) 18: the 15 and the body posture P_h, P_p, P_r, knee
+  with ``CPGConfig.posture`` (ours, kernels/cpg.py) 18: the 15 and the body posture P_h, P_p, P_r, knee
   offsets that level the body over uneven footholds; the observation adds their 3 filtered values (62,
   layout ``cpg_posture``);
 - ``joint`` (18 actions): joint targets about the standing pose, ``TaskConfig.joint_action_scale`` rad per unit
@@ -53,20 +53,18 @@ from tensordict import TensorDict
 from hexnewton import startup
 from hexnewton.config import ACTION_MODES, HexConfig, control_decimation
 from hexnewton.errors import HexnewtonError
+from hexnewton.kernels.cpg import CPGController, joint_actions_kernel
+from hexnewton.kernels.events import advance_counter_kernel, delay_actions_kernel, observation_noise_kernel, push_kernel
 from hexnewton.mdp.events import (
     DISTANCE,
     ENDS,
     GOALS,
     LENGTH,
     LEVEL,
-    advance_counter_kernel,
     bookkeeping_kernel,
     curriculum_kernel,
-    delay_actions_kernel,
     lane_count_kernel,
-    observation_noise_kernel,
     placement_kernel,
-    push_kernel,
     randomize_physics,
     reset_envs_kernel,
     start_levels,
@@ -101,13 +99,12 @@ from hexnewton.mdp.terms import (
     reward_table,
     reward_weights,
 )
-from hexnewton.physics.cpg import CPGController, joint_actions_kernel
 from hexnewton.physics.graphs import capture_graph
-from hexnewton.physics.precompile import compile_modules, loaded_variants, variant_names
-from hexnewton.physics.robot import BASE_Q
-from hexnewton.physics.terrain.heightmap import course_names, env_groups, group_offset_y
 from hexnewton.physics.model_build import ModelBuild
+from hexnewton.physics.precompile import compile_modules, loaded_variants, variant_names
 from hexnewton.physics.world import World
+from hexnewton.robot import BASE_Q
+from hexnewton.terrain.heightmap import course_names, env_groups, group_offset_y
 
 RING = 1024  # finished episodes the logged rates average over
 

@@ -7,8 +7,8 @@ Each env's friction, payload, link masses, PD gains, effort limits and, where se
 constant and motor strength (a factor on both the gains and the effort limits), drawn once and written into the
 :class:`~hexnewton.physics.world.World`'s Newton model, then handed to MuJoCo.
 
-Per-step randomisation (``RandomizationConfig.enabled``)
---------------------------------------------------------
+Per-step randomisation (``RandomizationConfig.enabled``; the kernels in ``hexnewton.kernels.events``)
+--------------------------------------------------------------------------------------------------
 - :func:`delay_actions_kernel`: actuation latency. Envs flagged ``late`` act on the previous control step's
   actions (20 ms late); the others on this step's.
 - :func:`push_kernel`: every ``interval`` control steps of an episode, a random horizontal change of the base
@@ -79,8 +79,8 @@ import warp as wp
 from hexnewton.mdp.status import NONFINITE, SUCCESS, TIMEOUT
 from hexnewton.mdp.terms import TERMINATIONS, Goals, HeightField, TaskParams, max_terrain_height, set_goal
 from hexnewton.mdp.terms.goals import course_to
-from hexnewton.physics.robot import BASE_QD
 from hexnewton.physics.world import World
+from hexnewton.robot import BASE_QD
 
 
 def randomize_physics(world: World, seed: int = 0) -> dict[str, np.ndarray]:
@@ -159,69 +159,6 @@ def _contact_draws(world: World, rng: np.random.Generator, robot: np.ndarray, sh
 
 
 __all__ = ["randomize_physics"]
-
-
-# ====================================================================================================
-# per-step randomisation
-# ====================================================================================================
-
-@wp.kernel
-def delay_actions_kernel(
-    actions: wp.array2d[wp.float32],
-    late: wp.array[wp.bool],
-    previous: wp.array2d[wp.float32],
-    effective: wp.array2d[wp.float32],
-):
-    e, k = wp.tid()
-    a = actions[e, k]
-    if late[e]:
-        effective[e, k] = previous[e, k]
-    else:
-        effective[e, k] = a
-    previous[e, k] = a
-
-
-@wp.kernel
-def observation_noise_kernel(
-    amplitude: wp.array[wp.float32],
-    seed: int,
-    counter: wp.array[wp.int32],
-    obs: wp.array2d[wp.float32],
-):
-    e = wp.tid()
-    rng = wp.rand_init(seed, e + obs.shape[0] * counter[0])
-    for j in range(obs.shape[1]):
-        obs[e, j] = obs[e, j] + amplitude[j] * (2.0 * wp.randf(rng) - 1.0)
-
-
-@wp.kernel
-def push_kernel(
-    episode_steps: wp.array[wp.int32],
-    interval: int,
-    velocity: float,
-    seed: int,
-    counter: wp.array[wp.int32],
-    joint_qd: wp.array2d[wp.float32],
-):
-    e = wp.tid()
-    k = episode_steps[e]
-    if k == 0 or k % interval != 0:
-        return
-    rng = wp.rand_init(seed, e + joint_qd.shape[0] * counter[0])
-    joint_qd[e, 0] = joint_qd[e, 0] + velocity * (2.0 * wp.randf(rng) - 1.0)
-    joint_qd[e, 1] = joint_qd[e, 1] + velocity * (2.0 * wp.randf(rng) - 1.0)
-
-
-def delay_actions_reference(actions, late, previous):
-    """Float64 reference of :func:`delay_actions_kernel`: returns (effective, new previous)."""
-    a = np.asarray(actions, np.float64)
-    return np.where(np.asarray(late, bool)[:, None], np.asarray(previous, np.float64), a), a
-
-
-def pushed_envs_reference(episode_steps, interval):
-    """Which envs :func:`push_kernel` pushes this step (the draws themselves are Warp's)."""
-    k = np.asarray(episode_steps)
-    return (k != 0) & (k % interval == 0)
 
 
 # ====================================================================================================
@@ -444,11 +381,6 @@ def reset_envs_kernel(
         goals.goal[e] = g
         goals.course[e] = course_to(x, y, g)
     prev_xy[e] = wp.vec2(x, y)
-
-
-@wp.kernel
-def advance_counter_kernel(counter: wp.array[wp.int32]):
-    counter[0] = counter[0] + 1
 
 
 def reset_bounds_reference(lane, spawn_z, stand, lower, upper, lateral, yaw, joint_noise, joint_q):

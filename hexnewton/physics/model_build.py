@@ -19,8 +19,8 @@ from hexnewton.config import HexConfig, SimConfig
 from hexnewton.errors import HexnewtonError
 from hexnewton.physics.device import resolve_device
 from hexnewton.physics.precompile import compiles_generated, install_shipped_modules, live_kernel_ids, preload
-from hexnewton.physics.robot import BASE_Q, NUM_JOINTS, build_hexapod, stand_height
-from hexnewton.physics.terrain import Terrain, make_terrain, max_terrain_height_np
+from hexnewton.robot import BASE_Q, NUM_JOINTS, build_hexapod, stand_height
+from hexnewton.terrain import Terrain, make_terrain, max_terrain_height_np
 
 MAX_ENVS = 1 << 20  # per device; an H100 holds 16384 envs in a few GB (studies/throughput/report.md)
 

@@ -295,7 +295,7 @@ class RolloutViewer:
         """The goals as points on the ground: the goal now green, the other waypoints white."""
         import warp as wp
 
-        from hexnewton.physics.terrain.query import terrain_height_np
+        from hexnewton.terrain.query import terrain_height_np
 
         for name, xy, color in (("goals", marks[0], GOAL_COLOR), ("waypoints", marks[1].reshape(-1, 2), WAYPOINT_COLOR)):
             if not len(xy):

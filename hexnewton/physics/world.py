@@ -33,6 +33,16 @@ from newton.solvers import SolverMuJoCo
 from hexnewton import startup
 from hexnewton.config import HexConfig, SimConfig
 from hexnewton.errors import HexnewtonError
+from hexnewton.kernels.world import (
+    OVERFLOW_BOX_PAIRS,
+    OVERFLOW_CONTACT_REDUCTION,
+    OVERFLOW_TRIANGLE_PAIRS,
+    accumulate_overflow_kernel,
+    as_mask,
+    nonfinite_envs_kernel,
+    spawn_pose_kernel,
+    zero_world_rows_kernel,
+)
 from hexnewton.physics.graphs import capture_graph
 from hexnewton.physics.model_build import ModelBuild
 from hexnewton.physics.private_api import reduction_overflow
@@ -40,16 +50,12 @@ from hexnewton.physics.precompile import (
     precompile,
     precompile_solver,
 )
-from hexnewton.physics.robot import BASE_Q, BASE_QD, NUM_JOINTS, leg_bounds
-from hexnewton.physics.terrain import Terrain
-from hexnewton.physics.terrain.box_pairs import TerrainBoxPairs
+from hexnewton.robot import BASE_Q, BASE_QD, NUM_JOINTS, leg_bounds
+from hexnewton.terrain import Terrain
+from hexnewton.terrain.box_pairs import TerrainBoxPairs
 
 log = logging.getLogger("hexnewton")
 
-# overflow bits beyond MuJoCo's own (bits 0-15) and Newton's (16 pipeline contacts, 17 nconmax)
-OVERFLOW_TRIANGLE_PAIRS = 1 << 20
-OVERFLOW_CONTACT_REDUCTION = 1 << 21
-OVERFLOW_BOX_PAIRS = 1 << 22  # terrain collision "boxes": a robot shape met more boxes than its pair slots
 # mujoco_warp's ITERATIONS (1 << 9) and LS_ITERATIONS (1 << 10) flags mean "solver hit its iteration cap",
 # not a dropped contact or constraint: counted apart from capacity overflow.
 NOT_CONVERGED_BITS = (1 << 9) | (1 << 10)
@@ -63,85 +69,6 @@ def contacts_per_world(cfg: SimConfig, num_envs: int) -> int:
     """MuJoCo's per-world contact capacity (``nconmax``; mujoco_warp pools it over the worlds): ``contacts_per_env``,
     raised so that the pool holds at least ``min_contact_pool`` contacts."""
     return max(cfg.contacts_per_env, -(-cfg.min_contact_pool // num_envs))
-
-
-@wp.kernel
-def _accumulate_overflow(
-    solver_overflow: wp.array[wp.int32],
-    triangle_pairs: wp.array[wp.int32],
-    max_triangle_pairs: int,
-    reduction_overflow: wp.array[wp.int32],
-    sticky: wp.array[wp.int32],
-    global_sticky: wp.array[wp.int32],
-):
-    w = wp.tid()
-    bits = solver_overflow[w]
-    if bits != 0:
-        wp.atomic_or(sticky, w, bits)
-    if w == 0:
-        g = wp.int32(0)
-        if triangle_pairs[0] > max_triangle_pairs:
-            g = g | OVERFLOW_TRIANGLE_PAIRS
-        if reduction_overflow[0] != 0:
-            g = g | OVERFLOW_CONTACT_REDUCTION
-        if g != 0:
-            wp.atomic_or(global_sticky, 0, g)
-
-
-@wp.kernel
-def _nonfinite_envs(
-    joint_q: wp.array2d[wp.float32],
-    joint_qd: wp.array2d[wp.float32],
-    out: wp.array[wp.bool],
-):
-    e = wp.tid()
-    bad = int(0)
-    for i in range(joint_q.shape[1]):
-        if not wp.isfinite(joint_q[e, i]):
-            bad = 1
-    for i in range(joint_qd.shape[1]):
-        if not wp.isfinite(joint_qd[e, i]):
-            bad = 1
-    out[e] = bad != 0
-
-
-@wp.kernel
-def _spawn_pose(
-    mask: wp.array[wp.bool],
-    spawn_q: wp.array2d[wp.float32],
-    joint_q: wp.array2d[wp.float32],
-    joint_qd: wp.array2d[wp.float32],
-    joint_target: wp.array2d[wp.float32],
-):
-    e = wp.tid()
-    if not mask[e]:
-        return
-    for k in range(joint_q.shape[1]):
-        joint_q[e, k] = spawn_q[e, k]
-        joint_target[e, k] = spawn_q[e, k]
-    for k in range(joint_qd.shape[1]):
-        joint_qd[e, k] = 0.0
-
-
-@wp.kernel
-def _zero_world_rows(mask: wp.array[wp.bool], values: wp.array2d[wp.float32]):
-    """values[w, :] = 0 for the worlds w selected by mask (one thread per world: most steps reset few)."""
-    w = wp.tid()
-    if mask[w]:
-        for i in range(values.shape[1]):
-            values[w, i] = 0.0
-
-
-def as_mask(mask: np.ndarray | wp.array | None, buffer: wp.array) -> wp.array:
-    """A per-env bool mask as a Warp array: ``None`` selects all (filled into ``buffer``), a Warp array is used as
-    is (capturable), anything else is copied into ``buffer``."""
-    if mask is None:
-        buffer.fill_(True)
-        return buffer
-    if isinstance(mask, wp.array):
-        return mask
-    buffer.assign(np.asarray(mask, dtype=bool))
-    return buffer
 
 
 @dataclass
@@ -272,7 +199,7 @@ class World:
 
     def _terrain_box_pairs(self) -> TerrainBoxPairs | None:
         """With terrain collision "boxes": the robot shapes' pairs with the terrain boxes under them, refreshed before
-        every detection (:mod:`hexnewton.physics.terrain.box_pairs`); None otherwise."""
+        every detection (:mod:`hexnewton.terrain.box_pairs`); None otherwise."""
         boxes = self.terrain.boxes
         if boxes is None:
             return None
@@ -375,7 +302,7 @@ class World:
             self.solver.step(self.state_0, self.state_1, self.control, self.contacts, self.sim_dt, observables=seen)
             if last:
                 self.leg_sensor.update(None, self.contacts, observables=seen)
-            wp.launch(_accumulate_overflow, dim=self.num_envs,
+            wp.launch(accumulate_overflow_kernel, dim=self.num_envs,
                       inputs=[seen.overflow, self._triangle_pair_count(),
                               self.pipeline.narrow_phase.max_triangle_pairs, self._reduction_overflow,
                               self._overflow_world, self._overflow_global], device=self.device)  # fmt: skip
@@ -415,7 +342,7 @@ class World:
         on it (:meth:`restart`). The MDP places its robots itself (``hexnewton.mdp.events``) and calls
         :meth:`restart`. Capturable when ``mask`` is a Warp array."""
         m = as_mask(mask, self._reset_mask)
-        wp.launch(_spawn_pose, dim=self.num_envs, inputs=[m, self._spawn_q],
+        wp.launch(spawn_pose_kernel, dim=self.num_envs, inputs=[m, self._spawn_q],
                   outputs=[self.joint_q_wp, self.joint_qd_wp, self.joint_target_wp], device=self.device)  # fmt: skip
         self.restart(m)
 
@@ -431,11 +358,11 @@ class World:
         # ... and so do the constraint rows (mujoco_warp fills only the non-zero Jacobian entries of a new row):
         # zero them, or a NaN left by a blow-up returns a few steps later
         for rows in self._efc_rows:
-            wp.launch(_zero_world_rows, dim=self.num_envs, inputs=[mask, rows], device=self.device)
+            wp.launch(zero_world_rows_kernel, dim=self.num_envs, inputs=[mask, rows], device=self.device)
 
     def reset_nonfinite(self) -> int:
         """Reset every env whose state holds NaN/Inf; returns how many (also counted in nonfinite_resets)."""
-        wp.launch(_nonfinite_envs, dim=self.num_envs, inputs=[self.joint_q_wp, self.joint_qd_wp, self._bad],
+        wp.launch(nonfinite_envs_kernel, dim=self.num_envs, inputs=[self.joint_q_wp, self.joint_qd_wp, self._bad],
                   device=self.device)  # fmt: skip
         bad = int(self._bad.numpy().sum())
         if bad:

@@ -5,7 +5,7 @@ Everything here is kinematic: joint angles are the CPG's joint targets (the PD d
 body is a rigid frame over its feet, and the ground is the terrain generator's own height grid.
 
 - Forward kinematics (:func:`feet_np`): the foot spheres' centres in the body frame from the 18 joint angles, the
-  geometry of ``physics/robot/geometry.py`` (the leg frame at the hip mount, yawed by ``leg_yaw``; hip about the
+  geometry of ``robot/geometry.py`` (the leg frame at the hip mount, yawed by ``leg_yaw``; hip about the
   vertical, knee and ankle about the leg frame's -y', the tibia hanging along -z at knee + ankle from vertical).
 - The CPG's gait (:func:`cpg_cycle`): Eq. 3 integrated by its float64 reference (``hopf_cpg_reference``) from the
   locked start, one settling cycle, then one recorded cycle mapped by Eq. 4's reference (``mapping_reference``) to
@@ -31,10 +31,10 @@ from dataclasses import replace
 import numpy as np
 
 from hexnewton.config import LEG_NAMES, LEG_OSCILLATOR, CPGConfig, RobotConfig, TerrainConfig, without_lanes
-from hexnewton.physics.reference import hopf_cpg_reference, initial_cpg_state, mapping_reference
-from hexnewton.physics.robot.geometry import hip_mount, joint_limits, leg_bounds, leg_yaw, stand_height
-from hexnewton.physics.terrain.heightmap import build_height_grid, complex_step_count, validate_config
-from hexnewton.physics.terrain.query import max_terrain_height_np
+from hexnewton.kernels.reference import hopf_cpg_reference, initial_cpg_state, mapping_reference
+from hexnewton.robot.geometry import hip_mount, joint_limits, leg_bounds, leg_yaw, stand_height
+from hexnewton.terrain.heightmap import build_height_grid, complex_step_count, validate_config
+from hexnewton.terrain.query import max_terrain_height_np
 
 #: the issue's targets: (name, what is swept, value [m], the course it is walked on, the rest of that course)
 TARGETS = (("8 cm rise", "step_rise", 0.08, "stepped", dict(step_depth=0.25)),

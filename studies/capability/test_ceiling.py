@@ -11,7 +11,7 @@ import pytest
 import ceiling_model as cap
 from hexnewton.apps.cli import run
 from hexnewton.config import CPGConfig, HexConfig, RobotConfig, gait_params
-from hexnewton.physics.robot import BASE_Q, stand_height
+from hexnewton.robot import BASE_Q, stand_height
 
 pytestmark = pytest.mark.slow  # a study's test: the CI line of its own (python -m pytest -q -m slow)
 
@@ -31,7 +31,7 @@ def test_fk_matches_newton():
     import newton
     import warp as wp
 
-    from hexnewton.physics.robot import build_hexapod, joint_limits
+    from hexnewton.robot import build_hexapod, joint_limits
 
     wp.init()
     robot = RobotConfig()

@@ -7,15 +7,15 @@ fully coupled network of six: the six-oscillator CPG converges to its rhythm in 
 one in about 70, with 67 % fewer network parameters. The paper publishes neither its constants nor its step size.
 This command integrates both networks with ours (``CPGConfig``), in float64 NumPy, from random initial states.
 
-Networks (every oscillator is the kernel's Eq. 3 oscillator, ``physics/reference.hopf_unit_rhs_np``: the same
+Networks (every oscillator is the kernel's Eq. 3 oscillator, ``kernels/reference.hopf_unit_rhs_np``: the same
 alpha, mu, delta, the swing/stance blend of omega keyed on x and the frequency compensation; only the topology
 differs):
 
-- ``two``: the kernel's pair (``physics/cpg.py``), integrated by its reference ``hopf_cpg_reference``:
+- ``two``: the kernel's pair (``kernels/cpg.py``), integrated by its reference ``hopf_cpg_reference``:
   theta_10 = -theta, theta_01 = theta, oscillator 0 for the tripod {R1, L2, R3}, 1 for {L1, R2, L3}.
 - ``six_sum``: one oscillator per leg (R1, R2, R3, L1, L2, L3), fully coupled, Eq. 3's coupling summed over the
   five others: dy_i/dt gets delta * sum_{j != i} Delta_ji, Delta_ji = y_j cos(theta_ji) - x_j sin(theta_ji), with
-  theta_ji = 0 within a tripod and pi across (``physics/reference.tripod_theta``: theta_ji = theta (g_i - g_j) for
+  theta_ji = 0 within a tripod and pi across (``kernels/reference.tripod_theta``: theta_ji = theta (g_i - g_j) for
   the tripods g = ``LEG_OSCILLATOR``). Each link has Eq. 3's strength delta.
 - ``six_mean``: the same network with delta / 5 on each link (the mean over the neighbours), so each oscillator
   feels the coupling strength of the pair.
@@ -24,7 +24,7 @@ Frequency compensation. Locked in the tripod, every neighbour's Delta_ji equals 
 equal), so oscillator i receives K y_i with K = delta * sum_j c_ji (c_ji: the weight of the link j -> i): K = delta
 for ``two`` and ``six_mean``, 5 delta for ``six_sum``. That term adds K sin(phi) cos(phi) to dphi/dt, so a cycle
 lasts 2 pi / sqrt(w^2 - K^2 / 4): the kernel's derivation with delta replaced by K. Every network therefore
-integrates with omega_c = sqrt(omega^2 + K^2 / 4) (``physics/reference.network_omega``; K = delta is the kernel's
+integrates with omega_c = sqrt(omega^2 + K^2 / 4) (``kernels/reference.network_omega``; K = delta is the kernel's
 own), and all three run at the commanded omega (the report lists the measured frequency of each converged cycle).
 Uncompensated, ``six_sum`` would not oscillate at all below omega = K / 2 = 12.5 rad/s (2 Hz) with delta = 5:
 dphi/dt would vanish on the cycle. The same term adds K r sin^2(phi) to dr/dt, so the converged radius ripples
@@ -50,7 +50,7 @@ Starts: each oscillator's (x, y) drawn independently, uniform over the disc of r
 inside and outside the limit cycle), seeded; the pair takes the first two of the six legs' draws (R1, R2: one per
 tripod), so both networks start from the same distribution.
 
-Step: one RK4 step of the CPG, what ``hexnewton.physics.cpg`` integrates before every physics substep, dt =
+Step: one RK4 step of the CPG, what ``hexnewton.kernels.cpg`` integrates before every physics substep, dt =
 ``SimConfig.frame_dt / substeps``: 2.5 ms for the default physics (tasks ``flat``, ``paper``), 5 ms under the 20 ms
 frame of the terrain tasks (the shipped policies). The high level acts every ``TaskConfig.control_dt`` (20 ms), i.e.
 every 8 or 4 steps. ``--dt`` defaults to every step size the CPG tasks use.
@@ -84,7 +84,7 @@ from oscillators import (  # noqa: E402
 )
 from hexnewton.apps.cli import ArgumentParser, check_new_dir, positive_int, run
 from hexnewton.config import CPGConfig, TaskConfig
-from hexnewton.physics.reference import network_omega
+from hexnewton.kernels.reference import network_omega
 
 FIGURE = "fig1.png"
 

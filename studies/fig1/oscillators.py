@@ -8,7 +8,7 @@ import math
 import numpy as np
 
 from hexnewton.config import LEG_NAMES, LEG_OSCILLATOR, CPGConfig
-from hexnewton.physics.reference import hopf_cpg_reference, hopf_network_reference, tripod_theta
+from hexnewton.kernels.reference import hopf_cpg_reference, hopf_network_reference, tripod_theta
 
 #: name: (label, oscillator groups (tripod of each oscillator), coupling weight of each link)
 NETWORKS = {

@@ -8,7 +8,7 @@ import pytest
 
 from hexnewton.apps.cli import run
 from hexnewton.config import LEG_OSCILLATOR, CPGConfig
-from hexnewton.physics.reference import (
+from hexnewton.kernels.reference import (
     hopf_cpg_reference,
     hopf_network_reference,
     initial_cpg_state,

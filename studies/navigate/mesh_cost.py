@@ -31,7 +31,7 @@ def _one(case: str) -> dict:
     import warp as wp
 
     from hexnewton.physics.private_api import time_mesh_boundary_flags
-    from hexnewton.physics.terrain import make_terrain
+    from hexnewton.terrain import make_terrain
     from hexnewton.tasks import task
 
     wp.init()

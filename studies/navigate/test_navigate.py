@@ -28,7 +28,7 @@ def test_the_measured_patch_is_the_tasks():
     """navigate-rugged's terrain as the task builds it now: the same patch and the same collision triangles."""
     import newton
 
-    from hexnewton.physics.terrain import make_terrain
+    from hexnewton.terrain import make_terrain
     from hexnewton.tasks import task
 
     row = next(r for r in _saved()["rows"] if r["case"] == "navigate-rugged")

@@ -29,10 +29,10 @@ from hexnewton.config import TERRAINS, CPGConfig, HexConfig, SimConfig, TaskConf
 from hexnewton.learning.policy import fixed_cpg_actions
 from hexnewton.mdp.env import make_env
 from hexnewton.mdp.status import STATUS_NAMES
-from hexnewton.physics.cpg import CPGController
-from hexnewton.physics.robot import stand_height
-from hexnewton.physics.terrain import max_terrain_height_np
-from hexnewton.physics.terrain.query import terrain_height_np
+from hexnewton.kernels.cpg import CPGController
+from hexnewton.robot import stand_height
+from hexnewton.terrain import max_terrain_height_np
+from hexnewton.terrain.query import terrain_height_np
 from hexnewton.physics.world import World
 
 CANDIDATES = {

@@ -6,7 +6,7 @@ from dataclasses import replace
 import numpy as np
 
 from hexnewton.config import HexConfig, SimConfig, TerrainConfig
-from hexnewton.physics.cpg import CPGController
+from hexnewton.kernels.cpg import CPGController
 from hexnewton.physics.world import World
 
 for terrain in ("flat", "complex"):

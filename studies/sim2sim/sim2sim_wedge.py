@@ -38,7 +38,7 @@ import time
 import numpy as np
 
 from hexnewton.config import RobotConfig
-from hexnewton.physics.reference import scale_actions_reference
+from hexnewton.kernels.reference import scale_actions_reference
 
 POLICY = "results/policies/cpg_rl_complex.pt"
 BUNDLE = "results/controllers/cpg_rl_complex"
@@ -143,8 +143,8 @@ def newton_setting(name: str, robots: int, steps: int, seed: int) -> dict:
     from hexnewton.analysis.rollout import CONTROLLERS, START_SEED_OFFSET, controller_policy, read_controller_checkpoint
     from hexnewton.learning.checkpoint import trained_config
     from hexnewton.mdp.env import make_env
-    from hexnewton.physics.reference import quat_rotate_inv_np
-    from hexnewton.physics.terrain.query import terrain_height_np
+    from hexnewton.kernels.reference import quat_rotate_inv_np
+    from hexnewton.terrain.query import terrain_height_np
     from hexnewton.tasks import course
 
     t0 = time.perf_counter()
@@ -263,7 +263,7 @@ def mujoco_setting(name: str, robots: int, steps: int, seed: int) -> dict:
     import mujoco
 
     from hexnewton.analysis.sim2sim import Rounds
-    from hexnewton.physics.terrain.query import terrain_height_np
+    from hexnewton.terrain.query import terrain_height_np
 
     sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
     from sim2sim_side_by_side import wedged_feet

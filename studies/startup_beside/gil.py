@@ -58,7 +58,7 @@ def scene_of(name: str, num_envs: int, device: str):
     from dataclasses import replace
 
     from hexnewton.physics.model_build import build_scene
-    from hexnewton.physics.terrain import make_terrain
+    from hexnewton.terrain import make_terrain
     from hexnewton.tasks import task
 
     cfg = task(name).env

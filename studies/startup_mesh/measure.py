@@ -28,8 +28,8 @@ def _one(name: str) -> list[dict]:
     import warp as wp
 
     from hexnewton.physics.private_api import time_mesh_boundary_flags
-    from hexnewton.physics.terrain import build_height_grid, make_terrain
-    from hexnewton.physics.terrain.mesh import _merge_close_heights, grid_to_mesh
+    from hexnewton.terrain import build_height_grid, make_terrain
+    from hexnewton.terrain.mesh import _merge_close_heights, grid_to_mesh
     from hexnewton.tasks import task
 
     wp.init()
@@ -89,7 +89,7 @@ def _report(rows: list[dict], command: str, machine: str) -> str:
         "",
         "`TerrainConfig.watertight` (off by default) builds the terrain meshes without T-junctions: every quad edge",
         "split at the vertices on it, each quad cut into N - 2 triangles (N: its corners and split points), plus one",
-        "vertex halfway up the vertical edge of each saddle corner, where four walls meet (hexnewton/physics/terrain/",
+        "vertex halfway up the vertical edge of each saddle corner, where four walls meet (hexnewton/terrain/",
         "mesh.py). Newton's `Mesh.is_watertight` then holds and `ModelBuilder.finalize` skips",
         "`compute_mesh_boundary_flags`. One run each; CPU seconds of the process (all threads) and, in brackets, wall",
         "seconds. The machine was shared with other jobs (load: its 1-minute load average on 2 cores), so wall times",

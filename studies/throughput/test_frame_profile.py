@@ -24,7 +24,7 @@ def test_each_module_has_its_part():
     assert fp.part_of("mujoco_warp._src.solver") == "solver (MuJoCo-Warp)"
     assert fp.part_of("newton._src.geometry.narrow_phase") == "collision (Newton)"
     assert fp.part_of("newton._src.solvers.mujoco.kernels") == "solver glue (Newton's MuJoCo solver)"
-    assert fp.part_of("hexnewton.physics.cpg") == "CPG and mapping (hexnewton.physics)"
+    assert fp.part_of("hexnewton.kernels.cpg") == "CPG and mapping (hexnewton.physics)"
     assert fp.part_of("hexnewton.mdp.terms.rewards") == "MDP terms (hexnewton.mdp)"
     assert fp.part_of("somewhere.else") == "other"
 
@@ -42,11 +42,11 @@ def test_the_phases_are_the_control_steps_calls_in_its_order():
 
 
 def test_the_loaded_kernels_name_their_modules():
-    import hexnewton.physics.cpg  # noqa: F401  (its kernels)
+    import hexnewton.kernels.cpg  # noqa: F401  (its kernels)
 
     modules = fp.kernel_modules()
-    ours = {m for m in modules.values() if m.startswith("hexnewton.physics")}
-    assert ours, "no hexnewton.physics kernel found among the live wp.Kernel objects"
+    ours = {m for m in modules.values() if m.startswith("hexnewton.kernels")}
+    assert ours, "no hexnewton.kernels kernel found among the live wp.Kernel objects"
 
 
 def test_without_a_gpu_it_says_so_in_one_line(capsys):

@@ -25,8 +25,8 @@ from hexnewton.mdp.terms import (
     height_field_from_grid,
     make_struct,
 )
-from hexnewton.physics.reference import quat_to_rpy_np
-from hexnewton.physics.terrain import make_terrain, terrain_height_np
+from hexnewton.kernels.reference import quat_to_rpy_np
+from hexnewton.terrain import make_terrain, terrain_height_np
 
 ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
 TASK = TaskConfig()

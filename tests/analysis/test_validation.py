@@ -154,7 +154,7 @@ def test_courses_side_by_side_are_each_course_in_its_own_lane_group():
 
     from hexnewton.analysis.validation import VALIDATION_SEED, together_config
     from hexnewton.config import HexConfig
-    from hexnewton.physics.terrain.heightmap import build_height_grid, env_groups, lane_config
+    from hexnewton.terrain.heightmap import build_height_grid, env_groups, lane_config
     from hexnewton.tasks import course
 
     names = ["flat", "rugged", "stepped", "complex"]
@@ -179,7 +179,7 @@ def test_courses_side_by_side_give_every_course_and_candidate_its_rounds(monkeyp
     (i // G) mod K, ``rounds`` robots per (course, candidate) pair, the results keyed by the courses' own order; under
     torchrun, or with one course, course by course as before."""
     from hexnewton.analysis import validation
-    from hexnewton.physics.terrain.heightmap import env_groups
+    from hexnewton.terrain.heightmap import env_groups
 
     seen = {}
 

@@ -232,7 +232,7 @@ def test_stuck_response_in_the_simulator_and_the_runtime(tmp_path):
     import torch
 
     from hexnewton.deploy.runtime import Controller, replay
-    from hexnewton.physics.reference import scale_actions_reference
+    from hexnewton.kernels.reference import scale_actions_reference
 
     ck = torch.load(POLICY, map_location="cpu", weights_only=False)
     ck["infos"]["hexnewton"]["config"]["cpg"].update(stuck_lift=0.3, stuck_window=3, stuck_progress=100.0, stuck_hold=2)
@@ -309,7 +309,7 @@ def test_runtime_observes_the_gyro_and_last_actions_as_the_env_does():
     from hexnewton.deploy.runtime import Controller
     from hexnewton.mdp.env import make_env
     from hexnewton.mdp.terms import OBS_LAYOUT
-    from hexnewton.physics.reference import quat_rotate_inv_np
+    from hexnewton.kernels.reference import quat_rotate_inv_np
 
     cfg = HexConfig(sim=SimConfig(num_envs=2, device="cpu", use_graph=False), terrain=TerrainConfig(name="stepped"),
                     task=TaskConfig(max_episode_steps=10), obs=ObsConfig(gyro=True, last_action=True))  # fmt: skip

@@ -16,7 +16,7 @@ from hexnewton.apps.sim2sim import HEADLINE, PROG, main  # noqa: E402
 from hexnewton.config import JOINT_NAMES, RobotConfig, TerrainConfig  # noqa: E402
 from hexnewton.deploy.mjcf import SENSORS_PER_ROBOT, build_model, robot_xml  # noqa: E402
 from hexnewton.mdp.status import RUNNING, SUCCESS  # noqa: E402
-from hexnewton.physics.terrain.heightmap import build_height_grid  # noqa: E402
+from hexnewton.terrain.heightmap import build_height_grid  # noqa: E402
 
 BUNDLE = os.path.join(os.path.dirname(__file__), "..", "..", "results", "controllers", "cpg_rl_complex")
 
@@ -26,7 +26,7 @@ def _newton_robot(cfg: RobotConfig, q: np.ndarray):
     import newton
     import warp as wp
 
-    from hexnewton.physics.robot import build_hexapod
+    from hexnewton.robot import build_hexapod
 
     model = build_hexapod(cfg).finalize(device="cpu")
     state = model.state()
@@ -88,7 +88,7 @@ def test_servos_and_sensors_follow_the_robot_config():
 
 
 def test_terrain_boxes_and_scanner_are_the_height_grid():
-    from hexnewton.physics.terrain import max_terrain_height_np, terrain_height_np
+    from hexnewton.terrain import max_terrain_height_np, terrain_height_np
 
     grid = build_height_grid(TerrainConfig(name="complex", seed=3))
     m = build_model(RobotConfig(), grid, [], 0.005)

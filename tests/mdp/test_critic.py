@@ -24,8 +24,8 @@ from hexnewton.mdp.terms import (
     height_field_from_grid,
     make_struct,
 )
-from hexnewton.physics.reference import quat_rotate_inv_np
-from hexnewton.physics.terrain import make_terrain, terrain_height_np
+from hexnewton.kernels.reference import quat_rotate_inv_np
+from hexnewton.terrain import make_terrain, terrain_height_np
 
 DEV = "cpu"
 BODIES = 19  # per robot: torso, then coxa, femur, tibia per leg

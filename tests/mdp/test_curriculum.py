@@ -14,8 +14,8 @@ from hexnewton.mdp.events import (curriculum_kernel, curriculum_reference, lane_
                                   placement_kernel, start_levels, strict_from)
 from hexnewton.mdp.status import NONFINITE, SUCCESS
 from hexnewton.mdp.terms import height_field_from_grid
-from hexnewton.physics.terrain import build_height_grid, max_terrain_height_np, terrain_height_np
-from hexnewton.physics.terrain.heightmap import lane_center_y
+from hexnewton.terrain import build_height_grid, max_terrain_height_np, terrain_height_np
+from hexnewton.terrain.heightmap import lane_center_y
 
 DEV = "cpu"
 
@@ -244,7 +244,7 @@ def test_lane_courses_hold_each_course_whole():
     """``lane_courses``: one group of lanes per course side by side along y; the first group is the terrain's own
     grid unchanged, and each other group's lane k is that course's lane k (its stairs at the lane's scaled rise, its
     blocks its own draws); env i plays group i mod 3."""
-    from hexnewton.physics.terrain.heightmap import env_groups, lane_config
+    from hexnewton.terrain.heightmap import env_groups, lane_config
 
     one = TerrainConfig(name="complex", levels=3, lane_width=1.0)
     cfg = replace(one, lane_courses=("rugged", "stepped"))
@@ -283,7 +283,7 @@ def test_lane_courses_checked(bad, message):
 @pytest.mark.slow  # builds an env: a few seconds on a 2-core CPU
 def test_env_places_each_env_on_its_course():
     """Envs of a curriculum with ``lane_courses`` start on their level's lane of their own group."""
-    from hexnewton.physics.terrain.heightmap import env_groups
+    from hexnewton.terrain.heightmap import env_groups
 
     cfg = HexConfig(sim=replace(SimConfig(), num_envs=6, device=DEV),
                     terrain=TerrainConfig(name="complex", levels=2, start_levels=2, lane_courses=("rugged", "stepped")))

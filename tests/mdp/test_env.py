@@ -16,8 +16,8 @@ from hexnewton.mdp.env import make_env
 from hexnewton.mdp.events import reset_bounds_reference
 from hexnewton.mdp.status import NONFINITE, TIMEOUT
 from hexnewton.mdp.terms import OBS_LAYOUT, REWARD_NAMES
-from hexnewton.physics.cpg import joint_actions_kernel
-from hexnewton.physics.reference import joint_actions_reference
+from hexnewton.kernels.cpg import joint_actions_kernel
+from hexnewton.kernels.reference import joint_actions_reference
 
 DEV = "cpu"
 TASK = TaskConfig()

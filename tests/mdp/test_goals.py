@@ -36,7 +36,7 @@ from hexnewton.mdp.terms import (
     set_goal,
     set_goal_np,
 )
-from hexnewton.physics.terrain import make_terrain, terrain_height_np
+from hexnewton.terrain import make_terrain, terrain_height_np
 
 DEV = "cpu"
 RANDOM = dataclasses.replace(TaskConfig(), random_goals=True, goal_bearing=math.pi, goal_distance_min=1.0,

@@ -10,7 +10,7 @@ import warp as wp
 
 from hexnewton.config import HexConfig, RandomizationConfig, SimConfig, TaskConfig
 from hexnewton.mdp.env import make_env
-from hexnewton.mdp.events import (
+from hexnewton.kernels.events import (
     delay_actions_kernel,
     delay_actions_reference,
     observation_noise_kernel,
@@ -18,7 +18,7 @@ from hexnewton.mdp.events import (
     pushed_envs_reference,
 )
 from hexnewton.mdp.terms import OBS_LAYOUT
-from hexnewton.physics.reference import scale_actions_reference
+from hexnewton.kernels.reference import scale_actions_reference
 
 DEV = "cpu"
 RZ = RandomizationConfig(enabled=True)

@@ -31,7 +31,7 @@ from hexnewton.mdp.terms import (
     make_struct,
 )
 from hexnewton.mdp.terms.terminations import make_status_kernel
-from hexnewton.physics.terrain import make_terrain, terrain_height_np
+from hexnewton.terrain import make_terrain, terrain_height_np
 
 DEV = "cpu"
 ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))

@@ -52,7 +52,7 @@ from hexnewton.mdp.terms import (
     rewards_reference,
 )
 from hexnewton.mdp.terms.observations import LAYOUT_ACTIONS
-from hexnewton.physics.terrain import make_terrain, max_terrain_height_np, terrain_height_np
+from hexnewton.terrain import make_terrain, max_terrain_height_np, terrain_height_np
 
 DEV = "cpu"
 TASK, REW = TaskConfig(), RewardConfig()
@@ -304,7 +304,7 @@ def test_config_structs_follow_the_config():
 
 
 def test_termination_table_covers_every_status_once():
-    """One row per status code 1..5, named as in physics/reference.py; the blow-up check comes first (its rpy is 0)."""
+    """One row per status code 1..5, named as in kernels/reference.py; the blow-up check comes first (its rpy is 0)."""
     assert sorted(t.code for t in TERMINATIONS) == list(range(1, len(STATUS_NAMES)))
     assert [t.name for t in sorted(TERMINATIONS, key=lambda t: t.code)] == list(STATUS_NAMES[1:])
     assert TERMINATIONS[0].name == "nonfinite" and [t.name for t in TERMINATIONS[1:]] == ["fell", "off_course",

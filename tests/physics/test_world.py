@@ -10,10 +10,10 @@ import warp as wp
 
 from hexnewton.config import TERRAINS, HexConfig, SimConfig, TerrainConfig
 from hexnewton.errors import HexnewtonError
-from hexnewton.physics.cpg import CPGController
+from hexnewton.kernels.cpg import CPGController
 from hexnewton.physics.device import resolve_device
-from hexnewton.physics.robot import stand_height
-from hexnewton.physics.terrain import max_terrain_height_np
+from hexnewton.robot import stand_height
+from hexnewton.terrain import max_terrain_height_np
 from hexnewton.physics.model_build import ModelBuild
 from hexnewton.physics.world import ContactOverflowError, World, contacts_per_world
 

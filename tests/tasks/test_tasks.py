@@ -131,7 +131,7 @@ def test_complex_margin_recipe():
 
     import numpy as np
 
-    from hexnewton.physics.terrain.heightmap import lane_config
+    from hexnewton.terrain.heightmap import lane_config
     from hexnewton.tasks import MARGIN_LANES, MARGIN_RANDOMIZATION, course
 
     c, m = task("complex"), task("complex-margin")
@@ -145,7 +145,7 @@ def test_complex_margin_recipe():
     rz = m.env.randomization
     assert rz.friction[0] <= 0.3 and rz.payload[1] >= 1.0 and rz.motor_strength[0] * rz.kp_scale[1] <= 0.5
     # the validation course: the complex course's ground, the same as the complex task's
-    from hexnewton.physics.terrain import build_height_grid
+    from hexnewton.terrain import build_height_grid
 
     grids = [build_height_grid(course(g).terrain).heights for g in (m.env.terrain, c.env.terrain, "complex")]
     assert np.array_equal(grids[0], grids[1]) and np.array_equal(grids[0], grids[2])

@@ -19,8 +19,8 @@ import warp as wp
 from hexnewton.config import LEG_NAMES
 from hexnewton.mdp.terms.ground import HeightField, terrain_height
 from hexnewton.mdp.terms.observations import BASE_LAYOUTS, CPG
-from hexnewton.physics.cpg import quat_to_rpy
-from hexnewton.physics.reference import quat_rotate_inv_np, quat_to_rpy_np
+from hexnewton.kernels.cpg import quat_to_rpy
+from hexnewton.kernels.reference import quat_rotate_inv_np, quat_to_rpy_np
 
 #: ours: the 3 x 3 ground heights around each foot, 3 cm apart along world x and y (a 2 cm block and the blocks beside
 #: it): offsets FOOT_GRID [m]

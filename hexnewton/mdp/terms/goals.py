@@ -44,8 +44,8 @@ import warp as wp
 from hexnewton.deploy import rules
 from hexnewton.mdp.status import RUNNING
 from hexnewton.mdp.terms.structs import TaskParams
-from hexnewton.physics.cpg import quat_to_rpy
-from hexnewton.physics.reference import quat_to_rpy_np
+from hexnewton.kernels.cpg import quat_to_rpy
+from hexnewton.kernels.reference import quat_to_rpy_np
 
 #: the switch's random draws: ``wp.rand_init(task.seed + SWITCH_SEED, env + N * counter)``
 SWITCH_SEED = 611953

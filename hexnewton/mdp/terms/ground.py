@@ -1,10 +1,10 @@
 """The ground as the terms see it: a terrain's height grid on the device (:class:`HeightField`) and the Warp height
-queries the kernels run on it; their float64 twins are ``hexnewton/physics/terrain/query.py``'s."""
+queries the kernels run on it; their float64 twins are ``hexnewton/terrain/query.py``'s."""
 
 import numpy as np
 import warp as wp
 
-from hexnewton.physics.terrain.heightmap import HeightGrid
+from hexnewton.terrain.heightmap import HeightGrid
 
 
 @wp.struct

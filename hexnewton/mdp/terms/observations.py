@@ -23,8 +23,8 @@ from hexnewton.config import JOINT_NAMES, PARAM_NAMES, POSTURE_NAMES
 from hexnewton.mdp.terms.goals import Goals
 from hexnewton.mdp.terms.ground import HeightField, max_terrain_height, terrain_height
 from hexnewton.mdp.terms.structs import TaskParams
-from hexnewton.physics.cpg import quat_to_rpy
-from hexnewton.physics.reference import quat_rotate_inv_np, quat_to_rpy_np
+from hexnewton.kernels.cpg import quat_to_rpy
+from hexnewton.kernels.reference import quat_rotate_inv_np, quat_to_rpy_np
 
 H_HALF_EXTENT = 0.3  # ours: the square that "max height h" looks at: +-30 cm, about the legs' reach [m]
 #: ``cpg``: the paper's (15 CPG parameters); ``cpg_posture``: with the body posture (18); ``joint``: the pure-DRL

@@ -31,7 +31,7 @@ from hexnewton.mdp.status import FELL, OFF_COURSE, RUNNING, SUCCESS
 from hexnewton.mdp.terms.goals import Goals, along_course, off_line, off_line_np
 from hexnewton.mdp.terms.ground import HeightField, terrain_height
 from hexnewton.mdp.terms.structs import RewardParams, TaskParams, choose
-from hexnewton.physics.reference import quat_rotate_inv_np
+from hexnewton.kernels.reference import quat_rotate_inv_np
 
 
 REF_DT = 0.02

@@ -27,7 +27,7 @@ from hexnewton.mdp.status import FELL, NONFINITE, OFF_COURSE, RUNNING, STATUS_NA
 from hexnewton.mdp.terms.goals import Goals, goal_reached, off_line
 from hexnewton.mdp.terms.ground import HeightField, terrain_height
 from hexnewton.mdp.terms.structs import TaskParams, choose
-from hexnewton.physics.cpg import quat_to_rpy
+from hexnewton.kernels.cpg import quat_to_rpy
 
 
 @wp.struct

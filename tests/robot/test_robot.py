@@ -8,7 +8,7 @@ import pytest
 import warp as wp
 
 from hexnewton.config import JOINT_NAMES, RobotConfig
-from hexnewton.physics.robot import BASE_Q, build_hexapod, stand_height
+from hexnewton.robot import BASE_Q, build_hexapod, stand_height
 
 
 @pytest.fixture(scope="module")

@@ -10,10 +10,10 @@ import numpy as np
 import warp as wp
 
 from hexnewton.config import HexConfig, SimConfig, TerrainConfig
-from hexnewton.physics.reference import quat_rotate_inv_np
-from hexnewton.physics.terrain import HeightGrid, grid_boxes, make_terrain, max_terrain_height_np
-from hexnewton.physics.terrain.box_pairs import find_box_pairs
-from hexnewton.physics.terrain.boxes import box_capacity, box_pairs_np
+from hexnewton.kernels.reference import quat_rotate_inv_np
+from hexnewton.terrain import HeightGrid, grid_boxes, make_terrain, max_terrain_height_np
+from hexnewton.terrain.box_pairs import find_box_pairs
+from hexnewton.terrain.boxes import box_capacity, box_pairs_np
 from hexnewton.physics.world import World
 
 wp.init()

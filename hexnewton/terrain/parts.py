@@ -5,7 +5,7 @@ The height grid is cut along x into strips, band by band along y (the whole widt
 * a run of columns whose cells all share one height across the band (a flat run-up, a stair tread, a landing,
   the flat ground beyond the blocks) becomes one box whose top is that height;
 * a run of columns that is not constant across the band (the rugged blocks) becomes one closed triangle mesh of
-  its sub-grid (:func:`~hexnewton.physics.terrain.mesh.grid_to_mesh`).
+  its sub-grid (:func:`~hexnewton.terrain.mesh.grid_to_mesh`).
 
 Equal parts of neighbouring bands (same columns, same box height) are merged. Every part reaches down to the same
 bottom, ``min(height) - base_depth``, so the parts tile the patch without gaps and their union has the surface of
@@ -19,8 +19,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from hexnewton.physics.terrain.heightmap import HeightGrid
-from hexnewton.physics.terrain.mesh import grid_to_mesh
+from hexnewton.terrain.heightmap import HeightGrid
+from hexnewton.terrain.mesh import grid_to_mesh
 
 if TYPE_CHECKING:
     import newton
@@ -82,7 +82,7 @@ def add_mesh_boxes(grid: HeightGrid, builder: newton.ModelBuilder, cfg: newton.M
                    name: str, band: int | None = None, base_depth: float = 0.1, watertight: bool = False) -> list[int]:
     """Add the parts of :func:`split_strips` as static shapes (body -1): boxes from the common bottom
     ``min(height) - base_depth`` up to their height, closed meshes down to the same bottom (``watertight``: without
-    T-junctions, :func:`~hexnewton.physics.terrain.mesh.grid_to_mesh`). Returns the shape indices (consecutive),
+    T-junctions, :func:`~hexnewton.terrain.mesh.grid_to_mesh`). Returns the shape indices (consecutive),
     meshes first."""
     import newton
     import warp as wp

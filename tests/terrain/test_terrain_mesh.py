@@ -15,8 +15,8 @@ from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
 from hexnewton.config import TerrainConfig
-from hexnewton.physics.terrain import HeightGrid, build_height_grid, grid_to_mesh, make_terrain, terrain_height_np
-from hexnewton.physics.terrain.mesh import HEIGHT_TOLERANCE
+from hexnewton.terrain import HeightGrid, build_height_grid, grid_to_mesh, make_terrain, terrain_height_np
+from hexnewton.terrain.mesh import HEIGHT_TOLERANCE
 
 wp.init()
 DEVICE = "cpu"

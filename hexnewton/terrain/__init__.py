@@ -17,11 +17,11 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from hexnewton.config import TerrainConfig
-from hexnewton.physics.terrain.boxes import BoxIndex, add_boxes, grid_boxes
-from hexnewton.physics.terrain.heightmap import HeightGrid, build_height_grid, complex_step_count, validate_config
-from hexnewton.physics.terrain.mesh import grid_to_mesh
-from hexnewton.physics.terrain.parts import Part, add_mesh_boxes, split_strips
-from hexnewton.physics.terrain.query import max_terrain_height_np, terrain_height_np
+from hexnewton.terrain.boxes import BoxIndex, add_boxes, grid_boxes
+from hexnewton.terrain.heightmap import HeightGrid, build_height_grid, complex_step_count, validate_config
+from hexnewton.terrain.mesh import grid_to_mesh
+from hexnewton.terrain.parts import Part, add_mesh_boxes, split_strips
+from hexnewton.terrain.query import max_terrain_height_np, terrain_height_np
 
 if TYPE_CHECKING:
     import newton
@@ -67,10 +67,10 @@ class Terrain:
 
         flat: an infinite ground plane at z = 0. Otherwise, by ``TerrainConfig.collision``: "mesh", one triangle
         mesh; "mesh_boxes", the same surface as boxes for the constant-height strips plus meshes for the rugged
-        blocks (:func:`~hexnewton.physics.terrain.parts.add_mesh_boxes`, consecutive shapes; with curriculum levels the
+        blocks (:func:`~hexnewton.terrain.parts.add_mesh_boxes`, consecutive shapes; with curriculum levels the
         strips are one lane wide); "boxes", every rectangle of equal-height cells one box, each rugged block one
-        (:mod:`~hexnewton.physics.terrain.boxes`, consecutive shapes, then one box far below: :attr:`boxes` holds
-        them, their pairs with the robot shapes come from :mod:`~hexnewton.physics.terrain.box_pairs`).
+        (:mod:`~hexnewton.terrain.boxes`, consecutive shapes, then one box far below: :attr:`boxes` holds
+        them, their pairs with the robot shapes come from :mod:`~hexnewton.terrain.box_pairs`).
         """
         if self.name == "flat":
             return builder.add_ground_plane(cfg=cfg)

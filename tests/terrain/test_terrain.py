@@ -1,4 +1,4 @@
-"""Tests for hexnewton.physics.terrain: the paper's terrains (Huang et al. 2025, §3.1), their collision mesh
+"""Tests for hexnewton.terrain: the paper's terrains (Huang et al. 2025, §3.1), their collision mesh
 and the in-kernel height query. CPU only."""
 
 from __future__ import annotations
@@ -16,7 +16,7 @@ from hypothesis.extra.numpy import arrays
 
 from hexnewton.config import TERRAINS, TerrainConfig
 from hexnewton.mdp.terms import HeightField, height_field_from_grid, sample_heights, terrain_height
-from hexnewton.physics.terrain import (
+from hexnewton.terrain import (
     HeightGrid,
     Part,
     Terrain,

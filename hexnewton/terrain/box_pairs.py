@@ -3,11 +3,11 @@
 Newton's explicit broad phase tests a fixed-length list of shape pairs. With ~50,000 terrain boxes the list of every
 robot shape against every box would hold ~10^6 pairs per robot; :func:`find_box_pairs` instead writes, per robot
 shape, the boxes under the shape's bounding cube (its centre from the body pose, half width its bounding radius plus
-both contact gaps), read off the cell each box covers (:class:`~hexnewton.physics.terrain.boxes.BoxIndex`). Every
+both contact gaps), read off the cell each box covers (:class:`~hexnewton.terrain.boxes.BoxIndex`). Every
 shape owns a fixed run of slots sized for the most boxes its cube can overlap
-(:func:`~hexnewton.physics.terrain.boxes.box_capacity`); unused slots pair the shape with one box far below the
+(:func:`~hexnewton.terrain.boxes.box_capacity`); unused slots pair the shape with one box far below the
 terrain that nothing reaches. Newton's broad phase then tests these pairs' exact bounding boxes as usual.
-Float64 reference: :func:`~hexnewton.physics.terrain.boxes.box_pairs_np`.
+Float64 reference: :func:`~hexnewton.terrain.boxes.box_pairs_np`.
 """
 
 from __future__ import annotations
@@ -15,8 +15,8 @@ from __future__ import annotations
 import numpy as np
 import warp as wp
 
-from hexnewton.physics.terrain.boxes import BoxIndex, box_capacity
-from hexnewton.physics.terrain.heightmap import HeightGrid
+from hexnewton.terrain.boxes import BoxIndex, box_capacity
+from hexnewton.terrain.heightmap import HeightGrid
 
 
 @wp.kernel

@@ -20,7 +20,7 @@ import numpy as np
 import warp as wp
 
 from hexnewton.config import LEG_NAMES, RobotConfig
-from hexnewton.physics.robot.geometry import (  # noqa: F401  (re-exported: hexnewton.physics.robot's names)
+from hexnewton.robot.geometry import (  # noqa: F401  (re-exported: hexnewton.robot's names)
     BASE_Q,
     BASE_QD,
     NUM_JOINTS,

@@ -1,7 +1,7 @@
 """The paper's hexapod: its geometry (:mod:`.geometry`, plain Python) and the Newton articulation (:mod:`.hexapod`,
 loaded on first use of ``build_hexapod``, so that the geometry imports without Warp or Newton)."""
 
-from hexnewton.physics.robot.geometry import (
+from hexnewton.robot.geometry import (
     BASE_Q,
     BASE_QD,
     NUM_JOINTS,
@@ -29,7 +29,7 @@ __all__ = [
 
 def __getattr__(name: str):
     if name == "build_hexapod":
-        from hexnewton.physics.robot.hexapod import build_hexapod
+        from hexnewton.robot.hexapod import build_hexapod
 
         return build_hexapod
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

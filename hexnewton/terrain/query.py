@@ -1,4 +1,4 @@
-"""Terrain height queries on a :class:`~hexnewton.physics.terrain.heightmap.HeightGrid`, in float64 NumPy: the height
+"""Terrain height queries on a :class:`~hexnewton.terrain.heightmap.HeightGrid`, in float64 NumPy: the height
 under a point (:func:`terrain_height_np`, one cell lookup, indices clamped to the grid edge, so points off the patch
 see the nearest edge cell) and the highest cell overlapping an axis-aligned square (:func:`max_terrain_height_np`).
 They are the references of the MDP's in-kernel queries (``terrain_height`` and ``max_terrain_height`` in
@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from hexnewton.physics.terrain.heightmap import HeightGrid
+from hexnewton.terrain.heightmap import HeightGrid
 
 # ----------------------------------------------------------------------------------------------------
 # float64 NumPy references

@@ -17,8 +17,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from hexnewton.physics.terrain.heightmap import HeightGrid
-from hexnewton.physics.terrain.mesh import merge_rows
+from hexnewton.terrain.heightmap import HeightGrid
+from hexnewton.terrain.mesh import merge_rows
 
 
 @dataclass(frozen=True)
@@ -63,7 +63,7 @@ def box_capacity(half_width: np.ndarray | float, min_side: float) -> np.ndarray:
 
 
 def box_pairs_np(index: BoxIndex, grid: HeightGrid, centers: np.ndarray, half_widths: np.ndarray) -> list[list[int]]:
-    """Float64 reference of :func:`~hexnewton.physics.terrain.box_pairs.find_box_pairs`: per cube (centre
+    """Float64 reference of :func:`~hexnewton.terrain.box_pairs.find_box_pairs`: per cube (centre
     ``centers[n]``, half width ``half_widths[n]``), the boxes whose extent (x, y from their cells, z from the bottom to
     their top) overlaps it, in ascending order. A brute-force test of every box."""
     c = np.asarray(centers, np.float64)

@@ -1,5 +1,5 @@
 """The hexapod's geometry and mass properties from :class:`~hexnewton.config.RobotConfig`, in plain Python: what the
-Newton articulation (:mod:`hexnewton.physics.robot.hexapod`) and the MuJoCo model (:mod:`hexnewton.deploy.mjcf`) are both built from.
+Newton articulation (:mod:`hexnewton.robot.hexapod`) and the MuJoCo model (:mod:`hexnewton.deploy.mjcf`) are both built from.
 
 Each leg has its own "leg frame" at its hip mount: x' points outward along the leg's neutral direction, z' = world up,
 y' = z' x x'. In that frame the hip axis is +z' (right legs) or -z' (left legs), so that a positive hip angle moves the

@@ -1,6 +1,6 @@
 """Compact closed triangle mesh of a piecewise-constant height grid (pure NumPy).
 
-The surface of a :class:`~hexnewton.physics.terrain.heightmap.HeightGrid` is made of
+The surface of a :class:`~hexnewton.terrain.heightmap.HeightGrid` is made of
 
 * top faces: equal-height cells merged greedily into rectangles (a 25 cm step strip is one quad,
   a 2 cm rugged block one quad), normal +z;
@@ -33,7 +33,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from hexnewton.physics.terrain.heightmap import HeightGrid
+from hexnewton.terrain.heightmap import HeightGrid
 
 # Corner order that reverses a quad's winding (flips its normal).
 _FLIP = np.array([0, 3, 2, 1])

@@ -9,8 +9,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from hexnewton.config import CPGConfig
-from hexnewton.physics.cpg import hopf_cpg_kernel, mapping_kernel, scale_actions_kernel, stuck_response_kernel
-from hexnewton.physics.reference import (
+from hexnewton.kernels.cpg import hopf_cpg_kernel, mapping_kernel, scale_actions_kernel, stuck_response_kernel
+from hexnewton.kernels.reference import (
     hopf_cpg_reference,
     mapping_offsets_np,
     mapping_reference,

@@ -2,7 +2,7 @@
 
 The kernel tests compare each Warp kernel with its reference here, and the deployment runtime
 (``hexnewton.deploy.runtime``) runs the same functions on the robot's computer: the Hopf oscillators (Eq. 3, RK4),
-the mapping function (Eq. 4) and the action scaling (all in ``physics/cpg.py``) and the base quaternion's
+the mapping function (Eq. 4) and the action scaling (all in ``kernels/cpg.py``) and the base quaternion's
 roll/pitch/yaw. The kernel modules' docstrings explain the maths; this module only holds the NumPy versions. The
 n-oscillator network (``hopf_network_*``, the six-oscillator comparison of ``studies/fig1/figure.py``, explained there)
 shares the kernel's single-oscillator right-hand side, :func:`hopf_unit_rhs_np`.
@@ -125,7 +125,7 @@ def mapping_reference(state, dy, params, mu, stand, lower, upper, rpy=None, refl
 
 
 def stuck_response_reference(target, history, count, left, params_target, lift, progress, hold):
-    """Float64 reference of :func:`hexnewton.physics.cpg.stuck_response_kernel`, one control step: ``target`` (N, 2+)
+    """Float64 reference of :func:`hexnewton.kernels.cpg.stuck_response_kernel`, one control step: ``target`` (N, 2+)
     the goal relative to each robot (x, y first), ``history`` (N, W) its last W goal distances (a ring indexed by
     ``count`` (N,) mod W), ``left`` (N,) control steps of the response still to go, ``params_target`` (N, P). Returns
     updated copies of ``history``, ``count``, ``left`` and ``params_target``."""

@@ -12,7 +12,7 @@ The high level writes actions with ``set_actions`` (policy actions in [-1, 1]: o
 :func:`scale_actions_kernel` per control step) or ``set_params`` (physical values). Call
 ``world.set_controller(controller)``: before every physics substep (inside the captured graph) the controller
 launches :func:`hopf_cpg_kernel` and then :func:`mapping_kernel`, which writes the 18 joint targets into Newton's
-control array. Float64 references of every kernel: ``physics/reference.py`` (the deployment runtime runs them too).
+control array. Float64 references of every kernel: ``kernels/reference.py`` (the deployment runtime runs them too).
 
 Actions -> parameters
 ---------------------
@@ -121,9 +121,9 @@ import numpy as np
 import warp as wp
 
 from hexnewton.config import CPGConfig, RobotConfig
-from hexnewton.physics.reference import initial_cpg_state
-from hexnewton.physics.robot import BASE_Q, leg_bounds
-from hexnewton.physics.world import as_mask
+from hexnewton.kernels.reference import initial_cpg_state
+from hexnewton.kernels.world import as_mask
+from hexnewton.robot import BASE_Q, leg_bounds
 
 # ----------------------------------------------------------------------------------------------------
 # actions -> parameters

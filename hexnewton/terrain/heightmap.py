@@ -3,8 +3,8 @@
 Every terrain is described by one :class:`HeightGrid`: a regular grid of cells of side
 ``TerrainConfig.query_resolution`` with one constant height per cell. All terrain features (blocks,
 step edges, the rugged/stepped split of the complex terrain) lie on cell edges, so the grid is an
-exact description of the surface; the collision mesh (:mod:`hexnewton.physics.terrain.mesh`) and the in-kernel
-height query (:mod:`hexnewton.physics.terrain.query`) are both built from it.
+exact description of the surface; the collision mesh (:mod:`hexnewton.terrain.mesh`) and the in-kernel
+height query (:mod:`hexnewton.terrain.query`) are both built from it.
 
 World frame: z up, the robot starts at the origin facing +x, features lie ahead along +x.
 """
