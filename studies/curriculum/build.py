@@ -30,16 +30,60 @@ METRICS = ("success_3m", "fall_rate_before_goal", "fall_rate", "pitch_var_deg2",
 #: the target of "experience that reaches the hardest ground": every seed >= this share of its last stage's finished
 #: episodes on the top lane
 TOP_TARGET = 0.20
+#: what each lease was: its device, what shared the GPU, what it left out
+LEASE_NOTES = {
+    "2026-12-07": "one H100 (`nvidia-h100-x1`), code 4e8e34b; the four runs (`ARMS=\"anchor spread both\" SEEDS=1 "
+                  "RECIPE_SEEDS=1 VAL_ROUNDS=500 KEPT=gate_s1`) trained side by side on the one GPU, beside the "
+                  "references' evaluations (times shared: not timed). The lease's device time ended as the runs "
+                  "reached their validation: their results were not validated, so their rows hold what training saw "
+                  "(each console's last line, iteration 299) and the training episodes' sampled success and falls "
+                  "on their own lanes, not validation rounds. Partial.",
+}
 RUN = re.compile(r"^(?P<arm>[a-z0-9]+)_s(?P<seed>\d+)$")
 
 
-def add(lease: str) -> str:
-    """Copy a lease's small files into the study under the lease's date; returns that name."""
+LINE = re.compile(r"^iteration (?P<it>\d+)/\d+  success (?P<success>[\d.]+)  fell (?P<fell>[\d.]+)  off course "
+                  r"[\d.]+  distance [\d.]+ m  level (?P<level>[\d.]+)  top lane (?P<top>\d+|-)%? of (?P<ep>\d+) ep  "
+                  r"(?P<per_robot>[\d.]+) ep/robot")
+STAGE = re.compile(r"^iteration (\d+): curriculum stage (\d+) of (\d+)")
+
+
+def parse_console(text: str) -> dict:
+    """A train.py console: per iteration the training episodes' success and falls (sampled actions, the last 1024),
+    the mean lane, the top lane's share of the current stage's finished episodes, their count and the episodes per
+    robot; the stages' first iterations."""
+    rows, stages = [], []
+    for line in text.splitlines():
+        if m := LINE.match(line):
+            rows.append({"iteration": int(m["it"]), "success": float(m["success"]), "fell": float(m["fell"]),
+                         "mean_level": float(m["level"]), "stage_episodes": int(m["ep"]),
+                         "stage_top_lane_share": None if m["top"] == "-" else int(m["top"]) / 100,
+                         "episodes_per_robot": float(m["per_robot"])})  # fmt: skip
+        elif m := STAGE.match(line):
+            stages.append(int(m[1]))
+    return {"iterations": rows, "stage_starts": stages}
+
+
+def add(lease: str, name: str | None = None) -> str:
+    """Copy a lease's small files into the study under the lease's date (or ``name``); returns that name. A run
+    without its timing.json (cut off before its validation ended) keeps what its console says (``console.json``)."""
     timings = glob.glob(os.path.join(lease, "runs", "*", "*", "timing.json"))
-    if not timings:
-        raise SystemExit(f"build.py: no runs/*/*/timing.json under {lease}")
-    stamp = os.path.basename(os.path.dirname(sorted(timings)[0]))[:10]
-    name = os.path.basename(os.path.normpath(lease)) if not re.match(r"\d{4}-\d\d-\d\d$", stamp) else stamp
+    consoles = glob.glob(os.path.join(lease, "runs", "*.log"))
+    if not timings and not consoles:
+        raise SystemExit(f"build.py: no runs/*/*/timing.json or runs/*.log under {lease}")
+    if name is None:
+        stamp = os.path.basename(os.path.dirname(sorted(timings)[0]))[:10] if timings else ""
+        name = stamp if re.match(r"\d{4}-\d\d-\d\d$", stamp) else os.path.basename(os.path.normpath(lease))
+    for path in consoles:
+        run = os.path.basename(path)[:-4]
+        if not RUN.match(run):
+            continue
+        parsed = parse_console(open(path).read())
+        if parsed["iterations"]:
+            dest = os.path.join(HERE, "runs", name, run)
+            os.makedirs(dest, exist_ok=True)
+            with open(os.path.join(dest, "console.json"), "w") as f:
+                json.dump(parsed, f, indent=0)
     for path in timings:
         run = os.path.basename(os.path.dirname(os.path.dirname(path)))
         dest = os.path.join(HERE, "runs", name, run)
@@ -71,8 +115,16 @@ def collect() -> dict:
         for run_dir in sorted(glob.glob(os.path.join(lease_dir, "*"))):
             name = os.path.basename(run_dir)
             m = RUN.match(name)
-            timing = json.load(open(os.path.join(run_dir, "timing.json")))
+            tpath, cpath = os.path.join(run_dir, "timing.json"), os.path.join(run_dir, "console.json")
+            timing = json.load(open(tpath)) if os.path.exists(tpath) else {}
             cur = timing.get("curriculum", {})
+            if not cur and os.path.exists(cpath):  # cut off before its validation: what its console said
+                last = json.load(open(cpath))["iterations"][-1]
+                cur = {"training_success": last["success"], "training_fell": last["fell"],
+                       "last_stage": {"top_lane_share": last["stage_top_lane_share"],
+                                      "episodes": last["stage_episodes"]},
+                       "episodes_per_robot": last["episodes_per_robot"], "mean_level_end": last["mean_level"],
+                       "from": f"console, iteration {last['iteration']}"}  # fmt: skip
             runs[name] = {"arm": m["arm"] if m else name, "seed": int(m["seed"]) if m else None,
                           "flags": ARMS.get(m["arm"], ("?",))[0] if m else "?",
                           "top_lane_share_last_stage": cur.get("last_stage", {}).get("top_lane_share"),
@@ -81,6 +133,8 @@ def collect() -> dict:
                           "episodes_per_robot": cur.get("episodes_per_robot"),
                           "mean_level_end": cur.get("mean_level_end"),
                           "lanes_last_stage": cur.get("last_stage", {}).get("lanes_top_first"),
+                          "curriculum_from": cur.get("from", "timing.json"),
+                          "training_success": cur.get("training_success"), "training_fell": cur.get("training_fell"),
                           "wall_s_to_result": timing.get("wall_s_to_result"), "device": timing.get("device_name"),
                           "validation": {t: _eval(lease, name, t) for t in COURSES}}  # fmt: skip
         refs = {"shipped": {t: _eval(lease, "shipped", t) for t in COURSES},
@@ -134,7 +188,7 @@ def report(results: dict) -> str:
         lines.append(f"- `{arm}`: {what} (`{flags or '--task complex'}`)")
     lines.append("")
     for lease, data in results["leases"].items():
-        lines += [f"## Lease {lease}", "",
+        lines += [f"## Lease {lease}", "", LEASE_NOTES.get(lease, ""), "",
                   "| run | top lane, last stage | episodes/robot | mean lane at end | " + " | ".join(
                       f"{t} 3 m | {t} falls before goal" for t in COURSES) + " | rugged pitch / roll var |",
                   "|---|---|---|---|" + "---|---|" * len(COURSES) + "---|"]
@@ -147,6 +201,11 @@ def report(results: dict) -> str:
                          + " | ".join(f"{fmt((v.get(t) or {}).get('success_3m'))} | "
                                       f"{fmt((v.get(t) or {}).get('fall_rate_before_goal'))}" for t in COURSES)
                          + f" | {fmt(rug.get('pitch_var_deg2'), False)} / {fmt(rug.get('roll_var_deg2'), False)} |")
+        trained = [(k, r) for k, r in data["runs"].items() if r.get("training_success") is not None]
+        if trained:
+            lines += ["", "Training episodes at the last iteration (sampled actions, the last 1024 finished, each on its "
+                      "own lane): " + "; ".join(f"{k} success {fmt(r['training_success'])} %, fell "
+                                               f"{fmt(r['training_fell'])} %" for k, r in trained) + "."]
         lines.append("")
     lines += ["## Arms", "", f"Target: every seed >= {TOP_TARGET:.0%} of its last stage's finished episodes on the top "
               "lane. A quality verdict needs >= 6 seeds an arm (log(falls before the goal + 0.1 %)).", "",
@@ -159,6 +218,12 @@ def report(results: dict) -> str:
                      + " | ".join(f"{fmt(row.get(t, {}).get('success_3m_median'))} | "
                                   f"{fmt(row.get(t, {}).get('fall_before_goal_median'))}" for t in COURSES)
                      + f" | {row['verdict']} |")
+    met = [a for a, r in results["arms"].items() if r["every_seed_meets_top_target"]]
+    missed = [a for a, r in results["arms"].items() if not r["every_seed_meets_top_target"]]
+    if results["arms"]:
+        lines += ["", f"Top lane: {', '.join(met) or 'no arm'} reach{'es' if len(met) == 1 else ''} the target on "
+                  f"every seed run; {', '.join(missed) or 'none'} {'does' if len(missed) == 1 else 'do'} not. "
+                  "Arms with fewer than 6 seeds have no quality verdict."]
     mc = results.get("gate_mc")
     if mc:
         cols = ("median_3m", "pooled_falls", "worst_seed", "rugged_variance", "gate")
@@ -174,12 +239,13 @@ def report(results: dict) -> str:
 def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(description=__doc__, allow_abbrev=False)
     p.add_argument("--add", metavar="LEASE", help="a lease's unpacked folder (queue.sh collect)")
+    p.add_argument("--name", help="the lease's name in the study (default: its runs' date)")
     a = p.parse_args(argv)
     if a.add:
         if not os.path.isdir(a.add):
             print(f"build.py: {a.add} is not a folder", file=sys.stderr)
             return 2
-        print(f"added lease {add(a.add)}")
+        print(f"added lease {add(a.add, a.name)}")
     leases = collect()
     mc_path = os.path.join(HERE, "gate_mc.json")
     results = {"command": "python studies/curriculum/build.py", "top_target": TOP_TARGET, "leases": leases,
