@@ -361,7 +361,7 @@ def device_label(device: str) -> str:
 
 
 def finish(args, runner, cfg, agent, rank, run_dir: str, views, train_s: float, first_it: int,
-           validated: dict | None, started: tuple[dict, dict]) -> None:  # fmt: skip
+           validated: dict | None, started: tuple[dict, dict], reason: str = "") -> None:  # fmt: skip
     """Rank 0 after training: the last episodes, the policy to ship (chosen on ``validated``, the result of
     :func:`validate_result`; without validation the best iteration's or the last) exported as ONNX, ``timing.json``
     (``started``: the start-up's phases and notes, taken before validation builds its env), and the commands that use
@@ -411,6 +411,24 @@ def finish(args, runner, cfg, agent, rank, run_dir: str, views, train_s: float, 
           f"{cfg.terrain.name}\n"
           f"  python -m hexnewton.apps.export --checkpoint {final} --out bundle/\n"
           f"  tensorboard --logdir {args.log_dir}")  # fmt: skip
+    last = closing_line(reason, runner.current_learning_iteration, agent, timing.get("validation"))
+    if last:
+        print(last)
+
+
+def closing_line(reason: str, iteration: int, agent, validation: dict | None) -> str | None:
+    """The run's last line where its result is not what the command's header promised: training cut short by the
+    task's time cap (``agent.max_minutes``), or a result that reaches no goal on its validation rounds."""
+    out = []
+    if reason == "the --max_minutes limit":
+        out.append(f"stopped by its time cap, --agent.max_minutes {agent.max_minutes:g}, at iteration {iteration} of "
+                   f"{agent.max_iterations - 1}: the schedule did not finish (raise the cap for the whole run)")
+    if validation is not None:
+        chosen = next(c for c in validation["candidates"] if c["path"] == validation["chosen"])
+        if chosen["goal"] == 0.0:
+            out.append(f"the result reaches the goal in 0 of its {validation['rounds']} validation rounds per course: "
+                       "it has not learnt the task")
+    return "; ".join(out) if out else None
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -473,7 +491,7 @@ def main(argv: list[str] | None = None) -> int:
     if rank.world_size > 1:
         runner.leave_group()
     if rank.is_main:
-        finish(args, runner, cfg, agent, rank, run_dir, views, train_s, first_it, validated, started)
+        finish(args, runner, cfg, agent, rank, run_dir, views, train_s, first_it, validated, started, reason)
     return exit_status(reason)
 
 

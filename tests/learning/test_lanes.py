@@ -67,3 +67,16 @@ def test_a_last_stage_below_the_target_says_so_and_groups_apart():
 def test_bad_fall_weight(weight):
     with pytest.raises(ValueError, match="validation_fall_weight must be a finite number >= 0"):
         AgentConfig(validation_fall_weight=weight).check()
+
+
+def test_a_run_cut_by_its_time_cap_or_reaching_nothing_says_so_last():
+    from hexnewton.apps.train import closing_line
+
+    agent = AgentConfig(max_minutes=7.0, max_iterations=1500)
+    line = closing_line("the --max_minutes limit", 378, agent, None)
+    assert line.startswith("stopped by its time cap, --agent.max_minutes 7, at iteration 378 of 1499")
+    validation = {"rounds": 8, "chosen": "b.pt",
+                  "candidates": [{"path": "a.pt", "goal": 0.5}, {"path": "b.pt", "goal": 0.0}]}
+    assert "reaches the goal in 0 of its 8 validation rounds" in closing_line("300 iterations", 299, agent, validation)
+    validation["chosen"] = "a.pt"
+    assert closing_line("300 iterations", 299, agent, validation) is None
