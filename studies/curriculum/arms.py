@@ -12,8 +12,8 @@ import sys
 ARMS = {
     "recipe": ("", "the complex recipe: robots start on lanes 0-2 of 10, one lane up per goal reached"),
     "anchor": ("--env.terrain.start_levels 6 --env.terrain.climb 2",
-               "start and promotion nearer the anchors' (legged_gym, Isaac Lab, mjlab start on lanes 0-5): robots start "
-               "on lanes 0-5, two lanes up per goal reached"),
+               "start and promotion nearer the anchors' (legged_gym, Isaac Lab, mjlab start on lanes 0-5): "
+               "robots start on lanes 0-5, two lanes up per goal reached"),
     "spread": ("--env.terrain.start_progress 2.0",
                "more, shorter episodes: each training episode starts 0-2 m along its lane (uniform), toward the same "
                "goal, so the stairs and the far blocks come sooner and more often"),

@@ -92,7 +92,8 @@ def simulate(m: dict, fall_factor: float = 1.0, seed_spread: float = 0.0, draws:
         ship_3m, ship_f = rng.binomial(n, p30, draws) / n, rng.binomial(n, pf0, draws) / n
         passes["median_3m"] &= np.median(seeds_3m, axis=1) >= ship_3m - LINES["median_3m_below_shipped"]
         passes["pooled_falls"] &= seeds_f.mean(axis=1) <= ship_f + LINES["pooled_falls_above_shipped"]
-        passes["worst_seed"] &= (seeds_3m.min(axis=1) >= LINES["worst_3m"]) & (seeds_f.max(axis=1) <= LINES["worst_falls"])
+        worst = (seeds_3m.min(axis=1) >= LINES["worst_3m"]) & (seeds_f.max(axis=1) <= LINES["worst_falls"])
+        passes["worst_seed"] &= worst
     v = m["rugged_variance"]
     for axis in ("pitch", "roll"):
         pol, ref = v[f"cpg_rl_{axis}"], v[f"cpg_{axis}"]
