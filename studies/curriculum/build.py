@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import argparse
 import glob
+import importlib.util
 import json
 import os
 import re
@@ -22,8 +23,10 @@ import sys
 import numpy as np
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-sys.path.insert(0, HERE)
-from arms import ARMS  # noqa: E402
+_spec = importlib.util.spec_from_file_location("curriculum_arms", os.path.join(HERE, "arms.py"))
+_arms = importlib.util.module_from_spec(_spec)
+_spec.loader.exec_module(_arms)
+ARMS = _arms.ARMS  # the study's arms (arms.py), loaded by path: other studies have scripts of the same names
 
 COURSES = ("rugged", "stepped", "complex")
 METRICS = ("success_3m", "fall_rate_before_goal", "fall_rate", "pitch_var_deg2", "roll_var_deg2")

@@ -1,6 +1,7 @@
 """The curriculum study: its report renders from its results.json, its consoles parse, its arms' flags are train.py's,
 and its gate's Monte Carlo reproduces (CPU)."""
 
+import importlib.util
 import json
 import os
 import sys
@@ -8,11 +9,18 @@ import sys
 import pytest
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-sys.path.insert(0, HERE)
 
-import arms  # noqa: E402
-import build  # noqa: E402
-import gate_mc  # noqa: E402
+
+def _load(name: str):
+    """A script of this study as a module of its own name (other studies' tests import their own ``build``)."""
+    spec = importlib.util.spec_from_file_location(f"curriculum_{name}", os.path.join(HERE, f"{name}.py"))
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[spec.name] = module
+    spec.loader.exec_module(module)
+    return module
+
+
+arms, build, gate_mc = _load("arms"), _load("build"), _load("gate_mc")
 
 pytestmark = pytest.mark.slow
 
