@@ -170,7 +170,7 @@ def study_runs(leases: list[dict]) -> dict:
 
 def kept_runs() -> dict:
     """The study's runs as the arms' choice reads them: parsed from the kept console logs (``study_runs``) where the
-    tree holds every one; else, the raw runs having left the tree (issue 92), the committed results.json's ``runs``
+    tree holds every one; else, the raw runs having left the tree, the committed results.json's ``runs``
     (the numbers build.py parsed from those logs)."""
     if not raw_missing() and glob.glob(os.path.join(HERE, "runs", "*", "train.log")):
         return study_runs([])
@@ -648,7 +648,7 @@ def main(argv: list[str] | None = None) -> int:
         print("added:", ", ".join(add(args.add)) or "nothing")
     missing = raw_missing()
     if missing:
-        print(f"build.py: the raw runs are not in the tree ({missing}, removed in issue 92): restore them with `git "
+        print(f"build.py: the raw runs are not in the tree ({missing}, not tracked): restore them with `git "
               "restore --source df27913 --worktree -- studies/learner/runs` or rerun the lease (README, Raw runs)",
               file=sys.stderr)
         return 2

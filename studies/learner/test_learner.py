@@ -32,7 +32,7 @@ def test_parse_log_reads_the_validation_block():
 
 def test_the_report_regenerates_from_the_kept_runs(tmp_path):
     kept = json.load(open(os.path.join(build.HERE, "results.json")))
-    if build.raw_missing():  # the raw runs left the tree (issue 92): the committed results.json renders report.md
+    if build.raw_missing():  # the raw runs left the tree: the committed results.json renders report.md
         res = kept
         assert build.main([]) == 2  # build.py says what is missing, writes nothing
         assert json.load(open(os.path.join(build.HERE, "results.json"))) == kept
@@ -60,7 +60,7 @@ def test_a_change_pays_only_with_more_goals_and_no_more_falls():
 
 def test_the_choice_reads_the_committed_runs_without_the_raw_ones(tmp_path, monkeypatch):
     """kept_runs: the runs parsed from runs/NAME/train.log while every kept run has its log; with none in the tree
-    (issue 92) the committed results.json's runs, so --choose and --gate-name still judge the study; a lease's runs
+    the committed results.json's runs, so --choose and --gate-name still judge the study; a lease's runs
     (--runs DIR) join them, and a study without recipe runs has nothing to compare with."""
     (tmp_path / "runs" / "recipe_s1").mkdir(parents=True)
     (tmp_path / "runs" / "recipe_s1" / "config.json").write_text("{}")   # the raw log gone, its config kept

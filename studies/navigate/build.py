@@ -324,7 +324,7 @@ def raw_missing() -> str:
 def build() -> dict:
     missing = raw_missing()
     if missing:
-        raise RuntimeError(f"the raw runs are not in the tree ({missing}, removed in issue 92): restore them with `git "
+        raise RuntimeError(f"the raw runs are not in the tree ({missing}, not tracked): restore them with `git "
                            "restore --source df27913 --worktree -- studies/navigate/runs` or rerun queue.sh (README)")
     res = load()
     with open(os.path.join(HERE, "results.json"), "w") as f:

@@ -142,9 +142,9 @@ def test_the_committed_report_renders_what_the_study_keeps():
     build = _build()
     with open(os.path.join(HERE, "results.json")) as f:
         kept = json.load(f)
-    if build.raw_missing():  # the console logs left the tree (issue 92): the committed results.json renders report.md
+    if build.raw_missing():  # the console logs left the tree: the committed results.json renders report.md
         res = kept
-        with pytest.raises(RuntimeError, match="removed in issue 92"):
+        with pytest.raises(RuntimeError, match="not tracked"):
             build.build()
     else:
         res = build.load()

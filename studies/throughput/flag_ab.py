@@ -48,7 +48,7 @@ def load_lease(folder: str) -> dict:
     and, where profiled, its phases [s]; the calls that left only a log (``unfinished``)."""
     calls: dict = {m: [] for m in MODES}
     unfinished = []
-    # a call's json without its log is a finished call whose console left the tree (issue 92): a call that left only
+    # a call's json without its log is a finished call whose console left the tree: a call that left only
     # its log (unfinished) is told by the logs alone (``logs_missing``)
     names = {os.path.basename(p)[:-4] for p in glob.glob(os.path.join(folder, "*.log"))} | {
         os.path.basename(p)[:-5] for p in glob.glob(os.path.join(folder, "*.json"))}
@@ -257,7 +257,7 @@ def main() -> None:
             missing = logs_missing(name)
             if missing:
                 raise FileNotFoundError(
-                    f"the raw calls' console logs are not in the tree ({missing}, removed in issue 92): restore them "
+                    f"the raw calls' console logs are not in the tree ({missing}, not tracked): restore them "
                     f"with `git restore --source df27913 --worktree -- studies/throughput/{name}/raw` (its "
                     "results.json and report.md stay as committed)")
             res = load(name)

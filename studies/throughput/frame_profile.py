@@ -24,7 +24,7 @@ PARTS = (("collision (Newton)", r"^newton\._src\.(geometry|sim\.collide|collisio
          ("solver (MuJoCo-Warp)", r"^mujoco_warp"),
          ("solver glue (Newton's MuJoCo solver)", r"^newton\._src\.solvers"),
          ("Newton (other)", r"^newton"),
-         # the physics level's own kernels (hexnewton.kernels, .physics, .terrain since issue 92's layout; the
+         # the physics level's own kernels (hexnewton.kernels, .physics, .terrain; the
          # label stays as the committed results.json name it)
          ("CPG and mapping (hexnewton.physics)", r"^hexnewton\.(kernels|physics|terrain|robot)"),
          ("MDP terms (hexnewton.mdp)", r"^hexnewton\.mdp"),

@@ -61,7 +61,7 @@ def test_the_effect_is_the_deferred_mean_over_the_per_step_one():
 
 def _committed(study, name: str) -> dict:
     """The committed results.json of A/B ``name``, checked against what flag_ab.py makes of NAME/raw/ now: all of it
-    where the calls' console logs are in the tree; without them (issue 92: ``git restore --source df27913 --worktree
+    where the calls' console logs are in the tree; without them (``git restore --source df27913 --worktree
     -- studies/throughput/NAME/raw`` brings them back) every number from the kept call jsons, and the calls that
     left only a log (``unfinished``, which only the logs tell) as committed. report.md renders it."""
     import json
