@@ -41,11 +41,17 @@ LEASE_NOTES = {
                   "reached their validation: their results were not validated, so their rows hold what training saw "
                   "(each console's last line, iteration 299) and the training episodes' sampled success and falls "
                   "on their own lanes, not validation rounds. Partial.",
+    "2026-12-08": "one H100 (`nvidia-h100-x1`), code c0c44ef; the three seed-1 runs (`ARMS=\"anchor spread both\" "
+                  "SEEDS=1 RECIPE_SEEDS= VAL_ROUNDS=1000 KEPT=\"gate_s1 gate_s2 gate_s3\" LIMIT=680`) trained side by "
+                  "side beside the references' twelve evaluations, which held them at 3.7 s/it; the queue's limit "
+                  "stopped them at iterations 214-220 of 299, early in their last stage (iterations 200-299), before "
+                  "their validation. Their rows hold what training saw up to there (not the last stage's whole share). "
+                  "The references' 1000 validation rounds per course all came back. Partial.",
 }
 RUN = re.compile(r"^(?P<arm>[a-z0-9]+)_s(?P<seed>\d+)$")
 
 
-LINE = re.compile(r"^iteration (?P<it>\d+)/\d+  success (?P<success>[\d.]+)  fell (?P<fell>[\d.]+)  off course "
+LINE = re.compile(r"^iteration (?P<it>\d+)/(?P<of>\d+)  success (?P<success>[\d.]+)  fell (?P<fell>[\d.]+)  off course "
                   r"[\d.]+  distance [\d.]+ m  level (?P<level>[\d.]+)  top lane (?P<top>\d+|-)%? of (?P<ep>\d+) ep  "
                   r"(?P<per_robot>[\d.]+) ep/robot")
 STAGE = re.compile(r"^iteration (\d+): curriculum stage (\d+) of (\d+)")
@@ -55,16 +61,17 @@ def parse_console(text: str) -> dict:
     """A train.py console: per iteration the training episodes' success and falls (sampled actions, the last 1024),
     the mean lane, the top lane's share of the current stage's finished episodes, their count and the episodes per
     robot; the stages' first iterations."""
-    rows, stages = [], []
+    rows, stages, last = [], [], None
     for line in text.splitlines():
         if m := LINE.match(line):
+            last = int(m["of"])
             rows.append({"iteration": int(m["it"]), "success": float(m["success"]), "fell": float(m["fell"]),
                          "mean_level": float(m["level"]), "stage_episodes": int(m["ep"]),
                          "stage_top_lane_share": None if m["top"] == "-" else int(m["top"]) / 100,
                          "episodes_per_robot": float(m["per_robot"])})  # fmt: skip
         elif m := STAGE.match(line):
             stages.append(int(m[1]))
-    return {"iterations": rows, "stage_starts": stages}
+    return {"iterations": rows, "stage_starts": stages, "last_iteration": last}
 
 
 def add(lease: str, name: str | None = None) -> str:
@@ -121,8 +128,11 @@ def collect() -> dict:
             tpath, cpath = os.path.join(run_dir, "timing.json"), os.path.join(run_dir, "console.json")
             timing = json.load(open(tpath)) if os.path.exists(tpath) else {}
             cur = timing.get("curriculum", {})
+            complete = bool(cur)  # timing.json is written after the last iteration
             if not cur and os.path.exists(cpath):  # cut off before its validation: what its console said
-                last = json.load(open(cpath))["iterations"][-1]
+                console = json.load(open(cpath))
+                last = console["iterations"][-1]
+                complete = last["iteration"] >= console["last_iteration"]
                 cur = {"training_success": last["success"], "training_fell": last["fell"],
                        "last_stage": {"top_lane_share": last["stage_top_lane_share"],
                                       "episodes": last["stage_episodes"]},
@@ -130,6 +140,7 @@ def collect() -> dict:
                        "from": f"console, iteration {last['iteration']}"}  # fmt: skip
             runs[name] = {"arm": m["arm"] if m else name, "seed": int(m["seed"]) if m else None,
                           "flags": ARMS.get(m["arm"], ("?",))[0] if m else "?",
+                          "trained_to_the_end": complete,
                           "top_lane_share_last_stage": cur.get("last_stage", {}).get("top_lane_share"),
                           "last_stage_episodes": cur.get("last_stage", {}).get("episodes"),
                           "top_lane_share_run": cur.get("run", {}).get("top_lane_share"),
@@ -152,14 +163,21 @@ def collect() -> dict:
 def arms_table(leases: dict) -> dict:
     """Per arm: its seeds' top-lane shares, whether every seed meets the target, the seeds' validation medians and the
     log-falls mean (log(falls before the goal + 0.1 %), the verdict's scale)."""
-    out = {}
+    best = {}  # (arm, seed) -> the run of most evidence: trained to the end, then validated, then the later lease
     for lease in leases.values():
         for run in lease["runs"].values():
-            out.setdefault(run["arm"], []).append(run)
+            if not run["trained_to_the_end"]:
+                continue  # its last stage's share is not the whole stage's
+            key, rank = (run["arm"], run["seed"]), any(run["validation"].values())
+            if key not in best or rank >= best[key][0]:
+                best[key] = (rank, run)
+    out = {}
+    for (arm, _), (_, run) in sorted(best.items(), key=lambda kv: (kv[0][0], kv[0][1] or 0)):
+        out.setdefault(arm, []).append(run)
     table = {}
     for arm, runs in out.items():
         shares = [r["top_lane_share_last_stage"] for r in runs if r["top_lane_share_last_stage"] is not None]
-        row = {"seeds": len(runs), "top_lane_shares": shares,
+        row = {"seeds": len(runs), "seed_list": [r["seed"] for r in runs], "top_lane_shares": shares,
                "every_seed_meets_top_target": bool(shares) and min(shares) >= TOP_TARGET,
                "episodes_per_robot": [r["episodes_per_robot"] for r in runs]}  # fmt: skip
         for t in COURSES:
@@ -199,6 +217,8 @@ def report(results: dict) -> str:
         rows = list(data["runs"].items()) + [(k, {"validation": v}) for k, v in data["references"].items()]
         for name, r in rows:
             v = r["validation"]
+            if r.get("trained_to_the_end") is False:
+                name = f"{name} (cut: {r['curriculum_from']})"
             rug = v.get("rugged") or {}
             lines.append(f"| {name} | {fmt(r.get('top_lane_share_last_stage'))} % | "
                          f"{fmt(r.get('episodes_per_robot'), False)} | {fmt(r.get('mean_level_end'), False)} | "
@@ -212,12 +232,14 @@ def report(results: dict) -> str:
                                                f"{fmt(r['training_fell'])} %" for k, r in trained) + "."]
         lines.append("")
     lines += ["## Arms", "", f"Target: every seed >= {TOP_TARGET:.0%} of its last stage's finished episodes on the top "
-              "lane. A quality verdict needs >= 6 seeds an arm (log(falls before the goal + 0.1 %)).", "",
+              "lane. A quality verdict needs >= 6 seeds an arm (log(falls before the goal + 0.1 %)). Each seed "
+              "once (its run trained to the end, validated where one was); runs cut before their last iteration "
+              "are left out.", "",
               "| arm | seeds | top lane, last stage (each seed) | every seed >= target | " + " | ".join(
                   f"{t} 3 m median | {t} falls median" for t in COURSES) + " | verdict |",
               "|---|---|---|---|" + "---|---|" * len(COURSES) + "---|"]
     for arm, row in results["arms"].items():
-        lines.append(f"| {arm} | {row['seeds']} | " + ", ".join(f"{100 * s:.0f} %" for s in row["top_lane_shares"])
+        lines.append(f"| {arm} | {', '.join(map(str, row['seed_list']))} | " + ", ".join(f"{100 * s:.0f} %" for s in row["top_lane_shares"])
                      + f" | {'yes' if row['every_seed_meets_top_target'] else 'no'} | "
                      + " | ".join(f"{fmt(row.get(t, {}).get('success_3m_median'))} | "
                                   f"{fmt(row.get(t, {}).get('fall_before_goal_median'))}" for t in COURSES)

@@ -6,8 +6,9 @@
 #    its curriculum saw, counted as the arms' are), all at once on the GPU
 #    (`python train.py --task complex --seed N FLAGS`, candidates.sh: each run packed, its result on $VAL_ROUNDS
 #    validation rounds per course, seed 3000, deterministic action); their times are shared, not timed;
-# 3. beside them, on the same validation rounds: the recipe's kept results $KEPT (studies/learner/runs/NAME/policy.pt),
-#    the shipped policy and the fixed CPG.
+# 3. once their training has ended (REF_DELAY=SECONDS: that long after their start), on the same validation rounds:
+#    the recipe's kept results $KEPT (studies/learner/runs/NAME/policy.pt), the shipped policy and the fixed CPG
+#    (SHIPPED=0: neither).
 # Then `bash studies/device/gpu.sh poll 560` and `bash studies/curriculum/queue.sh collect` ($OUT/curriculum.tgz.NN;
 # here: `mkdir -p LEASE && cat curriculum.tgz.* | tar xzf - -C LEASE && python studies/curriculum/build.py --add LEASE`).
 set -u
@@ -42,7 +43,17 @@ for seed in ${RECIPE_SEEDS-1}; do specs="$specs|recipe_s$seed@0:--task complex -
 IFS='|' read -r -a list <<< "${specs#|}"
 OUT=$RUNS_OUT LIMIT=${LIMIT:-1500} VAL_ROUNDS=$VAL_ROUNDS bash studies/device/candidates.sh "${list[@]}" \
   > "$RUNS/candidates.log" 2>&1 &
-sleep "${REF_DELAY:-90}"   # the references' evaluations after the runs' start-up
+cand=$!
+# the references' evaluations once every run's training (and its own validation) has ended: twelve evaluations beside
+# the runs hold them at about twice their time per iteration. REF_DELAY=SECONDS starts them that long after the runs.
+if [ -n "${REF_DELAY:-}" ]; then
+  sleep "$REF_DELAY"
+else
+  while kill -0 "$cand" 2>/dev/null && [ "$(grep -c ': train exit' "$RUNS/candidates.log")" -lt "${#list[@]}" ]; do
+    sleep 10
+  done
+fi
+[ "${SHIPPED:-1}" = 1 ] || echo "$(date +%T) no shipped policy or fixed CPG (SHIPPED=0)"
 evaluate() {   # NAME TERRAIN CHECKPOINT [MORE evaluate FLAGS]
   local name=$1 t=$2 ckpt=$3; shift 3
   python -m hexnewton.apps.evaluate --controllers cpg_rl --checkpoint "cpg_rl=$ckpt" --terrains "$t" \
@@ -50,7 +61,7 @@ evaluate() {   # NAME TERRAIN CHECKPOINT [MORE evaluate FLAGS]
   echo "exit $?" >> "$EVALS/${name}_$t.log"
 }
 for t in complex rugged stepped; do
-  evaluate shipped "$t" results/policies/cpg_rl_complex.pt --controllers cpg cpg_rl &
+  [ "${SHIPPED:-1}" = 1 ] && evaluate shipped "$t" results/policies/cpg_rl_complex.pt --controllers cpg cpg_rl &
   for name in $KEPT; do
     [ -f "studies/learner/runs/$name/policy.pt" ] && evaluate "recipe_$name" "$t" "studies/learner/runs/$name/policy.pt" &
   done
