@@ -6,7 +6,8 @@
 A lease's folder holds ``runs/NAME/<stamp>/timing.json`` (with its ``curriculum`` block: what training saw) and
 ``config.json``, and ``evals/JOB/results.json`` (each result, the shipped policy with the fixed CPG, and the recipe's
 kept results on the same validation rounds). ``--add`` copies the timings, configs and evaluations into
-``runs/LEASE_DATE/`` and ``evals/LEASE_DATE/`` of the study (small JSON files; the checkpoints and consoles stay out).
+``runs/LEASE_DATE/`` and ``evals/LEASE_DATE/`` of the study (small JSON files; the checkpoints and consoles stay out),
+and the gate's results (``gate/gate_sN.pt``, gate.sh) into ``policies/LEASE_DATE/`` (not tracked).
 """
 
 from __future__ import annotations
@@ -27,6 +28,11 @@ _spec = importlib.util.spec_from_file_location("curriculum_arms", os.path.join(H
 _arms = importlib.util.module_from_spec(_spec)
 _spec.loader.exec_module(_arms)
 ARMS = _arms.ARMS  # the study's arms (arms.py), loaded by path: other studies have scripts of the same names
+_spec = importlib.util.spec_from_file_location("curriculum_gate_mc", os.path.join(HERE, "gate_mc.py"))
+_gate_mc = importlib.util.module_from_spec(_spec)
+_spec.loader.exec_module(_gate_mc)
+GATE_LINES, GATE_SEEDS = _gate_mc.LINES, _gate_mc.SEEDS  # the gate's lines, the ones its Monte Carlo checks
+GATE_SECONDS = 240  # the gate's time line: from process start to the exported result, validation included
 
 COURSES = ("rugged", "stepped", "complex")
 METRICS = ("success_3m", "fall_rate_before_goal", "fall_rate", "pitch_var_deg2", "roll_var_deg2")
@@ -102,6 +108,10 @@ def add(lease: str, name: str | None = None) -> str:
             src = os.path.join(os.path.dirname(path), f)
             if os.path.exists(src):
                 shutil.copyfile(src, os.path.join(dest, f))
+    for path in glob.glob(os.path.join(lease, "gate", "gate_s*.pt")):  # the gate's results (gate.sh collect)
+        dest = os.path.join(HERE, "policies", name)  # untracked: a split gate's second lease carries them
+        os.makedirs(dest, exist_ok=True)
+        shutil.copyfile(path, os.path.join(dest, os.path.basename(path)))
     for path in glob.glob(os.path.join(lease, "evals", "*", "results.json")):
         dest = os.path.join(HERE, "evals", name, os.path.basename(os.path.dirname(path)))
         os.makedirs(dest, exist_ok=True)
@@ -160,14 +170,76 @@ def collect() -> dict:
     return leases
 
 
+def gate_lines(seeds: dict, shipped: dict, fixed: dict, times: dict) -> dict:
+    """The gate's lines (README, "The gate") on its test results: ``seeds`` {seed: {course: metrics}}, ``shipped`` and
+    ``fixed`` {course: metrics} (the shipped policy and the fixed CPG on the same rounds), ``times`` {seed: seconds
+    from process start to the result, or None}. Returns each line's pass and values, and the whole gate's pass."""
+    lines = {}
+    per = {t: [seeds[k][t] for k in sorted(seeds)] for t in COURSES}
+    lines["median_3m"] = {t: {"median": float(np.median([r["success_3m"] for r in per[t]])),
+                              "shipped": shipped[t]["success_3m"]} for t in COURSES}  # fmt: skip
+    for t, v in lines["median_3m"].items():
+        v["pass"] = v["median"] >= v["shipped"] - GATE_LINES["median_3m_below_shipped"] - 1e-12
+    pooled = {}
+    for t in COURSES:
+        n = sum(r["rounds"] for r in per[t])
+        pooled[t] = {"pooled": sum(r["fall_rate_before_goal"] * r["rounds"] for r in per[t]) / n,
+                     "shipped": shipped[t]["fall_rate_before_goal"]}  # fmt: skip
+        pooled[t]["pass"] = (pooled[t]["pooled"]
+                             <= pooled[t]["shipped"] + GATE_LINES["pooled_falls_above_shipped"] + 1e-12)
+    lines["pooled_falls"] = pooled
+    lines["worst_seed"] = {t: {"worst_3m": min(r["success_3m"] for r in per[t]),
+                               "worst_falls": max(r["fall_rate_before_goal"] for r in per[t])} for t in COURSES}
+    for v in lines["worst_seed"].values():
+        v["pass"] = v["worst_3m"] >= GATE_LINES["worst_3m"] and v["worst_falls"] <= GATE_LINES["worst_falls"]
+    cap = GATE_LINES["rugged_var_vs_fixed_cpg"]
+    lines["rugged_variance"] = {axis: {"worst": max(seeds[k]["rugged"][f"{axis}_var_deg2"] for k in seeds),
+                                       "fixed_cpg": fixed["rugged"][f"{axis}_var_deg2"]} for axis in ("pitch", "roll")}
+    for v in lines["rugged_variance"].values():
+        v["pass"] = v["worst"] < cap * v["fixed_cpg"]
+    measured = [times.get(k) for k in sorted(seeds)]
+    lines["time"] = {"seconds": measured, "pass": None not in measured and max(measured) <= GATE_SECONDS}
+    passes = [v["pass"] for line in lines.values() for v in (line.values() if "pass" not in line else [line])]
+    return {"seeds": sorted(seeds), "lines": lines, "pass": len(seeds) >= GATE_SEEDS and all(passes)}
+
+
+def gate_table(leases: dict) -> dict | None:
+    """The gate of the lease whose evaluations hold its test rounds (``gate_shipped_COURSE`` beside ``gate_sN_COURSE``),
+    with the seeds' times from their runs (that lease's, else the latest lease with them); None without one."""
+    tested = [lease for lease in leases if _eval(lease, "gate_shipped", "rugged")]
+    if not tested:
+        return None
+    lease = tested[-1]
+    seeds = {}
+    for path in sorted(glob.glob(os.path.join(HERE, "evals", lease, "gate_s*_rugged"))):
+        k = int(re.match(r"gate_s(\d+)_rugged$", os.path.basename(path))[1])
+        res = {t: _eval(lease, f"gate_s{k}", t) for t in COURSES}
+        if all(res.values()):
+            seeds[k] = res
+    times, shares = {}, {}
+    for name in sorted(leases, key=lambda n: n != lease):  # the tested lease first
+        for run in leases[name]["runs"].values():
+            if run["arm"] == "gate" and run["seed"] in seeds and run["seed"] not in times:
+                times[run["seed"]] = run["wall_s_to_result"]
+                shares[run["seed"]] = run["top_lane_share_last_stage"]
+    if not seeds:
+        return None
+    shipped = {t: _eval(lease, "gate_shipped", t) for t in COURSES}
+    fixed = {t: _eval(lease, "gate_shipped", t, "cpg") for t in COURSES}
+    out = gate_lines(seeds, shipped, fixed, times)
+    out.update(lease=lease, per_seed={str(k): v for k, v in seeds.items()}, shipped=shipped, fixed_cpg=fixed,
+               top_lane_shares={str(k): v for k, v in shares.items()})  # fmt: skip
+    return out
+
+
 def arms_table(leases: dict) -> dict:
     """Per arm: its seeds' top-lane shares, whether every seed meets the target, the seeds' validation medians and the
     log-falls mean (log(falls before the goal + 0.1 %), the verdict's scale)."""
     best = {}  # (arm, seed) -> the run of most evidence: trained to the end, then validated, then the later lease
     for lease in leases.values():
         for run in lease["runs"].values():
-            if not run["trained_to_the_end"]:
-                continue  # its last stage's share is not the whole stage's
+            if not run["trained_to_the_end"] or run["arm"] == "gate":
+                continue  # its last stage's share is not the whole stage's; the gate's seeds are the gate's
             key, rank = (run["arm"], run["seed"]), any(run["validation"].values())
             if key not in best or rank >= best[key][0]:
                 best[key] = (rank, run)
@@ -239,7 +311,8 @@ def report(results: dict) -> str:
                   f"{t} 3 m median | {t} falls median" for t in COURSES) + " | verdict |",
               "|---|---|---|---|" + "---|---|" * len(COURSES) + "---|"]
     for arm, row in results["arms"].items():
-        lines.append(f"| {arm} | {', '.join(map(str, row['seed_list']))} | " + ", ".join(f"{100 * s:.0f} %" for s in row["top_lane_shares"])
+        lines.append(f"| {arm} | {', '.join(map(str, row['seed_list']))} | "
+                     + ", ".join(f"{100 * s:.0f} %" for s in row["top_lane_shares"])
                      + f" | {'yes' if row['every_seed_meets_top_target'] else 'no'} | "
                      + " | ".join(f"{fmt(row.get(t, {}).get('success_3m_median'))} | "
                                   f"{fmt(row.get(t, {}).get('fall_before_goal_median'))}" for t in COURSES)
@@ -250,6 +323,41 @@ def report(results: dict) -> str:
         lines += ["", f"Top lane: {', '.join(met) or 'no arm'} reach{'es' if len(met) == 1 else ''} the target on "
                   f"every seed run; {', '.join(missed) or 'none'} {'does' if len(missed) == 1 else 'do'} not. "
                   "Arms with fewer than 6 seeds have no quality verdict."]
+    g = results.get("gate")
+    if g:
+        lines += ["", "## The gate", "", f"Lease {g['lease']}: `python train.py --task complex --seed N` (the gate's "
+                  "flags: gate.sh), each alone on the GPU; test rounds (the evaluate default seed, deterministic "
+                  f"action) beside the shipped policy and the fixed CPG. Seeds {', '.join(map(str, g['seeds']))}.", "",
+                  "| seed | " + " | ".join(f"{t} 3 m | {t} falls before goal" for t in COURSES)
+                  + " | rugged pitch / roll var | top lane, last stage | s from process start |",
+                  "|---|" + "---|---|" * len(COURSES) + "---|---|---|"]
+        who = [(f"gate_s{k}", g["per_seed"][str(k)], k) for k in g["seeds"]] + [
+            ("shipped", g["shipped"], None), ("fixed CPG", g["fixed_cpg"], None)]
+        shares = {int(k): v for k, v in g["top_lane_shares"].items()}
+        secs = dict(zip(g["seeds"], g["lines"]["time"]["seconds"]))
+        for name, res, k in who:
+            rug = res["rugged"]
+            lines.append(f"| {name} | " + " | ".join(f"{fmt(res[t]['success_3m'])} | "
+                                                     f"{fmt(res[t]['fall_rate_before_goal'])}" for t in COURSES)
+                         + f" | {fmt(rug['pitch_var_deg2'], False)} / {fmt(rug['roll_var_deg2'], False)} | "
+                         + (f"{fmt(shares.get(k))} % | {fmt(secs.get(k), False)} |" if k else "- | - |"))
+        ln = g["lines"]
+        lines += ["", "| line | " + " | ".join(COURSES) + " |", "|---|" + "---|" * len(COURSES),
+                  "| median seed >= shipped - 0.5 points at 3 m | " + " | ".join(
+                      f"{fmt(ln['median_3m'][t]['median'])} vs {fmt(ln['median_3m'][t]['shipped'])}: "
+                      f"{'pass' if ln['median_3m'][t]['pass'] else 'FAIL'}" for t in COURSES) + " |",
+                  "| pooled falls before the goal <= shipped + 0.3 points | " + " | ".join(
+                      f"{fmt(ln['pooled_falls'][t]['pooled'])} vs {fmt(ln['pooled_falls'][t]['shipped'])}: "
+                      f"{'pass' if ln['pooled_falls'][t]['pass'] else 'FAIL'}" for t in COURSES) + " |",
+                  "| worst seed >= 95 % at 3 m, <= 2 % falls | " + " | ".join(
+                      f"{fmt(ln['worst_seed'][t]['worst_3m'])} / {fmt(ln['worst_seed'][t]['worst_falls'])}: "
+                      f"{'pass' if ln['worst_seed'][t]['pass'] else 'FAIL'}" for t in COURSES) + " |", "",
+                  "Rugged variance, the worst seed against 0.8x the fixed CPG's: " + "; ".join(
+                      f"{axis} {fmt(v['worst'], False)} vs {fmt(0.8 * v['fixed_cpg'], False)}: "
+                      f"{'pass' if v['pass'] else 'FAIL'}" for axis, v in ln["rugged_variance"].items())
+                  + f". Time <= {GATE_SECONDS} s from process start on every seed: "
+                  f"{'pass' if ln['time']['pass'] else 'FAIL'}.", "",
+                  f"The gate: **{'holds' if g['pass'] else 'fails'}**."]
     mc = results.get("gate_mc")
     if mc:
         cols = ("median_3m", "pooled_falls", "worst_seed", "rugged_variance", "gate")
@@ -275,7 +383,8 @@ def main(argv: list[str] | None = None) -> int:
     leases = collect()
     mc_path = os.path.join(HERE, "gate_mc.json")
     results = {"command": "python studies/curriculum/build.py", "top_target": TOP_TARGET, "leases": leases,
-               "arms": arms_table(leases), "gate_mc": json.load(open(mc_path)) if os.path.exists(mc_path) else None}
+               "arms": arms_table(leases), "gate": gate_table(leases),
+               "gate_mc": json.load(open(mc_path)) if os.path.exists(mc_path) else None}
     with open(os.path.join(HERE, "results.json"), "w") as f:
         json.dump(results, f, indent=1)
     with open(os.path.join(HERE, "report.md"), "w") as f:

@@ -67,3 +67,51 @@ def test_the_gate_monte_carlo_reproduces():
     assert m == committed["model"]
     assert gate_mc.simulate(m) == committed["scenarios"]["as good as the shipped policy"]
     assert committed["sound"]
+
+
+def _gate_case():
+    """Five seeds a little better than the shipped policy on every line, 4000/1000/4000 test rounds."""
+    rounds = {"rugged": 4000, "stepped": 1000, "complex": 4000}
+    seed = {t: {"success_3m": 0.985, "fall_rate_before_goal": 0.004, "pitch_var_deg2": 20.0, "roll_var_deg2": 8.0,
+                "rounds": n} for t, n in rounds.items()}  # fmt: skip
+    seeds = {k: {t: dict(v) for t, v in seed.items()} for k in range(1, 6)}
+    shipped = {t: dict(v, success_3m=0.98, fall_rate_before_goal=0.004) for t, v in seed.items()}
+    fixed = {t: dict(v, pitch_var_deg2=30.0, roll_var_deg2=13.0) for t, v in seed.items()}
+    return seeds, shipped, fixed, {k: 200.0 for k in seeds}
+
+
+def test_the_gate_lines():
+    seeds, shipped, fixed, times = _gate_case()
+    assert build.gate_lines(seeds, shipped, fixed, times)["pass"]
+    # each line fails alone
+    s = {k: {t: dict(v) for t, v in r.items()} for k, r in seeds.items()}
+    for k in (1, 2, 3):
+        s[k]["complex"]["success_3m"] = 0.97  # the median 0.97 < shipped 0.98 - 0.005
+    g = build.gate_lines(s, shipped, fixed, times)
+    assert not g["pass"] and not g["lines"]["median_3m"]["complex"]["pass"]
+    assert g["lines"]["worst_seed"]["complex"]["pass"]
+    s = {k: {t: dict(v) for t, v in r.items()} for k, r in seeds.items()}
+    s[1]["rugged"]["fall_rate_before_goal"] = 0.02  # pooled (0.02 + 4 x 0.004) / 5 = 0.0072 > 0.004 + 0.003
+    g = build.gate_lines(s, shipped, fixed, times)
+    assert not g["pass"] and not g["lines"]["pooled_falls"]["rugged"]["pass"]
+    assert g["lines"]["worst_seed"]["rugged"]["pass"]
+    s = {k: {t: dict(v) for t, v in r.items()} for k, r in seeds.items()}
+    s[5]["stepped"]["success_3m"] = 0.94  # the worst seed < 95 %
+    g = build.gate_lines(s, shipped, fixed, times)
+    assert not g["pass"] and not g["lines"]["worst_seed"]["stepped"]["pass"]
+    s = {k: {t: dict(v) for t, v in r.items()} for k, r in seeds.items()}
+    s[2]["rugged"]["roll_var_deg2"] = 10.5  # >= 0.8 x 13
+    g = build.gate_lines(s, shipped, fixed, times)
+    assert not g["pass"] and not g["lines"]["rugged_variance"]["roll"]["pass"]
+    assert not build.gate_lines(seeds, shipped, fixed, {**times, 3: 250.0})["pass"]
+    assert not build.gate_lines(seeds, shipped, fixed, {**times, 3: None})["pass"]
+    assert not build.gate_lines({k: seeds[k] for k in (1, 2, 3, 4)}, shipped, fixed, times)["pass"]  # < 5 seeds
+
+
+def test_the_gate_renders():
+    seeds, shipped, fixed, times = _gate_case()
+    g = build.gate_lines(seeds, shipped, fixed, times)
+    g.update(lease="L", per_seed={str(k): v for k, v in seeds.items()}, shipped=shipped, fixed_cpg=fixed,
+             top_lane_shares={str(k): 0.3 for k in seeds})
+    text = build.report({"leases": {}, "arms": {}, "gate": json.loads(json.dumps(g)), "gate_mc": None})
+    assert "| gate_s5 | 98.5 | 0.4 |" in text and "The gate: **holds**." in text
