@@ -264,7 +264,8 @@ def _field_parser(hint, choices=None):
 
 def add_config_args(parser, prefix: str, obj, skip: tuple[str, ...] = (), title: str | None = None) -> None:
     """Add ``--<prefix>.<path> VALUE`` for every field of dataclass instance ``obj`` (recursively), its current value
-    shown as the default; ``skip`` lists paths (``sim.num_envs``) that have a conventional flag of their own. The
+    shown as the default; ``skip`` lists paths (``sim.num_envs``) that have a conventional flag of their own (a field
+    whose metadata says ``flag: False`` has none: the robot's name and frames, ``--robot``'s). The
     parsed values land in ``args.overrides`` as {path: value} (only those given)."""
     import dataclasses
     import typing
@@ -275,10 +276,10 @@ def add_config_args(parser, prefix: str, obj, skip: tuple[str, ...] = (), title:
         hints = typing.get_type_hints(type(o))
         for f in dataclasses.fields(o):
             value, sub = getattr(o, f.name), f"{path}{f.name}"
+            if sub in skip or f.metadata.get("flag", True) is False:
+                continue
             if dataclasses.is_dataclass(value):
                 walk(value, sub + ".")
-                continue
-            if sub in skip:
                 continue
             convert, nargs, metavar = _field_parser(hints[f.name], f.metadata.get("choices"))
             shown = "none" if value is None else " ".join(map(str, value)) if nargs and value else value

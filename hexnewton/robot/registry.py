@@ -1,0 +1,31 @@
+"""The named robots and ``--robot NAME|FILE``: :data:`ROBOTS` (``paper``, the paper's hexapod, ``RobotConfig()`` bit
+for bit; ``mx_phoenix``, a robot 1.6 times its size, ``hexnewton.robot.mx_phoenix``) and :func:`resolve_robot`, a
+name or a URDF / MJCF file (:func:`hexnewton.robot.loader.load_robot`) to its description.
+
+A robot of one's own is one more entry here (a ``RobotConfig`` by its dimensions, in a folder of its own with the
+sources of its numbers) or simply its file: ``--robot path/to/robot.urdf`` (docs/robots.md)."""
+
+from __future__ import annotations
+
+import os
+
+from hexnewton.errors import HexnewtonError
+from hexnewton.robot.mx_phoenix import MX_PHOENIX
+from hexnewton.robot_config import RobotConfig
+
+ROBOTS: dict[str, RobotConfig] = {"paper": RobotConfig(), "mx_phoenix": MX_PHOENIX}
+
+
+def resolve_robot(robot: str, joints: tuple[str, ...] | None = None) -> RobotConfig:
+    """The description of ``robot``: a name of :data:`ROBOTS`, or a ``.urdf`` / ``.xml`` file (``joints``: its 18 leg
+    joints in hexnewton's order, where its tree does not show them); one line (``HexnewtonError``) for neither."""
+    if robot in ROBOTS:
+        if joints:
+            raise HexnewtonError(f"--robot_joints names a robot file's joints; robot '{robot}' is a named one")
+        return ROBOTS[robot]
+    if os.path.splitext(robot)[1].lower() in (".urdf", ".xml") or os.path.sep in robot or os.path.exists(robot):
+        from hexnewton.robot.loader import load_robot
+
+        return load_robot(robot, tuple(joints) if joints else None)
+    raise HexnewtonError(f"unknown robot '{robot}': choose one of {', '.join(ROBOTS)}, or give a robot file "
+                         "(.urdf or .xml)")
