@@ -265,13 +265,20 @@ class CPGConfig:
     fixed_a1: float = 0.3
     fixed_a2: float = 0.5
     fixed_a3: float = 0.5
+    # the robot's: every amplitude above (the ranges, the fixed gaits, the posture's knee offsets, the stuck lift) is
+    # the paper robot's and scaled by this per joint kind (hip A1, knee A2 and the posture, ankle A3) where the robot's
+    # joints reach less far from its standing pose (hexnewton.robot.geometry.amplitude_scale; 1 for the paper's robot
+    # and any robot that reaches as far). Set with the robot (hexnewton.robot.registry.with_robot), no flag of its own
+    amplitude_scale: tuple[float, float, float] = field(default=(1.0, 1.0, 1.0), metadata={"flag": False})
 
     def fixed_params(self, gait: str = "default") -> list[float]:
         """A fixed baseline's 15 parameters in PARAM_NAMES order: ``default`` (the ``fixed_*`` fields) or a gait of
-        ``FIXED_GAITS`` (``swept``: the best of the documented sweep, ``studies/cpg_sweep/sweep.py``)."""
+        ``FIXED_GAITS`` (``swept``: the best of the documented sweep, ``studies/cpg_sweep/sweep.py``), its amplitudes
+        scaled for the robot (``amplitude_scale``)."""
         omega, a1, a2, a3 = (self.fixed_omega, self.fixed_a1, self.fixed_a2, self.fixed_a3) if gait == "default" \
             else FIXED_GAITS[gait]
-        return self.with_posture(gait_params(omega, a1, a2, a3)).tolist()
+        s1, s2, s3 = self.amplitude_scale
+        return self.with_posture(gait_params(omega, a1 * s1, a2 * s2, a3 * s3)).tolist()
 
     def with_posture(self, params):
         """Parameters (..., 15) or (..., num_params) as (..., num_params): a 15-parameter gait gets the neutral
@@ -291,11 +298,24 @@ class CPGConfig:
         return PARAM_NAMES + (POSTURE_NAMES if self.posture else ())
 
     def param_ranges(self) -> tuple[list[float], list[float]]:
-        """(lower, upper) bounds of the parameters in ``param_names`` order."""
+        """(lower, upper) bounds of the parameters in ``param_names`` order, the amplitudes' scaled for the robot."""
+        s1, s2, s3 = self.amplitude_scale
+        scale = [1.0] + [s1] * 2 + [s2] * 6 + [s3] * 6 + ([s2] * 3 if self.posture else [])
         rows = [self.omega_range] + [self.a1_range] * 2 + [self.a2_range] * 6 + [self.a3_range] * 6
         if self.posture:
             rows += [self.posture_height_range] + [self.posture_tilt_range] * 2
-        return [r[0] for r in rows], [r[1] for r in rows]
+        return [r[0] * k for r, k in zip(rows, scale)], [r[1] * k for r, k in zip(rows, scale)]
+
+    @property
+    def tilt_max(self) -> float:
+        """The largest tilt term of the body posture [rad of knee], scaled for the robot (the levelling reflex's
+        clamp)."""
+        return self.posture_tilt_range[1] * self.amplitude_scale[1]
+
+    @property
+    def lift(self) -> float:
+        """The stuck response's knee lift [rad], scaled for the robot."""
+        return self.stuck_lift * self.amplitude_scale[1]
 
 
 def gait_params(omega: float, a1: float, a2: float, a3: float) -> list[float]:
@@ -320,7 +340,8 @@ class TaskConfig:
     goal_distance: float = 3.5
     # §2.4.4 (3): within this distance of the goal the task is complete
     goal_radius: float = 0.5
-    # §2.4.4 (1): fallen below this torso height above the terrain [m], or |roll| / |pitch| beyond pi/3
+    # §2.4.4 (1): fallen below this torso height above the terrain [m] (the paper robot's; another robot's x
+    # height_scale), or |roll| / |pitch| beyond pi/3
     min_height: float = 0.05
     max_tilt: float = math.pi / 3
     # §2.4.4 (2): off course beyond |y - y_start| [m] (from the start-to-goal line); time out after this many steps
@@ -354,6 +375,13 @@ class TaskConfig:
     # ours: a waypoint course ((x, y), ...) [m] in each robot's start frame (x along its start heading), the goals in
     # turn; reaching the last ends the episode (play.py --waypoints); empty: none
     waypoints: tuple[tuple[float, float], ...] = ()
+    # the robot's: its standing height over the paper robot's and its footprint over the paper robot's
+    # (hexnewton.robot.geometry.height_scale, length_scale; 1 for the paper's robot). The heights above (min_height)
+    # and Table 1's height terms are the paper robot's, scaled by height_scale; the observation's heights (the
+    # target's z, the terrain's h) are divided by it, so that they read as on the paper's robot; h looks over a
+    # square length_scale times the paper's. Set with the robot (hexnewton.robot.registry.with_robot), no flag
+    height_scale: float = field(default=1.0, metadata={"flag": False})
+    length_scale: float = field(default=1.0, metadata={"flag": False})
 
 
 #: Table 1's terms (Eq. 5), the reward of the paper's task

@@ -29,3 +29,31 @@ def resolve_robot(robot: str, joints: tuple[str, ...] | None = None) -> RobotCon
         return load_robot(robot, tuple(joints) if joints else None)
     raise HexnewtonError(f"unknown robot '{robot}': choose one of {', '.join(ROBOTS)}, or give a robot file "
                          "(.urdf or .xml)")
+
+
+def with_robot(cfg, robot: RobotConfig):
+    """``cfg`` (a ``HexConfig``) for ``robot``: the robot and its scales, the CPG's amplitudes
+    (``CPGConfig.amplitude_scale``) and the task's heights and terrain window (``TaskConfig.height_scale``,
+    ``length_scale``), from its joint limits, standing height and footprint against the paper robot's. Everything else
+    stays as ``cfg`` has it; for the paper's robot nothing changes."""
+    from dataclasses import replace
+
+    from hexnewton.robot.geometry import amplitude_scale, height_scale, length_scale, validate
+
+    try:
+        validate(robot)
+    except ValueError as exc:
+        raise HexnewtonError(f"robot {robot.name}: {exc}") from None
+    return replace(cfg, robot=robot, cpg=replace(cfg.cpg, amplitude_scale=amplitude_scale(robot)),
+                   task=replace(cfg.task, height_scale=height_scale(robot), length_scale=length_scale(robot)))
+
+
+def check_scales(cfg) -> None:
+    """A one-line error unless ``cfg``'s robot scales are its robot's (:func:`with_robot` sets them)."""
+    from hexnewton.robot.geometry import amplitude_scale, height_scale, length_scale
+
+    want = (*amplitude_scale(cfg.robot), height_scale(cfg.robot), length_scale(cfg.robot))
+    have = (*cfg.cpg.amplitude_scale, cfg.task.height_scale, cfg.task.length_scale)
+    if any(abs(a - b) > 1e-9 for a, b in zip(want, have)):
+        raise HexnewtonError(f"the config's robot scales {have} are not robot {cfg.robot.name}'s {want}: configure it "
+                             "with hexnewton.robot.registry.with_robot")
