@@ -265,10 +265,9 @@ class CPGConfig:
     fixed_a1: float = 0.3
     fixed_a2: float = 0.5
     fixed_a3: float = 0.5
-    # the robot's: every amplitude above (the ranges, the fixed gaits, the posture's knee offsets, the stuck lift) is
-    # the paper robot's and scaled by this per joint kind (hip A1, knee A2 and the posture, ankle A3) where the robot's
-    # joints reach less far from its standing pose (hexnewton.robot.geometry.amplitude_scale; 1 for the paper's robot
-    # and any robot that reaches as far). Set with the robot (hexnewton.robot.registry.with_robot), no flag of its own
+    # the robot's: the amplitudes above (ranges, fixed gaits, posture, stuck lift) are the paper robot's, scaled per
+    # joint kind (hip A1, knee A2 and posture, ankle A3) for a robot whose joints reach less far (robot.geometry.
+    # amplitude_scale; 1 for the paper's). Set with the robot (robot.registry.with_robot), no flag of its own
     amplitude_scale: tuple[float, float, float] = field(default=(1.0, 1.0, 1.0), metadata={"flag": False})
 
     def fixed_params(self, gait: str = "default") -> list[float]:
@@ -308,8 +307,7 @@ class CPGConfig:
 
     @property
     def tilt_max(self) -> float:
-        """The largest tilt term of the body posture [rad of knee], scaled for the robot (the levelling reflex's
-        clamp)."""
+        """The body posture's largest tilt term [rad of knee], scaled for the robot (the levelling reflex's clamp)."""
         return self.posture_tilt_range[1] * self.amplitude_scale[1]
 
     @property
@@ -340,8 +338,7 @@ class TaskConfig:
     goal_distance: float = 3.5
     # §2.4.4 (3): within this distance of the goal the task is complete
     goal_radius: float = 0.5
-    # §2.4.4 (1): fallen below this torso height above the terrain [m] (the paper robot's; another robot's x
-    # height_scale), or |roll| / |pitch| beyond pi/3
+    # §2.4.4 (1): fallen below this torso height above the terrain [m] (x height_scale), or |roll| / |pitch| > pi/3
     min_height: float = 0.05
     max_tilt: float = math.pi / 3
     # §2.4.4 (2): off course beyond |y - y_start| [m] (from the start-to-goal line); time out after this many steps
@@ -375,11 +372,10 @@ class TaskConfig:
     # ours: a waypoint course ((x, y), ...) [m] in each robot's start frame (x along its start heading), the goals in
     # turn; reaching the last ends the episode (play.py --waypoints); empty: none
     waypoints: tuple[tuple[float, float], ...] = ()
-    # the robot's: its standing height over the paper robot's and its footprint over the paper robot's
-    # (hexnewton.robot.geometry.height_scale, length_scale; 1 for the paper's robot). The heights above (min_height)
-    # and Table 1's height terms are the paper robot's, scaled by height_scale; the observation's heights (the
-    # target's z, the terrain's h) are divided by it, so that they read as on the paper's robot; h looks over a
-    # square length_scale times the paper's. Set with the robot (hexnewton.robot.registry.with_robot), no flag
+    # the robot's standing height and footprint over the paper robot's (robot.geometry.height_scale, length_scale; 1
+    # for the paper's): min_height and Table 1's height terms scale with height_scale, the observed heights (target z,
+    # terrain h) are divided by it, h looks over a square length_scale times the paper's. Set with the robot
+    # (robot.registry.with_robot), no flag of its own
     height_scale: float = field(default=1.0, metadata={"flag": False})
     length_scale: float = field(default=1.0, metadata={"flag": False})
 

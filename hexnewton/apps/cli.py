@@ -166,6 +166,28 @@ def check_new_dir(path: str, files: tuple[str, ...] = ()) -> None:
         raise ValueError(f"cannot create {path}: {parent} is not a writable directory")
 
 
+def add_robot_args(parser, default: str) -> None:
+    """``--robot NAME|FILE`` (a named robot, hexnewton.robot.registry, or a URDF / MJCF file) and ``--robot_joints``
+    (a robot file's 18 leg joints in hexnewton's order, where its tree does not show them); ``default`` says what
+    leaving ``--robot`` out means."""
+    parser.add_argument("--robot", metavar="NAME|FILE", default=None,
+                        help=f"the robot: paper, mx_phoenix, or a .urdf / .xml file (docs/robots.md); default {default}")
+    parser.add_argument("--robot_joints", nargs=18, metavar="JOINT", default=None,
+                        help="with --robot FILE: its leg joints in hexnewton's order (R1 hip knee ankle, R2 ..., L3), "
+                             "where the file's tree does not show them")  # fmt: skip
+
+
+def robot_from_args(args):
+    """The ``RobotConfig`` of ``--robot`` (None where it is left out); one line for a robot that cannot be read."""
+    if args.robot is None:
+        if args.robot_joints:
+            raise ValueError("--robot_joints names the joints of a --robot FILE")
+        return None
+    from hexnewton.robot.registry import resolve_robot
+
+    return resolve_robot(args.robot, args.robot_joints)
+
+
 def add_browser_args(parser) -> None:
     """``--host`` and ``--port`` of the browser viewer (``--viewer viser``)."""
     from hexnewton.physics.viewer import DEFAULT_HOST, DEFAULT_PORT

@@ -3,7 +3,8 @@
     python -m hexnewton.apps.export --checkpoint logs/.../model_299.pt --out bundle/
 
 writes ``bundle/policy.onnx`` (one file, dynamic batch), ``bundle/controller.json`` (observation layout,
-parameter ranges, CPG and mapping constants, periods, standing pose, joint limits) and ``bundle/check.npz``
+parameter ranges, CPG and mapping constants, periods, standing pose, joint limits, the robot: its name, joint names,
+senses and limits, scales and whole description) and ``bundle/check.npz``
 (a short rollout in the simulator: the observations and the simulator's joint targets). It then replays the
 rollout through the NumPy/onnxruntime runtime and fails unless the joint targets agree within the tolerance.
 The configuration comes from the checkpoint (the config the policy was trained with).
@@ -19,7 +20,7 @@ import sys
 
 import numpy as np
 
-from hexnewton.apps.cli import ArgumentParser, positive_int, run
+from hexnewton.apps.cli import ArgumentParser, add_robot_args, positive_int, robot_from_args, run
 from hexnewton.config import RandomizationConfig, TaskConfig, TerrainConfig, config_from_dict
 from hexnewton.deploy.runtime import FORMAT, replay
 
@@ -149,6 +150,7 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--steps", type=positive_int, default=100, help="control steps of the recorded check rollout")
     p.add_argument("--robots", type=positive_int, default=4, help="robots in the recorded check rollout")
     p.add_argument("--tolerance", type=float, default=1e-3, help="largest joint-target difference allowed [rad]")
+    add_robot_args(p, "the checkpoint's (the bundle is its robot's; another is one error line)")
     args = p.parse_args(argv)
     if os.path.exists(args.out):
         raise ValueError(f"{args.out} exists: nothing is overwritten")
@@ -161,6 +163,9 @@ def main(argv: list[str] | None = None) -> int:
         raise ValueError(f"{args.checkpoint} is a '{meta['action_mode']}' policy: a bundle carries the CPG hierarchy "
                          "(a joint-mode policy's policy.onnx from train.py is its whole controller)")  # fmt: skip
     cfg = config_from_dict(meta.get("config", {}))
+    from hexnewton.robot.registry import check_robot
+
+    check_robot(cfg.robot, robot_from_args(args), args.checkpoint)
     cfg = dataclasses.replace(
         cfg,
         # no graph capture: the reflex's attitude log (AttitudeLog) runs from Python at every substep

@@ -50,7 +50,16 @@ import time
 from hexnewton.analysis.report import ended_cell
 from hexnewton.analysis.rollout import EVAL_TERRAIN_SEED, START_SEED_OFFSET
 from hexnewton.analysis.sim2sim import Film, Viewer, fixed_cpg_spec, measure
-from hexnewton.apps.cli import ArgumentParser, check_writable, positive_int, run, terrain_name, waypoint
+from hexnewton.apps.cli import (
+    ArgumentParser,
+    add_robot_args,
+    check_writable,
+    positive_int,
+    robot_from_args,
+    run,
+    terrain_name,
+    waypoint,
+)
 from hexnewton.config import TaskConfig
 from hexnewton.deploy.runtime import load_spec, spec_robot
 
@@ -183,6 +192,7 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--viewer", action="store_true", help="show robot 0 in MuJoCo's interactive viewer")
     p.add_argument("--workers", type=int, default=1,
                    help="processes per terrain, each a consecutive range of the rounds (0: one per core)")
+    add_robot_args(p, "the bundle's (its controller.json's description; the fixed CPG walks it too)")
     args = p.parse_args(argv)
     if args.workers < 0:
         raise ValueError(f"--workers must be 0 (one per core) or more, got {args.workers}")
@@ -193,6 +203,9 @@ def main(argv: list[str] | None = None) -> int:
     if os.path.exists(args.out):
         raise ValueError(f"--out {args.out} exists already (nothing is overwritten)")
     args.robot_cfg = spec_robot(load_spec(args.bundle))  # the fixed CPG walks the bundle's robot
+    from hexnewton.robot.registry import check_robot
+
+    check_robot(args.robot_cfg, robot_from_args(args), args.bundle)
     if args.video:
         check_writable(args.video, ".mp4")
         os.environ.setdefault("MUJOCO_GL", "egl")

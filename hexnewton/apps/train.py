@@ -8,11 +8,14 @@
     torchrun --nproc_per_node=2 train.py --task complex --num_envs 4096    # 4096 envs on each of 2 GPUs
     python train.py --task rugged --video --video_interval 100             # a 4 s clip every 100 iterations
     python train.py --task complex --viewer viser                          # watch training at http://127.0.0.1:8080
+    python train.py --task complex --robot mx_phoenix                      # another robot (a name or a robot file)
 
 Every field of the task's configs can be set from the command line: ``--env.<section>.<field>`` (HexConfig: robot,
 terrain, sim, cpg, task, reward, randomization) and ``--agent.<field>`` (AgentConfig: PPO, networks, distribution,
-curriculum, stop rules); ``python train.py --task T --help`` lists them with the task's values. A resumed run goes on
-with the configs its checkpoint recorded, overrides on top.
+curriculum, stop rules); ``python train.py --task T --help`` lists them with the task's values. ``--robot NAME|FILE``
+trains on another robot than the paper's (docs/robots.md: its CPG amplitudes, heights and terrain window scaled for it,
+before the ``--env.*`` overrides), its whole description recorded in the checkpoints. A resumed run goes on with the
+configs its checkpoint recorded, overrides on top.
 
 Each run writes ``logs/hexnewton_<task>/<date_time>/``: TensorBoard event files; ``model_<it>.pt`` checkpoints with
 the task, the configs and the action mode (``play.py``, ``evaluate`` and ``export`` need nothing else);
@@ -41,9 +44,11 @@ from hexnewton.apps.cli import (
     ArgumentParser,
     add_browser_args,
     add_config_args,
+    add_robot_args,
     announce_browser,
     config_overrides,
     positive_int,
+    robot_from_args,
     run,
 )
 from hexnewton.config import apply_overrides
@@ -109,8 +114,10 @@ def parser(base, resumed: bool) -> ArgumentParser:
     p.add_argument("--max_iterations", type=positive_int, default=None,
                    help=f"PPO iterations of this run (default: the task's, {base.agent.max_iterations})")
     p.add_argument("--resume", metavar="PATH", help="checkpoint to continue from (a new run directory is made)")
+    add_robot_args(p, "the checkpoint's" if resumed else "the paper's")
     p.add_argument("--log_dir", default="logs")
-    p.add_argument("--experiment", default=None, help="default: hexnewton_<task>")
+    p.add_argument("--experiment", default=None, help="default: hexnewton_<task> (on another robot than the paper's "
+                   "hexnewton_<task>_<robot>)")
     p.add_argument("--build_beside_imports", action=argparse.BooleanOptionalAction, default=True,
                    help="build the terrain and the physics model in a thread while torch and rsl-rl import (default; "
                         "--no-build_beside_imports: after them)")  # fmt: skip
@@ -142,7 +149,14 @@ def parser(base, resumed: bool) -> ArgumentParser:
 def configs(args, base, ckpt: dict | None):
     """The run's environment and learner configs: the task's (or the resumed checkpoint's) with the command line's
     overrides, checked before anything is built."""
-    env_cfg = apply_overrides(base.env, config_overrides(args, "env"))
+    robot, base_env = robot_from_args(args), base.env
+    if robot is not None:  # the robot and its scales first, the --env.* overrides on top
+        from hexnewton.robot.registry import check_robot, with_robot
+
+        if ckpt is not None:
+            check_robot(base.env.robot, robot, args.resume)
+        base_env = with_robot(base.env, robot)
+    env_cfg = apply_overrides(base_env, config_overrides(args, "env"))
     agent = apply_overrides(base.agent, config_overrides(args, "agent"))
     if args.max_iterations is not None:
         agent = dataclasses.replace(agent, max_iterations=args.max_iterations)
@@ -206,7 +220,8 @@ def rank_config(args, env_cfg):
 def make_run_dir(args, meta: dict, train_cfg: dict, rank) -> str:
     """``log_dir/experiment/<date_time>``; rank 0 makes it (nothing is overwritten) and writes its config.json: the
     run's metadata and rsl-rl's ``train_cfg``."""
-    experiment = args.experiment or f"hexnewton_{meta['task']}"
+    robot = meta.get("robot", "paper")
+    experiment = args.experiment or f"hexnewton_{meta['task']}" + (f"_{robot}" if robot != "paper" else "")
     run_dir = os.path.join(args.log_dir, experiment, datetime.datetime.now().strftime("%Y-%m-%d_%H-%M-%S"))
     if rank.is_main:  # only rank 0 writes logs, checkpoints and the export
         if os.path.exists(run_dir):
@@ -465,14 +480,15 @@ def main(argv: list[str] | None = None) -> int:
 
         check_compatible(ckpt, args.resume, env.num_obs, env.num_actions, base.action_mode)
         check_critic(ckpt, args.resume, sum(g.shape[1] for g in env.get_observations().values()))
-    meta = {"task": base.name, "action_mode": base.action_mode, "num_obs": env.num_obs,
+    meta = {"task": base.name, "robot": cfg.robot.name, "action_mode": base.action_mode, "num_obs": env.num_obs,
             "num_actions": env.num_actions, "config": dataclasses.asdict(cfg), "agent": dataclasses.asdict(agent),
             "world_size": rank.world_size}  # fmt: skip
     agent = ranks_agent(agent, rank)  # checkpoints keep the unscaled one: a resumed run scales for its own ranks
     run_dir = make_run_dir(args, meta, agent.to_rsl_rl(cfg.sim.num_envs, env.obs_groups), rank)
     runner, views = make_runner(args, env, agent, meta, run_dir, rank, ckpt)
     where = f"rank {rank.rank} of {rank.world_size}, " if rank.world_size > 1 else ""
-    print(f"training task {base.name}: {where}{cfg.sim.num_envs} envs on {cfg.sim.device}, {agent.max_iterations} "
+    on = f" on robot {cfg.robot.name}" if cfg.robot.name != "paper" else ""
+    print(f"training task {base.name}{on}: {where}{cfg.sim.num_envs} envs on {cfg.sim.device}, {agent.max_iterations} "
           f"iterations, logs in {run_dir}")  # fmt: skip
     for view in views:
         view.first_iteration = runner.current_learning_iteration

@@ -370,8 +370,10 @@ def replay(bundle: str) -> dict:
     for k in range(len(obs)):
         o = obs[k]
         gyro = sl(o, "gyro") if "gyro" in lay else None
-        mine = ctrl.observe(sl(o, "joint_pos"), sl(o, "joint_vel"), sl(o, "quat"), sl(o, "target"), sl(o, "max_height"),
-                            gyro)  # fmt: skip
+        # the readings in metres: the recorded observation's heights are divided by the robot's height_scale
+        hs = ctrl.height_scale
+        mine = ctrl.observe(sl(o, "joint_pos"), sl(o, "joint_vel"), sl(o, "quat"), sl(o, "target") * [1.0, 1.0, hs],
+                            sl(o, "max_height") * hs, gyro)  # fmt: skip
         err_obs = max(err_obs, float(np.abs(mine - o).max()))  # the CPG parameters were integrated here
         q = ctrl.advance(ctrl.act(mine), None if quats is None else quats[k], sl(o, "target"))
         err_q = max(err_q, float(np.abs(q - sim_targets[k]).max()))

@@ -57,3 +57,20 @@ def check_scales(cfg) -> None:
     if any(abs(a - b) > 1e-9 for a, b in zip(want, have)):
         raise HexnewtonError(f"the config's robot scales {have} are not robot {cfg.robot.name}'s {want}: configure it "
                              "with hexnewton.robot.registry.with_robot")
+
+
+def same_robot(a: RobotConfig, b: RobotConfig) -> bool:
+    """Whether two descriptions are one robot (where each was read from does not matter)."""
+    from dataclasses import replace
+
+    return replace(a, source="") == replace(b, source="")
+
+
+def check_robot(trained: RobotConfig, robot: RobotConfig | None, what: str) -> None:
+    """One line unless ``robot`` (None: any) is the robot ``what`` (a checkpoint, a bundle) was trained for: a policy
+    walks its own robot; ``train.py --init`` starts one for another from it."""
+    if robot is None or same_robot(trained, robot):
+        return
+    raise HexnewtonError(f"{what} was trained on robot {trained.name}, not {robot.name}: leave --robot out to run it on "
+                         f"its own, or train a policy for {robot.name} from it: python train.py --robot "
+                         f"{robot.source or robot.name} --init {what}")

@@ -1,7 +1,7 @@
 """Robot files: the MX-Phoenix's URDF and MJCF (written by us, ``scripts/robot_files.py``) load to its named
 description (joint order, senses, limits, masses, frames), and a file with a leg missing, a leg of two joints, a
-continuous joint, a joint without limits, seven legs or a bad path is one error line, and exit status 2 from the
-command lines."""
+continuous joint, a joint without limits, seven legs or a bad path is one error line (exit status 2 from the command
+lines: tests/apps/test_robot_flag.py)."""
 
 import copy
 import dataclasses
