@@ -9,7 +9,7 @@ Conventions (used everywhere in hexnewton):
   * World frame: z up, the robot starts at the origin facing +x; terrain features lie ahead along +x.
   * Body frame: x forward, y left, z up.
   * Joint order: legs R1, R2, R3, L1, L2, L3 (front to back), each leg hip, knee (femur), ankle (tibia).
-  * Joint signs (same on every leg):
+  * Joint signs (same on every leg; another robot's: docs/robots.md, its zero angles its own):
       - hip   > 0 swings the foot forward (+x), the hip axis is vertical;
       - knee  > 0 lifts the femur (rotates the leg upward), 0 = femur horizontal;
       - ankle < 0 tucks the foot inward toward the body, 0 = tibia perpendicular to the femur, pointing
