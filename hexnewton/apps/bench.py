@@ -3,6 +3,7 @@
     python -m hexnewton.apps.bench                         # default device, all terrains, N = 1024 (64 on CPU)
     python -m hexnewton.apps.bench --num_envs 1024 4096 16384 --terrain flat complex --device cuda
     python -m hexnewton.apps.bench --mode sim              # simulation only
+    python -m hexnewton.apps.bench --mode sim --robot mx_phoenix --terrain rugged   # another robot (docs/robots.md)
     python -m hexnewton.apps.bench --mode sim --terrain stepped --env.terrain.collision mesh_boxes  # terrain settings
     python -m hexnewton.apps.bench --append studies/throughput/report.md  # the table appended (date, device, git)
     python -m hexnewton.apps.bench --task complex --mode train --num_envs 4096    # the complex task's physics, learner
@@ -205,7 +206,7 @@ def measure(args, device: str, rank, sim, ground, agent, base, terrains):
                     profiles.append({"terrain": terrain, "num_envs": n, **prof})
                 pipeline.append(pr)
         if args.largest:
-            results += largest_that_fits(terrain, max(envs), device, frames, sim, ground=ground)
+            results += largest_that_fits(terrain, max(envs), device, frames, sim, ground=ground, base=base)
     return results, pipeline, profiles
 
 
