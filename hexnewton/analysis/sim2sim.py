@@ -30,8 +30,8 @@ from hexnewton.robot.geometry import (
     stand_height,
 )
 
-#: the terrain reading's window, as the training observation's (``mdp.terms.observations.H_HALF_EXTENT``; another robot's
-#: x its ``length_scale``) [m]
+#: the terrain reading's window, as the training observation's (``mdp.terms.observations.H_HALF_EXTENT``; another
+#: robot's x its ``length_scale``) [m]
 H_HALF_EXTENT = 0.3
 
 

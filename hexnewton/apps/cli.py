@@ -171,7 +171,8 @@ def add_robot_args(parser, default: str) -> None:
     (a robot file's 18 leg joints in hexnewton's order, where its tree does not show them); ``default`` says what
     leaving ``--robot`` out means."""
     parser.add_argument("--robot", metavar="NAME|FILE", default=None,
-                        help=f"the robot: paper, mx_phoenix, or a .urdf / .xml file (docs/robots.md); default {default}")
+                        help=f"the robot: paper, mx_phoenix, or a .urdf / .xml file (docs/robots.md); default "
+                             f"{default}")  # fmt: skip
     parser.add_argument("--robot_joints", nargs=18, metavar="JOINT", default=None,
                         help="with --robot FILE: its leg joints in hexnewton's order (R1 hip knee ankle, R2 ..., L3), "
                              "where the file's tree does not show them")  # fmt: skip

@@ -8,9 +8,9 @@ and tibia, a foot sphere, the torso box (no self-collision). A robot given frame
 ``RobotConfig.legs``) is written from its frames the same way (:func:`frames_robot_xml`): its links' masses, full
 inertias and collision shapes, its joints in hexnewton's sense and names, so that the sensors read as in Newton.
 Each joint has a MuJoCo position actuator with Newton's PD drive: kp = ``joint_ke``, kv = ``joint_kd``, force clamped
-to ``effort_limit``. Sensors per robot
-(``SENSORS_PER_ROBOT`` values): the torso's orientation (``framequat`` at an IMU site on the torso origin), 18
-``jointpos`` / 18 ``jointvel`` encoders and the IMU's ``gyro`` (the torso's angular velocity in its own frame).
+to ``effort_limit``. Sensors per robot (``SENSORS_PER_ROBOT`` values): the torso's orientation (``framequat`` at an IMU
+site on the torso origin), 18 ``jointpos`` / 18 ``jointvel`` encoders and the IMU's ``gyro`` (the torso's angular
+velocity in its own frame).
 
 The terrain comes from the height grid (:func:`hexnewton.terrain.heightmap.build_height_grid`): every strip of constant
 height across the patch (run-ups, stair treads, landings) is one box (:func:`hexnewton.terrain.parts.split_strips`),

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import math
 
-from hexnewton.robot_config import LegConfig, RobotConfig
+from hexnewton.robot_config import SHAPE_KINDS, LegConfig, RobotConfig
 
 Vec = tuple[float, float, float]
 Quat = tuple[float, float, float, float]
@@ -99,3 +99,7 @@ def validate(cfg: RobotConfig) -> None:
                                  f"{j.link.mass} and {j.limit}")
             if abs(norm(j.axis) - 1.0) > 1e-6:
                 raise ValueError(f"robot {cfg.name}: joint {j.name}'s axis {j.axis} is not a unit vector")
+    shapes = [s for link in [cfg.torso] + [j.link for leg in cfg.legs for j in leg.joints] for s in link.shapes]
+    unknown = sorted({s.kind for s in shapes} - set(SHAPE_KINDS))
+    if unknown:
+        raise ValueError(f"robot {cfg.name}: shape kind {unknown[0]} is none of {', '.join(SHAPE_KINDS)}")

@@ -71,6 +71,6 @@ def check_robot(trained: RobotConfig, robot: RobotConfig | None, what: str) -> N
     walks its own robot; ``train.py --init`` starts one for another from it."""
     if robot is None or same_robot(trained, robot):
         return
-    raise HexnewtonError(f"{what} was trained on robot {trained.name}, not {robot.name}: leave --robot out to run it on "
-                         f"its own, or train a policy for {robot.name} from it: python train.py --robot "
+    raise HexnewtonError(f"{what} was trained on robot {trained.name}, not {robot.name}: leave --robot out to run it "
+                         f"on its own, or train a policy for {robot.name} from it: python train.py --robot "
                          f"{robot.source or robot.name} --init {what}")

@@ -167,8 +167,8 @@ def quat_np(inputs):
 def max_height(inputs: ObsInputs, env: int, obs: wp.array2d[wp.float32], col: int):
     px = inputs.joint_q[env, 0]
     py = inputs.joint_q[env, 1]
-    h = max_terrain_height(inputs.hf, px, py, H_HALF_EXTENT * inputs.task.length_scale) - terrain_height(inputs.hf, px,
-                                                                                                         py)
+    half = H_HALF_EXTENT * inputs.task.length_scale
+    h = max_terrain_height(inputs.hf, px, py, half) - terrain_height(inputs.hf, px, py)
     obs[env, col] = h / inputs.task.height_scale
 
 

@@ -173,7 +173,8 @@ def stability(inputs: RewardInputs, frame: RewardFrame) -> float:
 def stability_np(inputs, frame):
     rpy = np.asarray(inputs.rpy, np.float64)
     tilted = (np.abs(rpy[:, 0]) > inputs.reward.stability_tilt) | (np.abs(rpy[:, 1]) > inputs.reward.stability_tilt)
-    return np.where((frame.z < 0.05 * inputs.task.height_scale) | tilted | (np.asarray(inputs.status) == FELL), -1.0, 0.0)
+    low = frame.z < 0.05 * inputs.task.height_scale
+    return np.where(low | tilted | (np.asarray(inputs.status) == FELL), -1.0, 0.0)
 
 
 @wp.func
