@@ -9,7 +9,7 @@ Conventions (used everywhere in hexnewton):
   * World frame: z up, the robot starts at the origin facing +x; terrain features lie ahead along +x.
   * Body frame: x forward, y left, z up.
   * Joint order: legs R1, R2, R3, L1, L2, L3 (front to back), each leg hip, knee (femur), ankle (tibia).
-  * Joint signs (same on every leg):
+  * Joint signs (same on every leg; another robot's: docs/robots.md, its zero angles its own):
       - hip   > 0 swings the foot forward (+x), the hip axis is vertical;
       - knee  > 0 lifts the femur (rotates the leg upward), 0 = femur horizontal;
       - ankle < 0 tucks the foot inward toward the body, 0 = tibia perpendicular to the femur, pointing
@@ -21,62 +21,21 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
-LEG_NAMES = ("R1", "R2", "R3", "L1", "L2", "L3")
-JOINT_KINDS = ("hip", "knee", "ankle")
-JOINT_NAMES = tuple(f"{leg}_{kind}" for leg in LEG_NAMES for kind in JOINT_KINDS)
+from hexnewton.robot_config import (  # noqa: F401  (the robot's description, part of this tree)
+    JOINT_KINDS,
+    JOINT_NAMES,
+    LEG_NAMES,
+    JointConfig,
+    LegConfig,
+    LinkConfig,
+    RobotConfig,
+    ShapeConfig,
+)
+
 TERRAINS = ("flat", "rugged", "stepped", "complex")
 TERRAIN_COLLISIONS = ("mesh", "mesh_boxes", "boxes")
 #: what the policy's actions set: the CPG's parameters (the paper's CPG_RL) or the 18 joint targets (pure DRL)
 ACTION_MODES = ("cpg", "joint")
-
-
-@dataclass
-class RobotConfig:
-    """The paper's hexapod (§3.5) plus the physical details the paper leaves open."""
-
-    # §3.5: link lengths [m]
-    hip_length: float = 0.050
-    femur_length: float = 0.080
-    tibia_length: float = 0.130
-    # §3.5: total mass [kg]
-    total_mass: float = 2.5
-    # ours: mass split. Servo-driven legs: 0.15 kg per leg (coxa servo 0.05, femur 0.05, tibia 0.05),
-    # the remaining 1.6 kg in the torso (battery, controller, six servos' share).
-    coxa_mass: float = 0.05
-    femur_mass: float = 0.05
-    tibia_mass: float = 0.05
-    # §3.5: joint limits [rad]
-    hip_limit: tuple[float, float] = (-math.pi / 6, math.pi / 6)
-    knee_limit: tuple[float, float] = (0.0, math.pi / 2)
-    ankle_limit: tuple[float, float] = (-math.pi / 3, 0.0)
-    # ours: torso box (x length, y width, z height) [m], sized like common 2.5 kg servo hexapods
-    torso_size: tuple[float, float, float] = (0.26, 0.14, 0.05)
-    # ours: hip mounts in the body frame, (x, |y|) per leg row front/middle/rear [m]
-    hip_mounts: tuple[tuple[float, float], ...] = ((0.11, 0.07), (0.0, 0.08), (-0.11, 0.07))
-    # ours: outward leg direction, degrees from lateral toward +x for the front row (front legs splay
-    # forward, rear legs backward)
-    mount_splay_deg: tuple[float, float, float] = (30.0, 0.0, -30.0)
-    # ours: collision radii [m]
-    leg_radius: float = 0.010
-    foot_radius: float = 0.012
-    # ours: neutral standing pose (hip, knee, ankle) [rad]: femur slightly raised, tibia vertical, so
-    # stance never rests on the knee's lower limit and the torso stands ~0.13 m high (the paper's
-    # height reward pays above 0.12 m, Table 1).
-    stand_pose: tuple[float, float, float] = (0.0, 0.15, -0.15)
-    # ours: PD position drive. A tripod stance carries ~8 N per foot at ~0.09 m lever: ~0.75 N m at the
-    # knee; kp = 40 N m/rad keeps the sag under 0.02 rad. Effort limit like a 35 kg cm hobby servo.
-    joint_ke: float = 40.0
-    joint_kd: float = 0.8
-    effort_limit: float = 3.5
-    # ours: reflected rotor inertia of a geared servo [kg m^2]; it also keeps the light tibia stable
-    armature: float = 0.005
-    # ours: joint-limit penalty stiffness/damping
-    limit_ke: float = 1.0e3
-    limit_kd: float = 10.0
-    # ours: contact material
-    friction: float = 0.9
-    # initial torso height above the terrain under the origin [m]; the robot drops onto its feet
-    spawn_height: float = 0.15
 
 
 @dataclass
@@ -118,7 +77,8 @@ class TerrainConfig:
     # lanes side by side along y, each lane_width wide (replacing ``width``); lane k (0-based) is this
     # terrain with its block heights and step rise scaled by (k + 1) / L, so the last lane is the terrain
     # above (unless lanes go past it: ``levels_past``). Robots move up a lane after reaching the goal and down one
-    # after walking less than half of it (mdp/events.py). 3 m = 2 x TaskConfig.max_abs_y: a robot leaves the course as it leaves its lane.
+    # after walking less than half of it (mdp/events.py). 3 m = 2 x TaskConfig.max_abs_y: a robot leaves the course
+    # as it leaves its lane.
     levels: int = 0
     lane_width: float = 3.0
     # ours: lanes past the course. The last ``levels_past`` of the ``levels`` lanes go beyond the terrain above, in
@@ -305,13 +265,19 @@ class CPGConfig:
     fixed_a1: float = 0.3
     fixed_a2: float = 0.5
     fixed_a3: float = 0.5
+    # the robot's: the amplitudes above (ranges, fixed gaits, posture, stuck lift) are the paper robot's, scaled per
+    # joint kind (hip A1, knee A2 and posture, ankle A3) for a robot whose joints reach less far (robot.geometry.
+    # amplitude_scale; 1 for the paper's). Set with the robot (robot.registry.with_robot), no flag of its own
+    amplitude_scale: tuple[float, float, float] = field(default=(1.0, 1.0, 1.0), metadata={"flag": False})
 
     def fixed_params(self, gait: str = "default") -> list[float]:
         """A fixed baseline's 15 parameters in PARAM_NAMES order: ``default`` (the ``fixed_*`` fields) or a gait of
-        ``FIXED_GAITS`` (``swept``: the best of the documented sweep, ``studies/cpg_sweep/sweep.py``)."""
+        ``FIXED_GAITS`` (``swept``: the best of the documented sweep, ``studies/cpg_sweep/sweep.py``), its amplitudes
+        scaled for the robot (``amplitude_scale``)."""
         omega, a1, a2, a3 = (self.fixed_omega, self.fixed_a1, self.fixed_a2, self.fixed_a3) if gait == "default" \
             else FIXED_GAITS[gait]
-        return self.with_posture(gait_params(omega, a1, a2, a3)).tolist()
+        s1, s2, s3 = self.amplitude_scale
+        return self.with_posture(gait_params(omega, a1 * s1, a2 * s2, a3 * s3)).tolist()
 
     def with_posture(self, params):
         """Parameters (..., 15) or (..., num_params) as (..., num_params): a 15-parameter gait gets the neutral
@@ -331,11 +297,23 @@ class CPGConfig:
         return PARAM_NAMES + (POSTURE_NAMES if self.posture else ())
 
     def param_ranges(self) -> tuple[list[float], list[float]]:
-        """(lower, upper) bounds of the parameters in ``param_names`` order."""
+        """(lower, upper) bounds of the parameters in ``param_names`` order, the amplitudes' scaled for the robot."""
+        s1, s2, s3 = self.amplitude_scale
+        scale = [1.0] + [s1] * 2 + [s2] * 6 + [s3] * 6 + ([s2] * 3 if self.posture else [])
         rows = [self.omega_range] + [self.a1_range] * 2 + [self.a2_range] * 6 + [self.a3_range] * 6
         if self.posture:
             rows += [self.posture_height_range] + [self.posture_tilt_range] * 2
-        return [r[0] for r in rows], [r[1] for r in rows]
+        return [r[0] * k for r, k in zip(rows, scale)], [r[1] * k for r, k in zip(rows, scale)]
+
+    @property
+    def tilt_max(self) -> float:
+        """The body posture's largest tilt term [rad of knee], scaled for the robot (the levelling reflex's clamp)."""
+        return self.posture_tilt_range[1] * self.amplitude_scale[1]
+
+    @property
+    def lift(self) -> float:
+        """The stuck response's knee lift [rad], scaled for the robot."""
+        return self.stuck_lift * self.amplitude_scale[1]
 
 
 def gait_params(omega: float, a1: float, a2: float, a3: float) -> list[float]:
@@ -360,7 +338,7 @@ class TaskConfig:
     goal_distance: float = 3.5
     # §2.4.4 (3): within this distance of the goal the task is complete
     goal_radius: float = 0.5
-    # §2.4.4 (1): fallen below this torso height above the terrain [m], or |roll| / |pitch| beyond pi/3
+    # §2.4.4 (1): fallen below this torso height above the terrain [m] (x height_scale), or |roll| / |pitch| > pi/3
     min_height: float = 0.05
     max_tilt: float = math.pi / 3
     # §2.4.4 (2): off course beyond |y - y_start| [m] (from the start-to-goal line); time out after this many steps
@@ -394,6 +372,12 @@ class TaskConfig:
     # ours: a waypoint course ((x, y), ...) [m] in each robot's start frame (x along its start heading), the goals in
     # turn; reaching the last ends the episode (play.py --waypoints); empty: none
     waypoints: tuple[tuple[float, float], ...] = ()
+    # the robot's standing height and footprint over the paper robot's (robot.geometry.height_scale, length_scale; 1
+    # for the paper's): min_height and Table 1's height terms scale with height_scale, the observed heights (target z,
+    # terrain h) are divided by it, h looks over a square length_scale times the paper's. Set with the robot
+    # (robot.registry.with_robot), no flag of its own
+    height_scale: float = field(default=1.0, metadata={"flag": False})
+    length_scale: float = field(default=1.0, metadata={"flag": False})
 
 
 #: Table 1's terms (Eq. 5), the reward of the paper's task
@@ -559,18 +543,38 @@ def _as_tuples(v):
 
 
 def dataclass_from_dict(cls, values: dict):
-    """Rebuild dataclass ``cls`` from ``dataclasses.asdict`` output: nested dataclasses recursively, lists as tuples;
-    missing fields keep their defaults, unknown keys are ignored (configs written by older or newer versions load)."""
+    """Rebuild dataclass ``cls`` from ``dataclasses.asdict`` output: nested dataclasses recursively (a field's
+    dataclass, optional dataclass or tuple of dataclasses, as its annotation says), lists as tuples; missing fields
+    keep their defaults, unknown keys are ignored (configs written by older or newer versions load)."""
     import dataclasses
+    import typing
 
+    hints = typing.get_type_hints(cls)
     out = {}
     for f in dataclasses.fields(cls):
         if f.name not in (values or {}):
             continue
-        v = values[f.name]
-        default = f.default_factory() if f.default_factory is not dataclasses.MISSING else f.default
-        out[f.name] = dataclass_from_dict(type(default), v) if dataclasses.is_dataclass(default) else _as_tuples(v)
+        out[f.name] = _from_value(hints[f.name], values[f.name])
     return cls(**out)
+
+
+def _from_value(hint, v):
+    """``v`` (plain data) as annotation ``hint`` says: a dataclass, a tuple of them or None, else :func:`_as_tuples`."""
+    import dataclasses
+    import types
+    import typing
+
+    args = typing.get_args(hint)
+    if typing.get_origin(hint) in (typing.Union, types.UnionType):
+        if v is None:
+            return None
+        hint = next(a for a in args if a is not type(None))
+        args = typing.get_args(hint)
+    if dataclasses.is_dataclass(hint) and isinstance(v, dict):
+        return dataclass_from_dict(hint, v)
+    if typing.get_origin(hint) is tuple and args and dataclasses.is_dataclass(args[0]) and isinstance(v, (list, tuple)):
+        return tuple(dataclass_from_dict(args[0], x) if isinstance(x, dict) else x for x in v)
+    return _as_tuples(v)
 
 
 def config_from_dict(d: dict) -> HexConfig:

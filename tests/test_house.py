@@ -21,9 +21,10 @@ MAX_MODULE_LINES = 600
 #: console scripts
 COMMAND_LINE_HELPERS = {"hexnewton.apps.cli", "hexnewton.apps.console"}
 #: the layers, bottom up: a module imports modules of its own layer or of layers below it ("" is the package's root:
-#: configuration, errors, start-up timing). The physics level is four rooms, one-way among themselves too: the robot's
-#: description and builder (``robot``), the terrains (``terrain``), the step's kernels beside their NumPy twins
-#: (``kernels``: the CPG and mapping, the world's, the events'), the batched world (``physics``)
+#: configuration, the robot's description among it, errors, start-up timing). The physics level is four rooms, one-way
+#: among themselves too: the robot's builder, loader and named robots (``robot``), the terrains (``terrain``), the
+#: step's kernels beside their NumPy twins (``kernels``: the CPG and mapping, the world's, the events'), the batched
+#: world (``physics``)
 LAYERS = ("", "robot", "terrain", "kernels", "physics", "deploy", "mdp", "learning", "tasks", "analysis", "apps")
 HEAVY = ("warp", "newton")
 
@@ -117,11 +118,11 @@ def test_no_private_name_imported_from_another_module():
 
 
 def test_every_module_sits_in_a_layer_and_imports_only_go_down():
-    """Each module is in one of the layer folders (or is the root's configuration, errors, start-up timing); it
-    imports modules of its own layer or of a lower one, never of a higher one."""
+    """Each module is in one of the layer folders (or is the root's configuration, robot description, errors, start-up
+    timing); it imports modules of its own layer or of a lower one, never of a higher one."""
     assert {_layer(name) for name in MODULES} == set(LAYERS)
     assert {name for name in MODULES if _layer(name) == ""} == {"hexnewton", "hexnewton.config", "hexnewton.errors",
-                                                                 "hexnewton.startup"}  # fmt: skip
+                                                                 "hexnewton.robot_config", "hexnewton.startup"}
     rank = {layer: k for k, layer in enumerate(LAYERS)}
     up = [f"{name}:{line} ({_layer(name) or 'root'}) imports {target} ({_layer(target)})" for name in sorted(MODULES)
           for target, _, line in _imports(name) if target in MODULES and rank[_layer(target)] > rank[_layer(name)]]

@@ -229,16 +229,17 @@ def is_out_of_memory(exc: BaseException) -> bool:
 
 
 def largest_that_fits(terrain: str, start: int, device: str, frames: int, sim: SimConfig,
-                      limit: int = 1 << 20, ground: TerrainConfig | None = None) -> list[BenchResult]:  # fmt: skip
+                      limit: int = 1 << 20, ground: TerrainConfig | None = None,
+                      base: HexConfig | None = None) -> list[BenchResult]:  # fmt: skip
     """Sim-only results at 2x, 4x, ... ``start`` envs until an allocation fails (or ``limit``); the last one
-    is the largest env count that fits on ``device``."""
+    is the largest env count that fits on ``device`` (``base``: the env config, a task's or another robot's)."""
     import gc
 
     out, n = [], start
     while n * 2 <= limit:
         n *= 2
         try:
-            out.append(bench_one(terrain, n, device, frames, sim, ground=ground))
+            out.append(bench_one(terrain, n, device, frames, sim, ground=ground, base=base))
         except Exception as exc:
             if not is_out_of_memory(exc):
                 raise

@@ -326,22 +326,27 @@ class RoundLog:
 
 def run_rounds(controller: str, checkpoint: str | None, terrain: str, rounds: int, device: str | None,
                max_steps: int, progress: bool = True, seed: int = EVAL_TERRAIN_SEED, overrides: dict | None = None,
-               stochastic: bool = False, expected: bool = False, fixed_params: np.ndarray | None = None) -> Episode:
+               stochastic: bool = False, expected: bool = False, fixed_params: np.ndarray | None = None,
+               robot=None) -> Episode:
     """``rounds`` robots, one first episode each, with a controller on unseen seeds: the course of ``terrain``
-    (:func:`hexnewton.tasks.course`) with the policy's own physics and CPG (from its checkpoint), then ``overrides``
-    ({"terrain.step_rise": 0.07, "randomization.enabled": True, ...}: fields of the HexConfig tree; a named
-    perturbation is such a dict). ``seed`` is the terrain seed; the start poses (and sampled actions) use ``seed +
+    (:func:`hexnewton.tasks.course`) with the policy's own robot, physics and CPG (from its checkpoint; a fixed
+    controller on ``robot``, default the paper's; a policy of another robot than ``robot`` is one line), then
+    ``overrides`` ({"terrain.step_rise": 0.07, "randomization.enabled": True, ...}: fields of the HexConfig tree; a
+    named perturbation is such a dict). ``seed`` is the terrain seed; the start poses (and sampled actions) use ``seed +
     START_SEED_OFFSET``. ``stochastic``: a learnt policy samples its actions as in training; ``expected``: the
     expected clipped action of its Gaussian. ``fixed_params`` (N, 15) gives a fixed controller one gait per round
     (``studies/cpg_sweep/sweep.py``). ``cpg.posture_reflex`` in ``overrides`` gives a fixed gait the body posture at its
     neutral values with that reflex; a policy needs its own posture for it."""
     from hexnewton.learning.checkpoint import trained_config
     from hexnewton.mdp.env import make_env
+    from hexnewton.robot.registry import check_robot, with_robot
     from hexnewton.tasks import course
 
     action_mode = CONTROLLERS[controller]
     ckpt = read_controller_checkpoint(controller, checkpoint)
-    trained = trained_config(ckpt) if ckpt is not None else HexConfig()
+    trained = trained_config(ckpt) if ckpt is not None else with_robot(HexConfig(), robot or HexConfig().robot)
+    if ckpt is not None:
+        check_robot(trained.robot, robot, checkpoint)
     overrides = dict(overrides or {})
     if "cpg.posture_reflex" in overrides and action_mode == "cpg":
         if controller not in FIXED and not trained.cpg.posture:

@@ -218,6 +218,8 @@ class RosRounds(Rounds):
         self.dt = float(self.spec["substep_dt"])
         self.ticks, self.t0, self.missed, self.late_starts = 0, None, 0, 0
         self.last = np.asarray(self.spec["stand_pose"] * 6, np.float64)
+        # the robot's joint senses: the model's joints turn as hexnewton's, the node speaks the robot's
+        self.signs = np.asarray(self.spec.get("joint_signs", [1.0] * 18), np.float64)
 
     def targets(self, k: int, r: dict) -> np.ndarray:
         link, d = self.link, self.d
@@ -229,14 +231,14 @@ class RosRounds(Rounds):
             link.spin_until(start)
         stamp = time.time_ns()
         if k == 0:
-            link.readings(stamp, r["joint_pos"][0], r["joint_vel"][0], d.qpos[:3], r["quat"][0],
-                          self.scan.reading(d.qpos[0], d.qpos[1]))  # fmt: skip
+            link.readings(stamp, self.signs * r["joint_pos"][0], self.signs * r["joint_vel"][0], d.qpos[:3],
+                          r["quat"][0], self.scan.reading(d.qpos[0], d.qpos[1]))  # fmt: skip
         link.imu(stamp, r["quat"][0], r["gyro"][0])
         self.ticks += 1
         if not self.realtime:
-            self.last = link.lockstep_answer(stamp)
+            self.last = self.signs * link.lockstep_answer(stamp)
         elif link.realtime_answer(stamp, start + self.deadline * self.dt):
-            self.last = link.command
+            self.last = self.signs * link.command
         else:
             self.missed += 1
         return self.last[None]

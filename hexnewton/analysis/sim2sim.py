@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import replace
+from dataclasses import asdict, replace
 from types import SimpleNamespace
 
 import numpy as np
@@ -16,12 +16,22 @@ from hexnewton.analysis.rollout import EVAL_TERRAIN_SEED, START_SEED_OFFSET
 from hexnewton.config import CPGConfig, RobotConfig, SimConfig, TaskConfig, TerrainConfig, terrain_for_goal
 from hexnewton.deploy import rules
 from hexnewton.deploy.mjcf import SENSORS_PER_ROBOT, build_model
-from hexnewton.deploy.runtime import FORMAT, Controller
+from hexnewton.deploy.runtime import FORMAT, Controller, spec_robot
 from hexnewton.deploy.rules import RUNNING, SUCCESS
 from hexnewton.kernels.reference import quat_to_rpy_np
-from hexnewton.robot.geometry import footprint, leg_bounds, spawn_clearance
+from hexnewton.robot.geometry import (
+    amplitude_scale,
+    footprint,
+    height_scale,
+    joint_signs,
+    leg_bounds,
+    length_scale,
+    spawn_clearance,
+    stand_height,
+)
 
-#: the terrain reading's window, as the training observation's (``mdp.terms.observations.H_HALF_EXTENT``) [m]
+#: the terrain reading's window, as the training observation's (``mdp.terms.observations.H_HALF_EXTENT``; another
+#: robot's x its ``length_scale``) [m]
 H_HALF_EXTENT = 0.3
 
 
@@ -34,9 +44,10 @@ class HeightScanner:
     The terrain is static, so a cell is cast once; the readings are those of the training's height grid query
     (``terrain.query``: the cell under a point, the highest cell overlapping a square), edge cells clamped alike."""
 
-    def __init__(self, model, data, grid):
+    def __init__(self, model, data, grid, half: float = H_HALF_EXTENT):
         import mujoco
 
+        self.half = half  # the terrain reading's window [m]
         self._ray, self.m, self.d = mujoco.mj_rayHfield, model, data
         self.geom = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, "scanner")
         self.x0, self.y0, self.res, self.nx, self.ny = grid.x0, grid.y0, grid.res, grid.nx, grid.ny
@@ -66,35 +77,50 @@ class HeightScanner:
         i, j = int(self._index(x, self.x0, self.nx)), int(self._index(y, self.y0, self.ny))
         return float(self._cast(i, i, j, j)[0, 0])
 
-    def window_max(self, x: float, y: float, half: float = H_HALF_EXTENT) -> float:
-        """The highest terrain over the square of half side ``half`` around (x, y)."""
+    def window_max(self, x: float, y: float, half: float | None = None) -> float:
+        """The highest terrain over the square of half side ``half`` (None: the reading's) around (x, y)."""
+        half = self.half if half is None else half
         i0, i1 = self._index([x - half, x + half], self.x0, self.nx)
         j0, j1 = self._index([y - half, y + half], self.y0, self.ny)
         return float(self._cast(int(i0), int(i1), int(j0), int(j1)).max())
 
     def reading(self, x: float, y: float) -> float:
-        """The observation's terrain term: highest terrain within +-30 cm minus the ground under the base."""
+        """The observation's terrain term: highest terrain within the window (+-30 cm for the paper's robot) minus the
+        ground under the base [m]."""
         return self.window_max(x, y) - self.height(x, y)
 
 
 def fixed_cpg_spec(cpg: CPGConfig | None = None, robot: RobotConfig | None = None, control_dt: float = 0.02,
                    substep_dt: float = 0.005) -> dict:
     """A controller.json-shaped spec of the fixed CPG (§3.3): no policy, the CPG at ``cpg.fixed_params()``, for
-    :class:`deploy.Controller`. The default 5 ms substep is the shipped policy's physics, with which the committed
-    Newton numbers of the fixed CPG were measured (studies/stable_gait)."""
-    cpg, robot = cpg or CPGConfig(), robot or RobotConfig()
+    :class:`deploy.Controller`, on ``robot`` (default the paper's; ``cpg`` None: the default CPG with the robot's
+    amplitude scale). The default 5 ms substep is the shipped policy's physics, with which the committed Newton numbers
+    of the fixed CPG were measured (studies/stable_gait)."""
+    robot = robot or RobotConfig()
+    cpg = cpg or replace(CPGConfig(), amplitude_scale=amplitude_scale(robot))
     lo, hi = cpg.param_ranges()
     lower, upper = leg_bounds(robot)
     return {
         "format": FORMAT, "action_mode": "cpg", "num_obs": 0, "num_actions": cpg.num_params, "obs_layout": [],
         "param_names": list(cpg.param_names), "posture_reflex": cpg.posture_reflex if cpg.posture else 0.0,
-        "posture_tilt_max": cpg.posture_tilt_range[1], "param_lower": list(lo), "param_upper": list(hi),
+        "posture_tilt_max": cpg.tilt_max, "param_lower": list(lo), "param_upper": list(hi),
         "initial_params": list(cpg.fixed_params()),
         "cpg": {k: getattr(cpg, k) for k in ("alpha", "mu", "delta", "theta", "duty", "steepness", "param_tau")},
         "control_dt": control_dt, "substep_dt": substep_dt, "substeps_per_control": int(round(control_dt / substep_dt)),
         "stand_pose": list(robot.stand_pose), "joint_lower": list(lower), "joint_upper": list(upper),
-        "goal_distance": TaskConfig.goal_distance,
+        "goal_distance": TaskConfig.goal_distance, **robot_fields(robot),
     }  # fmt: skip
+
+
+def robot_fields(robot: RobotConfig) -> dict:
+    """What a controller.json says of its robot beyond the joints' bounds (:func:`hexnewton.apps.export`'s, here for a
+    spec without a policy): its name, senses, standing height, scales and whole description (named robots other than
+    the paper's and robot files only: a paper-robot spec stays as it was)."""
+    if robot == RobotConfig():
+        return {}
+    return {"robot": robot.name, "joint_signs": list(joint_signs(robot)), "stand_height": stand_height(robot),
+            "height_scale": height_scale(robot), "length_scale": length_scale(robot),
+            "robot_description": asdict(robot)}  # fmt: skip
 
 
 def start_poses(rounds: int, seed: int, task: TaskConfig | None = None, spread: float = SimConfig.spawn_y_spread,
@@ -151,10 +177,13 @@ class Rounds:
         keep = np.arange(rounds) if robots is None else np.asarray(robots, dtype=np.int64)
         if keep.ndim != 1 or keep.size == 0 or keep.min() < 0 or keep.max() >= rounds:
             raise ValueError(f"robots must be indices of the {rounds} rounds, got {robots!r}")
-        self.mj, self.robot, self.task = mujoco, robot or RobotConfig(), task or TaskConfig()
         total, rounds = rounds, keep.size
         self.ctrl = Controller(controller, num_robots=rounds)
         self.spec, self.n = self.ctrl.spec, rounds
+        # the controller's robot (controller.json's description) and its scales of the task's heights
+        self.mj, self.robot, self.task = mujoco, robot or spec_robot(self.spec), task or TaskConfig()
+        self.task = replace(self.task, height_scale=float(self.spec.get("height_scale", 1.0)),
+                            length_scale=float(self.spec.get("length_scale", 1.0)))
         self.policy = self.ctrl.session is not None
         self.control_dt, self.substeps = float(self.spec["control_dt"]), int(self.spec["substeps_per_control"])
         self.task = replace(self.task, goal_distance=float(self.spec.get("goal_distance", self.task.goal_distance)))
@@ -168,7 +197,7 @@ class Rounds:
         if self.m.nq != 25 * rounds or self.m.nsensordata != SENSORS_PER_ROBOT * rounds:
             raise RuntimeError("unexpected MuJoCo model layout")
         mujoco.mj_forward(self.m, self.d)  # the terrain's poses, for the scanner's rays
-        self.scan = HeightScanner(self.m, self.d, self.grid)
+        self.scan = HeightScanner(self.m, self.d, self.grid, H_HALF_EXTENT * self.task.length_scale)
         z = [self.scan.window_max(0.0, y, footprint(self.robot)) + spawn_clearance(self.robot) for y in s["lane"]]
         q = self.d.qpos.reshape(rounds, 25)
         q[:, 0], q[:, 1], q[:, 2] = 0.0, s["y"], z

@@ -3,6 +3,7 @@
     python -m hexnewton.apps.bench                         # default device, all terrains, N = 1024 (64 on CPU)
     python -m hexnewton.apps.bench --num_envs 1024 4096 16384 --terrain flat complex --device cuda
     python -m hexnewton.apps.bench --mode sim              # simulation only
+    python -m hexnewton.apps.bench --mode sim --robot mx_phoenix --terrain rugged   # another robot (docs/robots.md)
     python -m hexnewton.apps.bench --mode sim --terrain stepped --env.terrain.collision mesh_boxes  # terrain settings
     python -m hexnewton.apps.bench --append studies/throughput/report.md  # the table appended (date, device, git)
     python -m hexnewton.apps.bench --task complex --mode train --num_envs 4096    # the complex task's physics, learner
@@ -48,7 +49,16 @@ from hexnewton.analysis.bench import (
 )
 from hexnewton.analysis.report import git_rev
 from hexnewton.analysis.scaling import rate_rows, scaling_markdown, scaling_rows, with_ranks
-from hexnewton.apps.cli import ArgumentParser, add_config_args, config_overrides, positive_int, run, terrain_name
+from hexnewton.apps.cli import (
+    ArgumentParser,
+    add_config_args,
+    add_robot_args,
+    config_overrides,
+    positive_int,
+    robot_from_args,
+    run,
+    terrain_name,
+)
 from hexnewton.config import TERRAINS, SimConfig, TerrainConfig, apply_overrides
 from hexnewton.learning.agent import AgentConfig
 from hexnewton.terrain import validate_config
@@ -120,6 +130,7 @@ def parser() -> ArgumentParser:
     p.add_argument("--json", metavar="PATH", help="write the raw results as JSON (with every rank's rates)")
     p.add_argument("--baseline", metavar="PATH",
                    help="a 1-GPU run's --json: the scaling efficiency of this run's rates against it")
+    add_robot_args(p, "the paper's")
     add_config_args(p, "env.sim", SimConfig(), skip=("num_envs", "device"),
                     title="--env.sim.*: the physics (SimConfig), as train.py's")
     add_config_args(p, "env.terrain", TerrainConfig(), skip=("name", "seed"),
@@ -158,13 +169,18 @@ def settings(args):
 
     base = task(args.task) if args.task else None
     env, agent = (base.env, base.agent) if base else (HexConfig(), AgentConfig())
+    robot = robot_from_args(args)
+    if robot is not None:  # the robot and its scales in the env base the measurements build from
+        from hexnewton.robot.registry import with_robot
+
+        env = with_robot(env, robot)
     agent = apply_overrides(agent, config_overrides(args, "agent"))
     sim = apply_overrides(env.sim, config_overrides(args, "env.sim"))
     ground = apply_overrides(env.terrain, config_overrides(args, "env.terrain"))
     terrains = args.terrain or ([env.terrain.name] if base else list(TERRAINS))
     for name in terrains:
         validate_config(replace(ground, name=name))
-    return sim, ground, agent, (env if base else None), terrains
+    return sim, ground, agent, (env if base or robot else None), terrains
 
 
 def measure(args, device: str, rank, sim, ground, agent, base, terrains):
@@ -190,7 +206,7 @@ def measure(args, device: str, rank, sim, ground, agent, base, terrains):
                     profiles.append({"terrain": terrain, "num_envs": n, **prof})
                 pipeline.append(pr)
         if args.largest:
-            results += largest_that_fits(terrain, max(envs), device, frames, sim, ground=ground)
+            results += largest_that_fits(terrain, max(envs), device, frames, sim, ground=ground, base=base)
     return results, pipeline, profiles
 
 

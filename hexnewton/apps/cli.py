@@ -166,6 +166,29 @@ def check_new_dir(path: str, files: tuple[str, ...] = ()) -> None:
         raise ValueError(f"cannot create {path}: {parent} is not a writable directory")
 
 
+def add_robot_args(parser, default: str) -> None:
+    """``--robot NAME|FILE`` (a named robot, hexnewton.robot.registry, or a URDF / MJCF file) and ``--robot_joints``
+    (a robot file's 18 leg joints in hexnewton's order, where its tree does not show them); ``default`` says what
+    leaving ``--robot`` out means."""
+    parser.add_argument("--robot", metavar="NAME|FILE", default=None,
+                        help=f"the robot: paper, mx_phoenix, or a .urdf / .xml file (docs/robots.md); default "
+                             f"{default}")  # fmt: skip
+    parser.add_argument("--robot_joints", nargs=18, metavar="JOINT", default=None,
+                        help="with --robot FILE: its leg joints in hexnewton's order (R1 hip knee ankle, R2 ..., L3), "
+                             "where the file's tree does not show them")  # fmt: skip
+
+
+def robot_from_args(args):
+    """The ``RobotConfig`` of ``--robot`` (None where it is left out); one line for a robot that cannot be read."""
+    if args.robot is None:
+        if args.robot_joints:
+            raise ValueError("--robot_joints names the joints of a --robot FILE")
+        return None
+    from hexnewton.robot.registry import resolve_robot
+
+    return resolve_robot(args.robot, args.robot_joints)
+
+
 def add_browser_args(parser) -> None:
     """``--host`` and ``--port`` of the browser viewer (``--viewer viser``)."""
     from hexnewton.physics.viewer import DEFAULT_HOST, DEFAULT_PORT
@@ -264,7 +287,8 @@ def _field_parser(hint, choices=None):
 
 def add_config_args(parser, prefix: str, obj, skip: tuple[str, ...] = (), title: str | None = None) -> None:
     """Add ``--<prefix>.<path> VALUE`` for every field of dataclass instance ``obj`` (recursively), its current value
-    shown as the default; ``skip`` lists paths (``sim.num_envs``) that have a conventional flag of their own. The
+    shown as the default; ``skip`` lists paths (``sim.num_envs``) that have a conventional flag of their own (a field
+    whose metadata says ``flag: False`` has none: the robot's name and frames, ``--robot``'s). The
     parsed values land in ``args.overrides`` as {path: value} (only those given)."""
     import dataclasses
     import typing
@@ -275,10 +299,10 @@ def add_config_args(parser, prefix: str, obj, skip: tuple[str, ...] = (), title:
         hints = typing.get_type_hints(type(o))
         for f in dataclasses.fields(o):
             value, sub = getattr(o, f.name), f"{path}{f.name}"
+            if sub in skip or f.metadata.get("flag", True) is False:
+                continue
             if dataclasses.is_dataclass(value):
                 walk(value, sub + ".")
-                continue
-            if sub in skip:
                 continue
             convert, nargs, metavar = _field_parser(hints[f.name], f.metadata.get("choices"))
             shown = "none" if value is None else " ".join(map(str, value)) if nargs and value else value

@@ -6,6 +6,7 @@
     python -m hexnewton.apps.evaluate ... --runs cpg_rl=logs/.../run joint=logs/.../run       # adds Fig. 5a
     python -m hexnewton.apps.evaluate ... --sweep terrain.step_rise 0.06 0.08 0.10          # a capability curve
     python -m hexnewton.apps.evaluate ... --sweep default                                   # the default set of curves
+    python -m hexnewton.apps.evaluate --controllers cpg --robot mx_phoenix --terrains rugged  # another robot
     python -m hexnewton.apps.evaluate ... --sweep step_rise --no-nominal                    # one of them, alone
     python -m hexnewton.apps.evaluate --navigate --controllers cpg_rl --checkpoint cpg_rl=NAV.pt --terrains flat \
         --rounds 1000 --out eval/navigate     # goals at 8 bearings and the 2 m square (hexnewton.analysis.navigation)
@@ -77,9 +78,11 @@ from hexnewton.analysis.rollout import (
 from hexnewton.apps.cli import (
     ArgumentParser,
     add_config_args,
+    add_robot_args,
     check_new_dir,
     config_overrides,
     positive_int,
+    robot_from_args,
     run,
     terrain_name,
 )
@@ -205,6 +208,7 @@ def parser() -> ArgumentParser:
                    help=f"terrain seed S, start poses from seed S + {START_SEED_OFFSET} (default {EVAL_TERRAIN_SEED}: "
                         "the test set). Choose checkpoints on another S (a validation set), report on the default")
     p.add_argument("--device", default=None)
+    add_robot_args(p, "the learnt policies' own (the fixed gaits walk it too; without a policy the paper's)")
     p.add_argument("--out", default=None, help="output directory (default eval/<date_time>); must not exist")
     p.add_argument("--merge", nargs="+", metavar="DIR",
                    help="simulate nothing: join the results.json of evaluations run apart (one controller or terrain "
@@ -243,6 +247,20 @@ def read_checkpoints(checkpoints: dict[str, str], controllers: list[str], terrai
     return read
 
 
+def evaluation_robot(args, read: dict[str, dict]):
+    """The robot every controller walks: ``--robot``'s, else the learnt policies' own (one line where they differ),
+    else None (the paper's)."""
+    from hexnewton.learning.checkpoint import trained_config
+    from hexnewton.robot.registry import check_robot
+
+    robot = robot_from_args(args)
+    for path, ckpt in read.items():
+        trained = trained_config(ckpt).robot
+        check_robot(trained, robot, path)
+        robot = robot or trained
+    return robot
+
+
 def check_runs(runs: dict[str, str]) -> None:
     """ValueError unless every ``--runs`` training run logged its mean episode reward (Fig. 5a)."""
     from hexnewton.analysis.curves import read_curve
@@ -277,7 +295,7 @@ def evaluator(args, checkpoints: dict[str, str], env_overrides: dict, fixed_phys
         fixed_params = gait_params(*args.swept_gait) if ctrl == "cpg_swept" and args.swept_gait else None
         overrides = {**env_overrides, **(fixed_physics if ctrl in FIXED else {}), **(perturbed or {})}
         ep = run_rounds(ctrl, ck, terrain, args.rounds, device, args.max_steps, progress, args.seed, overrides,
-                        args.stochastic, args.expected, fixed_params)  # fmt: skip
+                        args.stochastic, args.expected, fixed_params, args.robot_cfg)  # fmt: skip
         m = round_metrics(ep.pos, ep.rpy, ep.done, ep.status, ep.dt, distances)
         s = summarize(m, ep.rpy, distances, ep.goal_line)
         s.update(gait_quality(m, ep.ang_rate, ep.dparam, ep.daction), segments=ep.segments, checkpoint=ck)
@@ -389,6 +407,7 @@ def main(argv: list[str] | None = None) -> int:
     checkpoints = _pairs(args.checkpoint, "--checkpoint")
     runs = _pairs(args.runs, "--runs")
     read = read_checkpoints(checkpoints, args.controllers, args.terrains)  # every learnt policy's file, checked
+    args.robot_cfg = evaluation_robot(args, read)
     check_runs(runs)
     for name in args.perturbations:
         perturbation(name)
@@ -415,7 +434,7 @@ def main(argv: list[str] | None = None) -> int:
             "distances": list(distances), "goal_distance": goal_distance, "overrides": env_overrides,
             "actions": "sampled" if args.stochastic else "expected" if args.expected else "deterministic (mean)",
             "physics": physics or "each policy's own (checkpoint)", "fixed_cpg_physics": fixed_physics or "default",
-            "perturbations": args.perturbations,
+            "perturbations": args.perturbations, "robot": (args.robot_cfg or HexConfig().robot).name,
             "swept_gait": args.swept_gait or list(FIXED_GAITS["swept"]),
             "terrain_seed": args.seed, "reset_seed": args.seed + START_SEED_OFFSET,
             "unseen": "terrain seed and start poses differ from training (train.py: terrain seed 0, seed 1)",

@@ -3,7 +3,8 @@
     python -m hexnewton.apps.export --checkpoint logs/.../model_299.pt --out bundle/
 
 writes ``bundle/policy.onnx`` (one file, dynamic batch), ``bundle/controller.json`` (observation layout,
-parameter ranges, CPG and mapping constants, periods, standing pose, joint limits) and ``bundle/check.npz``
+parameter ranges, CPG and mapping constants, periods, standing pose, joint limits, the robot: its name, joint names,
+senses and limits, scales and whole description) and ``bundle/check.npz``
 (a short rollout in the simulator: the observations and the simulator's joint targets). It then replays the
 rollout through the NumPy/onnxruntime runtime and fails unless the joint targets agree within the tolerance.
 The configuration comes from the checkpoint (the config the policy was trained with).
@@ -19,8 +20,8 @@ import sys
 
 import numpy as np
 
-from hexnewton.apps.cli import ArgumentParser, positive_int, run
-from hexnewton.config import JOINT_NAMES, RandomizationConfig, TaskConfig, TerrainConfig, config_from_dict
+from hexnewton.apps.cli import ArgumentParser, add_robot_args, positive_int, robot_from_args, run
+from hexnewton.config import RandomizationConfig, TaskConfig, TerrainConfig, config_from_dict
 from hexnewton.deploy.runtime import FORMAT, replay
 
 
@@ -37,11 +38,12 @@ def controller_spec(env, checkpoint: str, action_std: list[float] | None) -> dic
     for a Beta policy)."""
     from hexnewton.analysis.report import git_rev
     from hexnewton.mdp.terms import H_HALF_EXTENT, OBS_LAYOUT
-    from hexnewton.robot import leg_bounds
+    from hexnewton.robot import joint_limits, joint_names, joint_signs, leg_bounds, stand_height
 
     cfg = env.cfg
     lo, hi = cfg.cpg.param_ranges()
     lower, upper = leg_bounds(cfg.robot)
+    window = H_HALF_EXTENT * cfg.task.length_scale
     sub_dt = cfg.sim.frame_dt / cfg.sim.substeps
     return {
         "format": FORMAT,
@@ -50,10 +52,12 @@ def controller_spec(env, checkpoint: str, action_std: list[float] | None) -> dic
         "num_actions": env.num_actions,
         "obs_layout": [list(row) for row in OBS_LAYOUT[env.obs_layout]],
         "obs_notes": {
-            "joint order": list(JOINT_NAMES),
-            "target": "goal relative to the base in its heading frame (x forward, y left) [m]; z = goal ground - base z",
+            "joint order": list(joint_names(cfg.robot)),
+            "target": "goal relative to the base in its heading frame (x forward, y left) [m]; z = goal ground - base z"
+                      + (" (/ height_scale)" if cfg.task.height_scale != 1.0 else ""),
             "quat": "base orientation (x, y, z, w), w >= 0",
-            "max_height": f"highest terrain within +-{H_HALF_EXTENT} m of the base minus the ground under it [m]",
+            "max_height": f"highest terrain within +-{window:.6g} m of the base minus the ground under it [m]"
+                          + (" (/ height_scale)" if cfg.task.height_scale != 1.0 else ""),
             **({"gyro": "base angular velocity in the body frame (x forward, y left, z up) [rad/s], the IMU's gyro"}
                if cfg.obs.gyro else {}),
             **({"last_action": "the actions the policy gave last, clamped to [-1, 1]; 0 after a reset"}
@@ -62,9 +66,10 @@ def controller_spec(env, checkpoint: str, action_std: list[float] | None) -> dic
         "param_names": list(cfg.cpg.param_names),
         # ours: the levelling reflex (CPGConfig.posture_reflex; 0 = none), its knee offsets clamped to +-tilt_max
         "posture_reflex": cfg.cpg.posture_reflex if cfg.cpg.posture else 0.0,
-        "posture_tilt_max": cfg.cpg.posture_tilt_range[1],
-        # ours: the stuck response (CPGConfig.stuck_*; stuck_lift 0 = none)
-        **{f"stuck_{k}": getattr(cfg.cpg, f"stuck_{k}") for k in ("lift", "window", "progress", "hold")},
+        "posture_tilt_max": cfg.cpg.tilt_max,
+        # ours: the stuck response (CPGConfig.stuck_*; stuck_lift 0 = none), its lift scaled for the robot
+        **{f"stuck_{k}": getattr(cfg.cpg, f"stuck_{k}") for k in ("window", "progress", "hold")},
+        "stuck_lift": cfg.cpg.lift,
         "param_lower": list(lo),
         "param_upper": list(hi),
         "initial_params": list(cfg.cpg.fixed_params()),
@@ -80,6 +85,16 @@ def controller_spec(env, checkpoint: str, action_std: list[float] | None) -> dic
         "stand_pose": list(cfg.robot.stand_pose),
         "joint_lower": list(lower),
         "joint_upper": list(upper),
+        # the robot (docs/robots.md): its name, each joint's limits in hexnewton's sense and its sense on the robot
+        # (a robot file's joint that turns the other way: -1), its standing height and the scales of the observed
+        # heights and the terrain window, and its whole description (the model sim2sim builds)
+        "robot": cfg.robot.name,
+        "joint_limits": [list(limit) for limit in joint_limits(cfg.robot)],
+        "joint_signs": list(joint_signs(cfg.robot)),
+        "stand_height": stand_height(cfg.robot),
+        "height_scale": cfg.task.height_scale,
+        "length_scale": cfg.task.length_scale,
+        "robot_description": dataclasses.asdict(cfg.robot),
         "joint_gains": {"kp": cfg.robot.joint_ke, "kd": cfg.robot.joint_kd, "effort_limit": cfg.robot.effort_limit},
         "goal_distance": cfg.task.goal_distance,
         # the goals it was trained to: "ahead" (goal_distance along +x, the paper's) or "any" (every direction: steer it
@@ -135,6 +150,7 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--steps", type=positive_int, default=100, help="control steps of the recorded check rollout")
     p.add_argument("--robots", type=positive_int, default=4, help="robots in the recorded check rollout")
     p.add_argument("--tolerance", type=float, default=1e-3, help="largest joint-target difference allowed [rad]")
+    add_robot_args(p, "the checkpoint's (the bundle is its robot's; another is one error line)")
     args = p.parse_args(argv)
     if os.path.exists(args.out):
         raise ValueError(f"{args.out} exists: nothing is overwritten")
@@ -147,6 +163,9 @@ def main(argv: list[str] | None = None) -> int:
         raise ValueError(f"{args.checkpoint} is a '{meta['action_mode']}' policy: a bundle carries the CPG hierarchy "
                          "(a joint-mode policy's policy.onnx from train.py is its whole controller)")  # fmt: skip
     cfg = config_from_dict(meta.get("config", {}))
+    from hexnewton.robot.registry import check_robot
+
+    check_robot(cfg.robot, robot_from_args(args), args.checkpoint)
     cfg = dataclasses.replace(
         cfg,
         # no graph capture: the reflex's attitude log (AttitudeLog) runs from Python at every substep

@@ -10,13 +10,17 @@
     python play.py --checkpoint logs/.../model_299.pt                    # its controller and course from the file
     python play.py --checkpoint results/policies/cpg_rl_complex.pt --terrain stepped --env.terrain.step_rise 0.07
     python play.py --checkpoint NAV.pt --waypoints 2,0 2,2 0,2 0,0 --viewer viser   # a waypoint course, drawn
+    python play.py --robot mx_phoenix --controller cpg --num_envs 4 --steps 500    # another robot, the fixed CPG
+    python play.py --robot path/to/robot.urdf --controller cpg                   # a robot file (docs/robots.md)
 
 Without ``--controller`` and ``--checkpoint`` it plays the newest checkpoint under ``--log_dir`` (any task), or the
 shipped ``results/policies/cpg_rl_complex.pt`` when nothing was trained; without ``--terrain``, on the course the
 policy was trained on (its terrain without the curriculum's lanes, its goal distance; a navigate policy its random
 goals). ``--waypoints X,Y ...`` gives every robot that waypoint course in its start frame (x along its start heading)
 instead: the goals in turn, the last one's reaching ending the episode (no off-course end). ``--env.<section>.<field>``
-sets any field of that course's config (HexConfig).
+sets any field of that course's config (HexConfig). ``--robot NAME|FILE`` walks another robot (the fixed CPG on it;
+without ``--checkpoint``, the newest policy trained on it); a policy plays its own robot, and one line says so for
+another (``train.py --init`` starts a policy for it from this one).
 
 Controllers:
 - ``cpg``: the paper's fixed-parameter "CPG" baseline (§3.3). The two-Hopf CPG and the mapping run with the
@@ -50,11 +54,13 @@ from hexnewton.apps.cli import (
     ArgumentParser,
     add_browser_args,
     add_config_args,
+    add_robot_args,
     announce_browser,
     check_checkpoint_file,
     check_writable,
     config_overrides,
     positive_int,
+    robot_from_args,
     run,
     terrain_name,
     waypoint,
@@ -72,6 +78,7 @@ def parser() -> ArgumentParser:
     p.add_argument("--checkpoint", metavar="PATH", help="a trained policy (.pt); default: the newest under --log_dir, "
                    "else results/policies/cpg_rl_complex.pt")  # fmt: skip
     p.add_argument("--log_dir", default="logs")
+    add_robot_args(p, "the policy's own (the fixed CPG: the paper's)")
     p.add_argument("--terrain", type=terrain_name, nargs="+", default=None,
                    help=f"one or more of {TERRAINS} as §3.1 defines them (default: the policy's training course, else "
                         "flat)")
@@ -137,9 +144,13 @@ def choose_checkpoint(args) -> None:
     if args.controller not in FIXED and args.checkpoint is None:
         from hexnewton.learning.checkpoint import SHIPPED_POLICY, newest_checkpoint
 
-        try:
-            args.checkpoint = newest_checkpoint(args.log_dir, "hexnewton_*")
+        robot = args.robot_cfg.name if args.robot_cfg is not None else "paper"
+        try:  # the newest policy of the robot: train.py names another robot's runs hexnewton_<task>_<robot>
+            args.checkpoint = newest_checkpoint(args.log_dir, "hexnewton_*" + (f"_{robot}" if robot != "paper" else ""))
         except ValueError:
+            if robot != "paper":
+                raise ValueError(f"no policy trained on robot {robot} under {args.log_dir}: --controller cpg walks it "
+                                 f"with the fixed CPG, python train.py --robot {args.robot} trains one") from None
             if args.controller == "joint" or not os.path.isfile(SHIPPED_POLICY):
                 raise
             args.checkpoint = SHIPPED_POLICY
@@ -150,13 +161,17 @@ def read_policy(args):
     """(the config the policy was trained with, the courses to play, its checkpoint, its task) for ``args.checkpoint``
     (read once, before any world is built; ``args.controller`` defaults to the one that runs it), or the defaults for
     a fixed gait."""
+    from hexnewton.robot.registry import check_robot, with_robot
+
     if not args.checkpoint:
-        return HexConfig(), args.terrain or ["flat"], None, None
+        robot = args.robot_cfg
+        return (with_robot(HexConfig(), robot) if robot else HexConfig()), args.terrain or ["flat"], None, None
     from hexnewton.learning.checkpoint import checkpoint_task, trained_config
     from hexnewton.learning.policy import policy_checkpoint
 
     ckpt, default = policy_checkpoint(args.checkpoint)  # fails before building a world
     trained, task = trained_config(ckpt), checkpoint_task(ckpt)
+    check_robot(trained.robot, args.robot_cfg, args.checkpoint)
     if args.controller is None:
         args.controller = default
     if (args.controller in BASELINES) != (default in BASELINES):
@@ -224,6 +239,7 @@ def main(argv: list[str] | None = None) -> int:
     if args.checkpoint:
         check_checkpoint_file(args.checkpoint)  # a run's folder: one line naming its result, before anything else
     check_outputs(args)
+    args.robot_cfg = robot_from_args(args)
     choose_checkpoint(args)
     trained, courses, ckpt, task = read_policy(args)
     for i, ground in enumerate(courses):
@@ -231,7 +247,9 @@ def main(argv: list[str] | None = None) -> int:
     if args.plot:
         from hexnewton.analysis.plotting import plot_gait
 
-        plot_gait(HexConfig(), args.plot)
+        from hexnewton.robot.registry import with_robot
+
+        plot_gait(with_robot(HexConfig(), trained.robot), args.plot)  # the fixed CPG on the played robot
         print(f"gait plot written to {args.plot}")
     return 0
 

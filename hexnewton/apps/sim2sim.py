@@ -50,9 +50,18 @@ import time
 from hexnewton.analysis.report import ended_cell
 from hexnewton.analysis.rollout import EVAL_TERRAIN_SEED, START_SEED_OFFSET
 from hexnewton.analysis.sim2sim import Film, Viewer, fixed_cpg_spec, measure
-from hexnewton.apps.cli import ArgumentParser, check_writable, positive_int, run, terrain_name, waypoint
+from hexnewton.apps.cli import (
+    ArgumentParser,
+    add_robot_args,
+    check_writable,
+    positive_int,
+    robot_from_args,
+    run,
+    terrain_name,
+    waypoint,
+)
 from hexnewton.config import TaskConfig
-from hexnewton.deploy.runtime import load_spec
+from hexnewton.deploy.runtime import load_spec, spec_robot
 
 PROG = "python -m hexnewton.apps.sim2sim"
 #: the keys results.json carries per terrain (hexnewton.analysis.metrics' names)
@@ -183,6 +192,7 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--viewer", action="store_true", help="show robot 0 in MuJoCo's interactive viewer")
     p.add_argument("--workers", type=int, default=1,
                    help="processes per terrain, each a consecutive range of the rounds (0: one per core)")
+    add_robot_args(p, "the bundle's (its controller.json's description; the fixed CPG walks it too)")
     args = p.parse_args(argv)
     if args.workers < 0:
         raise ValueError(f"--workers must be 0 (one per core) or more, got {args.workers}")
@@ -192,7 +202,10 @@ def main(argv: list[str] | None = None) -> int:
         args.fixed_terrains = [] if args.waypoints else ["rugged"]
     if os.path.exists(args.out):
         raise ValueError(f"--out {args.out} exists already (nothing is overwritten)")
-    load_spec(args.bundle)
+    args.robot_cfg = spec_robot(load_spec(args.bundle))  # the fixed CPG walks the bundle's robot
+    from hexnewton.robot.registry import check_robot
+
+    check_robot(args.robot_cfg, robot_from_args(args), args.bundle)
     if args.video:
         check_writable(args.video, ".mp4")
         os.environ.setdefault("MUJOCO_GL", "egl")
@@ -222,8 +235,8 @@ def run_all(args, newton: dict) -> int:
                 hook.close()
         print(_line("bundle", terrain, bundle_res[terrain]), flush=True)
     for terrain in args.fixed_terrains:
-        fixed_res[terrain] = measure(fixed_cpg_spec(), terrain, args.rounds, args.seed, args.max_steps,
-                                     workers=args.workers)
+        fixed_res[terrain] = measure(fixed_cpg_spec(robot=args.robot_cfg), terrain, args.rounds, args.seed,
+                                     args.max_steps, workers=args.workers)
         print(_line("fixed CPG", terrain, fixed_res[terrain]), flush=True)
     from hexnewton.analysis.report import git_rev
 
@@ -237,8 +250,8 @@ def run_all(args, newton: dict) -> int:
     with open(os.path.join(args.out, "results.json"), "w") as f:
         json.dump({t: headline(s) for t, s in bundle_res.items()}, f, indent=1)
     with open(os.path.join(args.out, "details.json"), "w") as f:
-        json.dump({"meta": meta, "bundle": bundle_res, "fixed_cpg": fixed_res, "fixed_cpg_spec": fixed_cpg_spec(),
-                   "newton": newton}, f, indent=1)  # fmt: skip
+        json.dump({"meta": meta, "bundle": bundle_res, "fixed_cpg": fixed_res,
+                   "fixed_cpg_spec": fixed_cpg_spec(robot=args.robot_cfg), "newton": newton}, f, indent=1)
     with open(os.path.join(args.out, "report.md"), "w") as f:
         f.write(report_markdown(args.bundle, bundle_res, fixed_res, newton, meta))
     print(f"wrote {args.out}/report.md, results.json, details.json")
@@ -273,8 +286,8 @@ def run_waypoints(args, newton_path: str | None) -> int:
                                       workers=args.workers, waypoints=args.waypoints)  # fmt: skip
         print(_waypoint_line("bundle", terrain, bundle_res[terrain]), flush=True)
     for terrain in args.fixed_terrains:
-        fixed_res[terrain] = measure(fixed_cpg_spec(), terrain, args.rounds, args.seed, args.max_steps,
-                                     workers=args.workers, waypoints=args.waypoints)  # fmt: skip
+        fixed_res[terrain] = measure(fixed_cpg_spec(robot=args.robot_cfg), terrain, args.rounds, args.seed,
+                                     args.max_steps, workers=args.workers, waypoints=args.waypoints)  # fmt: skip
         print(_waypoint_line("fixed CPG", terrain, fixed_res[terrain]), flush=True)
     course = " ".join(f"({x:g}, {y:g})" for x, y in args.waypoints)
     meta = {"command": f"`{PROG} " + " ".join(args.argv) + "`", "MuJoCo": mujoco.__version__, "git": git_rev(),

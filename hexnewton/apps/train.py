@@ -8,11 +8,17 @@
     torchrun --nproc_per_node=2 train.py --task complex --num_envs 4096    # 4096 envs on each of 2 GPUs
     python train.py --task rugged --video --video_interval 100             # a 4 s clip every 100 iterations
     python train.py --task complex --viewer viser                          # watch training at http://127.0.0.1:8080
+    python train.py --task complex --robot mx_phoenix                      # another robot (a name or a robot file)
+    python train.py --task complex --robot mx_phoenix --init results/policies/cpg_rl_complex.pt   # from a policy
 
 Every field of the task's configs can be set from the command line: ``--env.<section>.<field>`` (HexConfig: robot,
 terrain, sim, cpg, task, reward, randomization) and ``--agent.<field>`` (AgentConfig: PPO, networks, distribution,
-curriculum, stop rules); ``python train.py --task T --help`` lists them with the task's values. A resumed run goes on
-with the configs its checkpoint recorded, overrides on top.
+curriculum, stop rules); ``python train.py --task T --help`` lists them with the task's values. ``--robot NAME|FILE``
+trains on another robot than the paper's (docs/robots.md: its CPG amplitudes, heights and terrain window scaled for it,
+before the ``--env.*`` overrides), its whole description recorded in the checkpoints. A resumed run goes on with the
+configs its checkpoint recorded, overrides on top. ``--init POLICY.pt`` starts a new run's actor and its observation
+normaliser from another policy of the same observation and action shapes (its critic new, learning alone for the
+first ``--agent.init_critic_iterations`` iterations): how a policy is adapted to another robot or task.
 
 Each run writes ``logs/hexnewton_<task>/<date_time>/``: TensorBoard event files; ``model_<it>.pt`` checkpoints with
 the task, the configs and the action mode (``play.py``, ``evaluate`` and ``export`` need nothing else);
@@ -41,9 +47,11 @@ from hexnewton.apps.cli import (
     ArgumentParser,
     add_browser_args,
     add_config_args,
+    add_robot_args,
     announce_browser,
     config_overrides,
     positive_int,
+    robot_from_args,
     run,
 )
 from hexnewton.config import apply_overrides
@@ -63,7 +71,10 @@ def _base_task(argv: list[str] | None):
     pre = ArgumentParser(add_help=False)
     pre.add_argument("--task", default=None)
     pre.add_argument("--resume", default=None)
+    pre.add_argument("--init", default=None)
     known, _ = pre.parse_known_args(argv)
+    if known.resume is not None and known.init is not None:
+        raise ValueError("--init starts a new run from a policy, --resume continues a run: give one of them")
     if known.resume is None:
         return task(known.task or "flat"), None
     if known.task is not None:
@@ -109,8 +120,14 @@ def parser(base, resumed: bool) -> ArgumentParser:
     p.add_argument("--max_iterations", type=positive_int, default=None,
                    help=f"PPO iterations of this run (default: the task's, {base.agent.max_iterations})")
     p.add_argument("--resume", metavar="PATH", help="checkpoint to continue from (a new run directory is made)")
+    add_robot_args(p, "the checkpoint's" if resumed else "the paper's")
+    p.add_argument("--init", metavar="POLICY.pt",
+                   help="start the actor and its observation normaliser from this policy (the same observation and "
+                        "action shapes; another robot's too), the critic new and learning alone for the first "
+                        "--agent.init_critic_iterations iterations")  # fmt: skip
     p.add_argument("--log_dir", default="logs")
-    p.add_argument("--experiment", default=None, help="default: hexnewton_<task>")
+    p.add_argument("--experiment", default=None, help="default: hexnewton_<task> (on another robot than the paper's "
+                   "hexnewton_<task>_<robot>)")
     p.add_argument("--build_beside_imports", action=argparse.BooleanOptionalAction, default=True,
                    help="build the terrain and the physics model in a thread while torch and rsl-rl import (default; "
                         "--no-build_beside_imports: after them)")  # fmt: skip
@@ -142,7 +159,14 @@ def parser(base, resumed: bool) -> ArgumentParser:
 def configs(args, base, ckpt: dict | None):
     """The run's environment and learner configs: the task's (or the resumed checkpoint's) with the command line's
     overrides, checked before anything is built."""
-    env_cfg = apply_overrides(base.env, config_overrides(args, "env"))
+    robot, base_env = robot_from_args(args), base.env
+    if robot is not None:  # the robot and its scales first, the --env.* overrides on top
+        from hexnewton.robot.registry import check_robot, with_robot
+
+        if ckpt is not None:
+            check_robot(base.env.robot, robot, args.resume)
+        base_env = with_robot(base.env, robot)
+    env_cfg = apply_overrides(base_env, config_overrides(args, "env"))
     agent = apply_overrides(base.agent, config_overrides(args, "agent"))
     if args.max_iterations is not None:
         agent = dataclasses.replace(agent, max_iterations=args.max_iterations)
@@ -160,6 +184,48 @@ def configs(args, base, ckpt: dict | None):
         raise ValueError("agent.stages change the levelling reflex of the body posture: set --env.cpg.posture true "
                          "or drop posture_reflex from the stages")  # fmt: skip
     return env_cfg, agent
+
+
+def init_policy(args, agent) -> dict | None:
+    """``--init``'s checkpoint, read and checked before anything is built (None without it): a policy of ``agent``'s
+    action distribution (never beside ``--resume``: :func:`_base_task` says so)."""
+    if args.init is None:
+        return None
+    from hexnewton.apps.cli import check_checkpoint_file
+    from hexnewton.learning.checkpoint import checkpoint_distribution, load_checkpoint
+
+    check_checkpoint_file(args.init, "--init")
+    init = load_checkpoint(args.init)
+    if checkpoint_distribution(init) != agent.distribution.name:
+        raise ValueError(f"--init {args.init} acts through a {checkpoint_distribution(init)} distribution, this run "
+                         f"through a {agent.distribution.name} one: --agent.distribution.name "
+                         f"{checkpoint_distribution(init)}")  # fmt: skip
+    return init
+
+
+def checked_env(args, base, cfg, build, ckpt: dict | None, init: dict | None):
+    """The run's env, checked against the checkpoint it resumes (observations, actions, critic) or starts from
+    (``--init``: observations and actions)."""
+    from hexnewton.learning.checkpoint import check_compatible, check_critic
+    from hexnewton.mdp.env import make_env
+
+    env = make_env(cfg, base.action_mode, build)
+    if ckpt is not None:
+        check_compatible(ckpt, args.resume, env.num_obs, env.num_actions, base.action_mode)
+        check_critic(ckpt, args.resume, sum(g.shape[1] for g in env.get_observations().values()))
+    if init is not None:
+        check_compatible(init, args.init, env.num_obs, env.num_actions, base.action_mode)
+    return env
+
+
+def init_meta(args, init: dict | None) -> dict:
+    """What a run started from a policy records of it (``--init``): the checkpoint, its task and robot."""
+    if init is None:
+        return {}
+    from hexnewton.learning.checkpoint import checkpoint_task, trained_config
+
+    return {"init": {"checkpoint": os.path.abspath(args.init), "task": checkpoint_task(init),
+                     "robot": trained_config(init).robot.name}}
 
 
 def check_outputs(args) -> None:
@@ -206,7 +272,8 @@ def rank_config(args, env_cfg):
 def make_run_dir(args, meta: dict, train_cfg: dict, rank) -> str:
     """``log_dir/experiment/<date_time>``; rank 0 makes it (nothing is overwritten) and writes its config.json: the
     run's metadata and rsl-rl's ``train_cfg``."""
-    experiment = args.experiment or f"hexnewton_{meta['task']}"
+    robot = meta.get("robot", "paper")
+    experiment = args.experiment or f"hexnewton_{meta['task']}" + (f"_{robot}" if robot != "paper" else "")
     run_dir = os.path.join(args.log_dir, experiment, datetime.datetime.now().strftime("%Y-%m-%d_%H-%M-%S"))
     if rank.is_main:  # only rank 0 writes logs, checkpoints and the export
         if os.path.exists(run_dir):
@@ -218,8 +285,9 @@ def make_run_dir(args, meta: dict, train_cfg: dict, rank) -> str:
     return run_dir
 
 
-def make_runner(args, env, agent, meta: dict, run_dir: str, rank, ckpt: dict | None):
-    """The run's :class:`~hexnewton.learning.runner.HexRunner` (resumed from ``ckpt`` if given) and, on rank 0, the
+def make_runner(args, env, agent, meta: dict, run_dir: str, rank, ckpt: dict | None, init: dict | None = None):
+    """The run's :class:`~hexnewton.learning.runner.HexRunner` (resumed from ``ckpt``, or its actor started from
+    ``init``, ``--init``'s policy, if given) and, on rank 0, the
     viewers it trains through: ``--video``'s :class:`~hexnewton.physics.viewer.VideoEnv` and ``--viewer viser``'s
     :class:`~hexnewton.physics.viewer.LiveEnv` (a list, empty without them)."""
     from hexnewton.learning.runner import HexRunner
@@ -243,6 +311,8 @@ def make_runner(args, env, agent, meta: dict, run_dir: str, rank, ckpt: dict | N
     runner = HexRunner(env, agent, meta, run_dir if rank.is_main else None, cfg.sim.device, rank)
     if ckpt is not None:
         resume(runner, ckpt, args, agent)
+    if init is not None:
+        runner.start_from(init, args.init)
     return runner, views
 
 
@@ -440,6 +510,7 @@ def main(argv: list[str] | None = None) -> int:
         print(task_table())
         return 0
     env_cfg, agent = configs(args, base, ckpt)
+    init = init_policy(args, agent)
     from hexnewton import startup
 
     # the heavy imports one by one, so that the start-up line says where "python and imports" goes; the terrain and
@@ -456,23 +527,18 @@ def main(argv: list[str] | None = None) -> int:
     startup.timed_imports("torch", "rsl_rl", "hexnewton.mdp.env", "hexnewton.learning.runner")
     check_outputs(args)
     from hexnewton.learning.runner import seed_everything
-    from hexnewton.mdp.env import make_env
 
     seed_everything(cfg.task.seed)
-    env = make_env(cfg, base.action_mode, build)
-    if ckpt is not None:
-        from hexnewton.learning.checkpoint import check_compatible, check_critic
-
-        check_compatible(ckpt, args.resume, env.num_obs, env.num_actions, base.action_mode)
-        check_critic(ckpt, args.resume, sum(g.shape[1] for g in env.get_observations().values()))
-    meta = {"task": base.name, "action_mode": base.action_mode, "num_obs": env.num_obs,
+    env = checked_env(args, base, cfg, build, ckpt, init)
+    meta = {"task": base.name, "robot": cfg.robot.name, "action_mode": base.action_mode, "num_obs": env.num_obs,
             "num_actions": env.num_actions, "config": dataclasses.asdict(cfg), "agent": dataclasses.asdict(agent),
-            "world_size": rank.world_size}  # fmt: skip
+            "world_size": rank.world_size, **init_meta(args, init)}  # fmt: skip
     agent = ranks_agent(agent, rank)  # checkpoints keep the unscaled one: a resumed run scales for its own ranks
     run_dir = make_run_dir(args, meta, agent.to_rsl_rl(cfg.sim.num_envs, env.obs_groups), rank)
-    runner, views = make_runner(args, env, agent, meta, run_dir, rank, ckpt)
+    runner, views = make_runner(args, env, agent, meta, run_dir, rank, ckpt, init)
     where = f"rank {rank.rank} of {rank.world_size}, " if rank.world_size > 1 else ""
-    print(f"training task {base.name}: {where}{cfg.sim.num_envs} envs on {cfg.sim.device}, {agent.max_iterations} "
+    on = f" on robot {cfg.robot.name}" if cfg.robot.name != "paper" else ""
+    print(f"training task {base.name}{on}: {where}{cfg.sim.num_envs} envs on {cfg.sim.device}, {agent.max_iterations} "
           f"iterations, logs in {run_dir}")  # fmt: skip
     for view in views:
         view.first_iteration = runner.current_learning_iteration

@@ -135,7 +135,8 @@ class ControlLoop:
 
     ``p``: :func:`check_parameters`'s dict; ``log(text)``: one line for the log. Times are nanoseconds, stamps those of
     the messages, ``now`` the wall clock. :meth:`on_imu` / :meth:`on_reading` / :meth:`on_timer` / :meth:`on_watchdog`
-    return the targets to publish, ``[(stamp of the IMU message they answer or None, targets (18,))]``."""
+    return the targets to publish, ``[(stamp of the IMU message they answer or None, targets (18,))]``, in the robot's
+    joint senses (``joint_signs``)."""
 
     def __init__(self, p: dict, log=print):
         self.p, self.log = p, log
@@ -143,6 +144,9 @@ class ControlLoop:
         spec = self.spec = self.ctrl.spec
         self.joints = tuple(spec.get("obs_notes", {}).get("joint order", JOINT_NAMES))
         self.order = {name: i for i, name in enumerate(self.joints)}
+        # the robot's joint senses (controller.json's joint_signs, a robot file's): its joint states are turned into
+        # hexnewton's sense as they come, the targets back into the robot's as they go
+        self.signs = np.asarray(spec.get("joint_signs", [1.0] * 18), np.float64)
         self.substeps, self.dt = int(spec["substeps_per_control"]), float(spec["substep_dt"])
         self.stand = np.tile(np.asarray(spec["stand_pose"], np.float64), 6)
         terrain = bool(p["terrain_topic"]) and "max_height" in self.ctrl.layout
@@ -200,7 +204,7 @@ class ControlLoop:
             if self._imu_at_reading is not None:
                 self.reading_gaps.append(self.received["imu"] - self._imu_at_reading)
             self._imu_at_reading = self.received["imu"]
-        self._store("joint_states", (pos[idx], vel[idx]), stamp, now)
+        self._store("joint_states", (self.signs * pos[idx], self.signs * vel[idx]), stamp, now)
         return None
 
     def imu(self, quat, gyro, stamp: int, now: int) -> str | None:
@@ -346,7 +350,7 @@ class ControlLoop:
         self.late = False
         self.counts["substeps"] += 1
         self.last, self.last_time = q, now
-        return stamp, q
+        return stamp, self.signs * q
 
     def _reached(self) -> bool:
         tol = self.p["goal_tolerance"]
@@ -384,7 +388,7 @@ class ControlLoop:
         step = self.p["stand_speed"] * min((now - self.last_time) * 1e-9, 0.1)
         self.last = self.last + np.clip(self.stand - self.last, -step, step)
         self.last_time = now
-        return self.last
+        return self.signs * self.last
 
     def published(self, stamp: int | None, now: int) -> None:
         """Record the latency of targets published at ``now`` for the IMU message stamped ``stamp``."""

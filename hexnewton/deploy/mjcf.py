@@ -4,10 +4,13 @@ The robot comes from :class:`~hexnewton.config.RobotConfig` through :mod:`hexnew
 the Newton articulation is built from (:func:`hexnewton.robot.hexapod.build_hexapod`), not converted from Newton's
 model: a free torso box and per leg (R1, R2, R3, L1, L2, L3) the bodies coxa -> femur -> tibia on hinge joints hip ->
 knee -> ankle with the Newton robot's frames, axes, masses, inertias, limits and armature; collision capsules on femur
-and tibia, a foot sphere, the torso box (no self-collision). Each joint has a MuJoCo position actuator with Newton's
-PD drive: kp = ``joint_ke``, kv = ``joint_kd``, force clamped to ``effort_limit``. Sensors per robot
-(``SENSORS_PER_ROBOT`` values): the torso's orientation (``framequat`` at an IMU site on the torso origin), 18
-``jointpos`` / 18 ``jointvel`` encoders and the IMU's ``gyro`` (the torso's angular velocity in its own frame).
+and tibia, a foot sphere, the torso box (no self-collision). A robot given frame by frame (a robot file's,
+``RobotConfig.legs``) is written from its frames the same way (:func:`frames_robot_xml`): its links' masses, full
+inertias and collision shapes, its joints in hexnewton's sense and names, so that the sensors read as in Newton.
+Each joint has a MuJoCo position actuator with Newton's PD drive: kp = ``joint_ke``, kv = ``joint_kd``, force clamped
+to ``effort_limit``. Sensors per robot (``SENSORS_PER_ROBOT`` values): the torso's orientation (``framequat`` at an IMU
+site on the torso origin), 18 ``jointpos`` / 18 ``jointvel`` encoders and the IMU's ``gyro`` (the torso's angular
+velocity in its own frame).
 
 The terrain comes from the height grid (:func:`hexnewton.terrain.heightmap.build_height_grid`): every strip of constant
 height across the patch (run-ups, stair treads, landings) is one box (:func:`hexnewton.terrain.parts.split_strips`),
@@ -31,6 +34,7 @@ from hexnewton.config import LEG_NAMES, RobotConfig
 from hexnewton.robot.geometry import (
     PITCH_AXIS,
     box_inertia,
+    explicit,
     hip_axis,
     hip_mount,
     leg_bounds,
@@ -92,10 +96,45 @@ def leg_xml(cfg: RobotConfig, leg: int, prefix: str) -> str:
     return "".join(out) + "".join(close)
 
 
+def _quat_wxyz(q) -> tuple[float, float, float, float]:
+    """MuJoCo's (w, x, y, z) of a quaternion (x, y, z, w)."""
+    return (q[3], q[0], q[1], q[2])
+
+
+def _link_xml(link, name: str, foot=None) -> str:
+    """A link's inertial (full inertia) and collision geoms; the sphere centred on ``foot`` named ``<name>_foot``."""
+    out = [f'<inertial pos="{_v(link.com)}" mass="{link.mass:.9g}" fullinertia="{_v(link.inertia)}"/>']
+    for k, s in enumerate(link.shapes):
+        is_foot = foot is not None and s.kind == "sphere" and max(abs(a - b) for a, b in zip(s.pos, foot)) < 1e-9
+        out.append(f'<geom name="{name}_{"foot" if is_foot else f"{s.kind}{k}"}" type="{s.kind}" '
+                   f'size="{_v(s.size)}" pos="{_v(s.pos)}" quat="{_v(_quat_wxyz(s.quat))}" {_ROBOT}/>')
+    return "".join(out)
+
+
+def frames_robot_xml(cfg: RobotConfig, prefix: str = "", pos=(0.0, 0.0, 0.15), yaw: float = 0.0) -> str:
+    """A robot given frame by frame as :func:`robot_xml` writes one: the torso on a free joint, per leg its three links
+    on hinge joints named ``<prefix><leg>_<hip|knee|ankle>`` with hexnewton's axes and limits."""
+    kinds, links = ("hip", "knee", "ankle"), ("coxa", "femur", "tibia")
+    legs = []
+    for leg, name in zip(cfg.legs, LEG_NAMES):
+        out = []
+        for k, j in enumerate(leg.joints):
+            out.append(f'<body name="{prefix}{name}_{links[k]}" pos="{_v(j.pos)}" quat="{_v(_quat_wxyz(j.quat))}">'
+                       f'<joint name="{prefix}{name}_{kinds[k]}" type="hinge" axis="{_v(j.axis)}" '
+                       f'range="{j.limit[0]:.12g} {j.limit[1]:.12g}" armature="{cfg.armature:.9g}"/>'
+                       + _link_xml(j.link, f"{prefix}{name}_{links[k]}", leg.foot if k == 2 else None))  # fmt: skip
+        legs.append("".join(out) + "</body>" * 3)
+    return (f'<body name="{prefix}torso" pos="{_v(pos)}" quat="{_v(_yaw_quat(yaw))}">'
+            f'<freejoint name="{prefix}base"/>{_link_xml(cfg.torso, f"{prefix}torso")}'
+            f'<site name="{prefix}imu"/>{"".join(legs)}</body>')  # fmt: skip
+
+
 def robot_xml(cfg: RobotConfig, prefix: str = "", pos=(0.0, 0.0, 0.15), yaw: float = 0.0) -> str:
     """One hexapod (MJCF ``<body>`` text): torso with a free joint at ``pos`` turned by ``yaw``, then the six legs.
     Names start with ``prefix`` (``r0_torso``, ``r0_R1_hip``, ...)."""
     validate(cfg)
+    if explicit(cfg):
+        return frames_robot_xml(cfg, prefix, pos, yaw)
     m = torso_mass(cfg)
     sx, sy, sz = cfg.torso_size
     legs = "".join(leg_xml(cfg, leg, prefix) for leg in range(len(LEG_NAMES)))

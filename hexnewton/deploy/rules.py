@@ -186,9 +186,10 @@ def nonfinite(inputs, frame: EndFrame) -> np.ndarray:
 
 
 def fell(inputs, frame: EndFrame) -> np.ndarray:
-    """The torso less than ``min_height`` above the terrain under it, or |roll| or |pitch| above ``max_tilt``."""
+    """The torso less than ``min_height`` (x the robot's ``height_scale``) above the terrain under it, or |roll| or
+    |pitch| above ``max_tilt``."""
     lim = inputs.task.max_tilt
-    low = frame.pz - np.asarray(inputs.ground, np.float64) < inputs.task.min_height
+    low = frame.pz - np.asarray(inputs.ground, np.float64) < inputs.task.min_height * inputs.task.height_scale
     return low | (np.abs(frame.rpy[:, 0]) > lim) | (np.abs(frame.rpy[:, 1]) > lim)
 
 

@@ -64,8 +64,8 @@ from hexnewton.kernels.reference import (
 )
 
 FORMAT = "hexnewton-controller/1"
-#: the torso's height above level ground when the robot stands and walks (the simulated robot's, RobotConfig) [m]: the
-#: base height :meth:`Controller.target_from_pose` assumes where none is given
+#: the torso's height above level ground when the paper's robot stands and walks (RobotConfig's) [m]: the base height
+#: :meth:`Controller.target_from_pose` assumes where none is given and controller.json has no ``stand_height``
 STAND_HEIGHT = 0.13
 
 
@@ -78,6 +78,15 @@ def target_in_heading_frame(base_pos, base_quat, goal, goal_ground_z=None) -> np
     c, s = np.cos(yaw), np.sin(yaw)
     gz = pos[:, 2] if goal_ground_z is None else np.broadcast_to(np.asarray(goal_ground_z, np.float64), dx.shape)
     return np.stack([c * dx + s * dy, -s * dx + c * dy, gz - pos[:, 2]], axis=1)
+
+
+def spec_robot(spec: dict):
+    """The robot a controller.json was exported for: its whole description (``robot_description``), or the paper's
+    robot for a bundle without one."""
+    from hexnewton.config import RobotConfig, dataclass_from_dict
+
+    description = spec.get("robot_description")
+    return dataclass_from_dict(RobotConfig, description) if description else RobotConfig()
 
 
 def load_spec(bundle: str) -> dict:
@@ -147,6 +156,10 @@ class Controller:
         self.stuck = {k: spec.get(f"stuck_{k}", d) for k, d in (("lift", 0.0), ("window", 1), ("progress", 0.0),
                                                                  ("hold", 1))}  # fmt: skip
         self.last_actions = np.zeros((self.n, int(spec["num_actions"])))  # the observation's ``last_action``
+        # the robot's (controller.json's "robot"): its standing height [m] and its heights' scale, by which the
+        # observed heights (the target's z, the terrain reading) are divided, as in training (1: the paper robot's)
+        self.stand_height = float(spec.get("stand_height", STAND_HEIGHT))
+        self.height_scale = float(spec.get("height_scale", 1.0))
         self.goal = None  # (N, 3): the goal's ground point in the odometry frame (set_goal)
         self.goals = None  # rules.Goals: the episode's course (set_course), None for a goal of set_goal
         self.reset()
@@ -232,14 +245,15 @@ class Controller:
     def target_from_pose(self, pose, base_z=None) -> np.ndarray:
         """The observation's target (N, 3) toward the goal of :meth:`set_goal` from the robots' planar poses ``pose``
         (N, 3): odometry's x, y [m] and yaw [rad]; ``base_z`` (N,): the base's height in the odometry frame (None: the
-        standing height above level ground, :data:`STAND_HEIGHT`). As the simulator's: the goal in the heading frame
+        robot's standing height above level ground, controller.json's ``stand_height``, else :data:`STAND_HEIGHT`). As
+        the simulator's: the goal in the heading frame
         (x forward, y left), z the goal's ground minus the base height."""
         if self.goal is None:
             raise ValueError("no goal: call set_goal(x, y) first, or pass the target to step()")
         p = np.asarray(pose, np.float64).reshape(self.n, 3)
         dx, dy = self.goal[:, 0] - p[:, 0], self.goal[:, 1] - p[:, 1]
         c, s = np.cos(p[:, 2]), np.sin(p[:, 2])
-        z = np.full(self.n, STAND_HEIGHT) if base_z is None else np.broadcast_to(np.asarray(base_z, np.float64),
+        z = np.full(self.n, self.stand_height) if base_z is None else np.broadcast_to(np.asarray(base_z, np.float64),
                                                                                (self.n,))  # fmt: skip
         return np.stack([c * dx + s * dy, -s * dx + c * dy, self.goal[:, 2] - z], axis=1)
 
@@ -252,9 +266,10 @@ class Controller:
         return np.hypot(self.goal[:, 0] - p[:, 0], self.goal[:, 1] - p[:, 1])
 
     def observe(self, joint_pos, joint_vel, base_quat, target, max_height=0.0, gyro=None) -> np.ndarray:
-        """The policy's observation (N, num_obs), laid out as in training (``controller.json``). ``gyro`` (N, 3): the
-        base angular velocity in the body frame [rad/s], required by a policy that observes it (``gyro`` in the
-        layout)."""
+        """The policy's observation (N, num_obs), laid out as in training (``controller.json``), from the readings in
+        metres (the target's z and the terrain reading ``max_height`` divided by the robot's ``height_scale`` here, as
+        the simulator's observation does). ``gyro`` (N, 3): the base angular velocity in the body frame [rad/s],
+        required by a policy that observes it (``gyro`` in the layout)."""
         obs = np.zeros((self.n, self.num_obs))
         quat = np.asarray(base_quat, np.float64).reshape(self.n, 4)
         h = np.asarray(max_height, np.float64)
@@ -264,12 +279,12 @@ class Controller:
         parts = {
             "joint_pos": np.asarray(joint_pos, np.float64).reshape(self.n, 18),
             "joint_vel": np.asarray(joint_vel, np.float64).reshape(self.n, 18),
-            "target": np.asarray(target, np.float64).reshape(self.n, 3),
+            "target": np.asarray(target, np.float64).reshape(self.n, 3) * [1.0, 1.0, 1.0 / self.height_scale],
             "omega": self.params[:, :1],
             "amplitudes": self.params[:, 1:15],
             "posture": self.params[:, 15:],
             "quat": quat * np.where(quat[:, 3:4] < 0, -1.0, 1.0),
-            "max_height": h,
+            "max_height": h / self.height_scale,
             "last_action": self.last_actions,
         }
         if gyro is not None:
@@ -355,8 +370,10 @@ def replay(bundle: str) -> dict:
     for k in range(len(obs)):
         o = obs[k]
         gyro = sl(o, "gyro") if "gyro" in lay else None
-        mine = ctrl.observe(sl(o, "joint_pos"), sl(o, "joint_vel"), sl(o, "quat"), sl(o, "target"), sl(o, "max_height"),
-                            gyro)  # fmt: skip
+        # the readings in metres: the recorded observation's heights are divided by the robot's height_scale
+        hs = ctrl.height_scale
+        mine = ctrl.observe(sl(o, "joint_pos"), sl(o, "joint_vel"), sl(o, "quat"), sl(o, "target") * [1.0, 1.0, hs],
+                            sl(o, "max_height") * hs, gyro)  # fmt: skip
         err_obs = max(err_obs, float(np.abs(mine - o).max()))  # the CPG parameters were integrated here
         q = ctrl.advance(ctrl.act(mine), None if quats is None else quats[k], sl(o, "target"))
         err_q = max(err_q, float(np.abs(q - sim_targets[k]).max()))

@@ -403,6 +403,7 @@ class CPGController:
         self.stuck_left = wp.zeros(n, dtype=wp.int32, device=dev)
         lower, upper = leg_bounds(robot)
         self.stand, self.joint_lower, self.joint_upper = wp.vec3(*robot.stand_pose), wp.vec3(*lower), wp.vec3(*upper)
+        self.tilt_max, self.lift = cfg.tilt_max, cfg.lift  # scaled for the robot (CPGConfig.amplitude_scale)
 
     # ------------------------------------------------------------------ high-level inputs
     def set_actions(self, actions) -> None:
@@ -425,7 +426,7 @@ class CPGController:
         if c.stuck_lift <= 0:
             return
         wp.launch(stuck_response_kernel, dim=self.num_envs,
-                  inputs=[target, col, c.stuck_lift, c.stuck_progress, c.stuck_hold],
+                  inputs=[target, col, self.lift, c.stuck_progress, c.stuck_hold],
                   outputs=[self.stuck_history, self.stuck_count, self.stuck_left, self.params_target],
                   device=self.device)  # fmt: skip
 
@@ -449,7 +450,7 @@ class CPGController:
             dim=self.num_envs,
             inputs=[self.state, self.dy, self.params, 1.0 / math.sqrt(c.mu), self.stand, self.joint_lower,
                     self.joint_upper, BASE_Q, world.state_0.joint_q.reshape(world.joint_q_wp.shape), c.posture_reflex,
-                    c.posture_tilt_range[1]],  # fmt: skip
+                    self.tilt_max],  # fmt: skip
             outputs=[world.joint_target_wp],
             device=self.device,
         )

@@ -182,6 +182,10 @@ class AgentConfig:
     #: K times fewer: studies/scale_out); ``learning_rate``: K times the learning rate (fixed schedule only: the
     #: adaptive one sets it from the ranks' mean KL). Empty: every rank runs this config as it is (rsl-rl's way)
     scale_with_ranks: tuple[str, ...] = field(default=(), metadata={"choices": RANK_SCALINGS})
+    #: ours: ``train.py --init POLICY.pt`` starts the actor (and its observation normaliser) from that policy and the
+    #: critic anew; for this many first iterations the actor stays as loaded (its parameters and normaliser frozen)
+    #: while the critic learns the values of its actions on this task and robot, then both learn. 0: both at once
+    init_critic_iterations: int = 10
     distribution: DistributionConfig = field(default_factory=DistributionConfig)
     model: ModelConfig = field(default_factory=ModelConfig)
     algorithm: AlgorithmConfig = field(default_factory=AlgorithmConfig)
@@ -194,6 +198,8 @@ class AgentConfig:
             raise ValueError("agent.target_success must lie in (0, 1]")
         if self.validation_rounds < 0:
             raise ValueError("agent.validation_rounds must be 0 (off) or positive")
+        if self.init_critic_iterations < 0:
+            raise ValueError("agent.init_critic_iterations must be 0 (the actor learns at once) or positive")
         if not (self.validation_fall_weight >= 0 and self.validation_fall_weight < float("inf")):
             raise ValueError("agent.validation_fall_weight must be a finite number >= 0")
         for name in ("num_steps_per_env", "max_iterations", "save_interval", "validation_candidates",

@@ -12,7 +12,9 @@ counts once per iteration (the runner's one host read of the episode statistics 
   ``Curriculum/episodes_per_robot`` and, where the lanes hold several courses (``TerrainConfig.lane_courses``),
   ``Curriculum/COURSE/stage_top_lane_share`` and ``Curriculum/COURSE/mean_level``;
 - the run's summary for ``timing.json`` (:meth:`LaneLog.summary`) and, when the last stage had fewer than
-  :data:`TOO_FEW` of its finished episodes on the top lane, one line that says so (:meth:`LaneLog.verdict`).
+  :data:`TOO_FEW` of its finished episodes on the top lane, one line that says so (:meth:`LaneLog.verdict`);
+- the hardest lane's heights, in metres and in units of the robot's leg length (:meth:`LaneLog.hardest`: a 6 cm rise
+  is a quarter of the paper robot's 0.26 m leg, a seventh of the MX-Phoenix's 0.41 m), in the summary and the verdict.
 """
 
 from __future__ import annotations
@@ -108,20 +110,46 @@ class LaneLog:
                "episodes_per_robot": self.episodes_per_robot(),
                "last_stage": {"stage": self.stage_index + 1, "first_iteration": self.stage_first_iteration,
                               **block(self.stage_counts())},
-               "run": block(self.run_counts())}  # fmt: skip
+               "run": block(self.run_counts()), "hardest_lane": self.hardest()}  # fmt: skip
         if len(self.groups) > 1:
             out["per_group"] = {name: {"mean_level_end": per.get(name), "last_stage": block(self.stage_counts()[g]),
                                        "run": block(self.run_counts()[g])} for g, name in enumerate(self.groups)}
         return out
 
+    def hardest(self) -> dict:
+        """The top lane's heights per lane group: its step rise and block height [m] (those of its course: stepped
+        rises, rugged blocks, complex both), each also in units of the robot's leg length (coxa, femur and tibia)."""
+        from hexnewton.robot import leg_length
+        from hexnewton.terrain.heightmap import lane_config
+
+        cfg, leg = self.env.cfg, leg_length(self.env.cfg.robot)
+        out = {"leg_length_m": leg}
+        for g, name in enumerate(self.groups):
+            lane = lane_config(cfg.terrain, self.levels - 1, g)
+            heights = {"step_rise": lane.step_rise, "block_height": lane.block_height_max}
+            kinds = {"rugged": ("block_height",), "stepped": ("step_rise",)}.get(name, tuple(heights))
+            kept = {k: heights[k] for k in kinds}
+            out[name] = {**{f"{k}_m": v for k, v in kept.items()}, **{f"{k}_legs": v / leg for k, v in kept.items()}}
+        return out
+
+    def hardest_line(self) -> str:
+        """The hardest lane's heights in words: ``stepped 6 cm rises (0.23 leg)``, per lane group."""
+        h = self.hardest()
+        words = {"step_rise": "rises", "block_height": "blocks"}
+        parts = [f"{name} " + ", ".join(f"{100 * v[f'{k}_m']:.3g} cm {w} ({v[f'{k}_legs']:.2f} leg)"
+                                        for k, w in words.items() if f"{k}_m" in v)
+                 for name, v in h.items() if name != "leg_length_m"]  # fmt: skip
+        return f"the hardest lane: {'; '.join(parts)} (leg length {h['leg_length_m']:.3g} m)"
+
     def verdict(self) -> str:
-        """One line on the last stage's top-lane share; it says when training rarely reached the top lane."""
+        """One line on the last stage's top-lane share and the hardest lane's heights in leg lengths; it says when
+        training rarely reached the top lane."""
         stage = self.stage_counts()
         n = int(stage[..., 0].sum())
         share = shares(stage)[-1] if n else 0.0
         head = (f"the last curriculum stage (from iteration {self.stage_first_iteration}) finished {n} episodes, "
                 f"{share:.1%} on the top lane (lane {self.levels} of {self.levels}, the course itself); "
-                f"{self.episodes_per_robot():.1f} episodes per robot in the run")  # fmt: skip
+                f"{self.episodes_per_robot():.1f} episodes per robot in the run; {self.hardest_line()}")
         if share < TOO_FEW:
             return (head + f": below {TOO_FEW:.0%}, so the last stage trained mostly below the course's heights "
                     "(docs/training.md, \"What training saw\")")

@@ -283,6 +283,7 @@ class HexRunner(RankedRunner):
         self._rsl_log = replace_logger_method(self.logger, "log", self._after_iteration)  # rsl_rl_private.py
         self._rsl_init_writer = replace_logger_method(self.logger, "init_logging_writer", self._init_writer)
         self._stage, self._time_up, self._t0 = None, False, time.time()
+        self._actor_frozen_until = None  # --init: the iteration from which the loaded actor learns too
         self.first_iteration_s = None  # seconds from the process's start to the end of the first iteration
         startup.mark("runner")
 
@@ -299,6 +300,32 @@ class HexRunner(RankedRunner):
         ckpt = load_checkpoint(path, map_location or "cpu")
         load_into_runner(self, ckpt, load_cfg)
         return ckpt.get("infos")
+
+    def start_from(self, ckpt: dict, path: str) -> None:
+        """``train.py --init``: the actor and its observation normaliser from ``ckpt`` (read from ``path``: another
+        run's policy of the same observation and action shapes, networks and distribution), the critic anew; for
+        ``agent.init_critic_iterations`` iterations the actor stays as loaded while the critic learns (one line for a
+        checkpoint whose actor does not fit)."""
+        try:
+            self.alg.load(ckpt, {"actor": True}, True)
+        except RuntimeError as exc:  # torch lists every key and shape that differs
+            raise ValueError(f"--init {path}: its actor does not fit this run's ({str(exc).splitlines()[0][:160]}): "
+                             "the same --agent.model and --agent.distribution as it was trained with") from None
+        n = self.agent.init_critic_iterations
+        self._actor_frozen_until = self.current_learning_iteration + n
+        self.freeze_actor(n > 0)
+        if self.rank.is_main:
+            first = f"the critic learns alone for {n} iterations, then both" if n else "actor and critic learn at once"
+            print(f"started from {path}: its actor and observation normaliser, a new critic; {first}", flush=True)
+
+    def freeze_actor(self, frozen: bool) -> None:
+        """The actor's parameters and observation normaliser kept as they are (``frozen``), or learning again."""
+        actor = self.alg.get_policy()
+        for p in actor.parameters():
+            p.requires_grad_(not frozen)
+        normalizer = getattr(actor, "obs_normalizer", None)
+        if hasattr(normalizer, "until"):  # rsl-rl's EmpiricalNormalization learns until ``count`` reaches ``until``
+            normalizer.until = int(normalizer.count) if frozen else None
 
     def export(self, path: str) -> float:
         """The deterministic policy as ONNX (:func:`~hexnewton.learning.policy.export_onnx`); returns the largest
@@ -338,6 +365,11 @@ class HexRunner(RankedRunner):
         if reason:
             raise TrainingStopped(reason)
         self.enter_stage(self.current_learning_iteration + 1)
+        if self._actor_frozen_until is not None and self.current_learning_iteration + 1 >= self._actor_frozen_until:
+            self.freeze_actor(False)
+            self._actor_frozen_until = None
+            if self.rank.is_main:
+                print(f"iteration {self.current_learning_iteration + 1}: the actor learns from here on", flush=True)
 
     def enter_stage(self, iteration: int) -> None:
         """The curriculum: from its first iteration on, a stage's reflex gain, reward weights, PPO settings and

@@ -103,7 +103,8 @@ from hexnewton.physics.graphs import capture_graph
 from hexnewton.physics.model_build import ModelBuild
 from hexnewton.physics.precompile import compile_modules, loaded_variants, variant_names
 from hexnewton.physics.world import World
-from hexnewton.robot import BASE_Q
+from hexnewton.robot import BASE_Q, foot_offset, leg_bounds
+from hexnewton.robot.registry import check_scales
 from hexnewton.terrain.heightmap import course_names, env_groups, group_offset_y
 
 RING = 1024  # finished episodes the logged rates average over
@@ -322,7 +323,7 @@ class HexapodEnv(VecEnv):
         self.critic_obs = None
         if not cfg.obs.critic:
             return
-        self._leg_forces = world.track_leg_contacts()
+        self._leg_forces, self._foot = world.track_leg_contacts(), wp.vec3(*foot_offset(cfg.robot))  # foot in tibia
         self._lower_legs = wp.array(world.lower_legs, dtype=wp.int32, device=dev)
         late = self._late.numpy() if self.randomized else None
         self.physics = wp.array(physics_columns(self.physical_draws, late, cfg.robot, n), device=dev)
@@ -484,7 +485,7 @@ class HexapodEnv(VecEnv):
                       device=self.device)  # fmt: skip
         if self.critic_obs is not None:
             critic = make_struct(CriticInputs, joint_q=w.joint_q_wp, joint_qd=w.joint_qd_wp, body_q=w.state_0.body_q,
-                                 lower_legs=self._lower_legs, foot=wp.vec3(0.0, 0.0, -self.cfg.robot.tibia_length),
+                                 lower_legs=self._lower_legs, foot=self._foot,
                                  forces=self._leg_forces, physics=self.physics,
                                  cpg_state=ctrl.state if ctrl is not None else self.last_cpg_state,
                                  episode_steps=self.episode_steps, hf=self.height_field)  # fmt: skip
@@ -578,11 +579,13 @@ def make_env(cfg: HexConfig, action_mode: str = "cpg", build: ModelBuild | None 
     if not math.isfinite(cfg.task.goal_distance) or cfg.task.goal_distance <= cfg.task.goal_radius:
         raise HexnewtonError("task.goal_distance must exceed task.goal_radius")
     check_goals(cfg.task)
-    knee = cfg.robot.knee_limit[1] - cfg.robot.stand_pose[1]  # the knee lift the standing pose leaves
-    lo, hi = cfg.cpg.a2_range
-    if not 0 <= lo < hi <= knee:
+    check_scales(cfg)
+    knee = leg_bounds(cfg.robot)[1][1] - cfg.robot.stand_pose[1]  # the knee lift the standing pose leaves
+    s = cfg.cpg.amplitude_scale[1]  # the robot's knee scale: the range scaled, as the CPG runs it
+    lo, hi = cfg.cpg.a2_range[0] * s, cfg.cpg.a2_range[1] * s
+    if not 0 <= lo < hi <= knee + 1e-9:
         raise HexnewtonError(f"cpg.a2_range must satisfy 0 <= LO < HI <= {knee:.3g} (the knee's limit above the "
-                             f"standing pose), got {lo:g} {hi:g}")  # fmt: skip
+                             f"standing pose), got {lo:g} {hi:g}" + (f" (x {s:.3g}, the robot's)" if s != 1 else ""))
     way, progress = cfg.task.goal_distance - cfg.task.goal_radius, cfg.terrain.start_progress
     if progress and (not progress < way or cfg.task.random_goals or cfg.task.waypoints):
         raise HexnewtonError(f"terrain.start_progress must be below goal_distance - goal_radius = {way:g} m, on a "

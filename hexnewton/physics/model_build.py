@@ -19,7 +19,7 @@ from hexnewton.config import HexConfig, SimConfig
 from hexnewton.errors import HexnewtonError
 from hexnewton.physics.device import resolve_device
 from hexnewton.physics.precompile import compiles_generated, install_shipped_modules, live_kernel_ids, preload
-from hexnewton.robot import BASE_Q, NUM_JOINTS, build_hexapod, stand_height
+from hexnewton.robot import BASE_Q, NUM_JOINTS, build_hexapod, footprint, spawn_clearance
 from hexnewton.terrain import Terrain, make_terrain, max_terrain_height_np
 
 MAX_ENVS = 1 << 20  # per device; an H100 holds 16384 envs in a few GB (studies/throughput/report.md)
@@ -71,15 +71,14 @@ def build_scene(cfg: HexConfig, terrain: Terrain) -> tuple[newton.ModelBuilder, 
     xy = np.zeros((n, 2))
     if n > 1:
         xy[:, 1] = np.linspace(-sim.spawn_y_spread, sim.spawn_y_spread, n)
-    footprint = 0.5 * math.hypot(*cfg.robot.torso_size[:2]) + cfg.robot.hip_length + cfg.robot.femur_length
-    clearance = max(cfg.robot.spawn_height, stand_height(cfg.robot))
-    z = max_terrain_height_np(terrain.grid, xy[:, 0], xy[:, 1], footprint) + clearance
+    half, clearance = footprint(cfg.robot), spawn_clearance(cfg.robot)
+    z = max_terrain_height_np(terrain.grid, xy[:, 0], xy[:, 1], half) + clearance
     nq = BASE_Q + NUM_JOINTS
     q = np.asarray(scene.joint_q, dtype=np.float32).reshape(n, nq)
     q[:, 0:2] = xy
     q[:, 2] = z
     scene.joint_q[:] = q.reshape(-1).tolist()
-    return scene, Spawn(xy, z, footprint, clearance)
+    return scene, Spawn(xy, z, half, clearance)
 
 
 class ModelBuild:

@@ -269,11 +269,13 @@ class RolloutViewer:
 
     def follow(self, base: np.ndarray) -> None:
         """Put the camera behind and beside ``base`` (the shown robots' base positions, (R, 3)), looking at their
-        mean; the target is smoothed so that the picture does not shake with the gait."""
+        mean, as far back as the robot is large (the task's ``length_scale``); the target is smoothed so that the
+        picture does not shake with the gait."""
         target = base.mean(axis=0)
         self._cam = target if self._cam is None else self._cam + 0.15 * (target - self._cam)
         spread = float(np.ptp(base[:, 1])) if len(base) > 1 else 0.0
-        dist = max(1.1, 0.9 * spread + 0.7)
+        size = self.world.cfg.task.length_scale if self.world is not None else 1.0
+        dist = max(1.1 * size, 0.9 * spread + 0.7 * size)
         direction = np.array([0.75, 0.55, -0.38])  # the view direction: forward (+x), across the lanes, down
         direction /= np.linalg.norm(direction)
         pos = self._cam - dist * direction

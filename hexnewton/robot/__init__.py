@@ -1,14 +1,22 @@
-"""The paper's hexapod: its geometry (:mod:`.geometry`, plain Python) and the Newton articulation (:mod:`.hexapod`,
-loaded on first use of ``build_hexapod``, so that the geometry imports without Warp or Newton)."""
+"""The hexapod: its geometry (:mod:`.geometry`, plain Python, :mod:`.frames` for a robot given frame by frame) and
+the Newton articulation (:mod:`.hexapod`, loaded on first use of ``build_hexapod``, so that the geometry imports without
+Warp or Newton); the named robots and ``--robot NAME|FILE`` (:mod:`.registry`), robot files (:mod:`.loader`)."""
 
 from hexnewton.robot.geometry import (
     BASE_Q,
     BASE_QD,
     NUM_JOINTS,
+    describe,
+    foot_offset,
+    footprint,
     hip_mount,
     joint_limits,
+    joint_names,
+    joint_signs,
     leg_bounds,
+    leg_length,
     leg_yaw,
+    spawn_clearance,
     stand_height,
     torso_mass,
 )
@@ -18,10 +26,17 @@ __all__ = [
     "BASE_QD",
     "NUM_JOINTS",
     "build_hexapod",
+    "describe",
+    "foot_offset",
+    "footprint",
     "hip_mount",
     "joint_limits",
+    "joint_names",
+    "joint_signs",
     "leg_bounds",
+    "leg_length",
     "leg_yaw",
+    "spawn_clearance",
     "stand_height",
     "torso_mass",
 ]

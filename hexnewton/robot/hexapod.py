@@ -1,4 +1,5 @@
-"""The paper's 18-DoF hexapod (Huang et al. 2025, §3.5), built procedurally as a Newton articulation.
+"""The 18-DoF hexapod as a Newton articulation: the paper's (Huang et al. 2025, §3.5) and any robot given by its
+dimensions built procedurally, a robot given frame by frame (a robot file's, ``RobotConfig.legs``) from its frames.
 
 Kinematic tree: torso (free base joint first), then per leg in the order R1, R2, R3, L1, L2, L3 (front to
 back) three revolute joints hip -> knee -> ankle with links coxa (50 mm), femur (80 mm), tibia (130 mm).
@@ -19,13 +20,15 @@ import newton
 import numpy as np
 import warp as wp
 
-from hexnewton.config import LEG_NAMES, RobotConfig
+from hexnewton.config import JOINT_KINDS, LEG_NAMES, RobotConfig
+from hexnewton.robot import frames
 from hexnewton.robot.geometry import (  # noqa: F401  (re-exported: hexnewton.robot's names)
     BASE_Q,
     BASE_QD,
     NUM_JOINTS,
     PITCH_AXIS,
     box_inertia,
+    explicit,
     hip_axis,
     hip_mount,
     joint_limits,
@@ -59,10 +62,14 @@ def build_hexapod(cfg: RobotConfig | None = None, gap: float | None = None) -> n
 
     leg_shape = newton.ModelBuilder.ShapeConfig(density=0.0, mu=cfg.friction)
     leg_shape.collision_filter_parent = True
-    torso = _add_torso(b, cfg, newton.ModelBuilder.ShapeConfig(density=0.0, mu=cfg.friction))
-    joints = [b.add_joint_free(child=torso, label="base")]
-    for leg in range(len(LEG_NAMES)):
-        joints += _add_leg(b, cfg, leg, torso, leg_shape)
+    torso_shape = newton.ModelBuilder.ShapeConfig(density=0.0, mu=cfg.friction)
+    if explicit(cfg):
+        joints = _add_frames(b, cfg, torso_shape, leg_shape)
+    else:
+        torso = _add_torso(b, cfg, torso_shape)
+        joints = [b.add_joint_free(child=torso, label="base")]
+        for leg in range(len(LEG_NAMES)):
+            joints += _add_leg(b, cfg, leg, torso, leg_shape)
     b.add_articulation(joints, label="hexapod")
 
     # self-collision off: filter every pair of the robot's own shapes
@@ -171,3 +178,58 @@ def _add_leg_shapes(b: newton.ModelBuilder, cfg: RobotConfig, name: str, femur: 
         xform=wp.transform(wp.vec3(0.0, 0.0, -cfg.tibia_length), wp.quat_identity()),
         radius=cfg.foot_radius, cfg=shape, label=f"{name}_foot",
     )  # fmt: skip
+
+
+# ----------------------------------------------------------------------------------------------------
+# a robot given frame by frame (RobotConfig.legs, a robot file's)
+# ----------------------------------------------------------------------------------------------------
+
+#: the links of a leg by joint kind, as the bodies are named (``R1_tibia``: the lower leg, whose contacts are tracked)
+LINK_NAMES = ("coxa", "femur", "tibia")
+
+
+def _inertia(values) -> wp.mat33:
+    ixx, iyy, izz, ixy, ixz, iyz = values
+    return wp.mat33(ixx, ixy, ixz, ixy, iyy, iyz, ixz, iyz, izz)
+
+
+def _add_shapes(b: newton.ModelBuilder, body: int, link, label: str, shape, foot=None) -> None:
+    """A link's collision shapes; the sphere centred on ``foot`` is labelled ``<label-leg>_foot``."""
+    for k, s in enumerate(link.shapes):
+        xform = wp.transform(wp.vec3(*s.pos), wp.quat(*s.quat))
+        is_foot = foot is not None and s.kind == "sphere" and frames.norm(frames.sub(s.pos, foot)) < 1e-9
+        name = label.rsplit("_", 1)[0] + "_foot" if is_foot else f"{label}_{s.kind}{k}"
+        if s.kind == "box":
+            b.add_shape_box(body, xform=xform, hx=s.size[0], hy=s.size[1], hz=s.size[2], cfg=shape, label=name)
+        elif s.kind == "sphere":
+            b.add_shape_sphere(body, xform=xform, radius=s.size[0], cfg=shape, label=name)
+        else:
+            add = b.add_shape_capsule if s.kind == "capsule" else b.add_shape_cylinder
+            add(body, xform=xform, radius=s.size[0], half_height=s.size[1], cfg=shape, label=name)
+
+
+def _add_frames(b: newton.ModelBuilder, cfg: RobotConfig, torso_shape, leg_shape) -> list[int]:
+    """A robot given frame by frame: the torso on a free joint, then per leg its three links on PD-driven revolute
+    joints at the standing pose, each with its collision shapes; returns the joints."""
+    t = cfg.torso
+    torso = b.add_link(xform=wp.transform(wp.vec3(0.0, 0.0, cfg.spawn_height), wp.quat_identity()),
+                       com=wp.vec3(*t.com), mass=t.mass, inertia=_inertia(t.inertia), label="torso", lock_inertia=True)
+    _add_shapes(b, torso, t, "torso", torso_shape)
+    joints = [b.add_joint_free(child=torso, label="base")]
+    drive = dict(target_ke=cfg.joint_ke, target_kd=cfg.joint_kd, effort_limit=cfg.effort_limit, armature=cfg.armature,
+                 limit_ke=cfg.limit_ke, limit_kd=cfg.limit_kd)
+    for name, leg in zip(LEG_NAMES, cfg.legs):
+        poses, _ = frames.leg_poses(leg)
+        parent = torso
+        for k, (joint, (pos, rot)) in enumerate(zip(leg.joints, poses)):
+            link = joint.link
+            body = b.add_link(xform=wp.transform(wp.vec3(pos[0], pos[1], pos[2] + cfg.spawn_height), wp.quat(*rot)),
+                              com=wp.vec3(*link.com), mass=link.mass, inertia=_inertia(link.inertia),
+                              label=f"{name}_{LINK_NAMES[k]}", lock_inertia=True)
+            joints.append(b.add_joint_revolute(
+                parent, body, parent_xform=wp.transform(wp.vec3(*joint.pos), wp.quat(*joint.quat)),
+                child_xform=wp.transform_identity(), axis=tuple(joint.axis), limit_lower=joint.limit[0],
+                limit_upper=joint.limit[1], target_q=cfg.stand_pose[k], label=f"{name}_{JOINT_KINDS[k]}", **drive))
+            _add_shapes(b, body, link, f"{name}_{LINK_NAMES[k]}", leg_shape, leg.foot if k == 2 else None)
+            parent = body
+    return joints

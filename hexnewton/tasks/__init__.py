@@ -49,6 +49,7 @@ from hexnewton.config import (
     without_lanes,
 )
 from hexnewton.learning.agent import AgentConfig, paper_agent
+from hexnewton.robot.registry import with_robot
 
 #: The stability shaping of the variant chosen on validation rounds among six (studies/stable_gait): fewest
 #: falls, lowest rugged pitch and roll variance; 2 / 0.02 / 0.05 (with a 0.03 s filter) fell 18x as often on rugged
@@ -171,14 +172,14 @@ def course(terrain: str | TerrainConfig, trained: HexConfig | None = None, overr
            num_envs: int | None = None, device: str | None = None, terrain_seed: int = 0, **task_fields) -> HexConfig:
     """The course a trained controller is played or evaluated on: ``terrain`` (a name: as §3.1 defines it; a
     ``TerrainConfig``: that one) without curriculum lanes (nor lanes drawn past them), no randomisation, with the
-    controller's own physics and CPG (``trained``: a checkpoint's config; the defaults for the fixed CPG) and
+    controller's own robot, physics and CPG (``trained``: a checkpoint's config; the defaults for the fixed CPG) and
     ``TaskConfig`` with ``task_fields``; then ``overrides`` ({"terrain.step_rise": 0.07, ...}), ``num_envs`` robots
     on ``device``, terrain seed ``terrain_seed`` and the patch long enough for the goal. The controller observes what
     it was trained to (``trained.obs``); the critic's group, which playing a policy never reads, is not built."""
     trained = trained or HexConfig()
     ground = TerrainConfig(name=terrain) if isinstance(terrain, str) else without_lanes(terrain)
-    cfg = HexConfig(sim=trained.sim, cpg=trained.cpg, task=replace(TaskConfig(), **task_fields), terrain=ground,
-                    obs=replace(trained.obs, critic=False))
+    cfg = with_robot(HexConfig(task=replace(TaskConfig(), **task_fields), terrain=ground), trained.robot)
+    cfg = replace(cfg, sim=trained.sim, cpg=trained.cpg, obs=replace(trained.obs, critic=False))
     cfg = apply_overrides(cfg, overrides or {})
     sim = cfg.sim if num_envs is None else replace(cfg.sim, num_envs=num_envs, device=device)
     return replace(cfg, sim=sim, terrain=terrain_for_goal(replace(cfg.terrain, seed=terrain_seed),

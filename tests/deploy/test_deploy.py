@@ -381,3 +381,36 @@ def test_a_checkpoint_from_before_the_switches_loads_evaluates_and_exports(tmp_p
     assert checkpoint_agent(ckpt).to_rsl_rl(2, env.obs_groups)["obs_groups"]["critic"] == ["policy"]
     ep = run_rounds("cpg_rl", REFLEX_POLICY, "stepped", 2, "cpu", 60, False)
     assert ep.pos.shape[1] == 2 and np.isfinite(ep.pos[-1]).all() and (ep.pos[-1, :, 0] > 0.05).all()
+
+
+def test_second_robot_bundle_names_its_robot_and_replays(tmp_path):
+    """The shipped policy's checkpoint given the MX-Phoenix's config (its robot and scales, ``with_robot``): its bundle
+    names the robot and carries its joint names, senses, limits, standing height, scales and whole description; the
+    runtime reproduces the simulator's joint targets (the observed heights scaled); C MuJoCo builds the robot from the
+    bundle alone."""
+    import dataclasses
+
+    import torch
+
+    from hexnewton.analysis.sim2sim import Rounds
+    from hexnewton.config import config_from_dict
+    from hexnewton.deploy.runtime import replay, spec_robot
+    from hexnewton.robot import stand_height
+    from hexnewton.robot.registry import ROBOTS, same_robot, with_robot
+
+    ck = torch.load(POLICY, map_location="cpu", weights_only=False)
+    cfg = with_robot(config_from_dict(ck["infos"]["hexnewton"]["config"]), ROBOTS["mx_phoenix"])
+    ck["infos"]["hexnewton"]["config"] = dataclasses.asdict(cfg)
+    torch.save(ck, tmp_path / "mx.pt")
+    out = tmp_path / "mx"
+    proc = _run(["-m", "hexnewton.apps.export", "--checkpoint", str(tmp_path / "mx.pt"), "--out", str(out),
+                 "--steps", "20", "--robots", "2", "--robot", "mx_phoenix"])  # fmt: skip
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    spec = json.loads((out / "controller.json").read_text())
+    assert spec["robot"] == "mx_phoenix" and spec["height_scale"] == pytest.approx(cfg.task.height_scale)
+    assert spec["stand_height"] == pytest.approx(stand_height(ROBOTS["mx_phoenix"]))
+    assert spec["joint_signs"] == [1.0] * 18 and len(spec["joint_limits"]) == 18
+    assert same_robot(spec_robot(spec), ROBOTS["mx_phoenix"])
+    assert replay(str(out))["max_target_diff_rad"] < 1e-4
+    r = Rounds(str(out), "flat", 1)
+    assert r.m.body_mass[1:].sum() == pytest.approx(4.2) and r.scan.half == pytest.approx(0.3 * cfg.task.length_scale)

@@ -202,3 +202,50 @@ def test_workers_run_the_same_rounds_as_one_model():
         assert two[k] == pytest.approx(one[k], rel=1e-6, abs=1e-9), k
     with pytest.raises(ValueError, match="on_step"):
         measure(BUNDLE, "flat", 2, workers=2, on_step=lambda r: None)
+
+
+def _other_robot(name: str) -> RobotConfig:
+    """The MX-Phoenix by name, or as its URDF or MJCF file."""
+    from hexnewton.robot.mx_phoenix import MJCF, URDF
+    from hexnewton.robot.registry import resolve_robot
+
+    return resolve_robot({"mx_phoenix": "mx_phoenix", "urdf": URDF, "xml": MJCF}[name])
+
+
+@pytest.mark.parametrize("name", ["mx_phoenix", "urdf", "xml"])
+def test_mjcf_is_the_newton_robot_for_other_robots(name):
+    """The MX-Phoenix by its dimensions and as its URDF and MJCF files (written from their frames,
+    ``mjcf.frames_robot_xml``): every body frame at a random pose, masses, centres of mass, limits in hexnewton's sense
+    and joint names as Newton's."""
+    from hexnewton.robot import leg_bounds
+
+    cfg = _other_robot(name)
+    rng = np.random.default_rng(1)
+    lo, hi = (np.tile(b, 6) for b in leg_bounds(cfg))
+    q = np.r_[0.1, -0.2, 0.3, 0.0, 0.0, np.sin(0.2), np.cos(0.2), rng.uniform(lo, hi)]
+    nm, body_q = _newton_robot(cfg, q)
+    m, d = _mujoco_robot(cfg, q)
+    assert m.nbody - 1 == nm.body_count == 19 and m.njnt - 1 == 18
+    np.testing.assert_allclose(d.xpos[1:], body_q[:, :3], atol=1e-5)
+    np.testing.assert_allclose(np.abs(np.sum(d.xquat[1:][:, [1, 2, 3, 0]] * body_q[:, 3:], axis=1)), 1.0, atol=1e-5)
+    np.testing.assert_allclose(m.body_mass[1:], nm.body_mass.numpy(), rtol=1e-6)
+    np.testing.assert_allclose(m.body_mass[1:].sum(), 4.2, rtol=1e-9)
+    limits = np.c_[nm.joint_limit_lower.numpy()[6:], nm.joint_limit_upper.numpy()[6:]]
+    np.testing.assert_allclose(m.jnt_range[1:], limits, atol=1e-6)
+    assert [mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_JOINT, j) for j in range(1, 19)] == list(JOINT_NAMES)
+
+
+def test_second_robot_walks_in_mujoco_with_the_fixed_cpg():
+    """The MX-Phoenix's fixed CPG (its own spec: description, scales) in C MuJoCo on flat ground for 4 s: it stands at
+    its height and walks ahead; the spec names the robot."""
+    from hexnewton.robot.mx_phoenix import MX_PHOENIX
+
+    spec = fixed_cpg_spec(robot=MX_PHOENIX)
+    assert spec["robot"] == "mx_phoenix" and spec["height_scale"] > 1.6 and "robot_description" in spec
+    assert "robot" not in fixed_cpg_spec()  # the paper robot's spec as it was
+    r = Rounds(spec, "flat", 2)
+    out = r.run(max_steps=200)
+    assert (out["status"][-1] == RUNNING).all()
+    assert np.all(out["pos"][-1][:, 0] > 0.8)
+    z = r.d.qpos.reshape(2, 25)[:, 2]
+    assert np.all(np.abs(z - 0.22) < 0.04), z

@@ -291,3 +291,52 @@ def test_tripod_groups_share_an_oscillator():
     off = mapping_offsets_np(state, dy, np.array([CFG.fixed_params()]), 1.0)[0]
     swing = off[:, 1] > 0  # legs R1, R2, R3, L1, L2, L3
     assert swing.tolist() == [True, False, True, False, True, False]  # {R1, R3, L2} swing, {R2, L1, L3} stand
+
+
+def _robots():
+    """The MX-Phoenix, its URDF as loaded, and a robot whose joints reach less far than the paper's (its amplitudes
+    scaled down: hip 0.3 rad, knee 0.9, ankle -0.6)."""
+    import dataclasses
+
+    from hexnewton.robot.loader import load_robot
+    from hexnewton.robot.mx_phoenix import URDF, MX_PHOENIX
+
+    narrow = dataclasses.replace(MX_PHOENIX, name="narrow", hip_limit=(-0.3, 0.3), knee_limit=(0.0, 0.9),
+                                 ankle_limit=(-0.6, 0.2))
+    return {"mx_phoenix": MX_PHOENIX, "mx_phoenix_urdf": load_robot(URDF), "narrow": narrow}
+
+
+@pytest.mark.parametrize("name", ["mx_phoenix", "mx_phoenix_urdf", "narrow"])
+def test_kernels_match_reference_for_other_robots(name):
+    """Another robot's standing pose, limits and amplitude-scaled ranges (``with_robot``): the action scaling and the
+    mapping (posture and reflex on) against their float64 twins, and every target inside the robot's limits."""
+    from hexnewton.config import HexConfig
+    from hexnewton.robot import leg_bounds
+    from hexnewton.robot.registry import with_robot
+
+    robot = _robots()[name]
+    cpg = with_robot(HexConfig(cpg=CPGConfig(posture=True)), robot).cpg
+    if name == "narrow":
+        assert cpg.amplitude_scale[0] < 1 and cpg.amplitude_scale[1] < 1 and cpg.amplitude_scale[2] < 1
+    stand, (lower, upper) = np.asarray(robot.stand_pose), (np.asarray(b) for b in leg_bounds(robot))
+    rng = np.random.default_rng(7)
+    n = 64
+    lo, hi = cpg.param_ranges()
+    actions = rng.uniform(-1.2, 1.2, (n, 18))
+    params = wp.zeros((n, 18), dtype=wp.float32, device=DEV)
+    wp.launch(scale_actions_kernel, dim=(n, 18), inputs=[_arr(actions), _arr(lo), _arr(hi), params], device=DEV)
+    ref_params = scale_actions_reference(actions, lo, hi)
+    np.testing.assert_allclose(params.numpy(), ref_params, rtol=1e-6, atol=1e-6)
+    state, dy = rng.uniform(-1.2, 1.2, (n, 4)), rng.normal(size=(n, 2))
+    q = np.zeros((n, 25))
+    q[:, 3:7] = rng.normal(size=(n, 4)) * [0.2, 0.2, 0.2, 1.0]
+    targets = wp.zeros((n, 25), dtype=wp.float32, device=DEV)
+    wp.launch(mapping_kernel, dim=n,
+              inputs=[_arr(state), _arr(dy), params, 1.0, wp.vec3(*stand), wp.vec3(*lower), wp.vec3(*upper), 7,
+                      _arr(q), 2.0, cpg.tilt_max],
+              outputs=[targets], device=DEV)  # fmt: skip
+    ref = mapping_reference(state, dy, params.numpy().astype(np.float64), 1.0, stand, lower, upper,
+                            quat_to_rpy_np(q[:, 3:7]), 2.0, cpg.tilt_max)  # fmt: skip
+    np.testing.assert_allclose(targets.numpy()[:, 7:], ref, atol=1e-5)
+    t = ref.reshape(n, 6, 3)
+    assert np.all(t >= lower - 1e-9) and np.all(t <= upper + 1e-9)

@@ -7,6 +7,7 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
+from hexnewton.config import RobotConfig, TerrainConfig
 from hexnewton.learning.agent import AgentConfig
 from hexnewton.learning.lanes import TOO_FEW, LaneLog, shares
 
@@ -14,8 +15,9 @@ from hexnewton.learning.lanes import TOO_FEW, LaneLog, shares
 class FakeEnv:
     """The two host reads LaneLog makes, over counts the test sets."""
 
-    def __init__(self, groups=("complex",), levels=4, num_envs=8):
-        self.cfg = SimpleNamespace(terrain=SimpleNamespace(levels=levels))
+    def __init__(self, groups=("complex",), levels=4, num_envs=8, robot=None):
+        self.cfg = SimpleNamespace(terrain=TerrainConfig(name=groups[0], levels=levels, lane_courses=tuple(groups[1:])),
+                                   robot=robot or RobotConfig())
         self.lane_groups, self.num_envs = groups, num_envs
         self.counts = np.zeros((len(groups), levels, 2), np.int64)
         self.levels = np.zeros((num_envs, 2), np.int64)
@@ -80,3 +82,20 @@ def test_a_run_cut_by_its_time_cap_or_reaching_nothing_says_so_last():
     assert "reaches the goal in 0 of its 8 validation rounds" in closing_line("300 iterations", 299, agent, validation)
     validation["chosen"] = "a.pt"
     assert closing_line("300 iterations", 299, agent, validation) is None
+
+
+def test_hardest_lane_in_leg_lengths():
+    """The top lane's heights in metres and in the robot's leg lengths: the complex course's 6 cm blocks and rises are
+    0.23 of the paper robot's 0.26 m leg and 0.14 of the MX-Phoenix's 0.41 m one; past the course, the hardest_*."""
+    from hexnewton.robot.registry import ROBOTS
+
+    h = LaneLog(FakeEnv()).hardest()
+    assert h["leg_length_m"] == pytest.approx(0.26)
+    assert h["complex"]["step_rise_m"] == pytest.approx(0.06) and h["complex"]["block_height_legs"] == pytest.approx(
+        0.06 / 0.26)
+    mx = LaneLog(FakeEnv(("rugged", "stepped"), robot=ROBOTS["mx_phoenix"]))
+    h = mx.hardest()
+    assert set(h["rugged"]) == {"block_height_m", "block_height_legs"} and "step_rise_legs" in h["stepped"]
+    assert h["stepped"]["step_rise_legs"] == pytest.approx(0.06 / 0.414)
+    assert "stepped 6 cm rises (0.14 leg)" in mx.verdict() and "(leg length 0.414 m)" in mx.verdict()
+    assert mx.summary()["hardest_lane"] == h

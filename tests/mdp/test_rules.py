@@ -69,14 +69,19 @@ def _random_ends(rng, n, grid):
     return q.astype(np.float32).astype(np.float64), qd.astype(np.float32).astype(np.float64), goal, course, left, steps
 
 
+@pytest.mark.parametrize("robot", ["paper", "mx_phoenix"])
 @pytest.mark.parametrize("names", [TaskConfig().terminations, NAVIGATION_ENDS])
-def test_ends_kernel_twin_rule_and_mujoco_agree_on_random_states(names):
+def test_ends_kernel_twin_rule_and_mujoco_agree_on_random_states(names, robot):
     """Random states on a rugged terrain: the Warp status kernel, its twin (``episode_status_np``), the shared rule
     (``rules.episode_status``) and C MuJoCo's (``sim2sim.episode_status``, its (w, x, y, z) quaternions) give the
-    same status codes and angles, with and without the off-course end; every code turns up."""
+    same status codes and angles, with and without the off-course end, for the paper's robot and the MX-Phoenix (its
+    fall height scaled); every code turns up."""
+    from hexnewton.config import HexConfig
+    from hexnewton.robot.registry import ROBOTS, with_robot
+
     rng = np.random.default_rng(11)
     n = 4096
-    task = TaskConfig(terminations=names)
+    task = dataclasses.replace(with_robot(HexConfig(), ROBOTS[robot]).task, terminations=names)
     grid = make_terrain(TerrainConfig(name="rugged", seed=3)).grid
     q, qd, goal, course, left, steps = _random_ends(rng, n, grid)
     inputs = make_struct(EndInputs, joint_q=wp.array(q.astype(np.float32), device=DEV),

@@ -52,10 +52,13 @@ from hexnewton.mdp.terms import (
     rewards_reference,
 )
 from hexnewton.mdp.terms.observations import LAYOUT_ACTIONS
+from hexnewton.robot.registry import ROBOTS, with_robot
 from hexnewton.terrain import make_terrain, max_terrain_height_np, terrain_height_np
 
 DEV = "cpu"
 TASK, REW = TaskConfig(), RewardConfig()
+#: the MX-Phoenix's task: its heights and terrain window scaled (hexnewton.robot.registry.with_robot)
+MX_TASK = with_robot(HexConfig(), ROBOTS["mx_phoenix"]).task
 
 
 # ------------------------------------------------------------------ rewards (Table 1, Eq. 5, shaping)
@@ -129,9 +132,11 @@ def test_reward_kernel_matches_reference_on_random_states():
     arrays = _random_reward_arrays(rng, n, grid)
     arrays["actions"][3, 2] = np.nan  # a non-finite action counts as 0
     shaping = dict(w_tilt=2.0, w_ang_vel=0.05, w_action_rate=0.3)
-    # ours; 40 ms control; Table 1 as written; a wider stability tilt (--env.reward.stability_tilt) with the shaping on
+    # ours; 40 ms control; Table 1 as written; a wider stability tilt (--env.reward.stability_tilt) with the shaping on;
+    # the MX-Phoenix's heights (height_scale 1.7) with Table 1's reward and ours
     for task, reward in ((TASK, REW), (dataclasses.replace(TASK, control_dt=0.04), REW), (TASK, REW.paper_reward()),
-                         (TASK, dataclasses.replace(REW, stability_tilt=0.8, **shaping))):  # fmt: skip
+                         (TASK, dataclasses.replace(REW, stability_tilt=0.8, **shaping)), (MX_TASK, REW.paper_reward()),
+                         (MX_TASK, REW)):  # fmt: skip
         (rew, terms, px, prev), (ref_rew, ref_terms, ref_px, ref_prev) = _run_rewards(grid, arrays, task, reward)
         assert terms.shape == (n, len(REWARD_TERMS)) and np.isfinite(rew).all()
         for k, name in enumerate(REWARD_NAMES):
@@ -373,8 +378,9 @@ def test_observation_kernel_matches_reference():
         return terrain_height_np(grid, x, y)
 
     ground_at.max = lambda x, y, h: max_terrain_height_np(grid, x, y, h)
-    # every layout: the paper's, with the posture, joint, each with the gyro and the last actions
-    for layout in LAYOUTS:
+    # every layout: the paper's, with the posture, joint, each with the gyro and the last actions; the paper robot's and
+    # the MX-Phoenix's heights and terrain window
+    for layout, task in [(layout, task) for task in (TASK, MX_TASK) for layout in LAYOUTS]:
         npar = {"cpg": 15, "cpg_posture": 18, "joint": 10}[layout_parts(layout)[0]]  # joint: unread
         p = np.ascontiguousarray(params[:, :npar])
         actions = rng.uniform(-1, 1, (n, LAYOUT_ACTIONS[layout_parts(layout)[0]])).astype(np.float32)
@@ -382,10 +388,10 @@ def test_observation_kernel_matches_reference():
         inputs = make_struct(ObsInputs, joint_q=wp.array(q, device=DEV), joint_qd=wp.array(qd, device=DEV),
                              params=wp.array(p, device=DEV), goals=goals_from_host(DEV, goal, course, np.zeros(n)),
                              actions=wp.array(actions, device=DEV), episode_steps=wp.array(steps, device=DEV), hf=hf,
-                             task=TASK)  # fmt: skip
+                             task=task)  # fmt: skip
         wp.launch(observations_kernel, dim=n, inputs=[inputs, LAYOUTS.index(layout)], outputs=[out], device=DEV)
         ns = SimpleNamespace(joint_q=q, joint_qd=qd, params=p, goals=SimpleNamespace(goal=goal), actions=actions,
-                             episode_steps=steps, ground_at=ground_at, task=TASK)  # fmt: skip
+                             episode_steps=steps, ground_at=ground_at, task=task)  # fmt: skip
         ref = observations_reference(ns, layout)
         assert ref.shape == (n, OBS_DIM[layout])
         np.testing.assert_allclose(out.numpy(), ref, atol=2e-4, rtol=1e-4)

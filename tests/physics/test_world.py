@@ -409,7 +409,7 @@ def test_bench_largest_that_fits(monkeypatch):
     """--largest doubles the env count until an allocation fails; other errors are not swallowed."""
     from hexnewton.analysis import bench
 
-    def fake(terrain, n, device, frames, sim, ground=None):
+    def fake(terrain, n, device, frames, sim, ground=None, base=None):
         assert ground is None or ground.collision == "mesh_boxes"  # the terrain settings are passed on
         if n > 16:
             raise RuntimeError(f"Warp error: Failed to allocate {n * 10**9} bytes on device 'cuda:0'")

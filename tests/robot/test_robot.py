@@ -125,3 +125,42 @@ def test_bad_config_is_one_clear_error():
         build_hexapod(RobotConfig(stand_pose=(0.0, -0.2, 0.0)))
     with pytest.raises(ValueError, match="total_mass"):
         build_hexapod(RobotConfig(total_mass=0.5))
+
+
+def _model_arrays(cfg):
+    model = build_hexapod(cfg, gap=0.01).finalize(device="cpu")
+    state = model.state()
+    newton.eval_fk(model, model.joint_q, model.joint_qd, state)
+    names = ("body_mass", "body_inertia", "body_com", "joint_limit_lower", "joint_limit_upper", "joint_axis",
+             "joint_X_p", "joint_q", "shape_scale", "shape_type", "joint_target_ke", "joint_armature")
+    return {n: getattr(model, n).numpy() for n in names} | {"body_q": state.body_q.numpy(),
+                                                            "labels": [str(x) for x in model.body_label]}
+
+
+@pytest.mark.parametrize("name", ["paper", "mx_phoenix"])
+def test_frames_build_the_robot_its_dimensions_build(name):
+    """A robot given by its dimensions and the same robot frame by frame (``describe``) make the same Newton model:
+    masses, inertias, frames, limits, shapes, gains, the standing pose's body poses (float32 rounding apart)."""
+    from hexnewton.robot.geometry import describe
+    from hexnewton.robot.registry import ROBOTS
+
+    wp.init()
+    a, b = _model_arrays(ROBOTS[name]), _model_arrays(describe(ROBOTS[name]))
+    assert a.pop("labels") == b.pop("labels")
+    for key in a:
+        np.testing.assert_allclose(a[key], b[key], atol=2e-7, err_msg=key)
+
+
+def test_robot_file_builds_the_named_robot():
+    """The MX-Phoenix's MJCF file, loaded, builds the named robot's model: link masses, joint limits in hexnewton's
+    sense, the standing pose's body poses (at the same spawn height)."""
+    import dataclasses
+
+    from hexnewton.robot.loader import load_robot
+    from hexnewton.robot.mx_phoenix import MJCF, MX_PHOENIX
+
+    wp.init()
+    loaded = dataclasses.replace(load_robot(MJCF), spawn_height=MX_PHOENIX.spawn_height)
+    a, b = _model_arrays(MX_PHOENIX), _model_arrays(loaded)
+    for key in ("body_mass", "joint_limit_lower", "joint_limit_upper", "body_q", "joint_q"):
+        np.testing.assert_allclose(a[key], b[key], atol=1e-5, err_msg=key)

@@ -26,7 +26,9 @@ from hexnewton.mdp.terms.structs import TaskParams
 from hexnewton.kernels.cpg import quat_to_rpy
 from hexnewton.kernels.reference import quat_rotate_inv_np, quat_to_rpy_np
 
-H_HALF_EXTENT = 0.3  # ours: the square that "max height h" looks at: +-30 cm, about the legs' reach [m]
+#: ours: the square that "max height h" looks at: +-30 cm, about the paper robot's legs' reach [m] (another robot's x
+#: ``TaskConfig.length_scale``)
+H_HALF_EXTENT = 0.3
 #: ``cpg``: the paper's (15 CPG parameters); ``cpg_posture``: with the body posture (18); ``joint``: the pure-DRL
 #: comparison (no CPG parameters)
 BASE_LAYOUTS = ("cpg", "cpg_posture", "joint")
@@ -105,7 +107,7 @@ def target(inputs: ObsInputs, env: int, obs: wp.array2d[wp.float32], col: int):
     s = wp.sin(yaw)
     obs[env, col] = c * dx + s * dy
     obs[env, col + 1] = -s * dx + c * dy
-    obs[env, col + 2] = terrain_height(inputs.hf, gx, gy) - inputs.joint_q[env, 2]
+    obs[env, col + 2] = (terrain_height(inputs.hf, gx, gy) - inputs.joint_q[env, 2]) / inputs.task.height_scale
 
 
 def target_np(inputs):
@@ -114,7 +116,8 @@ def target_np(inputs):
     dx, dy = gx - jq[:, 0], gy - jq[:, 1]
     yaw = quat_to_rpy_np(jq[:, 3:7])[:, 2]
     c, s = np.cos(yaw), np.sin(yaw)
-    return np.stack([c * dx + s * dy, -s * dx + c * dy, inputs.ground_at(gx, gy) - jq[:, 2]], axis=1)
+    z = (inputs.ground_at(gx, gy) - jq[:, 2]) / inputs.task.height_scale
+    return np.stack([c * dx + s * dy, -s * dx + c * dy, z], axis=1)
 
 
 @wp.func
@@ -164,12 +167,16 @@ def quat_np(inputs):
 def max_height(inputs: ObsInputs, env: int, obs: wp.array2d[wp.float32], col: int):
     px = inputs.joint_q[env, 0]
     py = inputs.joint_q[env, 1]
-    obs[env, col] = max_terrain_height(inputs.hf, px, py, H_HALF_EXTENT) - terrain_height(inputs.hf, px, py)
+    half = H_HALF_EXTENT * inputs.task.length_scale
+    h = max_terrain_height(inputs.hf, px, py, half) - terrain_height(inputs.hf, px, py)
+    obs[env, col] = h / inputs.task.height_scale
 
 
 def max_height_np(inputs):
     jq = np.asarray(inputs.joint_q, np.float64)
-    return (inputs.ground_at.max(jq[:, 0], jq[:, 1], H_HALF_EXTENT) - inputs.ground_at(jq[:, 0], jq[:, 1]))[:, None]
+    t = inputs.task
+    h = inputs.ground_at.max(jq[:, 0], jq[:, 1], H_HALF_EXTENT * t.length_scale) - inputs.ground_at(jq[:, 0], jq[:, 1])
+    return (h / t.height_scale)[:, None]
 
 
 @wp.func
@@ -239,7 +246,7 @@ OBS_TERMS = (
             joint_pos, joint_pos_np),
     ObsTerm("joint_vel", 18, "joint velocities [rad/s]", "noise_joint_vel", joint_vel, joint_vel_np),
     ObsTerm("target", 3, "target relative to the robot in its heading frame (x forward, y left; z = goal ground - "
-            "base z) [m]", "noise_target", target, target_np),
+            "base z, / the robot's height_scale) [m]", "noise_target", target, target_np),
     # the CPG parameters are the controller's own: exact
     ObsTerm("omega", 1, "omega [rad/s] (the filtered parameter the CPG runs with)", None, omega, omega_np, CPG),
     ObsTerm("amplitudes", 14, "A1_R, A1_L, A2[R1..L3], A3[R1..L3] [rad] (filtered)", None, amplitudes,
@@ -248,8 +255,8 @@ OBS_TERMS = (
             ("cpg_posture",)),
     ObsTerm("quat", 4, "base orientation quaternion (x, y, z, w), sign chosen so that w >= 0", "noise_quat", quat,
             quat_np),
-    ObsTerm("max_height", 1, "h: highest terrain within +-H_HALF_EXTENT of the base, minus the terrain under the "
-            "base [m]", "noise_height", max_height, max_height_np),
+    ObsTerm("max_height", 1, "h: highest terrain within +-H_HALF_EXTENT (x the robot's length_scale) of the base, "
+            "minus the terrain under the base (/ its height_scale) [m]", "noise_height", max_height, max_height_np),
     # ours, ObsConfig's switches (off: the paper's observation)
     ObsTerm("gyro", 3, "base angular velocity in the body frame (x forward, y left, z up) [rad/s], an IMU's gyro",
             "noise_gyro", gyro, gyro_np, switch="gyro"),

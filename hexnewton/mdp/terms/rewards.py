@@ -5,7 +5,8 @@ R_t = w_h r_h + w_d r_d + w_theta r_theta + r_f + r_s (Eq. 5) + r_goal + r_off +
 terms are quoted for a 20 ms control step (``REF_DT``) and scaled by ``control_dt / REF_DT``. The rows, in column
 order (each function's docstring gives its value):
 
-- ``height``: r_h, z - 0.11 above z = 0.12 m (z: torso height above the terrain under it);
+- ``height``: r_h, z - 0.11 above z = 0.12 m (z: torso height above the terrain under it; the heights are the paper
+  robot's, another robot's x ``TaskConfig.height_scale``);
 - ``direction``: r_theta, the heading error beyond a dead band, toward the goal (or, the paper's, along +x);
 - ``distance``: r_d, exp(-(d_n - d_t)), 1 on the goal circle;
 - ``stability``: r_s, -100 per step while low, tilted beyond ``stability_tilt`` or fallen;
@@ -113,15 +114,17 @@ def reward_frame_np(inputs) -> FrameNp:
 
 @wp.func
 def height(inputs: RewardInputs, frame: RewardFrame) -> float:
-    """r_h: z - 0.11 above 0.12 m, else 0."""
+    """r_h: z - 0.11 above 0.12 m, else 0 (the heights x the robot's ``height_scale``)."""
+    s = inputs.task.height_scale
     r = float(0.0)
-    if frame.z > 0.12:
-        r = frame.z - 0.11
+    if frame.z > 0.12 * s:
+        r = frame.z - 0.11 * s
     return r
 
 
 def height_np(inputs, frame):
-    return np.where(frame.z > 0.12, frame.z - 0.11, 0.0)
+    s = inputs.task.height_scale
+    return np.where(frame.z > 0.12 * s, frame.z - 0.11 * s, 0.0)
 
 
 @wp.func
@@ -157,11 +160,12 @@ def distance_np(inputs, frame):
 
 @wp.func
 def stability(inputs: RewardInputs, frame: RewardFrame) -> float:
-    """-1 while z < 0.05 m, |roll| or |pitch| > stability_tilt, or fallen (r_s = stability_penalty x this)."""
+    """-1 while z < 0.05 m (x the robot's ``height_scale``), |roll| or |pitch| > stability_tilt, or fallen (r_s =
+    stability_penalty x this)."""
     lim = inputs.reward.stability_tilt
     tilted = wp.abs(inputs.rpy[frame.env, 0]) > lim or wp.abs(inputs.rpy[frame.env, 1]) > lim
     r = float(0.0)
-    if frame.z < 0.05 or tilted or inputs.status[frame.env] == FELL:
+    if frame.z < 0.05 * inputs.task.height_scale or tilted or inputs.status[frame.env] == FELL:
         r = -1.0
     return r
 
@@ -169,7 +173,8 @@ def stability(inputs: RewardInputs, frame: RewardFrame) -> float:
 def stability_np(inputs, frame):
     rpy = np.asarray(inputs.rpy, np.float64)
     tilted = (np.abs(rpy[:, 0]) > inputs.reward.stability_tilt) | (np.abs(rpy[:, 1]) > inputs.reward.stability_tilt)
-    return np.where((frame.z < 0.05) | tilted | (np.asarray(inputs.status) == FELL), -1.0, 0.0)
+    low = frame.z < 0.05 * inputs.task.height_scale
+    return np.where(low | tilted | (np.asarray(inputs.status) == FELL), -1.0, 0.0)
 
 
 @wp.func

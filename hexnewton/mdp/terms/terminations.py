@@ -98,9 +98,10 @@ def nonfinite(inputs: EndInputs, frame: EndFrame) -> bool:
 
 @wp.func
 def fell(inputs: EndInputs, frame: EndFrame) -> bool:
-    """The torso less than ``min_height`` above the terrain under it, or |roll| or |pitch| above ``max_tilt``."""
+    """The torso less than ``min_height`` (x the robot's ``height_scale``) above the terrain under it, or |roll| or
+    |pitch| above ``max_tilt``."""
     lim = inputs.task.max_tilt
-    low = frame.pz - terrain_height(inputs.hf, frame.px, frame.py) < inputs.task.min_height
+    low = frame.pz - terrain_height(inputs.hf, frame.px, frame.py) < inputs.task.min_height * inputs.task.height_scale
     return low or wp.abs(frame.rpy[0]) > lim or wp.abs(frame.rpy[1]) > lim
 
 
