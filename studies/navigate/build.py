@@ -303,9 +303,9 @@ def render(res: dict) -> str:
         lines += ["", "## Video", ""]
         for t, v in res["videos"].items():
             said = v["printed"][0].split("] ", 1)[-1] if v["printed"] else "-"
-            lines.append(f"- [media/square_{t}.mp4](media/square_{t}.mp4): {said}. `{v['command']}` ({v['machine']}, "
-                         f"{v['wall_s']:.0f} s; re-encoded: {v['encoded']}; `python studies/navigate/build.py video "
-                         f"{t}`)")  # fmt: skip
+            lines.append(f"- media/square_{t}.mp4 (not tracked: `python studies/navigate/build.py video {t}` makes "
+                         f"it): {said}. `{v['command']}` ({v['machine']}, {v['wall_s']:.0f} s; re-encoded: "
+                         f"{v['encoded']})")  # fmt: skip
     lines += ["", "## The terrain patch's mesh", "",
               "[mesh/report.md](mesh/report.md): what the patch that holds every goal costs at start-up "
               "(`python3 studies/navigate/mesh_cost.py`).", ""]  # fmt: skip
