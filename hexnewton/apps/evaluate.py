@@ -77,6 +77,7 @@ from hexnewton.analysis.rollout import (
 from hexnewton.apps.cli import (
     ArgumentParser,
     add_config_args,
+    check_checkpoint_file,
     check_new_dir,
     config_overrides,
     positive_int,
@@ -234,7 +235,10 @@ def success_distances(given: list[float], goal_distance: float) -> tuple[float, 
 
 
 def read_checkpoints(checkpoints: dict[str, str], controllers: list[str], terrains: list[str]) -> dict[str, dict]:
-    """{path: checkpoint} of every learnt policy on every terrain, each file read and checked before any simulation."""
+    """{path: checkpoint} of every learnt policy on every terrain, each file read and checked before any simulation
+    (a directory given as a checkpoint: one line saying what it is and what is expected)."""
+    for key, path in checkpoints.items():
+        check_checkpoint_file(path, "--checkpoint", f"{key}=")
     read = {}
     for ctrl in controllers:
         for terrain in terrains:

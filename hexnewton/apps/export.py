@@ -19,7 +19,7 @@ import sys
 
 import numpy as np
 
-from hexnewton.apps.cli import ArgumentParser, positive_int, run
+from hexnewton.apps.cli import ArgumentParser, check_checkpoint_file, positive_int, run
 from hexnewton.config import JOINT_NAMES, RandomizationConfig, TaskConfig, TerrainConfig, config_from_dict
 from hexnewton.deploy.runtime import FORMAT, replay
 
@@ -136,6 +136,7 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--robots", type=positive_int, default=4, help="robots in the recorded check rollout")
     p.add_argument("--tolerance", type=float, default=1e-3, help="largest joint-target difference allowed [rad]")
     args = p.parse_args(argv)
+    check_checkpoint_file(args.checkpoint)  # a run's folder: one line naming its result
     if os.path.exists(args.out):
         raise ValueError(f"{args.out} exists: nothing is overwritten")
     from hexnewton.learning.checkpoint import checkpoint_meta, load_checkpoint
