@@ -97,7 +97,10 @@ def add(lease: str, revision: str | None) -> list[str]:
             timing = os.path.join(lease, "keep", f"timing_{t}.json")
             if os.path.exists(timing):
                 shutil.copyfile(timing, os.path.join(dst, "timing.json"))
-            save_policy_only(ckpt, os.path.join(dst, "policy.pt"))
+            policy = os.path.join(dst, "policy.pt")
+            if os.path.islink(policy):  # the kept policy is a shipped one (runs/flat): the link goes, the file stays
+                os.remove(policy)
+            save_policy_only(ckpt, policy)
             _note_lease(dst, lease, revision)
             got = True
         for src, kind in ((f"eval_{t}", "eval"), (f"s2s_{t}", "sim2sim")):
