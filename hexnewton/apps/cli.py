@@ -120,11 +120,12 @@ def check_writable(path: str, ext: str) -> None:
         raise ValueError(f"cannot write {path}: {parent} is not a writable directory")
 
 
-def check_checkpoint_file(path: str, flag: str = "--checkpoint") -> None:
+def check_checkpoint_file(path: str, flag: str = "--checkpoint", key: str = "") -> None:
     """Fail in one line if ``path`` is a directory: a checkpoint is a ``.pt`` file. Where the directory holds
     ``model_*.pt`` checkpoints (a run's folder; or runs below it, an experiment's or a ``--log_dir``), the line names
     the newest run's result as ``play.py`` chooses it: ``model_result.pt``, else ``model_best.pt``, else the last
-    iteration's."""
+    iteration's. ``key``: what the flag's value carries before the path (``cpg_rl=`` of ``evaluate --checkpoint
+    cpg_rl=PATH``)."""
     if not os.path.isdir(path):
         return
     import glob
@@ -143,9 +144,9 @@ def check_checkpoint_file(path: str, flag: str = "--checkpoint") -> None:
         below = glob.glob(os.path.join(path, "*")) + glob.glob(os.path.join(path, "*", "*"))
         found = [r for r in map(result, sorted(filter(os.path.isdir, below), key=os.path.basename)) if r]
         newest = found[-1] if found else None
-    hint = f"; the newest there: {flag} {newest}" if newest else " (it holds no model_*.pt)"
-    raise ValueError(f"{flag} {path} is a directory: expected a checkpoint file (.pt, a run's model_<iteration>.pt or "
-                     f"model_result.pt){hint}")
+    hint = f"; the newest there: {flag} {key}{newest}" if newest else " (it holds no model_*.pt)"
+    raise ValueError(f"{flag} {key}{path} is a directory: expected a checkpoint file (.pt, a run's "
+                     f"model_<iteration>.pt or model_result.pt){hint}")
 
 
 def check_new_dir(path: str, files: tuple[str, ...] = ()) -> None:

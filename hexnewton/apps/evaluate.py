@@ -79,6 +79,7 @@ from hexnewton.apps.cli import (
     ArgumentParser,
     add_config_args,
     add_robot_args,
+    check_checkpoint_file,
     check_new_dir,
     config_overrides,
     positive_int,
@@ -145,9 +146,11 @@ def run_sweeps(specs, controllers, evaluate_one, last: float, out: str) -> dict:
     """Every controller at every point of every sweep (``evaluate_one(ctrl, terrain, overrides)``): success at
     ``last`` metres, falls, pitch / roll variance and p99.9, time to ``last``; one figure per sweep in ``out``."""
     from hexnewton.analysis.rollout import duration
+    from hexnewton.learning.progress import TimeLeft
 
-    sweeps, t0, done = {}, time.perf_counter(), 0
+    sweeps, done = {}, 0
     total = sum(len(values) for *_, values in specs) * len(controllers)
+    left = TimeLeft(total)  # from the finished points; the first's one-time costs (a course built) left out
     for name, field, terrain, values in specs:
         curves = {ctrl: [] for ctrl in controllers}
         for value in values:
@@ -157,11 +160,10 @@ def run_sweeps(specs, controllers, evaluate_one, last: float, out: str) -> dict:
                          f"time_to_{last:g}m_s": s[f"time_to_{last:g}m_s"], **{k: s[k] for k in SWEEP_METRICS}}
                 curves[ctrl].append(point)
                 done += 1
-                wall = time.perf_counter() - t0
+                left.update(done)
                 print(f"[sweep {name} = {value:g}] {terrain:8s} {LABELS[ctrl]:8s} {last:g} m "
                       f"{percent(point[f'success_{last:g}m'])}  falls {percent(point['fall_rate'])}  (point {done} of "
-                      f"{total}, {duration(wall)}, about {duration(wall / done * (total - done))} left)",
-                      flush=True)  # fmt: skip
+                      f"{total}, {duration(left.elapsed())}, about {left.text(duration)})", flush=True)  # fmt: skip
         sweeps[name] = {"field": field, "terrain": terrain, "values": list(values), "curves": curves}
         plot_sweep(os.path.join(out, f"fig_sweep_{name.replace('@', '_')}.png"), name, sweeps[name], last)
     return sweeps
@@ -237,7 +239,10 @@ def success_distances(given: list[float], goal_distance: float) -> tuple[float, 
 
 
 def read_checkpoints(checkpoints: dict[str, str], controllers: list[str], terrains: list[str]) -> dict[str, dict]:
-    """{path: checkpoint} of every learnt policy on every terrain, each file read and checked before any simulation."""
+    """{path: checkpoint} of every learnt policy on every terrain, each file read and checked before any simulation
+    (a directory given as a checkpoint: one line saying what it is and what is expected)."""
+    for key, path in checkpoints.items():
+        check_checkpoint_file(path, "--checkpoint", f"{key}=")
     read = {}
     for ctrl in controllers:
         for terrain in terrains:

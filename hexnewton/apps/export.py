@@ -20,7 +20,14 @@ import sys
 
 import numpy as np
 
-from hexnewton.apps.cli import ArgumentParser, add_robot_args, positive_int, robot_from_args, run
+from hexnewton.apps.cli import (
+    ArgumentParser,
+    add_robot_args,
+    check_checkpoint_file,
+    positive_int,
+    robot_from_args,
+    run,
+)
 from hexnewton.config import RandomizationConfig, TaskConfig, TerrainConfig, config_from_dict
 from hexnewton.deploy.runtime import FORMAT, replay
 
@@ -152,6 +159,7 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--tolerance", type=float, default=1e-3, help="largest joint-target difference allowed [rad]")
     add_robot_args(p, "the checkpoint's (the bundle is its robot's; another is one error line)")
     args = p.parse_args(argv)
+    check_checkpoint_file(args.checkpoint)  # a run's folder: one line naming its result
     if os.path.exists(args.out):
         raise ValueError(f"{args.out} exists: nothing is overwritten")
     from hexnewton.learning.checkpoint import checkpoint_meta, load_checkpoint

@@ -49,6 +49,7 @@ from hexnewton.apps.cli import (
     add_config_args,
     add_robot_args,
     announce_browser,
+    check_checkpoint_file,
     config_overrides,
     positive_int,
     robot_from_args,
@@ -89,6 +90,7 @@ def _base_task(argv: list[str] | None):
     )
     from hexnewton.tasks import TASKS, Task
 
+    check_checkpoint_file(known.resume, "--resume")  # a run's folder: one line naming its result
     ckpt = load_checkpoint(known.resume)  # fails before building anything
     if "critic_state_dict" not in ckpt or "optimizer_state_dict" not in ckpt:
         raise ValueError(f"{known.resume} holds the policy only (no critic or optimiser): resume from a run's "

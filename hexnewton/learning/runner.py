@@ -24,16 +24,19 @@ from hexnewton.learning.checkpoint import load_checkpoint, load_into_runner
 from hexnewton.learning.episode_log import DeferredEpisodes
 from hexnewton.learning.lanes import LaneLog
 from hexnewton.learning.policy import export_onnx
+from hexnewton.learning.progress import TimeLeft
 from hexnewton.learning.ranks import Rank
 from hexnewton.learning.rsl_rl_private import replace_logger_method, set_git_status_repos
 from hexnewton.learning.stopping import TrainingStopped, catch_stop_signals
 
 
-def progress_line(log_kwargs: dict, stats: dict, elapsed: float, goals: bool = False, lanes: str = "") -> str:
+def progress_line(log_kwargs: dict, stats: dict, elapsed: float, goals: bool = False, lanes: str = "",
+                  left: str = "") -> str:
     """One console line per iteration: the iteration, the last training episodes' outcome (``env.episode_stats()``;
     with ``goals``, random goals, the goals reached per episode in place of the success rate, which stays 0: reaching
     a goal sets the next one), the curriculum's mean level and ``lanes`` (``LaneLog.line``: the top lane's share of
-    the stage's episodes, the episodes per robot), the iteration's time and the run's."""
+    the stage's episodes, the episodes per robot), the iteration's time, the run's and ``left``
+    (``TimeLeft.text``: the run's time left)."""
     it, total = log_kwargs.get("it", 0), log_kwargs.get("total_it", 0)
     step_s = log_kwargs.get("collect_time", 0.0) + log_kwargs.get("learn_time", 0.0)
     level = f"  level {stats['mean_level']:.1f}" if "mean_level" in stats else ""
@@ -44,7 +47,7 @@ def progress_line(log_kwargs: dict, stats: dict, elapsed: float, goals: bool = F
         outcome = (f"{reached}  fell {stats['fell_rate']:.3f}  off course "
                    f"{stats['off_course_rate']:.3f}  distance {stats['distance_m']:.2f} m")  # fmt: skip
     return (f"iteration {it}/{total - 1}  {outcome}{level}{lanes}  {step_s:.2f} s/it  "
-            f"{datetime.timedelta(seconds=int(elapsed))}")
+            f"{datetime.timedelta(seconds=int(elapsed))}" + (f"  {left}" if left else ""))
 
 
 def training_success(stats: dict, levels: int, goals: bool = False) -> float | None:
@@ -284,6 +287,7 @@ class HexRunner(RankedRunner):
         self._rsl_init_writer = replace_logger_method(self.logger, "init_logging_writer", self._init_writer)
         self._stage, self._time_up, self._t0 = None, False, time.time()
         self._actor_frozen_until = None  # --init: the iteration from which the loaded actor learns too
+        self._left = TimeLeft(0)  # the run's time left (train() sets its iterations and time cap)
         self.first_iteration_s = None  # seconds from the process's start to the end of the first iteration
         startup.mark("runner")
 
@@ -359,7 +363,9 @@ class HexRunner(RankedRunner):
                 for tag, value in self.lanes.scalars().items():
                     self.logger.writer.add_scalar(tag, value, self.current_learning_iteration)
         if self.rank.is_main:
-            print(progress_line(kwargs, stats, time.time() - self._t0, self.goals, lanes), flush=True)
+            self._left.update(kwargs.get("it", 0) - kwargs.get("start_it", 0) + 1)
+            print(progress_line(kwargs, stats, time.time() - self._t0, self.goals, lanes, self._left.text()),
+                  flush=True)
             self.best.update(stats, self.current_learning_iteration, self.save)
         reason = stop_reason(self._time_up, stats, self.agent.target_success, self.levels, self._reduce)
         if reason:
@@ -398,6 +404,7 @@ class HexRunner(RankedRunner):
         save what was learnt in every case. Returns why it ended."""
         self.enter_stage(self.current_learning_iteration)
         self._t0 = time.time()
+        self._left = TimeLeft(iterations, 60.0 * self.agent.max_minutes if self.agent.max_minutes else None)
         handlers = catch_stop_signals()
         handlers[signal.SIGALRM] = signal.signal(signal.SIGALRM, lambda *_: setattr(self, "_time_up", True))
         if self.agent.max_minutes:

@@ -11,7 +11,9 @@ and its version, when an upgrade moves one.
 - Warp's struct type (``WarpStruct``, :func:`warp_struct_type`), for the MDP's configuration structs: ``wp.struct``
   makes one, ``warp.types.type_is_struct`` tests for one, no public name holds the class;
 - Newton's mesh boundary flags, which ``ModelBuilder.finalize`` computes for each mesh shape: the studies time them
-  (:func:`time_mesh_boundary_flags`; studies/startup_mesh, studies/navigate).
+  (:func:`time_mesh_boundary_flags`; studies/startup_mesh, studies/navigate), the terrain tests read them for a
+  mesh (:func:`mesh_boundary_flags`), and the bit of a mesh shape's properties that marks it watertight, so that
+  ``finalize`` skips them (:func:`mesh_watertight_flag`).
 
 What each name is for is said where it is used (``precompile.py``, ``device.py``, ``world.py``,
 ``mdp/terms/structs.py``)."""
@@ -95,6 +97,22 @@ def time_mesh_boundary_flags(seconds: list):
 
     module.compute_mesh_boundary_flags = timed
     return real
+
+
+def mesh_boundary_flags(mesh):
+    """Newton's seam analysis of a Warp mesh (``compute_mesh_boundary_flags``, what ``ModelBuilder.finalize`` runs for
+    each mesh shape): its boundary flags, nonzero where an edge is open."""
+    import importlib
+
+    return importlib.import_module(MESH_BOUNDARY_FLAGS).compute_mesh_boundary_flags(mesh)
+
+
+def mesh_watertight_flag() -> int:
+    """The bit of a finalized model's per-mesh-shape properties that marks a watertight mesh (Newton's
+    ``MeshProperties.WATERTIGHT``: ``finalize`` then skips the mesh's boundary flags)."""
+    from newton._src.geometry.flags import MeshProperties
+
+    return int(MeshProperties.WATERTIGHT)
 
 
 def untime_mesh_boundary_flags(real) -> None:

@@ -4,8 +4,8 @@ its falls before the goal line does.
 
     python studies/curriculum/gate_mc.py            # -> studies/curriculum/gate_mc.json (and prints the table)
 
-The model, from the shipped policy's own test results (studies/learner/evals/*shipped_*: 1000 test rounds per course
-in each of three leases, deterministic action, beside the fixed CPG of the same lease):
+The model, from the shipped policy's own test results (studies/learner/results.json, ``same_rounds``/``test``: 1000
+test rounds per course in each of three leases, deterministic action, beside the fixed CPG of the same lease):
 - per course, a seed's share at 3 m and its share of falls before the goal line are binomial on the gate's rounds
   (4000 on rugged and complex, 1000 on stepped) at the shipped policy's rates pooled over the three leases; the
   shipped policy in the gate's lease is one more such draw (the gate judges every seed against it);
@@ -20,7 +20,6 @@ in each of three leases, deterministic action, beside the fixed CPG of the same 
 
 from __future__ import annotations
 
-import glob
 import json
 import os
 import sys
@@ -29,7 +28,7 @@ import numpy as np
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(os.path.dirname(HERE))
-EVALS = os.path.join(ROOT, "studies", "learner", "evals")
+LEARNER = os.path.join(ROOT, "studies", "learner", "results.json")
 LEASES = ("gate", "gate_tf32", "gate_together")  # the three leases whose shipped policy ran the gate's test rounds
 COURSES = ("rugged", "stepped", "complex")
 ROUNDS = {"rugged": 4000, "stepped": 1000, "complex": 4000}
@@ -42,16 +41,18 @@ DRAWS = 20000
 
 
 def shipped_results() -> dict:
-    """Per lease and course: the shipped policy's and the fixed CPG's test results (1000 rounds each)."""
+    """Per lease and course: the shipped policy's and the fixed CPG's test results (1000 rounds each), as the learner
+    study's results.json keeps them from each gate's evaluations."""
+    with open(LEARNER) as f:
+        test = json.load(f)["same_rounds"]["test"]
     out = {}
     for lease in LEASES:
         for t in COURSES:
-            path = os.path.join(EVALS, f"{lease}_shipped_{t}", "results.json")
-            if not os.path.exists(path):
-                raise SystemExit(f"gate_mc.py: {os.path.relpath(path, ROOT)} is missing (the shipped policy's test "
-                                 "rounds of the learner study's gates)")  # fmt: skip
-            r = json.load(open(path))["results"][t]
-            out.setdefault(lease, {})[t] = {"cpg_rl": r["cpg_rl"], "cpg": r["cpg"]}
+            refs = test.get(lease, {})
+            if t not in refs.get("shipped", {}) or t not in refs.get("fixed_cpg", {}):
+                raise SystemExit(f"gate_mc.py: studies/learner/results.json has no {lease} test rounds on {t} (the "
+                                 "shipped policy's and the fixed CPG's, same_rounds/test)")  # fmt: skip
+            out.setdefault(lease, {})[t] = {"cpg_rl": refs["shipped"][t], "cpg": refs["fixed_cpg"][t]}
     return out
 
 

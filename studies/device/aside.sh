@@ -1,6 +1,6 @@
 #!/bin/bash
 # The studies' kept data (checkpoints, curves, evaluations) out of the working tree and back: the tree that a device
-# call sends must stay under 64 MiB with a wheel chunk beside it, and the tracked tree alone is larger.
+# call sends must stay under 64 MiB with a wheel chunk beside it: the smaller the tree, the larger the chunks.
 #
 #   bash studies/device/aside.sh out     # the folders below to $ASIDE (default ../device_aside), then the tree's size
 #   bash studies/device/aside.sh back    # them back into the tree

@@ -4,7 +4,7 @@
 # with the kept study (studies/paper_comparison), so run this at the start of every lease, from the repository root:
 #
 #   bash ../shared/device/pack.sh ...    # once per machine, when no .dw* folders exist
-#   bash studies/device/aside.sh out     # the studies' data out of the tree (the tracked tree is over 64 MiB)
+#   bash studies/device/aside.sh out     # the studies' data out of the tree: larger chunks, fewer calls
 #   bash studies/device/rechunk.sh       # then the device calls it prints
 #
 # The chunks are joined in name order and split again into .dw0 ... .dwN (install.sh joins /opt/w/part* in name

@@ -9,7 +9,8 @@ LEASE holds what ``studies/device/learner.sh collect`` brings back (``cat learne
 ``runs/<date_time>/`` as ``gpu.sh pack`` writes it) and ``evals/JOB/results.json`` (``JOB``: ``NAME_TERRAIN`` for a
 run's result, ``shipped_TERRAIN`` / ``STEM_shipped_TERRAIN`` for the shipped policy beside the fixed CPG on the
 validation / test rounds). The gate's runs are ``gate_s1`` ... ``gate_s3``. The study keeps
-per run its console log, config, timing and the result's actor (``runs/NAME/``), and per evaluation its report.
+per run its console log, config, timing and the result's actor (``runs/NAME/``), and per evaluation its report; the
+tracked tree holds results.json, report.md, the runs' configs and timings and the gates' actors (README, Raw runs).
 """
 
 from __future__ import annotations
@@ -648,8 +649,9 @@ def main(argv: list[str] | None = None) -> int:
         print("added:", ", ".join(add(args.add)) or "nothing")
     missing = raw_missing()
     if missing:
-        print(f"build.py: the raw runs are not in the tree ({missing}, not tracked): restore them with `git "
-              "restore --source df27913 --worktree -- studies/learner/runs` or rerun the lease (README, Raw runs)",
+        print(f"build.py: the raw runs are not in the tree ({missing}, not tracked): restore them with `git -C "
+              "studies/learner restore --source df27913 --worktree -- runs evals` or rerun the lease (README, Raw "
+              "runs)",
               file=sys.stderr)
         return 2
     res = collect()

@@ -97,7 +97,10 @@ def add(lease: str, revision: str | None) -> list[str]:
             timing = os.path.join(lease, "keep", f"timing_{t}.json")
             if os.path.exists(timing):
                 shutil.copyfile(timing, os.path.join(dst, "timing.json"))
-            save_policy_only(ckpt, os.path.join(dst, "policy.pt"))
+            policy = os.path.join(dst, "policy.pt")
+            if os.path.islink(policy):  # the kept policy is a shipped one (runs/flat): the link goes, the file stays
+                os.remove(policy)
+            save_policy_only(ckpt, policy)
             _note_lease(dst, lease, revision)
             got = True
         for src, kind in ((f"eval_{t}", "eval"), (f"s2s_{t}", "sim2sim")):
@@ -303,9 +306,9 @@ def render(res: dict) -> str:
         lines += ["", "## Video", ""]
         for t, v in res["videos"].items():
             said = v["printed"][0].split("] ", 1)[-1] if v["printed"] else "-"
-            lines.append(f"- [media/square_{t}.mp4](media/square_{t}.mp4): {said}. `{v['command']}` ({v['machine']}, "
-                         f"{v['wall_s']:.0f} s; re-encoded: {v['encoded']}; `python studies/navigate/build.py video "
-                         f"{t}`)")  # fmt: skip
+            lines.append(f"- media/square_{t}.mp4 (not tracked: `python studies/navigate/build.py video {t}` makes "
+                         f"it): {said}. `{v['command']}` ({v['machine']}, {v['wall_s']:.0f} s; re-encoded: "
+                         f"{v['encoded']})")  # fmt: skip
     lines += ["", "## The terrain patch's mesh", "",
               "[mesh/report.md](mesh/report.md): what the patch that holds every goal costs at start-up "
               "(`python3 studies/navigate/mesh_cost.py`).", ""]  # fmt: skip

@@ -151,7 +151,7 @@ def test_the_committed_report_renders_what_the_study_keeps():
         assert kept == json.loads(json.dumps(res))
     with open(os.path.join(HERE, "report.md")) as f:
         assert f.read() == build.render(res)
-    for t in res["training"]:
+    for t in build.TASKS:  # the kept policies the queue evaluates again (TRAINED=T)
         assert os.path.getsize(os.path.join(HERE, "runs", t, "policy.pt")) < 2_000_000  # the policy alone
     missing = [f"navigate-{t}: evaluation" for t in build.TASKS if t not in res["evaluation"]]
     assert [p for p in res["partial"] if p.endswith("evaluation")] == missing
@@ -186,3 +186,24 @@ def test_add_keeps_an_evaluation_alone_with_its_code(tmp_path):
     assert sorted(p.name for p in kept.iterdir()) == ["lease.json", "report.md", "results.json"]
     assert json.loads((kept / "lease.json").read_text())["revision"] == "abc1234"
     assert not (tmp_path / "study" / "runs").exists()
+
+
+def test_add_writes_a_new_policy_beside_the_shipped_one_a_run_links_to(tmp_path):
+    """runs/flat/policy.pt links to the shipped results/policies/cpg_rl_navigate_flat.pt (the same file); a lease's
+    new flat result replaces the link, never the shipped file."""
+    assert os.readlink(os.path.join(HERE, "runs", "flat", "policy.pt")) == os.path.join(
+        "..", "..", "..", "..", "results", "policies", "cpg_rl_navigate_flat.pt")
+    build = _build()
+    shipped = os.path.join(HERE, "..", "..", "results", "policies", "cpg_rl_navigate_flat.pt")
+    (tmp_path / "shipped.pt").write_bytes(open(shipped, "rb").read())
+    runs = tmp_path / "study" / "runs" / "flat"
+    runs.mkdir(parents=True)
+    (runs / "policy.pt").symlink_to(tmp_path / "shipped.pt")
+    lease = tmp_path / "lease"
+    (lease / "keep").mkdir(parents=True)
+    (lease / "train_flat.log").write_text(TRAIN_LOG.replace("navigate-rugged", "navigate-flat"))
+    (lease / "keep" / "navigate_flat.pt").write_bytes(open(shipped, "rb").read())
+    build.HERE = str(tmp_path / "study")
+    assert build.add(str(lease), "abc1234") == ["flat"]
+    assert not (runs / "policy.pt").is_symlink() and (runs / "policy.pt").stat().st_size < 2_000_000
+    assert (tmp_path / "shipped.pt").read_bytes() == open(shipped, "rb").read()

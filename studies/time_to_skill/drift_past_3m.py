@@ -1,6 +1,7 @@
-"""Rugged rounds that end badly after walking 3 m against the mean lateral drift, over every committed evaluation.
+"""Rugged rounds that end badly after walking 3 m against the mean lateral drift, over every evaluation in a tree.
 
-Every ``studies/**/results.json`` of ``python -m hexnewton.apps.evaluate`` with a learnt CPG policy (``cpg_rl``) on the
+Every ``ROOT/**/results.json`` (``--root``, default ``studies``; the evaluations themselves are in git history,
+studies/time_to_skill/README.md) of ``python -m hexnewton.apps.evaluate`` with a learnt CPG policy (``cpg_rl``) on the
 rugged course, at least 300 rounds, deterministic action. A round that never walked 3 m ended badly (fell, left the
 course, timed out), so the bad endings of the rounds that did are (fell + off course + time-outs) / rounds - (1 - 3 m
 success) (a report that carries ``ended_past_3m`` gives the same directly). Prints one line per evaluation and the

@@ -1,4 +1,5 @@
-"""``play.py --checkpoint DIR``: a directory is no checkpoint; one line says what it is, what is expected, and the
+"""A directory given as a checkpoint (``play.py --checkpoint DIR``, ``evaluate --checkpoint cpg_rl=DIR``, ``export
+--checkpoint DIR``, ``train.py --resume DIR``) is no checkpoint; one line says what it is, what is expected, and the
 newest run's result it holds (a run's folder, an experiment's, a --log_dir), exit status 2, before anything is built."""
 
 import os
@@ -44,3 +45,34 @@ def test_play_given_a_directory_is_one_line_and_exit_2(tmp_path):
     assert proc.stderr == (f"python play.py: error: --checkpoint {run_dir} is a directory: expected a checkpoint file "
                            f"(.pt, a run's model_<iteration>.pt or model_result.pt); the newest there: --checkpoint "
                            f"{os.path.join(run_dir, 'model_1.pt')}\n"), proc.stderr
+
+
+EXPECTED = "is a directory: expected a checkpoint file (.pt, a run's model_<iteration>.pt or model_result.pt)"
+
+
+@pytest.mark.parametrize("argv, flag", [
+    (["-m", "hexnewton.apps.evaluate", "--controllers", "cpg_rl", "--checkpoint", "cpg_rl={}"], "--checkpoint cpg_rl="),
+    (["-m", "hexnewton.apps.evaluate", "--terrains", "rugged", "--checkpoint", "cpg_rl:rugged={}"],
+     "--checkpoint cpg_rl:rugged="),
+    (["-m", "hexnewton.apps.export", "--checkpoint", "{}", "--out", "never_made"], "--checkpoint "),
+    (["train.py", "--resume", "{}", "--device", "cpu"], "--resume "),
+])  # fmt: skip
+def test_evaluate_export_and_resume_given_a_directory_are_one_line_and_exit_2(tmp_path, argv, flag):
+    run_dir = _run(tmp_path, "2026-01-01_00-00-00", ("model_0.pt", "model_best.pt"))
+    argv = [os.path.join(ROOT, a) if a == "train.py" else a.format(run_dir) for a in argv]
+    proc = subprocess.run([sys.executable, *argv], capture_output=True, text=True, cwd=tmp_path, timeout=300,
+                          env=dict(os.environ, PYTHONPATH=ROOT))  # fmt: skip
+    prog = "python train.py" if argv[0].endswith("train.py") else f"python -m {argv[1]}"
+    assert proc.returncode == 2 and proc.stdout == "", proc.stdout
+    assert proc.stderr == (f"{prog}: error: {flag}{run_dir} {EXPECTED}; the newest there: {flag}"
+                           f"{os.path.join(run_dir, 'model_best.pt')}\n"), proc.stderr
+    assert not (tmp_path / "never_made").exists()
+
+
+def test_an_empty_directory_says_it_holds_no_checkpoint(tmp_path):
+    (tmp_path / "empty").mkdir()
+    proc = subprocess.run([sys.executable, "-m", "hexnewton.apps.evaluate", "--checkpoint", f"cpg_rl={tmp_path}/empty"],
+                          capture_output=True, text=True, cwd=tmp_path, timeout=300,
+                          env=dict(os.environ, PYTHONPATH=ROOT))  # fmt: skip
+    assert proc.returncode == 2 and proc.stderr == (f"python -m hexnewton.apps.evaluate: error: --checkpoint "
+                                                    f"cpg_rl={tmp_path}/empty {EXPECTED} (it holds no model_*.pt)\n")

@@ -42,6 +42,9 @@ def test_baseline_trains_saves_and_runs_the_rounds(algo, tmp_path, capsys):
     assert _main(argv) == 0
     out = capsys.readouterr().out
     assert "finished after 96 env-steps" in out
+    steps = [line for line in out.splitlines() if line.startswith("step ")]
+    assert len(steps) == 3 and all(" left" in line for line in steps), steps  # the time left on each line
+    assert steps[-1].endswith("0:00:00 left"), steps[-1]
     (path,) = logs.glob(f"hexnewton_flat_{algo}/*/model_12.pt")
     raw = torch.load(path, weights_only=True)  # nothing in the file is code
     assert raw["env_steps"] == 96 and "policy" in raw["modules"]

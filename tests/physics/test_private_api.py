@@ -30,7 +30,9 @@ def test_private_module_exists(name):
 @pytest.mark.parametrize("func, name", [(private_api.warp_user_modules, "warp._src.context.user_modules"),
                                         (private_api.warp_started, "warp._src.context.runtime"),
                                         (private_api.export_reduced_contacts_block_dim,
-                                         "newton._src.geometry.contact_reduction_global")])  # fmt: skip
+                                         "newton._src.geometry.contact_reduction_global"),
+                                        (private_api.mesh_watertight_flag,
+                                         "newton._src.geometry.flags.MeshProperties.WATERTIGHT")])  # fmt: skip
 def test_private_name_exists(func, name):
     try:
         value = func()
@@ -103,3 +105,4 @@ def test_mesh_boundary_flags_are_timed_where_the_builder_finds_them():
     finally:
         private_api.untime_mesh_boundary_flags(real)
     assert len(seconds) == 1 and module.compute_mesh_boundary_flags is real
+    assert private_api.mesh_boundary_flags(mesh).any()  # one triangle: every edge open

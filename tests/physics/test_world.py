@@ -341,6 +341,7 @@ def test_precompile_asks_cuda_for_the_launched_block_sizes(monkeypatch):
     from types import SimpleNamespace
 
     from hexnewton.physics import precompile as pc
+    from hexnewton.physics.private_api import CONTACT_REDUCTION, NARROW_PHASE_SOURCES, SOLVER_MODULES
 
     world = _world("rugged")
     modules = {m.name: m for m in pc.imported_modules()}
@@ -348,12 +349,13 @@ def test_precompile_asks_cuda_for_the_launched_block_sizes(monkeypatch):
     narrow = world.pipeline.narrow_phase
     dims = pc.narrow_phase_block_dims(world.pipeline, "cuda:0")
     assert dims == tuple(sorted({narrow.block_dim, narrow.split_convex_block_dim, narrow.mesh_triangle_block_dim, 32}))
-    reduction = modules["newton._src.geometry.contact_reduction_global"]
+    reduction = modules[CONTACT_REDUCTION]
     assert pc._block_dims(reduction, "cuda:0", None, dims) == [None, *dims]
-    assert pc._block_dims(modules["mujoco_warp._src.smooth"], "cuda:0", None, dims) == [None]
+    assert pc._block_dims(modules[SOLVER_MODULES[0]], "cuda:0", None, dims) == [None]  # mujoco_warp's smooth
     # the import-time narrow phase launched no other size on the H100; its generated kernels did
-    assert pc._block_dims(modules["newton._src.geometry.narrow_phase"], "cuda:0", None, dims) == [None]
-    generated = next(k.module for k in pc._live_kernels() if k.func.__module__ == "newton._src.geometry.narrow_phase"
+    narrow_phase = NARROW_PHASE_SOURCES[0]  # Newton's narrow-phase module
+    assert pc._block_dims(modules[narrow_phase], "cuda:0", None, dims) == [None]
+    generated = next(k.module for k in pc._live_kernels() if k.func.__module__ == narrow_phase
                      and k.module.name not in pc.NARROW_PHASE_SOURCES)  # fmt: skip
     assert pc._block_dims(generated, "cuda:0", None, dims) == [None, *dims]
 

@@ -383,10 +383,11 @@ def test_add_to_builder_and_finalize() -> None:
     model = builder.finalize(device=DEVICE)
     assert model.shape_count == 2
     # Newton's own seam analysis finds no open edge (T-junctions are covered on both sides)
-    sdf_contact = pytest.importorskip("newton._src.geometry.sdf_contact")
+    from hexnewton.physics.private_api import mesh_boundary_flags
+
     wmesh = wp.Mesh(points=wp.array(terrain.mesh.vertices, dtype=wp.vec3, device=DEVICE),
                     indices=wp.array(terrain.mesh.indices, dtype=wp.int32, device=DEVICE))
-    assert not sdf_contact.compute_mesh_boundary_flags(wmesh).any()
+    assert not mesh_boundary_flags(wmesh).any()
 
 
 def test_patch_reaches_beyond_the_goal():

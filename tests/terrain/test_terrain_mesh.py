@@ -194,5 +194,6 @@ def test_finalize_skips_boundary_pass(collision: str) -> None:
     assert (model._shape_mesh_boundary_start.numpy()[meshes] >= 0).all()  # today: boundary flags computed
     model, meshes = _finalized_terrain(replace(cfg, watertight=True))
     assert (model._shape_mesh_boundary_start.numpy()[meshes] == -1).all()  # watertight: pass skipped
-    watertight_bit = 1  # newton._src.geometry.flags.MeshProperties.WATERTIGHT (no public name in Newton 1.8)
-    assert (model._shape_mesh_properties.numpy()[meshes] & watertight_bit).all()
+    from hexnewton.physics.private_api import mesh_watertight_flag
+
+    assert (model._shape_mesh_properties.numpy()[meshes] & mesh_watertight_flag()).all()

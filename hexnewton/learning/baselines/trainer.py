@@ -14,6 +14,7 @@ from hexnewton.learning.agent import apply_stage, split_stage_changes, stage_at
 from hexnewton.learning.baselines.checkpoint import save_checkpoint
 from hexnewton.learning.baselines.config import BaselineConfig
 from hexnewton.learning.baselines.env import wrap_env
+from hexnewton.learning.progress import TimeLeft
 
 
 @dataclass
@@ -73,6 +74,7 @@ class BaselineTrainer:
         self.hex_env, self.env, self.agent, self.algo, self.cfg = env, wrap_env(env), agent, algo, cfg
         self.meta, self.run_dir = meta, run_dir
         self.stages, self.steps_per_iteration, self._stage = stages, steps_per_iteration, -1
+        self._left: TimeLeft | None = None  # the run's time left (train() sets its vector steps and time cap)
         self.trainer_cfg = SequentialTrainerCfg(timesteps=1, headless=True, disable_progressbar=True,
                                                 close_environment_at_exit=False)  # fmt: skip
         self.timestep = 0
@@ -117,6 +119,7 @@ class BaselineTrainer:
         handlers = catch_stop_signals()
         t0 = time.monotonic()
         deadline = t0 + 60.0 * budget.max_minutes if budget.max_minutes else math.inf
+        self._left = TimeLeft(timesteps, 60.0 * budget.max_minutes if budget.max_minutes else None)
         reason = f"{budget.env_steps} env-steps"
         obs, _ = env.reset()
         states = env.state()
@@ -169,5 +172,9 @@ class BaselineTrainer:
         writer.add_scalar("Perf/env_steps_per_s", step / max(elapsed, 1e-9), step)
         writer.flush()
         success = float(log["Episode/success_rate"]) if "Episode/success_rate" in log else float("nan")
+        left = ""
+        if self._left is not None:
+            self._left.update(self.timestep)
+            left = f"  {self._left.text()}" if self.timestep else ""
         print(f"step {self.timestep}  env-steps {step}  return {ret:.2f}  success {success:.3f}  "
-              f"{step / max(elapsed, 1e-9):.0f} env-steps/s  {elapsed:.0f} s", flush=True)  # fmt: skip
+              f"{step / max(elapsed, 1e-9):.0f} env-steps/s  {elapsed:.0f} s{left}", flush=True)  # fmt: skip
