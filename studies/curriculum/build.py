@@ -3,11 +3,11 @@
     python studies/curriculum/build.py --add LEASE    # a lease's files (queue.sh collect, unpacked) into the study
     python studies/curriculum/build.py                # results.json and report.md again from runs/ and evals/
 
-A lease's folder holds ``runs/NAME/<stamp>/timing.json`` (with its ``curriculum`` block: what training saw) and
-``config.json``, and ``evals/JOB/results.json`` (each result, the shipped policy with the fixed CPG, and the recipe's
-kept results on the same validation rounds). ``--add`` copies the timings, configs and evaluations into
-``runs/LEASE_DATE/`` and ``evals/LEASE_DATE/`` of the study (small JSON files; the checkpoints and consoles stay out),
-and the gate's results (``gate/gate_sN.pt``, gate.sh) into ``policies/LEASE_DATE/`` (not tracked).
+A lease's folder holds ``runs/NAME/<stamp>/timing.json`` (with its ``curriculum`` block: what training saw), the
+consoles ``runs/NAME.log``, and ``evals/JOB/results.json`` (each result, the shipped policy with the fixed CPG, and the
+recipe's kept results on the same validation rounds). ``--add`` keeps the timings, the consoles' summaries and the
+evaluations' numbers in one file, ``leases/LEASE_DATE.json`` (the checkpoints and consoles stay out), and the gate's
+results (``gate/gate_sN.pt``, gate.sh) in ``policies/LEASE_DATE/`` (not tracked).
 """
 
 from __future__ import annotations
@@ -80,9 +80,27 @@ def parse_console(text: str) -> dict:
     return {"iterations": rows, "stage_starts": stages, "last_iteration": last}
 
 
+LEASES_DIR = os.path.join(HERE, "leases")  # one JSON file a lease: its runs' small files and its evaluations' numbers
+_LEASES: dict[str, dict] = {}
+
+
+def _lease(name: str) -> dict:
+    if name not in _LEASES:
+        _LEASES[name] = json.load(open(os.path.join(LEASES_DIR, f"{name}.json")))
+    return _LEASES[name]
+
+
+def _slim(results: dict) -> dict:
+    """An evaluation's results.json as the study keeps it: per controller its metrics and rounds."""
+    return {who: {m: r[m] for m in METRICS} | {"rounds": r["rounds"]}
+            for course in results["results"].values() for who, r in course.items()}  # fmt: skip
+
+
 def add(lease: str, name: str | None = None) -> str:
-    """Copy a lease's small files into the study under the lease's date (or ``name``); returns that name. A run
-    without its timing.json (cut off before its validation ended) keeps what its console says (``console.json``)."""
+    """A lease's small files into the study as ``leases/NAME.json`` (NAME: the lease's date, or ``name``; a second
+    ``--add`` of the same name adds to it): each run's timing.json (its ``curriculum`` block: what training saw), or,
+    for a run cut off before its timing.json, what its console said; each evaluation's numbers. The gate's results
+    (``gate/gate_sN.pt``, gate.sh) go to ``policies/NAME/`` (not tracked). Returns NAME."""
     timings = glob.glob(os.path.join(lease, "runs", "*", "*", "timing.json"))
     consoles = glob.glob(os.path.join(lease, "runs", "*.log"))
     if not timings and not consoles:
@@ -90,57 +108,45 @@ def add(lease: str, name: str | None = None) -> str:
     if name is None:
         stamp = os.path.basename(os.path.dirname(sorted(timings)[0]))[:10] if timings else ""
         name = stamp if re.match(r"\d{4}-\d\d-\d\d$", stamp) else os.path.basename(os.path.normpath(lease))
-    for path in consoles:
-        run = os.path.basename(path)[:-4]
-        if not RUN.match(run):
-            continue
-        parsed = parse_console(open(path).read())
-        if parsed["iterations"]:
-            dest = os.path.join(HERE, "runs", name, run)
-            os.makedirs(dest, exist_ok=True)
-            with open(os.path.join(dest, "console.json"), "w") as f:
-                json.dump(parsed, f, indent=0)
-    for path in timings:
-        run = os.path.basename(os.path.dirname(os.path.dirname(path)))
-        dest = os.path.join(HERE, "runs", name, run)
+    path = os.path.join(LEASES_DIR, f"{name}.json")
+    data = json.load(open(path)) if os.path.exists(path) else {"runs": {}, "evals": {}}
+    for log in consoles:
+        run = os.path.basename(log)[:-4]
+        parsed = parse_console(open(log).read())
+        if RUN.match(run) and parsed["iterations"]:
+            data["runs"].setdefault(run, {})["console"] = parsed
+    for t in timings:
+        run = os.path.basename(os.path.dirname(os.path.dirname(t)))
+        data["runs"].setdefault(run, {})["timing"] = json.load(open(t))
+    for pt in glob.glob(os.path.join(lease, "gate", "gate_s*.pt")):  # untracked: a split gate's second lease carries them
+        dest = os.path.join(HERE, "policies", name)
         os.makedirs(dest, exist_ok=True)
-        for f in ("timing.json", "config.json"):
-            src = os.path.join(os.path.dirname(path), f)
-            if os.path.exists(src):
-                shutil.copyfile(src, os.path.join(dest, f))
-    for path in glob.glob(os.path.join(lease, "gate", "gate_s*.pt")):  # the gate's results (gate.sh collect)
-        dest = os.path.join(HERE, "policies", name)  # untracked: a split gate's second lease carries them
-        os.makedirs(dest, exist_ok=True)
-        shutil.copyfile(path, os.path.join(dest, os.path.basename(path)))
-    for path in glob.glob(os.path.join(lease, "evals", "*", "results.json")):
-        dest = os.path.join(HERE, "evals", name, os.path.basename(os.path.dirname(path)))
-        os.makedirs(dest, exist_ok=True)
-        shutil.copyfile(path, os.path.join(dest, "results.json"))
+        shutil.copyfile(pt, os.path.join(dest, os.path.basename(pt)))
+    for r in glob.glob(os.path.join(lease, "evals", "*", "results.json")):
+        data["evals"][os.path.basename(os.path.dirname(r))] = _slim(json.load(open(r)))
+    os.makedirs(LEASES_DIR, exist_ok=True)
+    with open(path, "w") as f:
+        json.dump(data, f, indent=0, sort_keys=True)
+    _LEASES.pop(name, None)
     return name
 
 
 def _eval(lease: str, job: str, course: str, who: str = "cpg_rl") -> dict | None:
-    path = os.path.join(HERE, "evals", lease, f"{job}_{course}", "results.json")
-    if not os.path.exists(path):
-        return None
-    r = json.load(open(path))["results"][course].get(who)
-    return None if r is None else {m: r[m] for m in METRICS} | {"rounds": r["rounds"]}
+    return _lease(lease)["evals"].get(f"{job}_{course}", {}).get(who)
 
 
 def collect() -> dict:
     leases = {}
-    for lease_dir in sorted(glob.glob(os.path.join(HERE, "runs", "*"))):
-        lease = os.path.basename(lease_dir)
+    for path in sorted(glob.glob(os.path.join(LEASES_DIR, "*.json"))):
+        lease = os.path.basename(path)[:-5]
         runs = {}
-        for run_dir in sorted(glob.glob(os.path.join(lease_dir, "*"))):
-            name = os.path.basename(run_dir)
+        for name, files in sorted(_lease(lease)["runs"].items()):
             m = RUN.match(name)
-            tpath, cpath = os.path.join(run_dir, "timing.json"), os.path.join(run_dir, "console.json")
-            timing = json.load(open(tpath)) if os.path.exists(tpath) else {}
+            timing = files.get("timing", {})
             cur = timing.get("curriculum", {})
             complete = bool(cur)  # timing.json is written after the last iteration
-            if not cur and os.path.exists(cpath):  # cut off before its validation: what its console said
-                console = json.load(open(cpath))
+            if not cur and "console" in files:  # cut off before its validation: what its console said
+                console = files["console"]
                 last = console["iterations"][-1]
                 complete = last["iteration"] >= console["last_iteration"]
                 cur = {"training_success": last["success"], "training_fell": last["fell"],
@@ -163,8 +169,7 @@ def collect() -> dict:
                           "validation": {t: _eval(lease, name, t) for t in COURSES}}  # fmt: skip
         refs = {"shipped": {t: _eval(lease, "shipped", t) for t in COURSES},
                 "fixed_cpg": {t: _eval(lease, "shipped", t, "cpg") for t in COURSES}}
-        for job in sorted({os.path.basename(p).rsplit("_", 1)[0]
-                           for p in glob.glob(os.path.join(HERE, "evals", lease, "recipe_*"))}):  # fmt: skip
+        for job in sorted({k.rsplit("_", 1)[0] for k in _lease(lease)["evals"] if k.startswith("recipe_")}):
             refs[job] = {t: _eval(lease, job, t) for t in COURSES}
         leases[lease] = {"runs": runs, "references": refs}
     return leases
@@ -211,8 +216,10 @@ def gate_table(leases: dict) -> dict | None:
         return None
     lease = tested[-1]
     seeds = {}
-    for path in sorted(glob.glob(os.path.join(HERE, "evals", lease, "gate_s*_rugged"))):
-        k = int(re.match(r"gate_s(\d+)_rugged$", os.path.basename(path))[1])
+    for job in sorted(_lease(lease)["evals"]):
+        if not (m := re.match(r"gate_s(\d+)_rugged$", job)):
+            continue
+        k = int(m[1])
         res = {t: _eval(lease, f"gate_s{k}", t) for t in COURSES}
         if all(res.values()):
             seeds[k] = res
