@@ -147,6 +147,8 @@ def progress_lines(it: range, description: str, every: int = 10):
     are left (the rounds may all end sooner)."""
     import time
 
+    from hexnewton.learning.progress import time_left
+
     t0, n = time.perf_counter(), len(it)
     marks = {max(1, round(n * j / every)) for j in range(1, every)}
     for k in it:
@@ -154,7 +156,7 @@ def progress_lines(it: range, description: str, every: int = 10):
         if k + 1 in marks:
             done = time.perf_counter() - t0
             print(f"{description}: {k + 1} of {n} control steps, {duration(done)}, at most "
-                  f"{duration(done / (k + 1) * (n - k - 1))} left", flush=True)  # fmt: skip
+                  f"{duration(time_left(k + 1, n, done))} left", flush=True)  # fmt: skip
 
 
 def stepped(env, policy, steps: int, description: str, progress: bool | str = True):
