@@ -21,6 +21,8 @@ import json
 import math
 import os
 
+from hexnewton.analysis.figures import save_png
+
 TAGS = ("Episode/success_rate", "Episode/distance_m", "Train/mean_reward", "Episode/fell_rate",
         "Episode/off_course_rate", "Curriculum/mean_level", "Curriculum/top_level_success_rate")  # fmt: skip
 X_AXES = {"iteration": "iteration", "env_steps": "env-steps", "wall_time": "wall time [min]"}
@@ -204,7 +206,7 @@ def plot_fig5a(path: str, methods: dict[str, list[str]], axes: tuple[str, ...] =
         grid[0, 0].legend(fontsize=8)
     fig.suptitle(title)
     fig.tight_layout()
-    fig.savefig(path, dpi=100)
+    save_png(fig, path, dpi=100)
     plt.close(fig)
     with open(os.path.splitext(path)[0] + ".csv", "w", newline="") as f:
         w = csv.writer(f)
@@ -233,7 +235,7 @@ def plot_learning(path: str, runs: dict[str, str]) -> None:
         ax.grid(alpha=0.3)
     axes[0].legend(fontsize=8)
     fig.tight_layout()
-    fig.savefig(path, dpi=90)
+    save_png(fig, path, dpi=90)
     plt.close(fig)
 
 
@@ -262,7 +264,7 @@ def plot_curves(path: str, runs: list[str], labels: list[str] | None = None, x: 
         ax.grid(alpha=0.3)
     axes[0].legend(fontsize=8)
     fig.tight_layout()
-    fig.savefig(path, dpi=100)
+    save_png(fig, path, dpi=100)
     plt.close(fig)
     csv_path = os.path.splitext(path)[0] + ".csv"
     with open(csv_path, "w", newline="") as f:

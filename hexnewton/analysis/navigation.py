@@ -24,6 +24,7 @@ import math
 
 import numpy as np
 
+from hexnewton.analysis.figures import save_png
 from hexnewton.analysis.rollout import CONTROLLERS, LABELS, START_SEED_OFFSET, controller_policy
 from hexnewton.analysis.rollout import goals_reached, read_controller_checkpoint, stepped
 from hexnewton.mdp.status import FELL, NONFINITE, SUCCESS, TIMEOUT
@@ -215,7 +216,7 @@ def plot_paths(path: str, title: str, runs: dict, shown: int = 6) -> None:
         ax.grid(alpha=0.3)
     fig.suptitle(title)
     fig.tight_layout()
-    fig.savefig(path, dpi=90)
+    save_png(fig, path, dpi=90)
     plt.close(fig)
 
 

@@ -7,6 +7,7 @@ import math
 import numpy as np
 import warp as wp
 
+from hexnewton.analysis.figures import save_png
 from hexnewton.config import LEG_NAMES, HexConfig
 from hexnewton.kernels.cpg import hopf_cpg_kernel, mapping_kernel
 from hexnewton.kernels.reference import initial_cpg_state
@@ -66,5 +67,5 @@ def plot_gait(cfg: HexConfig, path: str) -> None:
         ax.legend(loc="upper right", fontsize=7, ncol=3)
     axes[-1].set_xlabel("time [s]")
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
+    save_png(fig, path, dpi=110)
     plt.close(fig)

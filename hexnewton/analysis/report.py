@@ -12,6 +12,7 @@ import subprocess
 
 import numpy as np
 
+from hexnewton.analysis.figures import save_png
 from hexnewton.analysis.metrics import DISTANCES
 from hexnewton.analysis.rollout import LABELS, Episode
 from hexnewton.config import PARAM_NAMES, POSTURE_NAMES
@@ -161,7 +162,7 @@ def plot_sweep(path: str, name: str, sweep: dict, last: float) -> None:
         ax.grid(alpha=0.3)
     axes[0].legend(fontsize=8)
     fig.tight_layout()
-    fig.savefig(path, dpi=90)
+    save_png(fig, path, dpi=90)
     plt.close(fig)
 
 
@@ -203,7 +204,7 @@ def plot_terrain(path: str, terrain: str, episodes: dict[str, Episode], metrics:
     axes[0].legend(fontsize=8)
     axes[4].legend(fontsize=8)
     fig.tight_layout()
-    fig.savefig(path, dpi=90)
+    save_png(fig, path, dpi=90)
     plt.close(fig)
 
 
@@ -229,7 +230,7 @@ def plot_params(path: str, terrain: str, episodes: dict[str, Episode]) -> None:
     axes[0].legend(fontsize=8)
     fig.suptitle(f"CPG parameters along round 0 on {terrain}")
     fig.tight_layout()
-    fig.savefig(path, dpi=90)
+    save_png(fig, path, dpi=90)
     plt.close(fig)
 
 

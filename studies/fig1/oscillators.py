@@ -7,6 +7,7 @@ import math
 
 import numpy as np
 
+from hexnewton.analysis.figures import save_png
 from hexnewton.config import LEG_NAMES, LEG_OSCILLATOR, CPGConfig
 from hexnewton.kernels.reference import hopf_cpg_reference, hopf_network_reference, tripod_theta
 
@@ -202,5 +203,5 @@ def plot_figure(path: str, runs: list[dict], traces: dict, steps: dict, dt: floa
     fig.suptitle(f"Eq. 3 networks from random starts: omega = {omega:.2f} rad/s, step = {1000 * dt:g} ms (one RK4 "
                  "step per physics substep); blue: tripod R1 L2 R3, red: tripod L1 R2 L3", fontsize=10)  # fmt: skip
     fig.tight_layout()
-    fig.savefig(path, dpi=80)
+    save_png(fig, path, dpi=80)
     plt.close(fig)
