@@ -7,8 +7,9 @@
 #    (`python train.py --task complex --seed N FLAGS`, candidates.sh: each run packed, its result on $VAL_ROUNDS
 #    validation rounds per course, seed 3000, deterministic action); their times are shared, not timed;
 # 3. once their training has ended (REF_DELAY=SECONDS: that long after their start), on the same validation rounds:
-#    the recipe's kept results $KEPT (studies/learner/runs/NAME/policy.pt), the shipped policy and the fixed CPG
-#    (SHIPPED=0: neither).
+#    the recipe's kept results $KEPT (studies/learner/runs/NAME/policy.pt, fetched from git history before the chunk
+#    calls: `python studies/house/kept.py fetch studies/learner`), the shipped policy and the fixed CPG (SHIPPED=0:
+#    neither).
 # Then `bash studies/device/gpu.sh poll 560` and `bash studies/curriculum/queue.sh collect` ($OUT/curriculum.tgz.NN;
 # here: `mkdir -p LEASE && cat curriculum.tgz.* | tar xzf - -C LEASE && python studies/curriculum/build.py --add LEASE`).
 set -u
@@ -27,7 +28,11 @@ if [ "${1:-}" = collect ]; then   # consoles, configs, timings, results, evaluat
   ls -la "$out"; exit 0
 fi
 ARMS=${ARMS:-anchor spread both} SEEDS=${SEEDS:-1 2} VAL_ROUNDS=${VAL_ROUNDS:-1000}
-KEPT=${KEPT-gate_s1 gate_s2 gate_s3}
+KEPT=${KEPT:-}
+for name in $KEPT; do
+  [ -f "studies/learner/runs/$name/policy.pt" ] || { echo "queue.sh: no studies/learner/runs/$name/policy.pt \
+(python studies/house/kept.py fetch studies/learner, before the chunk calls)" >&2; exit 2; }
+done
 echo "$(date +%T) the curriculum queue: arms '$ARMS' on seeds '$SEEDS', $VAL_ROUNDS validation rounds, kept '$KEPT'"
 python train.py --task complex --num_envs 256 --max_iterations 2 --agent.validation_rounds 0 --log_dir /root/warm \
   > /root/warm.log 2>&1
@@ -63,7 +68,7 @@ evaluate() {   # NAME TERRAIN CHECKPOINT [MORE evaluate FLAGS]
 for t in complex rugged stepped; do
   [ "${SHIPPED:-1}" = 1 ] && evaluate shipped "$t" results/policies/cpg_rl_complex.pt --controllers cpg cpg_rl &
   for name in $KEPT; do
-    [ -f "studies/learner/runs/$name/policy.pt" ] && evaluate "recipe_$name" "$t" "studies/learner/runs/$name/policy.pt" &
+    evaluate "recipe_$name" "$t" "studies/learner/runs/$name/policy.pt" &
   done
 done
 wait

@@ -7,8 +7,10 @@
 #   bash studies/device/aside.sh size    # the tree's size as a device call counts it (bytes: in bytes, rechunk.sh's)
 #
 # `out` before rechunk.sh and the device calls; `back` before anything that reads a study's data (its tests, build.py,
-# a commit). A queue that reads a kept study's files (KEPT=, TEST_KEPT= for studies/learner/runs, `gpu.sh study
-# studies/paper_comparison`) needs that folder in the tree: KEEP="studies/learner/runs" leaves it there.
+# a commit). A queue that reads a kept study's files (`gpu.sh study studies/paper_comparison`) needs that folder in
+# the tree: KEEP="studies/paper_comparison" leaves it there. The kept checkpoints (KEPT=, TEST_KEPT= for
+# studies/learner/runs, navigate's TRAINED=, capability.sh's seeds) come from git history: python
+# studies/house/kept.py fetch FOLDER (KEEP= the folder they are in), rechunk.sh carries them.
 set -euo pipefail
 cd "$(git rev-parse --show-toplevel)"
 ASIDE=${ASIDE:-../device_aside}

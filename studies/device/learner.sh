@@ -4,9 +4,10 @@
 # 1. the arms still missing ($ARMS, default actor; ARMS= none) on $SEEDS (1 2), one lane per seed, each training its
 #    arms one after another (candidates.sh: train.py with its own validation, the run packed to
 #    $RUNS_OUT/run_NAME.tgz, its result on $VAL_ROUNDS validation rounds per course, seed 3000, deterministic
-#    action); beside them the study's kept results that lack those rounds ($KEPT, default recipe_s1 recipe_s2:
-#    studies/learner/runs/NAME/policy.pt); with SHIPPED=1 also the shipped policy and the fixed CPG on the same
-#    rounds; with FAIR_JOBS set, the paper comparison's runs it names (fair_comparison.sh);
+#    action); beside them the study's kept results that lack those rounds ($KEPT, default none:
+#    studies/learner/runs/NAME/policy.pt, `python studies/house/kept.py fetch studies/learner` first); with SHIPPED=1
+#    also the shipped policy and the fixed CPG on the same rounds; with FAIR_JOBS set, the paper comparison's runs it
+#    names (fair_comparison.sh);
 # 2. the choice: `studies/learner/build.py --choose` over the study and this lease's runs names the changes that paid
 #    (their train.py flags) and `--gate-name` the gate's run names (gate_ARM-ARM; gate for the recipe itself), unless
 #    $GATE_FLAGS is given (then $GATE_NAME, default gate; the study's runs/ folder set aside for the chunk calls leaves
@@ -43,7 +44,7 @@ if [ "${1:-}" = collect ]; then   # logs, configs, timings, results (not the oth
   tar czhf - -C "$stage" $files | split -b 9M -d - "$out/learner.tgz."
   ls -la "$out"; exit 0
 fi
-ARMS=${ARMS-actor} SEEDS=${SEEDS:-1 2} VAL_ROUNDS=${VAL_ROUNDS:-500} KEPT=${KEPT-recipe_s1 recipe_s2}
+ARMS=${ARMS-actor} SEEDS=${SEEDS:-1 2} VAL_ROUNDS=${VAL_ROUNDS:-500} KEPT=${KEPT:-}
 EXTRA=""; [ "${AVERAGE:-0}" = 1 ] && EXTRA="--agent.validation_average true"
 AFTER=${ARMS_AFTER_GATE:-0}
 if [ "$AFTER" = 1 ] && [ "${GATE:-0}" != 1 ]; then
@@ -69,6 +70,10 @@ test_rounds() {   # NAME=CHECKPOINT...: each (one without its checkpoint is said
     done
   done
 }
+for name in $KEPT ${TEST_KEPT:-}; do
+  [ -f "studies/learner/runs/$name/policy.pt" ] || { echo "learner.sh: no studies/learner/runs/$name/policy.pt \
+(python studies/house/kept.py fetch studies/learner, before the chunk calls)" >&2; exit 2; }
+done
 echo "$(date +%T) the learner's queue: arms '$ARMS' on seeds '$SEEDS', kept results '$KEPT'"
 [ -n "${FAIR_JOBS:-}" ] && { JOBS=$FAIR_JOBS PER_GPU=4 bash studies/device/fair_comparison.sh > "$QUEUE/fair.log" 2>&1 & }
 kept_rounds() {   # the kept results' validation rounds, at once

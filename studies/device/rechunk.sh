@@ -18,6 +18,14 @@ install=$(ls $(for d in $dirs; do echo "$d/install.sh"; done) 2>/dev/null | tail
 # the files a call carries: tracked and untracked-not-ignored ones that exist (a study's data folder set aside for the
 # chunk calls, README "Workflow", is not in the tree then)
 tree=$(bash studies/device/aside.sh bytes)
+# the kept checkpoints fetched into the tree (git ignores them: python studies/house/kept.py fetch) travel in the last
+# call's carry, beside its chunk
+kept=$(python studies/house/kept.py present)
+if [ -n "$kept" ]; then
+  [ "$(echo "$kept" | wc -l)" -le 7 ] || { echo "rechunk.sh: more than 7 kept files in the tree (a call carries 8 \
+paths): fetch only those the queue reads" >&2; exit 1; }
+  tree=$(( tree + $(echo "$kept" | tr '\n' '\0' | xargs -0 du -cb | tail -1 | cut -f1) ))
+fi
 chunk=$(( 64 * 1048576 - tree - 2 * 1048576 ))
 [ "$chunk" -gt 4194304 ] || { echo "rechunk.sh: the tree ($((tree / 1048576)) MiB) leaves no room for wheel chunks: set the \
 studies' data aside first (bash studies/device/aside.sh out)" >&2; exit 1; }
@@ -38,7 +46,8 @@ echo "tree $((tree / 1048576)) MiB: $n chunks of at most $((chunk / 1048576)) Mi
 echo "  run carry=[\".dw0\"]  command: rm -rf /opt/w && mkdir -p /opt/w && cp .dw0/part* /opt/w/"
 for i in $(seq 1 $((n - 1))); do
   if [ ".dw$i" = "$last" ]; then
-    echo "  run carry=[\"$last\"]  command: cp $last/part* /opt/w/ && bash studies/device/gpu.sh install && ..."
+    echo "  run carry=[\"$last\"$(for k in $kept; do printf ', "%s"' "$k"; done)]  command: cp $last/part* /opt/w/ && \
+bash studies/device/gpu.sh install && ..."
   else
     echo "  run carry=[\".dw$i\"]  command: cp .dw$i/part* /opt/w/"
   fi

@@ -129,7 +129,7 @@ def video(t: str) -> dict:
     policy = os.path.join("studies", "navigate", "runs", t, "policy.pt")
     root = os.path.dirname(os.path.dirname(HERE))
     if not os.path.exists(os.path.join(root, policy)):
-        raise ValueError(f"no {policy}: add a lease's outputs first (--add DIR)")
+        raise ValueError(f"no {policy}: python studies/house/kept.py fetch {policy} (or a lease's: --add DIR)")
     media = os.path.join(HERE, "media")
     os.makedirs(media, exist_ok=True)
     raw, out = os.path.join(media, f".square_{t}_raw.mp4"), os.path.join(media, f"square_{t}.mp4")

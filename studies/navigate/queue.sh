@@ -14,15 +14,18 @@
 # $OUT, which the device empties at the start of every call.
 #
 # TASKS (default "flat rugged") picks the tasks; a task named in TRAINED is not trained again: its policy kept in the
-# study (studies/navigate/runs/<terrain>/policy.pt, build.py) is evaluated and exported.
+# study ($KEPT_RUNS/<terrain>/policy.pt, default studies/navigate/runs: flat's a link to the shipped policy, rugged's
+# from git history, `python studies/house/kept.py fetch studies/navigate` before the chunk calls) is evaluated and
+# exported.
 set -u
 NAV=${NAV:-/root/navigate} ROUNDS=${ROUNDS:-1000} S2S_ROUNDS=${S2S_ROUNDS:-100}
 NAV=$(mkdir -p "$NAV" && cd "$NAV" && pwd)
 pack() { tar czf "$NAV/$1.tgz" -C "$NAV" "${@:2}" 2>/dev/null; echo "$(date +%T) packed $1"; }
 for t in ${TASKS:-flat rugged}; do
   if [[ " ${TRAINED:-} " == *" $t "* ]]; then
-    ckpt=studies/navigate/runs/$t/policy.pt
-    [ -f "$ckpt" ] || { echo "queue.sh: no $ckpt to evaluate" >&2; exit 1; }
+    ckpt=${KEPT_RUNS:-studies/navigate/runs}/$t/policy.pt
+    [ -f "$ckpt" ] || { echo "queue.sh: no $ckpt to evaluate (python studies/house/kept.py fetch studies/navigate)" >&2
+                        exit 2; }
   else
     echo "$(date +%T) training navigate-$t"
     /usr/bin/time -f "%e s from process start" -o "$NAV/train_$t.time" \

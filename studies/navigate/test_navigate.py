@@ -90,13 +90,17 @@ def test_the_queue_evaluates_a_kept_policy_without_training_it(tmp_path):
     (bin_dir / "python").write_text(FAKE_PYTHON)
     (bin_dir / "python").chmod(0o755)
     root = os.path.dirname(os.path.dirname(HERE))
-    env = dict(os.environ, PATH=f"{bin_dir}:{os.environ['PATH']}", NAV=str(out), TASKS="rugged", TRAINED="rugged")
+    kept = tmp_path / "runs"
+    (kept / "rugged").mkdir(parents=True)
+    (kept / "rugged" / "policy.pt").write_bytes(b"a kept policy")
+    env = dict(os.environ, PATH=f"{bin_dir}:{os.environ['PATH']}", NAV=str(out), TASKS="rugged", TRAINED="rugged",
+               KEPT_RUNS=str(kept))
     done = subprocess.run(["bash", "studies/navigate/queue.sh"], cwd=root, env=env, capture_output=True, text=True)
     assert done.returncode == 0, done.stdout + done.stderr
     calls = (out / "calls").read_text().splitlines()
     assert [w[1] if w[0] == "-m" else w[0] for w in map(str.split, calls)] == [
         "hexnewton.apps.evaluate", "hexnewton.apps.export"]
-    assert all("studies/navigate/runs/rugged/policy.pt" in c for c in calls)
+    assert all(f"{kept}/rugged/policy.pt" in c for c in calls)
     assert sorted(p.name for p in out.glob("*.tgz")) == ["eval_rugged.tgz"]
 
 
@@ -151,8 +155,11 @@ def test_the_committed_report_renders_what_the_study_keeps():
         assert kept == json.loads(json.dumps(res))
     with open(os.path.join(HERE, "report.md")) as f:
         assert f.read() == build.render(res)
-    for t in build.TASKS:  # the kept policies the queue evaluates again (TRAINED=T)
-        assert os.path.getsize(os.path.join(HERE, "runs", t, "policy.pt")) < 2_000_000  # the policy alone
+    with open(os.path.join(HERE, "..", "house", "kept.json")) as f:
+        held = json.load(f)["files"]  # the kept checkpoints in git history (studies/house/kept.py fetch)
+    for t in build.TASKS:  # the kept policies the queue evaluates again (TRAINED=T): a link to a shipped one or held
+        path = f"studies/navigate/runs/{t}/policy.pt"
+        assert os.path.islink(os.path.join(HERE, "runs", t, "policy.pt")) or held[path]["bytes"] < 2_000_000
     missing = [f"navigate-{t}: evaluation" for t in build.TASKS if t not in res["evaluation"]]
     assert [p for p in res["partial"] if p.endswith("evaluation")] == missing
     assert {c["terrain"] for c in res["targets"]} == set(res["evaluation"]) - set(build.VARIANTS)
