@@ -3,13 +3,17 @@
     python -m hexnewton.apps.baselines --task complex --algo sac                         # scale preset, the task's budget
     python -m hexnewton.apps.baselines --task complex --algo a2c --preset paper --total_steps 100000000 --max_minutes 8
     python -m hexnewton.apps.baselines --task rugged --algo td3 --agent.batch_size 8192 --env.reward.w_tilt 10
+    python -m hexnewton.apps.baselines --task complex --algo sac --robot mx_phoenix     # another robot (name or file)
 
 The task's environment config (``--env.<section>.<field>`` overrides it as in ``train.py``) and curriculum stages;
 the algorithm's preset (``--agent.<field>`` overrides it; ``--task T --algo A --help`` lists the fields with their
 values). The budget: ``--total_steps`` env-steps over all envs (default: what the task's PPO recipe collects with
 the same number of envs, max_iterations x num_steps_per_env x num_envs) and ``--max_minutes`` of wall time, whichever
-ends first. Details: ``hexnewton/learning/baselines/`` (``__init__.py``; the presets in ``config.py``). It needs skrl,
-the ``baselines`` extra (``pip install -e ".[baselines]"``); without it the command says so in one line, exit status 2.
+ends first. ``--robot NAME|FILE`` trains on another robot than the paper's as ``train.py`` does (docs/robots.md: the
+task's config scaled for it, ``with_robot``); its checkpoints record the robot, and its runs go to
+``hexnewton_<task>_<algo>_<robot>``. Details: ``hexnewton/learning/baselines/`` (``__init__.py``; the presets in
+``config.py``). It needs skrl, the ``baselines`` extra (``pip install -e ".[baselines]"``); without it the command says
+so in one line, exit status 2.
 """
 
 from __future__ import annotations
@@ -20,7 +24,15 @@ import json
 import os
 import sys
 
-from hexnewton.apps.cli import ArgumentParser, add_config_args, config_overrides, positive_int, run
+from hexnewton.apps.cli import (
+    ArgumentParser,
+    add_config_args,
+    add_robot_args,
+    config_overrides,
+    positive_int,
+    robot_from_args,
+    run,
+)
 from hexnewton.config import apply_overrides
 from hexnewton.learning.stopping import exit_status
 
@@ -54,8 +66,10 @@ def parser(base, algo: str | None, preset: str) -> ArgumentParser:
                    help="env-steps over all envs (default: the task's PPO budget at this number of envs, "
                         f"{base.agent.max_iterations} x {base.agent.num_steps_per_env} x num_envs)")
     p.add_argument("--max_minutes", type=float, default=None, help="end (and save) after this wall time")
+    add_robot_args(p, "the paper's")
     p.add_argument("--log_dir", default="logs")
-    p.add_argument("--experiment", default=None, help="default: hexnewton_<task>_<algo>")
+    p.add_argument("--experiment", default=None, help="default: hexnewton_<task>_<algo> (on another robot than the "
+                   "paper's hexnewton_<task>_<algo>_<robot>)")
     add_config_args(p, "env", base.env, skip=("sim.num_envs", "sim.device", "task.seed"),
                     title="--env.*: the environment (HexConfig, hexnewton/config.py)")
     if algo in ALGOS and preset in PRESETS:
@@ -77,7 +91,12 @@ def main(argv: list[str] | None = None) -> int:
                          f"with python train.py --task {base.name})")  # fmt: skip
     if args.max_minutes is not None and not args.max_minutes > 0:
         raise ValueError("--max_minutes must be positive")
-    env_cfg = apply_overrides(base.env, config_overrides(args, "env"))
+    robot, base_env = robot_from_args(args), base.env
+    if robot is not None:  # the robot and its scales first, the --env.* overrides on top (as train.py)
+        from hexnewton.robot.registry import with_robot
+
+        base_env = with_robot(base.env, robot)
+    env_cfg = apply_overrides(base_env, config_overrides(args, "env"))
     cfg = apply_overrides(agent_config(args.algo, args.preset), config_overrides(args, "agent"))
     cfg.check()
     stages = base.agent.stages
@@ -105,14 +124,16 @@ def main(argv: list[str] | None = None) -> int:
                                   task=dataclasses.replace(env_cfg.task, seed=args.seed),
                                   obs=dataclasses.replace(env_cfg.obs, critic=False))  # fmt: skip
     env = make_env(cfg_env, "cpg")
-    run_dir = os.path.join(args.log_dir, args.experiment or f"hexnewton_{base.name}_{args.algo}",
-                           datetime.datetime.now().strftime("%Y-%m-%d_%H-%M-%S"))  # fmt: skip
+    robot_name = cfg_env.robot.name  # another robot's runs are named after it, as train.py's
+    on_robot = f"_{robot_name}" if robot_name != "paper" else ""
+    experiment = args.experiment or f"hexnewton_{base.name}_{args.algo}{on_robot}"
+    run_dir = os.path.join(args.log_dir, experiment, datetime.datetime.now().strftime("%Y-%m-%d_%H-%M-%S"))
     if os.path.exists(run_dir):
         raise ValueError(f"{run_dir} exists: nothing is overwritten (start again in a second, or change --experiment)")
     os.makedirs(run_dir)
-    meta = {"task": base.name, "algo": args.algo, "controller": f"{args.algo}_cpg", "preset": args.preset,
-            "action_mode": "cpg", "num_obs": env.num_obs, "num_actions": env.num_actions, "num_envs": num_envs,
-            "seed": args.seed, "device": device, "skrl": skrl.__version__,
+    meta = {"task": base.name, "robot": robot_name, "algo": args.algo, "controller": f"{args.algo}_cpg",
+            "preset": args.preset, "action_mode": "cpg", "num_obs": env.num_obs, "num_actions": env.num_actions,
+            "num_envs": num_envs, "seed": args.seed, "device": device, "skrl": skrl.__version__,
             "budget": {"env_steps": total, "max_minutes": args.max_minutes},
             "stages": [list(s) for s in stages], "steps_per_iteration": base.agent.num_steps_per_env,
             "config": dataclasses.asdict(cfg_env), "baseline": dataclasses.asdict(cfg)}  # fmt: skip
@@ -123,7 +144,8 @@ def main(argv: list[str] | None = None) -> int:
                        training=True, run_dir=run_dir)  # fmt: skip
     trainer = BaselineTrainer(env, agent, args.algo, cfg, meta, run_dir, stages, base.agent.num_steps_per_env)
     limit = f" or {args.max_minutes:g} min" if args.max_minutes else ""
-    print(f"training {LABELS[args.algo]} ({args.preset} preset) on task {base.name}: {num_envs} envs on {device}, "
+    on = f" on robot {robot_name}" if robot_name != "paper" else ""
+    print(f"training {LABELS[args.algo]} ({args.preset} preset) on task {base.name}{on}: {num_envs} envs on {device}, "
           f"{total} env-steps{limit}, logs in {run_dir}", flush=True)  # fmt: skip
     reason = trainer.train(Budget(total, args.max_minutes))
     print(f"finished after {trainer.env_steps} env-steps in {trainer.wall_s:.0f} s ({reason})")

@@ -16,9 +16,19 @@ from hexnewton.robot_config import RobotConfig
 ROBOTS: dict[str, RobotConfig] = {"paper": RobotConfig(), "mx_phoenix": MX_PHOENIX}
 
 
-def resolve_robot(robot: str, joints: tuple[str, ...] | None = None) -> RobotConfig:
-    """The description of ``robot``: a name of :data:`ROBOTS`, or a ``.urdf`` / ``.xml`` file (``joints``: its 18 leg
-    joints in hexnewton's order, where its tree does not show them); one line (``HexnewtonError``) for neither."""
+def resolve_robot(robot: str | os.PathLike | RobotConfig, joints: tuple[str, ...] | None = None) -> RobotConfig:
+    """The description of ``robot``: a name of :data:`ROBOTS`, a ``.urdf`` / ``.xml`` file (``joints``: its 18 leg
+    joints in hexnewton's order, where its tree does not show them) or a ``RobotConfig`` as it is; one line
+    (``HexnewtonError``) for none of them."""
+    if isinstance(robot, RobotConfig):
+        if joints:
+            raise HexnewtonError(f"--robot_joints names a robot file's joints; robot '{robot.name}' is a description")
+        return robot
+    if isinstance(robot, os.PathLike):
+        robot = os.fspath(robot)
+    if not isinstance(robot, str):
+        raise HexnewtonError(f"robot {robot!r}: expected a robot's name ({', '.join(ROBOTS)}), a robot file (.urdf or "
+                             ".xml) or a RobotConfig")  # fmt: skip
     if robot in ROBOTS:
         if joints:
             raise HexnewtonError(f"--robot_joints names a robot file's joints; robot '{robot}' is a named one")

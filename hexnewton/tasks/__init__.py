@@ -8,10 +8,13 @@
     import gymnasium as gym
     import hexnewton.tasks                                 # registers the tasks, as isaaclab_tasks and mjlab.tasks do
     env = gym.make("Hexnewton-Complex-v0", num_envs=1024, device="cuda")
+    env = gym.make("Hexnewton-Rugged-v0", num_envs=1024, device="cuda", robot="mx_phoenix")   # another robot
 
 A task is data: :func:`task` returns a fresh copy, ``train.py`` applies the command line's overrides to it, and every
 checkpoint records the task's name and the full configs it trained with, so ``play.py``, ``evaluate`` and ``export``
-need nothing but the checkpoint. Adding a task is one :func:`register` call below.
+need nothing but the checkpoint. A task's robot is the paper's; ``--robot NAME|FILE`` (``train.py``, the baselines)
+and ``gym.make(..., robot=NAME|FILE|RobotConfig)`` put another one into it with its scales
+(:func:`hexnewton.robot.registry.with_robot`, docs/robots.md). Adding a task is one :func:`register` call below.
 
 The recipe of the paper's terrains (ours; docs/training.md says what each part does): a terrain curriculum (10 lanes of
 rising difficulty, robots start on the first 3), a knee-lift floor (A2 in 0.9-1.3 rad: a high-stepping gait from the
@@ -201,7 +204,8 @@ def navigation_terrain(terrain: str | TerrainConfig, goal_area: float = NAVIGATE
 
 
 def _register_gymnasium(t: Task) -> None:
-    """Register ``t`` with Gymnasium (when it is installed): ``gym.make(t.gym_id, num_envs=N, device=D)``."""
+    """Register ``t`` with Gymnasium (when it is installed): ``gym.make(t.gym_id, num_envs=N, device=D)``, on another
+    robot ``robot=NAME|FILE|RobotConfig`` (:class:`~hexnewton.tasks.gymnasium_env.HexnewtonGymEnv`)."""
     try:
         import gymnasium
     except ImportError:  # pragma: no cover - gymnasium is a dependency

@@ -13,29 +13,55 @@ episode ended on.
 task's :class:`~hexnewton.config.HexConfig`). rsl-rl trains on :class:`~hexnewton.mdp.env.HexapodEnv` directly
 (``env.unwrapped.vec_env``, whose ``obs_groups`` give ``AgentConfig.to_rsl_rl`` the groups its critic reads: with
 ``ObsConfig.critic``, ``policy`` and ``critic``); ``reset`` and ``step`` return the ``policy`` group, the actor's.
+
+Another robot than the paper's, as ``train.py --robot NAME|FILE`` trains on it (docs/robots.md):
+
+    env = gym.make("Hexnewton-Rugged-v0", num_envs=256, device="cpu", robot="mx_phoenix")
+
+``robot`` is a named robot (:data:`hexnewton.robot.registry.ROBOTS`), a URDF / MJCF file (``robot_joints``: its 18
+leg joints in hexnewton's order, where its tree does not show them) or a
+:class:`~hexnewton.robot_config.RobotConfig`; it goes into the task's config with its scales
+(:func:`hexnewton.robot.registry.with_robot`: the CPG's amplitudes, the heights, the terrain window) before the
+``overrides``. A robot that cannot be read, or none of those, is one :class:`~hexnewton.errors.HexnewtonError` line.
 """
 
 from __future__ import annotations
 
+import os
+from typing import TYPE_CHECKING
+
 import gymnasium as gym
 import numpy as np
 
+from hexnewton.errors import HexnewtonError
+
+if TYPE_CHECKING:
+    from hexnewton.robot_config import RobotConfig
+
 
 class HexnewtonGymEnv(gym.Env):
-    """``num_envs`` robots of task ``task``; spaces are those of one robot (``single_*``) and of the batch."""
+    """``num_envs`` robots of task ``task`` (on ``robot``, the paper's without one: module docstring); spaces are those
+    of one robot (``single_*``) and of the batch."""
 
     metadata = {"render_modes": []}
 
     def __init__(self, task: str, num_envs: int = 64, device: str | None = None, seed: int | None = None,
-                 overrides: dict | None = None):
+                 overrides: dict | None = None, robot: str | os.PathLike | RobotConfig | None = None,
+                 robot_joints: tuple[str, ...] | None = None):
         from dataclasses import replace
 
         from hexnewton.config import apply_overrides
         from hexnewton.mdp.env import make_env
+        from hexnewton.robot.registry import resolve_robot, with_robot
         from hexnewton.tasks import task as get_task
 
         t = get_task(task)
-        cfg = apply_overrides(t.env, overrides or {})
+        cfg = t.env
+        if robot is not None:  # the robot and its scales first, the overrides on top (train.py --robot)
+            cfg = with_robot(cfg, resolve_robot(robot, robot_joints))
+        elif robot_joints:
+            raise HexnewtonError("robot_joints names the joints of a robot file: give it as robot=")
+        cfg = apply_overrides(cfg, overrides or {})
         cfg = replace(cfg, sim=replace(cfg.sim, num_envs=num_envs, device=device))
         if seed is not None:
             cfg = replace(cfg, task=replace(cfg.task, seed=seed))

@@ -22,6 +22,7 @@ COMMANDS = {
     "export": ["--checkpoint", POLICY],
     "sim2sim": [BUNDLE, "--rounds", "1"],
     "bench": ["--device", "cpu", "--num_envs", "1", "--terrain", "flat"],
+    "baselines": ["--algo", "sac", "--task", "flat", "--num_envs", "2", "--total_steps", "2", "--device", "cpu"],
 }
 
 
@@ -56,6 +57,8 @@ def _run(name: str, argv: list[str], out: str, capsys) -> tuple[int, list[str]]:
     module = importlib.import_module(f"hexnewton.apps.{name}")
     if name in ("evaluate", "export", "sim2sim"):
         argv = argv + ["--out", out]
+    if name == "baselines":
+        argv = argv + ["--log_dir", out]
     code = run(module.main, f"hexnewton-{name}", argv)
     return code, capsys.readouterr().err.strip().splitlines()
 
@@ -63,6 +66,8 @@ def _run(name: str, argv: list[str], out: str, capsys) -> tuple[int, list[str]]:
 @pytest.mark.parametrize("case", list(SAYS))
 @pytest.mark.parametrize("name", list(COMMANDS))
 def test_bad_robot_file_is_one_line_and_exit_2(tmp_path, capsys, name, case):
+    if name == "baselines":
+        pytest.importorskip("skrl")  # the baselines extra
     argv = COMMANDS[name] + ["--robot", _bad_urdf(tmp_path, case)]
     code, err = _run(name, argv, str(tmp_path / "out"), capsys)
     assert code == 2 and len(err) == 1 and SAYS[case] in err[0], err

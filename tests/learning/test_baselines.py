@@ -62,6 +62,45 @@ def test_baseline_trains_saves_and_runs_the_rounds(algo, tmp_path, capsys):
     assert cfg["baseline"]["learning_rate"] == agent_config(algo).learning_rate
 
 
+def test_a_baseline_trains_on_another_robot_and_keeps_to_it(tmp_path, capsys):
+    """``--robot mx_phoenix``: the task's config on that robot (``with_robot``, as ``train.py --robot``), its runs in
+    ``hexnewton_<task>_<algo>_mx_phoenix``; the checkpoint records the robot as an rsl-rl one does (the whole
+    description in its config, its name in the metadata), its evaluation rounds walk that robot, and played or
+    evaluated on another robot it is the rsl-rl path's one line, exit status 2."""
+    pytest.importorskip("skrl")
+    from hexnewton.analysis.rollout import run_rounds
+    from hexnewton.apps import evaluate, play
+    from hexnewton.apps.cli import run
+    from hexnewton.errors import HexnewtonError
+    from hexnewton.learning.baselines import load_baseline_checkpoint
+    from hexnewton.learning.checkpoint import checkpoint_meta, trained_config
+    from hexnewton.robot.registry import ROBOTS, same_robot, with_robot
+    from hexnewton.tasks import task
+
+    logs = tmp_path / "logs"
+    argv = ["--task", "flat", "--algo", "a2c", "--num_envs", "4", "--device", "cpu", "--total_steps", "16",
+            "--log_dir", str(logs), "--agent.rollouts", "2", "--robot", "mx_phoenix"]  # fmt: skip
+    assert _main(argv) == 0
+    assert "on task flat on robot mx_phoenix: 4 envs" in capsys.readouterr().out
+    (path,) = logs.glob("hexnewton_flat_a2c_mx_phoenix/*/model_4.pt")
+    ckpt = load_baseline_checkpoint(str(path))
+    trained, want = trained_config(ckpt), with_robot(task("flat").env, ROBOTS["mx_phoenix"])
+    assert checkpoint_meta(ckpt)["robot"] == "mx_phoenix" and same_robot(trained.robot, ROBOTS["mx_phoenix"])
+    assert (trained.cpg, trained.task.height_scale) == (want.cpg, want.task.height_scale) != (task("flat").env.cpg, 1.0)
+    assert json.loads((path.parent / "config.json").read_text())["hexnewton"]["robot"] == "mx_phoenix"
+    ep = run_rounds("a2c_cpg", str(path), "flat", 2, "cpu", 3, False, robot=ROBOTS["mx_phoenix"])
+    assert ep.pos.shape == (3, 2, 2)
+    with pytest.raises(HexnewtonError, match="trained on robot mx_phoenix, not paper"):
+        run_rounds("a2c_cpg", str(path), "flat", 2, "cpu", 3, False, robot=ROBOTS["paper"])
+    for module, args in ((play, ["--checkpoint", str(path), "--steps", "1", "--viewer", "null"]),
+                         (evaluate, ["--controllers", "a2c_cpg", "--checkpoint", f"a2c_cpg={path}", "--rounds", "1",
+                                     "--terrains", "flat", "--out", str(tmp_path / "e")])):  # fmt: skip
+        rc = run(module.main, "prog", args + ["--robot", "paper"])
+        err = capsys.readouterr().err.strip().splitlines()
+        assert rc == 2 and len(err) == 1 and f"{path} was trained on robot mx_phoenix, not paper" in err[0], err
+    assert not (tmp_path / "e").exists()
+
+
 def test_a_stop_signal_saves_and_exits_143(tmp_path, monkeypatch, capsys):
     """SIGTERM during training (raised where the handler raises it, inside the loop): the checkpoint is written and
     the command exits 143, so a queue never takes the stopped run for a finished one."""
@@ -149,6 +188,8 @@ def test_stages_follow_the_ppo_schedule_in_steps_per_env():
     (["--algo", "td3", "--task", "complex-joint"], "SAC-/TD3-/A2C-CPG act through the CPG"),
     (["--algo", "sac", "--max_minutes", "0"], "--max_minutes must be positive"),
     (["--algo", "a2c", "--agent.gamma", "x"], "expected a number"),
+    (["--algo", "sac", "--robot", "phantom"], "unknown robot 'phantom': choose one of paper, mx_phoenix"),
+    (["--algo", "sac", "--robot_joints", *["j"] * 18], "--robot_joints names the joints of a --robot FILE"),
 ])  # fmt: skip
 def test_bad_values_give_one_line_and_exit_2(argv, message, capsys):
     try:

@@ -67,11 +67,19 @@ def test_senses_follow_the_files_axes():
 
 
 def test_registry_names_and_files():
+    """A name, a file (a path object too) or a description as it is (``gym.make(..., robot=)`` takes all three);
+    anything else is one line."""
+    import pathlib
+
     assert ROBOTS["paper"] == dataclasses.replace(ROBOTS["paper"]) and resolve_robot("paper").legs == ()
-    assert resolve_robot("mx_phoenix") is MX_PHOENIX
-    assert resolve_robot(URDF).source == URDF
+    assert resolve_robot("mx_phoenix") is MX_PHOENIX and resolve_robot(MX_PHOENIX) is MX_PHOENIX
+    assert resolve_robot(URDF).source == URDF and resolve_robot(pathlib.Path(URDF)).source == URDF
     with pytest.raises(HexnewtonError, match="unknown robot 'phantom'"):
         resolve_robot("phantom")
+    with pytest.raises(HexnewtonError, match="robot 3: expected a robot's name"):
+        resolve_robot(3)
+    with pytest.raises(HexnewtonError, match="robot_joints names a robot file's joints"):
+        resolve_robot(MX_PHOENIX, ("j",) * 18)
 
 
 def _urdf_tree():

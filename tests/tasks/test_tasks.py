@@ -199,3 +199,53 @@ def test_navigate_tasks():
     for name, t in TASKS.items():
         if not name.startswith("navigate"):
             assert not t.env.task.random_goals and t.env.cpg.a1_range == (0.0, 0.5), name
+
+
+def test_gymnasium_makes_a_task_on_another_robot():
+    """``gym.make("Hexnewton-Rugged-v0", robot="mx_phoenix")``: the task's config on that robot through ``with_robot``
+    (as ``train.py --robot``), the overrides on top; the spaces are the paper robot's (every hexapod of this layout),
+    the heights the robot's own (its scale; its torso at its standing height, 1.7 times the paper robot's). Two robots,
+    the rugged blocks kept to a band along the start lines."""
+    import dataclasses
+
+    import gymnasium as gym
+    import torch
+
+    from hexnewton.robot import stand_height
+    from hexnewton.robot.registry import ROBOTS, with_robot
+
+    mx, paper = ROBOTS["mx_phoenix"], ROBOTS["paper"]
+    env = gym.make("Hexnewton-Rugged-v0", num_envs=2, device="cpu", robot="mx_phoenix",
+                   overrides={"terrain.rugged_half_width": 0.3})  # fmt: skip
+    vec = env.unwrapped.vec_env
+    want = with_robot(task("rugged").env, mx)
+    assert vec.cfg.robot is mx and (vec.cfg.cpg, vec.cfg.task) == (want.cpg, want.task)
+    assert vec.cfg.terrain == dataclasses.replace(want.terrain, rugged_half_width=0.3)
+    assert vec.cfg.task.height_scale == pytest.approx(stand_height(mx) / stand_height(paper))
+    assert vec.cfg.task.height_scale > 1.6 and task("rugged").env.task.height_scale == 1.0
+    assert env.unwrapped.single_observation_space.shape == (59,) and env.unwrapped.single_action_space.shape == (15,)
+    assert env.observation_space.shape == (2, 59) and env.action_space.shape == (2, 15)
+    env.reset(seed=0)
+    for _ in range(3):
+        obs, reward, terminated, truncated, _ = env.step(env.action_space.sample())
+    assert obs.shape == (2, 59) and reward.shape == (2,) and torch.isfinite(obs).all() and not terminated.any()
+    z = vec.world.joint_q[:, 2]
+    assert float((z - stand_height(mx)).abs().max()) < 0.15 * stand_height(mx)  # 0.22 m, the paper robot's 0.13
+    env.close()
+
+
+@pytest.mark.parametrize("robot, joints, says", [
+    ("phantom", None, "unknown robot 'phantom': choose one of paper, mx_phoenix"),
+    ("nowhere.urdf", None, "robot file not found: nowhere.urdf"),
+    (3, None, "robot 3: expected a robot's name (paper, mx_phoenix), a robot file"),
+    (None, ("j",) * 18, "robot_joints names the joints of a robot file"),
+])  # fmt: skip
+def test_gymnasium_refuses_a_bad_robot_in_one_line(robot, joints, says):
+    """A robot ``gym.make`` cannot read is one ``HexnewtonError`` line, before anything is built."""
+    import gymnasium as gym
+
+    from hexnewton.errors import HexnewtonError
+
+    with pytest.raises(HexnewtonError) as exc:
+        gym.make("Hexnewton-Flat-v0", num_envs=1, device="cpu", robot=robot, robot_joints=joints)
+    assert says in str(exc.value) and len(str(exc.value).splitlines()) == 1, exc.value

@@ -17,7 +17,8 @@ training loop (``trainer``: :class:`BaselineTrainer`, skrl's ``Trainer.train`` l
 curriculum stages, TensorBoard against env-steps and checkpoints).
 
 The task. A baseline trains on ``hexnewton.tasks.task(name).env`` exactly as ``train.py`` builds it (terrain and its
-curriculum lanes, randomisation, physics, body posture, reward) with the task's own stage schedule of reward weights
+curriculum lanes, randomisation, physics, body posture, reward; with ``--robot NAME|FILE`` on that robot, the config
+scaled for it by ``hexnewton.robot.registry.with_robot``) with the task's own stage schedule of reward weights
 and reflex gain (``AgentConfig.stages``): a stage that begins at PPO iteration ``i`` begins here after ``i x
 num_steps_per_env`` steps of every env, the same env-steps when the number of envs is the same.
 
@@ -34,12 +35,14 @@ Time-outs (7000 steps, 140 s) bootstrap; falls and the goal do not. The env rese
 so a time-out's next observation is the fresh start's: a small bias on those rare transitions (skrl's SAC and TD3
 bootstrap every non-terminated transition from its next observation; A2C with ``time_limit_bootstrap``).
 
-Each run writes ``logs/hexnewton_<task>_<algo>/<date_time>/``: ``config.json``; TensorBoard events whose step is the
-env-step count (``Train/mean_reward``, ``Episode/success_rate`` and the env's other logs; wall time is each event's
-time; ``hexnewton.analysis.curves`` plots against both); ``model_<vector step>.pt`` checkpoints: tensors and plain data only
-(``torch.load(weights_only=True)``), the task, algorithm, configs, action mode, observation and action sizes under
-``infos["hexnewton"]`` as for CPG_RL, so ``play.py`` and ``hexnewton.apps.evaluate`` (controllers ``sac_cpg``,
-``td3_cpg``, ``a2c_cpg``) load them by path. With ``skrl_stats`` skrl's own losses and Q values go to ``skrl/``.
+Each run writes ``logs/hexnewton_<task>_<algo>/<date_time>/`` (on another robot, ``--robot``,
+``hexnewton_<task>_<algo>_<robot>``): ``config.json``; TensorBoard events whose step is the env-step count
+(``Train/mean_reward``, ``Episode/success_rate`` and the env's other logs; wall time is each event's time;
+``hexnewton.analysis.curves`` plots against both); ``model_<vector step>.pt`` checkpoints: tensors and plain data only
+(``torch.load(weights_only=True)``), the task, robot, algorithm, configs, action mode, observation and action sizes
+under ``infos["hexnewton"]`` as for CPG_RL, so ``play.py`` and ``hexnewton.apps.evaluate`` (controllers ``sac_cpg``,
+``td3_cpg``, ``a2c_cpg``) load them by path, on the robot they were trained on. With ``skrl_stats`` skrl's own losses
+and Q values go to ``skrl/``.
 
 skrl is optional (the ``baselines`` extra: ``pip install -e ".[baselines]"``): nothing imports it before a baseline is
 built (``requirement``: :func:`require_skrl`, a one-line error naming the install where it is missing).
