@@ -339,7 +339,7 @@ def run_rounds(controller: str, checkpoint: str | None, terrain: str, rounds: in
     expected clipped action of its Gaussian. ``fixed_params`` (N, 15) gives a fixed controller one gait per round
     (``studies/cpg_sweep/sweep.py``). ``cpg.posture_reflex`` in ``overrides`` gives a fixed gait the body posture at its
     neutral values with that reflex; a policy needs its own posture for it."""
-    from hexnewton.learning.checkpoint import trained_config
+    from hexnewton.learning.checkpoint import is_baseline_checkpoint, trained_config
     from hexnewton.mdp.env import make_env
     from hexnewton.robot.registry import check_robot, with_robot
     from hexnewton.tasks import course
@@ -348,7 +348,7 @@ def run_rounds(controller: str, checkpoint: str | None, terrain: str, rounds: in
     ckpt = read_controller_checkpoint(controller, checkpoint)
     trained = trained_config(ckpt) if ckpt is not None else with_robot(HexConfig(), robot or HexConfig().robot)
     if ckpt is not None:
-        check_robot(trained.robot, robot, checkpoint)
+        check_robot(trained.robot, robot, checkpoint, init=not is_baseline_checkpoint(ckpt))
     overrides = dict(overrides or {})
     if "cpg.posture_reflex" in overrides and action_mode == "cpg":
         if controller not in FIXED and not trained.cpg.posture:

@@ -255,13 +255,13 @@ def read_checkpoints(checkpoints: dict[str, str], controllers: list[str], terrai
 def evaluation_robot(args, read: dict[str, dict]):
     """The robot every controller walks: ``--robot``'s, else the learnt policies' own (one line where they differ),
     else None (the paper's)."""
-    from hexnewton.learning.checkpoint import trained_config
+    from hexnewton.learning.checkpoint import is_baseline_checkpoint, trained_config
     from hexnewton.robot.registry import check_robot
 
     robot = robot_from_args(args)
     for path, ckpt in read.items():
         trained = trained_config(ckpt).robot
-        check_robot(trained, robot, path)
+        check_robot(trained, robot, path, init=not is_baseline_checkpoint(ckpt))
         robot = robot or trained
     return robot
 

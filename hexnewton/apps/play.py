@@ -166,12 +166,12 @@ def read_policy(args):
     if not args.checkpoint:
         robot = args.robot_cfg
         return (with_robot(HexConfig(), robot) if robot else HexConfig()), args.terrain or ["flat"], None, None
-    from hexnewton.learning.checkpoint import checkpoint_task, trained_config
+    from hexnewton.learning.checkpoint import checkpoint_task, is_baseline_checkpoint, trained_config
     from hexnewton.learning.policy import policy_checkpoint
 
     ckpt, default = policy_checkpoint(args.checkpoint)  # fails before building a world
     trained, task = trained_config(ckpt), checkpoint_task(ckpt)
-    check_robot(trained.robot, args.robot_cfg, args.checkpoint)
+    check_robot(trained.robot, args.robot_cfg, args.checkpoint, init=not is_baseline_checkpoint(ckpt))
     if args.controller is None:
         args.controller = default
     if (args.controller in BASELINES) != (default in BASELINES):

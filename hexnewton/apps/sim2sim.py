@@ -205,7 +205,7 @@ def main(argv: list[str] | None = None) -> int:
     args.robot_cfg = spec_robot(load_spec(args.bundle))  # the fixed CPG walks the bundle's robot
     from hexnewton.robot.registry import check_robot
 
-    check_robot(args.robot_cfg, robot_from_args(args), args.bundle)
+    check_robot(args.robot_cfg, robot_from_args(args), args.bundle, init=False)
     if args.video:
         check_writable(args.video, ".mp4")
         os.environ.setdefault("MUJOCO_GL", "egl")

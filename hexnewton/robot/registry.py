@@ -76,11 +76,14 @@ def same_robot(a: RobotConfig, b: RobotConfig) -> bool:
     return replace(a, source="") == replace(b, source="")
 
 
-def check_robot(trained: RobotConfig, robot: RobotConfig | None, what: str) -> None:
+def check_robot(trained: RobotConfig, robot: RobotConfig | None, what: str, init: bool = True) -> None:
     """One line unless ``robot`` (None: any) is the robot ``what`` (a checkpoint, a bundle) was trained for: a policy
-    walks its own robot; ``train.py --init`` starts one for another from it."""
+    walks its own robot; ``train.py --init`` starts one for another from it (``init``: an rsl-rl checkpoint, which
+    the line then names that way; not a bundle or a skrl baseline's)."""
     if robot is None or same_robot(trained, robot):
         return
-    raise HexnewtonError(f"{what} was trained on robot {trained.name}, not {robot.name}: leave --robot out to run it "
-                         f"on its own, or train a policy for {robot.name} from it: python train.py --robot "
-                         f"{robot.source or robot.name} --init {what}")
+    line = f"{what} was trained on robot {trained.name}, not {robot.name}: leave --robot out to run it on its own"
+    if init:
+        line += f", or train a policy for {robot.name} from it: python train.py --robot {robot.source or robot.name} " \
+                f"--init {what}"  # fmt: skip
+    raise HexnewtonError(line)

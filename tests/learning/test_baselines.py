@@ -98,6 +98,7 @@ def test_a_baseline_trains_on_another_robot_and_keeps_to_it(tmp_path, capsys):
         rc = run(module.main, "prog", args + ["--robot", "paper"])
         err = capsys.readouterr().err.strip().splitlines()
         assert rc == 2 and len(err) == 1 and f"{path} was trained on robot mx_phoenix, not paper" in err[0], err
+        assert "--init" not in err[0]  # train.py --init takes an rsl-rl checkpoint, not a baseline's
     assert not (tmp_path / "e").exists()
 
 
