@@ -15,7 +15,7 @@ from hexnewton.analysis.metrics import round_metrics, summarize
 from hexnewton.analysis.rollout import EVAL_TERRAIN_SEED, START_SEED_OFFSET
 from hexnewton.config import CPGConfig, RobotConfig, SimConfig, TaskConfig, TerrainConfig, terrain_for_goal
 from hexnewton.deploy import rules
-from hexnewton.deploy.mjcf import SENSORS_PER_ROBOT, build_model
+from hexnewton.deploy.mjcf import Layout, build_model
 from hexnewton.deploy.runtime import FORMAT, Controller, spec_robot
 from hexnewton.deploy.rules import RUNNING, SUCCESS
 from hexnewton.kernels.reference import quat_to_rpy_np
@@ -166,10 +166,13 @@ class Rounds:
     ``waypoints`` ((x, y), ...) in each start frame: the goals in turn instead of the one ahead, as in Newton's
     navigation evaluation (``analysis.navigation``: the navigate tasks' square patch, every start heading, no
     off-course end); the runtime keeps each robot's goal (``Controller.set_goal``) and forms the target from its
-    pose."""
+    pose. ``mjcf``: the robot's own MJCF file, run as written (:class:`hexnewton.deploy.robot_mjcf.RobotFile`)
+    instead of the model written from the description; ``layout`` says where each robot is in either
+    (:class:`hexnewton.deploy.mjcf.Layout`)."""
 
     def __init__(self, controller: str | dict, terrain: str, rounds: int, seed: int = EVAL_TERRAIN_SEED,
-                 robot: RobotConfig | None = None, task: TaskConfig | None = None, robots=None, waypoints=None):
+                 robot: RobotConfig | None = None, task: TaskConfig | None = None, robots=None, waypoints=None,
+                 mjcf: str | None = None):
         import mujoco
 
         from hexnewton.terrain.heightmap import build_height_grid
@@ -192,18 +195,22 @@ class Rounds:
         s = start_poses(total, seed + START_SEED_OFFSET, self.task, stand=self.spec["stand_pose"], robot=self.robot)
         s = {k: v[keep] for k, v in s.items()}
         places = [(0.0, y, 1.0, a) for y, a in zip(s["y"], s["yaw"])]
-        self.m = build_model(self.robot, self.grid, places, float(self.spec["substep_dt"]))
+        self.mjcf = mjcf
+        if mjcf:
+            from hexnewton.deploy.robot_mjcf import RobotFile
+
+            self.m, self.layout = RobotFile(mjcf, self.robot).model(self.grid, places, float(self.spec["substep_dt"]))
+        else:
+            self.m = build_model(self.robot, self.grid, places, float(self.spec["substep_dt"]))
+            self.layout = Layout.generated(self.m, rounds)
         self.d = mujoco.MjData(self.m)
-        if self.m.nq != 25 * rounds or self.m.nsensordata != SENSORS_PER_ROBOT * rounds:
-            raise RuntimeError("unexpected MuJoCo model layout")
         mujoco.mj_forward(self.m, self.d)  # the terrain's poses, for the scanner's rays
         self.scan = HeightScanner(self.m, self.d, self.grid, H_HALF_EXTENT * self.task.length_scale)
         z = [self.scan.window_max(0.0, y, footprint(self.robot)) + spawn_clearance(self.robot) for y in s["lane"]]
-        q = self.d.qpos.reshape(rounds, 25)
-        q[:, 0], q[:, 1], q[:, 2] = 0.0, s["y"], z
-        q[:, 3:7] = np.stack([np.cos(s["yaw"] / 2), 0 * s["yaw"], 0 * s["yaw"], np.sin(s["yaw"] / 2)], axis=1)
-        q[:, 7:] = s["joints"]
-        self.d.ctrl[:] = s["joints"].ravel()
+        yaw = s["yaw"]
+        self.layout.place(self.d, np.stack([np.zeros(rounds), s["y"], z, np.cos(yaw / 2), 0 * yaw, 0 * yaw,
+                                            np.sin(yaw / 2)], axis=1), s["joints"])  # fmt: skip
+        self.layout.set_targets(self.d, s["joints"])
         mujoco.mj_forward(self.m, self.d)
         self.start, self.start_yaw = np.stack([np.zeros(rounds), s["y"]], axis=1), s["yaw"]
         self._first_goals()
@@ -263,28 +270,27 @@ class Rounds:
     def next_goals(self, status: np.ndarray) -> None:
         """Robots still walking within ``goal_radius`` of a goal that is not their last: the next waypoint, by the
         env's goal switch (``Controller.next_goal``, the shared rule)."""
-        q = self.d.qpos.reshape(self.n, 25)
+        q = self.layout.qpos(self.d)
         pose = np.c_[q[:, :2], quat_to_rpy_np(q[:, [4, 5, 6, 3]])[:, 2]]
         self.ctrl.next_goal(pose, self.alive & (status == RUNNING))
 
     def _show_only(self, k: int) -> None:
-        """Robot ``k``'s geoms in group 0, the others' in group 3 (hidden by the viewer's and renderer's defaults)."""
-        for g in range(self.m.ngeom):
-            name = self.mj.mj_id2name(self.m, self.mj.mjtObj.mjOBJ_GEOM, g) or ""
-            if name.startswith("r") and "_" in name and name.split("_")[0][1:].isdigit():
-                self.m.geom_group[g] = 0 if name.startswith(f"r{k}_") else 3
+        """The geoms of every robot but ``k`` in group 3 (hidden by the viewer's and renderer's defaults)."""
+        robot = {int(t): i for i, t in enumerate(self.layout.torsos)}
+        for g, b in enumerate(self.m.geom_bodyid):
+            i = robot.get(int(self.m.body_rootid[b]), k)
+            if i != k:
+                self.m.geom_group[g] = 3
 
     def sensors(self) -> dict:
-        """The robots' current readings: joint encoders and velocities (N, 18), IMU quaternion (N, 4), x y z w, and
-        gyro (N, 3), the torso's angular velocity in its own frame [rad/s]."""
-        s = self.d.sensordata.reshape(self.n, SENSORS_PER_ROBOT)
-        return {"quat": s[:, [1, 2, 3, 0]].copy(), "joint_pos": s[:, 4:22].copy(), "joint_vel": s[:, 22:40].copy(),
-                "gyro": s[:, 40:43].copy()}
+        """The robots' current readings: joint encoders and velocities (N, 18, hexnewton's sense), IMU quaternion
+        (N, 4), x y z w, and gyro (N, 3), the torso's angular velocity in its own frame [rad/s]."""
+        return self.layout.readings(self.d)
 
     def observation_inputs(self, r: dict) -> dict:
         """The rest of the observation: the goal in the heading frame (odometry: the free joint's position) and the
         terrain reading, for the robots still walking (0 for the others)."""
-        pos = self.d.qpos.reshape(self.n, 25)[:, :3]
+        pos = self.layout.qpos(self.d)[:, :3]
         pose = np.c_[pos[:, :2], quat_to_rpy_np(np.atleast_2d(r["quat"]))[:, 2]]  # odometry's planar pose
         target = self.ctrl.target_from_pose(pose, pos[:, 2])
         height = np.zeros(self.n)
@@ -297,7 +303,7 @@ class Rounds:
         the current state; :meth:`targets` from them; ``mj_step2``: integrate)."""
         for k in range(self.substeps):
             self.mj.mj_step1(self.m, self.d)
-            self.d.ctrl[:] = np.asarray(self.targets(k, self.sensors())).ravel()
+            self.layout.set_targets(self.d, self.targets(k, self.sensors()))
             self.mj.mj_step2(self.m, self.d)
         self.steps += 1
 
@@ -313,14 +319,14 @@ class Rounds:
 
     def status(self) -> tuple[np.ndarray, np.ndarray]:
         """Episode status codes (N,) and roll / pitch / yaw (N, 3) after the last control step."""
-        q, v = self.d.qpos.reshape(self.n, 25), self.d.qvel.reshape(self.n, 24)
+        q, v = self.layout.qpos(self.d), self.layout.qvel(self.d)
         ground = np.array([self.scan.height(x, y) if a else 0.0 for (x, y), a in zip(q[:, :2], self.alive)])
         return episode_status(q, v, ground, self.start, self.steps, self.task, self.goal, self.line, self.final)
 
     def park(self, mask: np.ndarray) -> None:
         """Finished robots wait far below the terrain, 1 m apart and at rest (re-parked every step: they fall
         freely), where MuJoCo's collision detection skips them."""
-        q, v = self.d.qpos.reshape(self.n, 25), self.d.qvel.reshape(self.n, 24)
+        q, v = self.layout.blocks(self.d)
         k = np.flatnonzero(mask)
         q[k, 0], q[k, 1], q[k, 2] = 1.0 * k, 0.0, _PARK_Z
         v[k] = 0.0
@@ -337,7 +343,7 @@ class Rounds:
             st, a = self.status()
             st = np.where(self.alive, st, RUNNING)
             self.next_goals(st)
-            p = self.d.qpos.reshape(self.n, 25)[:, :2] - self.start
+            p = self.layout.qpos(self.d)[:, :2] - self.start
             pos.append(np.where(self.alive[:, None], p, np.nan))
             rpy.append(np.where(self.alive[:, None], a, np.nan))
             done.append(st != RUNNING)
@@ -351,11 +357,11 @@ class Rounds:
 
 
 def run_part(controller: str | dict, terrain: str, rounds: int, seed: int, max_steps: int | None,
-             robots=None, on_step=None, waypoints=None) -> dict:
-    """The rounds ``robots`` (indices of ``rounds``; None: all) run to the end (toward ``waypoints``, if given):
-    :meth:`Rounds.run`'s arrays plus ``control_dt``, ``steps`` and the scanner's ``rays``. A top-level function, so
-    that worker processes can run it."""
-    r = Rounds(controller, terrain, rounds, seed, robots=robots, waypoints=waypoints)
+             robots=None, on_step=None, waypoints=None, mjcf: str | None = None) -> dict:
+    """The rounds ``robots`` (indices of ``rounds``; None: all) run to the end (toward ``waypoints``, if given; on the
+    robot's own MJCF file ``mjcf``, if given): :meth:`Rounds.run`'s arrays plus ``control_dt``, ``steps`` and the
+    scanner's ``rays``. A top-level function, so that worker processes can run it."""
+    r = Rounds(controller, terrain, rounds, seed, robots=robots, waypoints=waypoints, mjcf=mjcf)
     ep = r.run(max_steps, on_step)
     ep.update(control_dt=r.control_dt, steps=r.steps, rays=r.scan.rays)
     return ep
@@ -392,10 +398,12 @@ def waypoint_summary(ep: dict, count: int) -> dict:
 
 
 def measure(controller: str | dict, terrain: str, rounds: int, seed: int = EVAL_TERRAIN_SEED,
-            max_steps: int | None = None, on_step=None, workers: int = 1, waypoints=None) -> dict:
+            max_steps: int | None = None, on_step=None, workers: int = 1, waypoints=None,
+            mjcf: str | None = None) -> dict:
     """:class:`Rounds` run to the end and summarised with :mod:`hexnewton.analysis.metrics` (``summarize``'s dict plus
     the wall time, the control steps and the scanner's ray count; with ``waypoints`` also ``waypoints``, the course's
-    :func:`waypoint_summary`). ``workers`` > 1 splits the rounds into that many
+    :func:`waypoint_summary`); ``mjcf``: the robot's own MJCF file instead of the generated model.
+    ``workers`` > 1 splits the rounds into that many
     consecutive ranges, each a MuJoCo model of its own in a process of its own (no ``on_step`` then): the robots of
     one model never touch each other, so each round starts and walks as in one model of all of them, to rounding (a
     smaller model and policy batch round differently, and over thousands of steps on blocks that can change how a
@@ -405,15 +413,15 @@ def measure(controller: str | dict, terrain: str, rounds: int, seed: int = EVAL_
     if workers > 1 and on_step is not None:
         raise ValueError("a film or viewer (on_step) shows one model: run it with workers=1")
     if workers == 1:
-        ep = run_part(controller, terrain, rounds, seed, max_steps, None, on_step, waypoints)
+        ep = run_part(controller, terrain, rounds, seed, max_steps, None, on_step, waypoints, mjcf)
     else:
         import multiprocessing
         from concurrent.futures import ProcessPoolExecutor
 
         ranges = np.array_split(np.arange(rounds), workers)
         with ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn")) as pool:
-            parts = list(pool.map(run_part, *zip(*[(controller, terrain, rounds, seed, max_steps, r, None, waypoints)
-                                                   for r in ranges])))  # fmt: skip
+            parts = list(pool.map(run_part, *zip(*[(controller, terrain, rounds, seed, max_steps, r, None, waypoints,
+                                                    mjcf) for r in ranges])))  # fmt: skip
         ep = join_parts(parts)
     out = summarize(round_metrics(ep["pos"], ep["rpy"], ep["done"], ep["status"], ep["control_dt"]), ep["rpy"])
     out.update(control_steps=ep["steps"], wall_s=round(time.perf_counter() - t0, 1), rays=ep["rays"])
@@ -443,7 +451,7 @@ class Film:
                 raise ValueError(f"--video: MuJoCo cannot render here ({exc}); try MUJOCO_GL=egl or osmesa") from exc
             self.camera = mj.MjvCamera()
             self.camera.type = mj.mjtCamera.mjCAMERA_TRACKING
-            self.camera.trackbodyid = mj.mj_name2id(r.m, mj.mjtObj.mjOBJ_BODY, "r0_torso")
+            self.camera.trackbodyid = int(r.layout.torsos[0])
             self.camera.distance, self.camera.elevation, self.camera.azimuth = 1.0, -25.0, 135.0
         if (r.alive[0] or self.frames == 0) and r.steps % self.every == 0:
             self.renderer.update_scene(r.d, self.camera)

@@ -8,9 +8,10 @@
     python -m hexnewton.apps.sim2sim NAV_BUNDLE --terrains flat --rounds 100 --waypoints 2,0 2,2 0,2 0,0 \
         --newton eval/navigate/results.json --out /tmp/s2s_square                     # a waypoint course, as Newton's
 
-The robot and the terrain are a MuJoCo model written from the project's descriptions (:mod:`hexnewton.deploy.mjcf`): MuJoCo's
-own collision detection and solver, every step. Per control step (``control_dt`` of the bundle) the loop does what
-the robot's computer does with :class:`hexnewton.deploy.runtime.Controller`:
+The robot and the terrain are a MuJoCo model written from the project's descriptions (:mod:`hexnewton.deploy.mjcf`), or
+a robot's own MJCF file on that terrain (``--mjcf``, below): MuJoCo's own collision detection and solver, every step.
+Per control step (``control_dt`` of the bundle) the loop does what the robot's computer does with
+:class:`hexnewton.deploy.runtime.Controller`:
 - reads the 18 joint encoders and velocities and the IMU's quaternion and gyro (MuJoCo sensors), the base position
   (the free joint's coordinates, as odometry gives it) for the goal in the heading frame
   (:func:`deploy.target_in_heading_frame`, the goal's ground from the height scanner), and the terrain reading: the
@@ -27,6 +28,15 @@ goal within 0.5 m; 7000 steps). All rounds run at once as robots of one model th
 other; a finished robot is parked out of the way. ``--workers N`` splits a terrain's rounds into N consecutive ranges,
 each a model of its own in a process of its own (0: one per core), the same rounds on more cores (a film or the
 viewer runs its terrain in one process). Metrics: :mod:`hexnewton.analysis.metrics`, as for Newton.
+
+``--mjcf own|generated``: the model of the robot. ``own`` runs the robot's own MJCF file as written (its bodies,
+geoms, actuators and joint senses; :mod:`hexnewton.deploy.robot_mjcf`) on the course; ``generated`` the model written
+from the bundle's description. The default is ``own`` for a robot read from an MJCF file: the file is the user's
+MuJoCo model of the robot, the one the rest of their MuJoCo work runs, and the policy meeting it is the stronger
+check; ``generated`` (every other robot's model) isolates what the simulators differ in, on the very description
+Newton trained. The file is ``--robot FILE.xml``'s, else the one the description was read from; where that is not
+here (or no longer that robot, or not driven by position servos), the default runs the generated model and says so in
+one line; ``--mjcf own`` then is an error. The fixed CPG walks the same model.
 
 ``--waypoints X,Y ...``: each round walks that waypoint course in its start frame instead (the goals in turn, the last
 one's reaching ending the round), on the navigate tasks' square patch with every start heading and no off-course end,
@@ -192,6 +202,9 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--viewer", action="store_true", help="show robot 0 in MuJoCo's interactive viewer")
     p.add_argument("--workers", type=int, default=1,
                    help="processes per terrain, each a consecutive range of the rounds (0: one per core)")
+    p.add_argument("--mjcf", choices=("own", "generated"), default=None,
+                   help="the robot's model: its own MJCF file as written (own; the default for a robot read from one) "
+                        "or the one written from the bundle's description (generated)")  # fmt: skip
     add_robot_args(p, "the bundle's (its controller.json's description; the fixed CPG walks it too)")
     args = p.parse_args(argv)
     if args.workers < 0:
@@ -205,7 +218,9 @@ def main(argv: list[str] | None = None) -> int:
     args.robot_cfg = spec_robot(load_spec(args.bundle))  # the fixed CPG walks the bundle's robot
     from hexnewton.robot.registry import check_robot
 
-    check_robot(args.robot_cfg, robot_from_args(args), args.bundle, init=False)
+    given = robot_from_args(args)
+    check_robot(args.robot_cfg, given, args.bundle, init=False)
+    args.mjcf_file = model_file(args.robot_cfg, given, args.mjcf)
     if args.video:
         check_writable(args.video, ".mp4")
         os.environ.setdefault("MUJOCO_GL", "egl")
@@ -219,6 +234,36 @@ def main(argv: list[str] | None = None) -> int:
     return run_all(args, newton_reference(newton_path))
 
 
+def model_file(robot, given, choice: str | None) -> str | None:
+    """The robot's own MJCF file that ``--mjcf`` (``choice``; None: the default) runs, or None for the model written
+    from the bundle's description ``robot``; ``given``: ``--robot``'s description (its file the one to run). Where the
+    default cannot run the file (not here, no longer that robot, not driven by position servos), one line says so and
+    the generated model runs; ``--mjcf own`` then is one error line."""
+    from hexnewton.deploy.robot_mjcf import RobotFile
+    from hexnewton.errors import HexnewtonError
+
+    path = (given.source if given is not None else "") or robot.source
+    if choice == "generated" or (choice is None and not path.lower().endswith(".xml")):
+        return None
+    try:
+        notes = RobotFile(path, robot).notes
+    except HexnewtonError as exc:
+        if choice == "own":
+            raise ValueError(f"--mjcf own: {exc}") from None
+        print(f"sim2sim: {exc}: running the model written from the bundle's description (--robot FILE.xml gives the "
+              "file)", flush=True)  # fmt: skip
+        return None
+    for line in [f"sim2sim: robot {robot.name}: its own MJCF file {path}, as written (--mjcf generated: the model "
+                 "written from its description)"] + notes:  # fmt: skip
+        print(line, flush=True)
+    return path
+
+
+def model_words(path: str | None) -> str:
+    """The report's words for the model that ran."""
+    return f"the robot's own MJCF file `{path}`" if path else "written from the bundle's description"
+
+
 def run_all(args, newton: dict) -> int:
     """The rounds of the bundle and the fixed CPG, then results.json, details.json and report.md in ``args.out``."""
     import mujoco
@@ -229,20 +274,20 @@ def run_all(args, newton: dict) -> int:
         hook = (Film(args.video) if args.video else Viewer() if args.viewer else None) if i == 0 else None
         try:
             bundle_res[terrain] = measure(args.bundle, terrain, args.rounds, args.seed, args.max_steps, hook,
-                                          1 if hook is not None else args.workers)
+                                          1 if hook is not None else args.workers, mjcf=args.mjcf_file)
         finally:
             if hook is not None:
                 hook.close()
         print(_line("bundle", terrain, bundle_res[terrain]), flush=True)
     for terrain in args.fixed_terrains:
         fixed_res[terrain] = measure(fixed_cpg_spec(robot=args.robot_cfg), terrain, args.rounds, args.seed,
-                                     args.max_steps, workers=args.workers)
+                                     args.max_steps, workers=args.workers, mjcf=args.mjcf_file)
         print(_line("fixed CPG", terrain, fixed_res[terrain]), flush=True)
     from hexnewton.analysis.report import git_rev
 
     cmd = f"{PROG} " + " ".join(args.argv)
     meta = {"command": f"`{cmd}`", "MuJoCo": mujoco.__version__, "git": git_rev(),
-            "rounds per terrain": args.rounds,
+            "rounds per terrain": args.rounds, "model": model_words(args.mjcf_file),
             "terrain seed / start seed": f"{args.seed} / {args.seed + START_SEED_OFFSET}",
             "machine": f"CPU ({os.cpu_count()} cores, {args.workers} worker processes)",
             "wall time": f"{time.perf_counter() - t0:.0f} s"}  # fmt: skip
@@ -283,15 +328,17 @@ def run_waypoints(args, newton_path: str | None) -> int:
     t0, bundle_res, fixed_res = time.perf_counter(), {}, {}
     for terrain in args.terrains:
         bundle_res[terrain] = measure(args.bundle, terrain, args.rounds, args.seed, args.max_steps,
-                                      workers=args.workers, waypoints=args.waypoints)  # fmt: skip
+                                      workers=args.workers, waypoints=args.waypoints, mjcf=args.mjcf_file)  # fmt: skip
         print(_waypoint_line("bundle", terrain, bundle_res[terrain]), flush=True)
     for terrain in args.fixed_terrains:
         fixed_res[terrain] = measure(fixed_cpg_spec(robot=args.robot_cfg), terrain, args.rounds, args.seed,
-                                     args.max_steps, workers=args.workers, waypoints=args.waypoints)  # fmt: skip
+                                     args.max_steps, workers=args.workers, waypoints=args.waypoints,
+                                     mjcf=args.mjcf_file)  # fmt: skip
         print(_waypoint_line("fixed CPG", terrain, fixed_res[terrain]), flush=True)
     course = " ".join(f"({x:g}, {y:g})" for x, y in args.waypoints)
     meta = {"command": f"`{PROG} " + " ".join(args.argv) + "`", "MuJoCo": mujoco.__version__, "git": git_rev(),
             "waypoints (start frame)": course, "rounds per terrain": args.rounds,
+            "model": model_words(args.mjcf_file),
             "terrain seed / start seed": f"{args.seed} / {args.seed + START_SEED_OFFSET}",
             "wall time": f"{time.perf_counter() - t0:.0f} s"}  # fmt: skip
     os.makedirs(args.out)

@@ -21,7 +21,9 @@ centres, so a vertical ray through a cell centre hits that cell's height) takes 
 
 Several robots can share one model (one terrain, as the evaluation's robots share one): robots touch the terrain
 only (``contype`` 1 / ``conaffinity`` 0 on the robot, 0 / 1 on the terrain), never each other. Plain Python and NumPy
-until :func:`build_model` compiles the text with ``mujoco``.
+until :func:`build_model` compiles the text with ``mujoco``. :class:`Layout` says where each robot's coordinates,
+servos and sensors are, in this model and in a robot's own MJCF file put on the terrain
+(:mod:`hexnewton.deploy.robot_mjcf`).
 """
 
 from __future__ import annotations
@@ -258,3 +260,71 @@ def build_model(cfg: RobotConfig, grid: HeightGrid | None, starts, timestep: flo
     if grid is not None:
         set_scanner_heights(model, grid)
     return model
+
+
+class Layout:
+    """Where a model of N robots keeps each robot, in hexnewton's terms: a block of ``nq`` position and ``nv``
+    velocity coordinates per robot, its free joint first; the 18 leg joints at ``joint_q`` / ``joint_v`` within the
+    block, in hexnewton's order, their senses ``signs`` and the coordinates of their zero angles ``zero`` (hexnewton's
+    angle = sign x (the model's - zero)); the servos ``actuators`` (N, 18), a servo's control = its ``gear`` (N, 18) x
+    the model's angle; the 43 sensor values per robot ``sensors`` (N, 43) in :func:`robot_io_xml`'s order (the
+    joints' in the model's sense); the torso bodies ``torsos`` (N,). The generated model's (:meth:`generated`) is
+    the identity: 25 / 24 coordinates per robot, hexnewton's senses, servos and sensors in order."""
+
+    def __init__(self, nq: int, nv: int, joint_q, joint_v, signs, zero, actuators, gear, sensors, torsos):
+        self.nq, self.nv = int(nq), int(nv)
+        self.joint_q, self.joint_v = np.asarray(joint_q, np.int64), np.asarray(joint_v, np.int64)
+        self.signs, self.zero = np.asarray(signs, np.float64), np.asarray(zero, np.float64)
+        self.actuators, self.gear = np.asarray(actuators, np.int64), np.asarray(gear, np.float64)
+        self.sensors, self.torsos = np.asarray(sensors, np.int64), np.asarray(torsos, np.int64)
+        self.n = len(self.torsos)
+
+    @classmethod
+    def identity(cls, n: int, torsos=None) -> "Layout":
+        """``n`` robots as :func:`build_model` lays them out (``torsos``: their bodies, default the first of each
+        robot's 19)."""
+        torsos = 1 + 19 * np.arange(n) if torsos is None else torsos
+        return cls(25, 24, np.arange(7, 25), np.arange(6, 24), np.ones(18), np.zeros(18),
+                   np.arange(18 * n).reshape(n, 18), np.ones((n, 18)),
+                   np.arange(SENSORS_PER_ROBOT * n).reshape(n, SENSORS_PER_ROBOT), torsos)  # fmt: skip
+
+    @classmethod
+    def generated(cls, model, n: int) -> "Layout":
+        """The layout of :func:`build_model`'s ``n`` robots (checked against the model)."""
+        import mujoco
+
+        if model.nq != 25 * n or model.nu != 18 * n or model.nsensordata != SENSORS_PER_ROBOT * n:
+            raise RuntimeError("unexpected MuJoCo model layout")
+        return cls.identity(n, [mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, f"r{k}_torso") for k in range(n)])
+
+    def blocks(self, d) -> tuple[np.ndarray, np.ndarray]:
+        """The robots' position and velocity coordinates (N, nq) and (N, nv), views of ``d``'s."""
+        return d.qpos.reshape(self.n, self.nq), d.qvel.reshape(self.n, self.nv)
+
+    def qpos(self, d) -> np.ndarray:
+        """The robots' coordinates in hexnewton's terms (N, 25): the free joint's (x, y, z, MuJoCo's w, x, y, z
+        quaternion), then the 18 joint angles."""
+        q, _ = self.blocks(d)
+        return np.concatenate([q[:, :7], self.signs * (q[:, self.joint_q] - self.zero)], axis=1)
+
+    def qvel(self, d) -> np.ndarray:
+        """The robots' velocities in hexnewton's terms (N, 24): the free joint's 6, then the 18 joints'."""
+        _, v = self.blocks(d)
+        return np.concatenate([v[:, :6], self.signs * v[:, self.joint_v]], axis=1)
+
+    def place(self, d, base: np.ndarray, joints: np.ndarray) -> None:
+        """Set the free joints' coordinates (N, 7) and the joint angles (N, 18, hexnewton's)."""
+        q, _ = self.blocks(d)
+        q[:, :7] = base
+        q[:, self.joint_q] = self.zero + self.signs * np.asarray(joints)
+
+    def set_targets(self, d, targets: np.ndarray) -> None:
+        """The servos' controls for joint targets (N, 18) in hexnewton's sense."""
+        d.ctrl[self.actuators] = self.gear * (self.zero + self.signs * np.asarray(targets).reshape(self.n, 18))
+
+    def readings(self, d) -> dict:
+        """The sensors' values: joint encoders and velocities (N, 18) in hexnewton's sense, the IMU quaternion (N, 4)
+        x y z w and gyro (N, 3)."""
+        s = d.sensordata[self.sensors]
+        return {"quat": s[:, [1, 2, 3, 0]], "joint_pos": self.signs * (s[:, 4:22] - self.zero),
+                "joint_vel": self.signs * s[:, 22:40], "gyro": s[:, 40:43]}  # fmt: skip

@@ -191,10 +191,13 @@ class _Ctrl:
 
 class _Rounds:
     def __init__(self, n, substeps=1, policy=True):
+        from hexnewton.deploy.mjcf import Layout
+
         self.n, self.substeps, self.policy, self.steps = n, substeps, policy, 0
         self.alive = np.ones(n, bool)
         self.mj, self.m = _Mj(), None
         self.d = type("D", (), {"ctrl": np.zeros(18 * n)})()
+        self.layout = Layout.identity(n)  # the servos' controls in order, as the generated model's
         self.ctrl = _Ctrl(n)
         self.knee = np.full((n, 6), 1.2)
         self.goal = np.full(n, 3.0)

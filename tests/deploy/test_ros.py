@@ -1,7 +1,7 @@
 """The bundle as a ROS 2 node (hexnewton.deploy.ros, hexnewton-ros): its logic without ROS (parameters, refusals, the
-standing pose on stale data, the runtime's targets), then over real topics: the node and the MuJoCo robot as two
-processes in lockstep, the faults and Ctrl-C. The ROS tests need rclpy (the ros extra); each has its own
-ROS_DOMAIN_ID, discovery on this machine only."""
+standing pose on stale data, the runtime's targets, a robot file's joint senses), then over real topics: the node and
+the MuJoCo robot as two processes in lockstep, the faults and Ctrl-C. The ROS tests need rclpy (the ros extra); each
+has its own ROS_DOMAIN_ID, discovery on this machine only."""
 
 from __future__ import annotations
 
@@ -28,8 +28,12 @@ _domains = itertools.count()
 
 
 def _loop(**params):
+    return _loop_for(BUNDLE, **params)
+
+
+def _loop_for(bundle: str, **params):
     lines = []
-    loop = ControlLoop(check_parameters({"bundle": BUNDLE, **params}), log=lines.append)
+    loop = ControlLoop(check_parameters({"bundle": bundle, **params}), log=lines.append)
     return loop, lines
 
 
@@ -206,6 +210,101 @@ def test_goal_reached_and_no_goal_hold_the_pose():
     assert loop.walking
 
 
+#: the senses of the flipped MX-Phoenix file's joints (tests/deploy/conftest.py): R1 hip, R2 knee, R3 ankle and L3 hip
+#: turned round, L1 knee back to hexnewton's sense, the file's other left knees and ankles as written (-1)
+FLIPPED_SIGNS = [-1.0, 1, 1, 1, -1, 1, 1, 1, -1, 1, 1, -1, 1, -1, -1, -1, -1, -1]
+
+
+def _file_robot(bundle: str, path: str):
+    """A robot file's bundle as the node reads it: (controller.json, the file's joint names in hexnewton's order, their
+    senses), the senses checked against the file's (the loader's ``JointConfig.sign``)."""
+    from hexnewton.robot.loader import load_robot
+
+    with open(os.path.join(bundle, "controller.json")) as f:
+        spec = json.load(f)
+    robot = load_robot(path)
+    names = [j.name for leg in robot.legs for j in leg.joints]
+    assert spec["obs_notes"]["joint order"] == names and spec["robot"] == robot.name
+    assert spec["joint_signs"] == [j.sign for leg in robot.legs for j in leg.joints] == FLIPPED_SIGNS
+    return spec, names, np.asarray(spec["joint_signs"])
+
+
+def test_a_file_robots_joint_states_and_targets_turn_with_its_joint_senses(flipped_bundle, flipped_mjcf):
+    """A robot file some of whose joints turn the other way (the MX-Phoenix's MJCF with 5 axes reversed): its bundle's
+    controller.json has those joints' senses, and the node's loop turns the robot's joint states (the file's angles,
+    by the file's names, in any order) into hexnewton's sense and its targets back into the file's: the targets are
+    the runtime's on hexnewton's angles with the file's senses applied, while walking and while holding the pose."""
+    spec, names, signs = _file_robot(flipped_bundle, flipped_mjcf)
+    loop, _ = _loop_for(flipped_bundle, sync_tolerance=0.0)
+    ctrl = Controller(flipped_bundle, num_robots=1)
+    loop.set_goal("odom", (3.0, 0.0, 0.0), 0)
+    rng = np.random.default_rng(3)
+    hex_q = np.tile(spec["stand_pose"], 6) + rng.uniform(-0.1, 0.1, 18)  # hexnewton's angles
+    hex_v = rng.uniform(-0.5, 0.5, 18)
+    order = rng.permutation(18)
+    robot_q, robot_v = signs * hex_q, signs * hex_v  # what the robot's encoders say
+    assert robot_q[0] == -hex_q[0] and robot_q[1] == hex_q[1]  # R1's hip turns the other way, its knee not
+    q, t = (0.0, 0.0, np.sin(0.05), np.cos(0.05)), 20 * MS
+    assert loop.joint_state([names[i] for i in order], robot_q[order], robot_v[order], t, t) is None
+    got_q, got_v = loop.latest["joint_states"].value
+    np.testing.assert_array_equal(got_q, hex_q)
+    np.testing.assert_array_equal(got_v, hex_v)
+    assert loop.odometry("odom", (0.0, 0.0, 0.2), q, t, t) is None and loop.terrain(0.0, t, t) is None
+    (_, out), = loop.on_imu(q, (0.0, 0.0, 0.0), t, t)
+    target = target_in_heading_frame((0.0, 0.0, 0.2), q, (3.0, 0.0, 0.0), 0.0)
+    ctrl.set_actions(ctrl.act(ctrl.observe(hex_q, hex_v, q, target, 0.0)), target)
+    want = ctrl.substep(q)[0]  # hexnewton's targets
+    np.testing.assert_array_equal(out, signs * want)
+    turned = signs < 0
+    assert np.abs(want[turned]).min() > 1e-3 and np.all(np.sign(out[turned]) == -np.sign(want[turned]))
+    for k in range(1, 4):
+        (_, out), = loop.on_imu(q, (0.0, 0.0, 0.0), t + k * 5 * MS, t + k * 5 * MS)
+        np.testing.assert_array_equal(out, signs * ctrl.substep(q)[0])
+    # the readings stop: the targets go to the standing pose, in the file's sense
+    held = [q_out for k in range(1, 200) for _, q_out in loop.on_watchdog(t + 200 * MS + k * 20 * MS)]
+    np.testing.assert_allclose(held[-1], signs * np.tile(spec["stand_pose"], 6))
+
+
+def test_the_node_turns_a_file_robots_messages(flipped_bundle, flipped_mjcf, ros_env):
+    """The same through the rclpy node: a ``sensor_msgs/JointState`` of the file's angles in, the
+    ``Float64MultiArray`` of its targets out, in the file's senses."""
+    import rclpy
+    from geometry_msgs.msg import PointStamped, PoseStamped
+    from nav_msgs.msg import Odometry
+    from sensor_msgs.msg import Imu, JointState
+
+    from hexnewton.deploy.ros import ControllerNode, ros_time
+
+    spec, names, signs = _file_robot(flipped_bundle, flipped_mjcf)
+    hex_q = np.tile(spec["stand_pose"], 6) + np.linspace(-0.1, 0.1, 18)
+    ctx = rclpy.Context()
+    rclpy.init(context=ctx, domain_id=int(ros_env["ROS_DOMAIN_ID"]))
+    try:
+        node = ControllerNode(flipped_bundle, context=ctx, cli_args=["--ros-args", "-p", "sync_tolerance:=0.0"])
+        goal = PoseStamped()
+        goal.header.frame_id, goal.pose.position.x = "odom", 3.0
+        node._goal(goal)
+        stamp = ros_time(time.time_ns())
+        js = JointState(name=names[::-1], position=(signs * hex_q)[::-1].tolist(), velocity=[0.0] * 18)
+        od, tr, imu = Odometry(), PointStamped(), Imu()
+        od.header.frame_id = tr.header.frame_id = "odom"
+        od.pose.pose.position.z, od.pose.pose.orientation.w, imu.orientation.w = 0.2, 1.0, 1.0
+        for m in (js, od, tr, imu):
+            m.header.stamp = stamp
+        node._joint_states(js)
+        node._odom(od)
+        node._terrain(tr)
+        node._imu(imu)
+        assert node.loop.walking and node.loop.counts["substeps"] == 1
+        ctrl = Controller(flipped_bundle, num_robots=1)
+        target = target_in_heading_frame((0.0, 0.0, 0.2), (0, 0, 0, 1.0), (3.0, 0.0, 0.0), 0.0)
+        ctrl.set_actions(ctrl.act(ctrl.observe(hex_q, np.zeros(18), (0, 0, 0, 1.0), target, 0.0)), target)
+        np.testing.assert_array_equal(node.cmd_msg.data, signs * ctrl.substep((0, 0, 0, 1.0))[0])
+        node.node.destroy_node()
+    finally:
+        rclpy.try_shutdown(context=ctx)
+
+
 def test_the_node_module_loads_neither_warp_newton_nor_torch_and_asks_for_rclpy():
     """``hexnewton.deploy.ros`` and its loop (``control_loop``) run on NumPy and onnxruntime; without rclpy the
     command says in one line how to install it."""
@@ -246,8 +345,8 @@ def ros_env():
     return dict(os.environ, ROS_DOMAIN_ID=str(domain), ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST")
 
 
-def _node(env, *params, stats=None):
-    cmd = [sys.executable, "-m", "hexnewton.apps.ros", "node", BUNDLE] + (["--stats", stats] if stats else [])
+def _node(env, *params, stats=None, bundle=BUNDLE):
+    cmd = [sys.executable, "-m", "hexnewton.apps.ros", "node", bundle] + (["--stats", stats] if stats else [])
     return subprocess.Popen(cmd + (["--ros-args", *params] if params else []), cwd=ROOT, env=env, text=True,
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE)  # fmt: skip
 
@@ -297,6 +396,29 @@ def test_node_and_mujoco_robot_walk_in_lockstep_as_in_process(ros_env, tmp_path)
         assert reader.connections[0].digest is not None
     assert counts["imu"] == 1200 and counts["joint_states"] == 300 and counts["joint_trajectory"] >= 1200
     assert os.path.isfile(bag / "metadata.yaml") and list(bag.glob("*.mcap"))
+
+
+@pytest.mark.slow  # end to end: 15 s or more on a 2-core CPU
+def test_a_file_robot_walks_over_ros_as_in_process(ros_env, flipped_bundle, tmp_path):
+    """The flipped robot file's bundle over ROS 2 in lockstep: C MuJoCo as the robot publishes the file's joint angles
+    and applies the node's targets in the file's senses (``RosRounds``), the node turns them into hexnewton's and
+    back; the round is the in-process sim2sim's, number for number."""
+    from hexnewton.analysis.ros_robot import LOCKSTEP_NODE_PARAMETERS, round_summary
+    from hexnewton.analysis.sim2sim import run_part
+
+    params = [w for k, v in LOCKSTEP_NODE_PARAMETERS.items() for w in ("-p", f"{k}:={v}")]
+    node = _node(ros_env, *params, bundle=flipped_bundle)
+    try:
+        out = tmp_path / "robot.json"
+        proc = subprocess.run([sys.executable, "-m", "hexnewton.apps.ros", "robot", flipped_bundle, "--terrain", "flat",
+                               "--rounds", "1", "--max_steps", "150", "--out", str(out)], cwd=ROOT, env=ros_env,
+                              capture_output=True, text=True, timeout=180)  # fmt: skip
+        assert proc.returncode == 0, proc.stderr[-3000:]
+    finally:
+        _stop(node)
+    (row,) = json.loads(out.read_text())["rounds"]
+    ref = round_summary(run_part(flipped_bundle, "flat", 1, 1000, 150))
+    assert row["steps"] == 150 and row["x"] > 0.2 and (row["x"], row["y"]) == (ref["x"], ref["y"]), (row, ref)
 
 
 def test_node_on_the_events_executor_stops_on_ctrl_c(ros_env):
