@@ -289,7 +289,8 @@ class _Tree:
             self._check_limit(j, urdf)
             pos, rot = self.frame(b)
             axis = signs[k] * self.m.jnt_axis[j] / np.linalg.norm(self.m.jnt_axis[j])
-            lo, hi = (float(v) for v in self.m.jnt_range[j])
+            ref = float(self.m.qpos0[self.m.jnt_qposadr[j]])  # the joint's ref: the file's frames stand at it
+            lo, hi = (float(v) - ref for v in self.m.jnt_range[j])
             limit = (lo, hi) if signs[k] > 0 else (-hi, -lo)
             link = foot_link if k == 2 else self.link(b)
             if k == 2 and extra is not None:
@@ -366,7 +367,8 @@ def _stand_pose(tree: _Tree, legs: list[LegConfig], chains: list[list[int]], sig
         k = tree.mj.mj_name2id(m, tree.mj.mjtObj.mjOBJ_KEY, key)
         if k >= 0:
             qpos = m.key_qpos[k]
-            poses = [[s * float(qpos[m.jnt_qposadr[j]]) for j, s in zip(chain, sg)] for chain, sg in zip(chains, signs)]
+            poses = [[s * float(qpos[m.jnt_qposadr[j]] - m.qpos0[m.jnt_qposadr[j]]) for j, s in zip(chain, sg)]
+                     for chain, sg in zip(chains, signs)]  # angles from the joints' ref, as the limits
             break
     if poses is None:
         poses = [_computed_stand(leg) for leg in legs]
@@ -415,10 +417,11 @@ def _servo(tree: _Tree, chains, urdf: dict, mass: float, femur: float) -> dict:
     kp, kv, effort = [], [], []
     for a in range(m.nu):
         if m.actuator_trntype[a] == 0 and m.actuator_trnid[a][0] in joints and m.actuator_biasprm[a][1] < 0:
-            kp.append(float(m.actuator_gainprm[a][0]))
-            kv.append(float(-m.actuator_biasprm[a][2]))
+            gear = abs(float(m.actuator_gear[a][0]))  # the servo turns the joint through its gear: the joint's
+            kp.append(float(m.actuator_gainprm[a][0]) * gear**2)  # stiffness kp g², damping kv g², torque g x force
+            kv.append(float(-m.actuator_biasprm[a][2]) * gear**2)
             if m.actuator_forcelimited[a]:
-                effort.append(float(max(abs(v) for v in m.actuator_forcerange[a])))
+                effort.append(float(max(abs(v) for v in m.actuator_forcerange[a])) * gear)
     effort += [e for j in joints if (e := (urdf.get(tree.joint(j)) or {}).get("effort"))]
     armature = [float(m.dof_armature[m.jnt_dofadr[j]]) for j in joints if m.dof_armature[m.jnt_dofadr[j]] > 0]
     pick = lambda values, default: float(np.median(values)) if values else default  # noqa: E731

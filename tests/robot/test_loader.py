@@ -149,3 +149,39 @@ def test_named_joints_replace_the_tree(tmp_path):
         load_robot(URDF, tuple(names[:17]) + ("x_joint",))
     swapped = names[3:6] + names[:3] + names[6:]
     assert [j.name for leg in load_robot(URDF, tuple(swapped)).legs for j in leg.joints] == swapped
+
+
+def test_a_joints_ref_and_a_servos_gear_are_counted(tmp_path):
+    """The same MX-Phoenix written with each femur's ``ref`` at 0.3 rad (its range and keyframe moved with it, the
+    frames as they were) and servos of gear 2 at a quarter of the stiffness and damping, half the force: the same
+    robot (angles from the ref; the joint's stiffness kp g², damping kv g², torque g x force)."""
+    root = ET.parse(MJCF).getroot()
+    femurs = [j for j in root.iter("joint") if j.get("name", "").endswith("_femur")]
+    adr = {}
+    for j in femurs:
+        lo, hi = (float(v) for v in j.get("range").split())
+        j.set("ref", "0.3")
+        j.set("range", f"{lo + 0.3!r} {hi + 0.3!r}")
+    names = [j.get("name") for j in root.iter("joint") if j.get("type") != "free" and j.get("name")]
+    for k, name in enumerate(names):
+        adr[name] = 7 + k
+    key = root.find("keyframe/key")
+    qpos = [float(v) for v in key.get("qpos").split()]
+    for j in femurs:
+        qpos[adr[j.get("name")]] += 0.3
+    key.set("qpos", " ".join(repr(v) for v in qpos))
+    for a in root.iter("position"):
+        a.set("gear", "2")
+        a.set("kp", repr(float(a.get("kp")) / 4))
+        a.set("kv", repr(float(a.get("kv")) / 4))
+        a.set("forcerange", " ".join(repr(float(v) / 2) for v in a.get("forcerange").split()))
+    path = tmp_path / "mx_phoenix_ref_gear.xml"
+    ET.ElementTree(root).write(path)
+    got, want = load_robot(str(path)), load_robot(MJCF)
+    assert np.allclose(got.stand_pose, want.stand_pose, atol=1e-9)
+    assert np.allclose(joint_limits(got), joint_limits(want), atol=1e-9)
+    for name in ("joint_ke", "joint_kd", "effort_limit"):
+        assert getattr(got, name) == pytest.approx(getattr(want, name), rel=1e-9), name
+    for lg, lw in zip(got.legs, want.legs):
+        for jg, jw in zip(lg.joints, lw.joints):
+            assert _same_frame(jg, jw) and jg.limit == pytest.approx(jw.limit, abs=1e-9)
