@@ -212,8 +212,8 @@ class RosRounds(Rounds):
     substep a command may take)."""
 
     def __init__(self, link: RobotLink, controller: str, terrain: str, rounds: int, k: int, seed: int,
-                 realtime: bool = False, deadline: float = 0.85):
-        super().__init__(controller, terrain, rounds, seed, robots=[k])
+                 realtime: bool = False, deadline: float = 0.85, mjcf: str | None = None):
+        super().__init__(controller, terrain, rounds, seed, robots=[k], mjcf=mjcf)
         self.link, self.realtime, self.deadline = link, realtime, deadline
         self.dt = float(self.spec["substep_dt"])
         self.ticks, self.t0, self.missed, self.late_starts = 0, None, 0, 0
@@ -258,8 +258,9 @@ def round_summary(ep: dict) -> dict:
 
 
 def run_rounds(bundle: str, terrain: str, rounds: int, seed: int, max_steps: int | None, realtime: bool,
-               bag_path: str | None = None, only=None, on_round=None) -> dict:
-    """Rounds ``only`` (default all) of ``rounds``, one after another, each with the node's targets; per round
+               bag_path: str | None = None, only=None, on_round=None, mjcf: str | None = None) -> dict:
+    """Rounds ``only`` (default all) of ``rounds``, one after another, each with the node's targets (on ``mjcf``,
+    a robot's own MJCF file, as sim2sim's ``Rounds``; None: the model written from the bundle); per round
     :func:`round_summary` and the robot's counts (messages sent, commands, missed periods, round trips)."""
     from hexnewton.deploy.runtime import load_spec
 
@@ -272,7 +273,7 @@ def run_rounds(bundle: str, terrain: str, rounds: int, seed: int, max_steps: int
         link = RobotLink(spec.get("obs_notes", {}).get("joint order") or JOINT_NAMES, bag)
         out = []
         for k in range(rounds) if only is None else only:
-            r = RosRounds(link, bundle, terrain, rounds, k, seed, realtime)
+            r = RosRounds(link, bundle, terrain, rounds, k, seed, realtime, mjcf=mjcf)
             link.handshake(r.goal3())
             t = time.perf_counter()
             row = dict(round=k, **round_summary(r.run(max_steps)), wall_s=round(time.perf_counter() - t, 2),

@@ -155,6 +155,31 @@ def episode_status(qpos: np.ndarray, qvel: np.ndarray, ground: np.ndarray, start
     return rules.episode_status(inputs, task.terminations)
 
 
+def model_file(robot, given, choice: str | None, prog: str = "sim2sim") -> str | None:
+    """The robot's own MJCF file that ``--mjcf`` (``choice``; None: the default) runs, or None for the model written
+    from the bundle's description ``robot``; ``given``: ``--robot``'s description (its file the one to run). Where the
+    default cannot run the file (not here, no longer that robot, not driven by position servos), one line says so and
+    the generated model runs; ``--mjcf own`` then is one error line (``prog`` begins the lines)."""
+    from hexnewton.deploy.robot_mjcf import RobotFile
+    from hexnewton.errors import HexnewtonError
+
+    path = (given.source if given is not None else "") or robot.source
+    if choice == "generated" or (choice is None and not path.lower().endswith(".xml")):
+        return None
+    try:
+        notes = RobotFile(path, robot).notes
+    except HexnewtonError as exc:
+        if choice == "own":
+            raise ValueError(f"--mjcf own: {exc}") from None
+        print(f"{prog}: {exc}: running the model written from the bundle's description (--robot FILE.xml gives the "
+              "file)", flush=True)  # fmt: skip
+        return None
+    for line in [f"{prog}: robot {robot.name}: its own MJCF file {path}, as written (--mjcf generated: the model "
+                 "written from its description)"] + notes:  # fmt: skip
+        print(line, flush=True)
+    return path
+
+
 class Rounds:
     """``rounds`` robots of one controller on one terrain, each its first episode, closed loop in MuJoCo.
 

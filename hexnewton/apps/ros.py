@@ -19,6 +19,8 @@ latency (sensor stamp to the targets' publish) to a JSON file when it stops.
 ``robot`` (:mod:`hexnewton.analysis.ros_robot`) is C MuJoCo as the robot: sim2sim's rounds (terrain seed
 ``--seed``, the evaluation's starts and episode ends), one after another, each its own model, the targets from
 the node, in lockstep (the default: each step waits for its targets) or ``--realtime`` (paced by the wall clock);
+its model sim2sim's (``--mjcf own|generated``, ``--robot FILE.xml``: a robot's own MJCF file, or the one written from
+the bundle's description);
 ``--bag`` records the run as a rosbag2 folder (MCAP); ``--out`` writes the rounds and the robot's counts as JSON.
 ``replay`` plays a recorded run's readings back to a node (open loop), each instant's messages together at the
 instant's recorded time.
@@ -32,7 +34,8 @@ import os
 import sys
 
 from hexnewton.analysis.rollout import EVAL_TERRAIN_SEED
-from hexnewton.apps.cli import ArgumentParser, check_new_dir, check_writable, positive_int, run, terrain_name
+from hexnewton.apps.cli import ArgumentParser, add_robot_args, check_new_dir, check_writable, positive_int
+from hexnewton.apps.cli import robot_from_args, run, terrain_name
 from hexnewton.config import TaskConfig
 
 PROG = "python -m hexnewton.apps.ros"
@@ -62,6 +65,10 @@ def _parser() -> ArgumentParser:
     r.add_argument("--bag", metavar="DIR", help="record the run as a rosbag2 folder (MCAP storage)")
     r.add_argument("--out", metavar="PATH.json", help="write the rounds and the robot's counts here")
     r.add_argument("--priority", **priority)
+    r.add_argument("--mjcf", choices=("own", "generated"), default=None,
+                   help="the robot's model, as sim2sim's: its own MJCF file as written (own; the default for a robot "
+                        "read from one) or the one written from the bundle's description (generated)")  # fmt: skip
+    add_robot_args(r, "the bundle's (its controller.json's description)")
     b = sub.add_parser("replay", help="play a recorded run's readings back to a node")
     b.add_argument("bag", help="a rosbag2 folder written by robot --bag")
     b.add_argument("--speed", type=float, default=1.0, help="times faster than recorded")
@@ -89,9 +96,14 @@ def main(argv: list[str] | None = None) -> int:
 
 
 def _robot(args) -> int:
-    from hexnewton.deploy.runtime import load_spec
+    from hexnewton.analysis.sim2sim import model_file
+    from hexnewton.deploy.runtime import load_spec, spec_robot
+    from hexnewton.robot.registry import check_robot
 
-    load_spec(args.bundle)
+    robot = spec_robot(load_spec(args.bundle))
+    given = robot_from_args(args)
+    check_robot(robot, given, args.bundle, init=False)
+    mjcf = model_file(robot, given, args.mjcf, prog="ros robot")
     if args.out:
         check_writable(args.out, ".json")
     if args.bag:
@@ -109,9 +121,9 @@ def _robot(args) -> int:
               f"{row['missed_periods']} missed periods, {row['wall_s']:.1f} s", flush=True)  # fmt: skip
 
     res = run_rounds(args.bundle, args.terrain, args.rounds, args.seed, args.max_steps, args.realtime, args.bag, only,
-                     show)  # fmt: skip
+                     show, mjcf=mjcf)  # fmt: skip
     res.update(mode="realtime" if args.realtime else "lockstep", terrain=args.terrain, seed=args.seed,
-               bundle=args.bundle)  # fmt: skip
+               bundle=args.bundle, model=mjcf or "generated")  # fmt: skip
     if args.out:
         with open(args.out, "w") as f:
             json.dump(res, f, indent=1)

@@ -59,7 +59,7 @@ import time
 
 from hexnewton.analysis.report import ended_cell
 from hexnewton.analysis.rollout import EVAL_TERRAIN_SEED, START_SEED_OFFSET
-from hexnewton.analysis.sim2sim import Film, Viewer, fixed_cpg_spec, measure
+from hexnewton.analysis.sim2sim import Film, Viewer, fixed_cpg_spec, measure, model_file
 from hexnewton.apps.cli import (
     ArgumentParser,
     add_robot_args,
@@ -232,31 +232,6 @@ def main(argv: list[str] | None = None) -> int:
     if args.waypoints:
         return run_waypoints(args, None if args.newton == NEWTON_REFERENCE else newton_path)
     return run_all(args, newton_reference(newton_path))
-
-
-def model_file(robot, given, choice: str | None) -> str | None:
-    """The robot's own MJCF file that ``--mjcf`` (``choice``; None: the default) runs, or None for the model written
-    from the bundle's description ``robot``; ``given``: ``--robot``'s description (its file the one to run). Where the
-    default cannot run the file (not here, no longer that robot, not driven by position servos), one line says so and
-    the generated model runs; ``--mjcf own`` then is one error line."""
-    from hexnewton.deploy.robot_mjcf import RobotFile
-    from hexnewton.errors import HexnewtonError
-
-    path = (given.source if given is not None else "") or robot.source
-    if choice == "generated" or (choice is None and not path.lower().endswith(".xml")):
-        return None
-    try:
-        notes = RobotFile(path, robot).notes
-    except HexnewtonError as exc:
-        if choice == "own":
-            raise ValueError(f"--mjcf own: {exc}") from None
-        print(f"sim2sim: {exc}: running the model written from the bundle's description (--robot FILE.xml gives the "
-              "file)", flush=True)  # fmt: skip
-        return None
-    for line in [f"sim2sim: robot {robot.name}: its own MJCF file {path}, as written (--mjcf generated: the model "
-                 "written from its description)"] + notes:  # fmt: skip
-        print(line, flush=True)
-    return path
 
 
 def model_words(path: str | None) -> str:

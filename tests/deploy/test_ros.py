@@ -322,15 +322,19 @@ def test_the_node_module_loads_neither_warp_newton_nor_torch_and_asks_for_rclpy(
     assert proc.returncode == 2 and len(lines) == 1 and "pip install -e '.[ros]'" in lines[0], proc.stderr
 
 
-def test_bad_command_lines_are_one_error_line():
+def test_bad_command_lines_are_one_error_line(capsys):
     from hexnewton.apps.cli import run
     from hexnewton.apps.ros import main
 
     for argv, words in [(["node", BUNDLE, "--ros-args", "-p", "no_such:=1"], "unknown parameter 'no_such'"),
                         (["robot", "no_bundle"], "not a controller bundle"),
                         (["robot", BUNDLE, "--rounds", "2", "--only", "5"], "--only"),
+                        (["robot", BUNDLE, "--mjcf", "own"], "--mjcf own"),
+                        (["robot", BUNDLE, "--robot", "mx_phoenix"], "trained on robot paper, not mx_phoenix"),
                         (["replay", "no_bag"], "not a rosbag2 folder")]:  # fmt: skip
         assert run(main, "hexnewton-ros", argv) == 2, argv
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and words in err[0], (argv, err)
 
 
 # --- over ROS 2 ------------------------------------------------------------------------------------------------------
@@ -399,10 +403,12 @@ def test_node_and_mujoco_robot_walk_in_lockstep_as_in_process(ros_env, tmp_path)
 
 
 @pytest.mark.slow  # end to end: 15 s or more on a 2-core CPU
-def test_a_file_robot_walks_over_ros_as_in_process(ros_env, flipped_bundle, tmp_path):
+@pytest.mark.parametrize("model", ["generated", "own"])
+def test_a_file_robot_walks_over_ros_as_in_process(ros_env, flipped_bundle, flipped_mjcf, tmp_path, model):
     """The flipped robot file's bundle over ROS 2 in lockstep: C MuJoCo as the robot publishes the file's joint angles
     and applies the node's targets in the file's senses (``RosRounds``), the node turns them into hexnewton's and
-    back; the round is the in-process sim2sim's, number for number."""
+    back; the round is the in-process sim2sim's, number for number, on the model written from the bundle and on the
+    file itself (``--mjcf own``)."""
     from hexnewton.analysis.ros_robot import LOCKSTEP_NODE_PARAMETERS, round_summary
     from hexnewton.analysis.sim2sim import run_part
 
@@ -411,13 +417,15 @@ def test_a_file_robot_walks_over_ros_as_in_process(ros_env, flipped_bundle, tmp_
     try:
         out = tmp_path / "robot.json"
         proc = subprocess.run([sys.executable, "-m", "hexnewton.apps.ros", "robot", flipped_bundle, "--terrain", "flat",
-                               "--rounds", "1", "--max_steps", "150", "--out", str(out)], cwd=ROOT, env=ros_env,
-                              capture_output=True, text=True, timeout=180)  # fmt: skip
+                               "--rounds", "1", "--max_steps", "150", "--out", str(out), "--mjcf", model],
+                              cwd=ROOT, env=ros_env, capture_output=True, text=True, timeout=180)  # fmt: skip
         assert proc.returncode == 0, proc.stderr[-3000:]
     finally:
         _stop(node)
-    (row,) = json.loads(out.read_text())["rounds"]
-    ref = round_summary(run_part(flipped_bundle, "flat", 1, 1000, 150))
+    res = json.loads(out.read_text())
+    (row,) = res["rounds"]
+    assert res["model"] == (flipped_mjcf if model == "own" else "generated")
+    ref = round_summary(run_part(flipped_bundle, "flat", 1, 1000, 150, mjcf=flipped_mjcf if model == "own" else None))
     assert row["steps"] == 150 and row["x"] > 0.2 and (row["x"], row["y"]) == (ref["x"], ref["y"]), (row, ref)
 
 
