@@ -115,3 +115,26 @@ def test_the_gate_renders():
              top_lane_shares={str(k): 0.3 for k in seeds})
     text = build.report({"leases": {}, "arms": {}, "gate": json.loads(json.dumps(g)), "gate_mc": None})
     assert "| gate_s5 | 98.5 | 0.4 |" in text and "The gate: **holds**." in text
+
+
+def test_the_ceiling_plays_the_shipped_policy_through_an_arms_curriculum(tmp_path):
+    """ceiling.py: an arm's flags as config paths of their fields' types, two iterations of the shipped policy on the
+    training env of the complex task with the spread arm (4 robots), its lanes counted and the report rendered from
+    the results; the kept ceiling/report.md is the rendering of ceiling/results.json."""
+    ceiling = _load("ceiling")
+    from hexnewton.tasks import task
+
+    env = task("complex").env
+    assert ceiling.arm_overrides(arms.ARMS["both"][0], env) == {"terrain.start_levels": 6, "terrain.climb": 2,
+                                                               "terrain.start_progress": 2.0}  # fmt: skip
+    out = tmp_path / "ceiling"
+    assert ceiling.main(["--out", str(out), "--arms", "spread", "--num_envs", "4", "--iterations", "2",
+                         "--device", "cpu"]) == 0  # fmt: skip
+    res = json.loads((out / "results.json").read_text())
+    r = res["arms"]["spread"]
+    assert r["iterations"] == 2 and len(r["iteration_top_lane_share"]) == 2 and r["summary"]["levels"] == 10
+    assert (out / "report.md").read_text() == ceiling.render(res)
+    kept = os.path.join(HERE, "ceiling", "results.json")
+    if os.path.exists(kept):
+        with open(kept) as f:
+            assert ceiling.render(json.load(f)) == open(os.path.join(HERE, "ceiling", "report.md")).read()
