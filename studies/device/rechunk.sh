@@ -43,6 +43,11 @@ last=".dw$((n - 1))"
 mv "$work/install.sh" "$last/install.sh"
 rm -rf "$work"
 echo "tree $((tree / 1048576)) MiB: $n chunks of at most $((chunk / 1048576)) MiB. Device calls, back to back:"
+if [ "$n" = 1 ]; then   # one chunk: its call installs too
+  echo "  run carry=[\".dw0\"$(for k in $kept; do printf ', "%s"' "$k"; done)]  command: rm -rf /opt/w && mkdir -p /opt/w && \
+cp .dw0/part* /opt/w/ && bash studies/device/gpu.sh install && ..."
+  exit 0
+fi
 echo "  run carry=[\".dw0\"]  command: rm -rf /opt/w && mkdir -p /opt/w && cp .dw0/part* /opt/w/"
 for i in $(seq 1 $((n - 1))); do
   if [ ".dw$i" = "$last" ]; then
