@@ -8,7 +8,8 @@ distribution as training's are (``--action sample``) or its mean (``mean``, the 
 a lane per goal reached: a run whose policy walks worse than the shipped one, as every run's does early on, climbs no
 faster, so an arm whose last stage sees less than the target here leaves it out of reach of its runs too.
 
-    python studies/curriculum/ceiling.py --out DIR                      # every arm, 128 robots, sampled actions
+    python studies/curriculum/ceiling.py --out DIR                      # every arm, 128 robots, sampled actions, seed 1
+    python studies/curriculum/ceiling.py --out DIR --num_envs 64 --seeds 1 2 --device cpu   # the kept one (ceiling/)
     python studies/curriculum/ceiling.py --out DIR --arms recipe spread --num_envs 64 --iterations 100
 
 ``--out`` (which must not exist) receives report.md and results.json; the study keeps them in ``ceiling/``.
@@ -105,35 +106,62 @@ def pct(v) -> str:
     return "-" if v is None else f"{100 * v:.1f}"
 
 
+def pooled(runs: list[dict]) -> dict:
+    """Per arm, its seeds' last stages together: episodes, those on the top lane, the share, and each seed's share."""
+    out: dict = {}
+    for r in runs:
+        last = r["summary"]["last_stage"]
+        top = last["lanes_top_first"][0]["episodes"]
+        o = out.setdefault(r["arm"], {"flags": r["flags"], "episodes": 0, "top_lane_episodes": 0, "seed_shares": {}})
+        o["episodes"] += last["episodes"]
+        o["top_lane_episodes"] += top
+        o["seed_shares"][str(r["seed"])] = last["top_lane_share"]
+    for o in out.values():
+        o["top_lane_share"] = o["top_lane_episodes"] / o["episodes"] if o["episodes"] else None
+        shares_ = [v for v in o["seed_shares"].values() if v is not None]
+        o["every_seed_meets_target"] = len(shares_) == len(o["seed_shares"]) and min(shares_) >= TARGET
+    return out
+
+
 def render(res: dict) -> str:
     """report.md from results.json."""
+    seeds = ", ".join(str(s) for s in res["seeds"])
     lines = ["# The curriculum's ceiling", "",
              "How much of its own top lane the complex recipe's training curriculum lets a robot reach that walks as "
              "the shipped policy does from the first iteration on (`studies/curriculum/ceiling.py`: the shipped policy "
              "plays the training env of `--task complex` with each arm's flags, as training meets it, no learning). "
              f"The issue's target for a run: >= {100 * TARGET:.0f} % of the last stage's finished episodes on the top "
-             "lane.", "",
+             "lane, on every seed.", "",
              f"Command: `{res['command']}` ({res['device']}, {res['num_envs']} robots, {res['iterations']} iterations "
-             f"of {res['steps_per_iteration']} steps, actions: {res['action']}, seed {res['seed']}, code "
+             f"of {res['steps_per_iteration']} steps per robot, actions: {res['action']}, seeds {seeds}, code "
              f"{res['commit']}).", "",
-             "| arm | last stage from iteration | its episodes | on the top lane | run's episodes on the top lane | "
-             "episodes per robot | mean lane at the end | target |",
-             "|---|---:|---:|---:|---:|---:|---:|---|"]  # fmt: skip
-    for arm, r in res["arms"].items():
+             "| arm | seeds' last stages: episodes | on the top lane | per seed | target on every seed |",
+             "|---|---:|---:|---|---|"]  # fmt: skip
+    for arm, o in res["arms"].items():
+        per = ", ".join(f"{pct(v)} %" for v in o["seed_shares"].values())
+        lines.append(f"| {arm} | {o['episodes']} | {o['top_lane_episodes']} ({pct(o['top_lane_share'])} %) | {per} | "
+                     f"{'reachable' if o['every_seed_meets_target'] else 'out of reach'} |")
+    lines += ["", "Each run (the last stage from its iteration on; lanes counted 1, the easiest, to 10, the course's "
+              "own heights):", "",
+              "| arm | seed | last stage from iteration | its episodes | on the top lane | "
+              "run's episodes on the top lane | episodes per robot | mean lane at the end | wall time |",
+              "|---|---:|---:|---:|---:|---:|---:|---:|---:|"]  # fmt: skip
+    for r in res["runs"]:
         s, last = r["summary"], r["summary"]["last_stage"]
-        meets = last["top_lane_share"] is not None and last["top_lane_share"] >= TARGET
-        lines.append(f"| {arm} | {last['first_iteration']} | {last['episodes']} | {pct(last['top_lane_share'])} % | "
-                     f"{pct(s['run']['top_lane_share'])} % | {s['episodes_per_robot']:.1f} | "
-                     f"{s['mean_level_end'] + 1:.1f} of {s['levels']} | {'reachable' if meets else 'out of reach'} |")
-    lines += ["", "Lanes counted 1 (easiest) to 10 (the course's own heights). Per arm, the last stage's finished "
-              "episodes per lane, top lane first:", ""]  # fmt: skip
-    for arm, r in res["arms"].items():
+        lines.append(f"| {r['arm']} | {r['seed']} | {last['first_iteration']} | {last['episodes']} | "
+                     f"{pct(last['top_lane_share'])} % | {pct(s['run']['top_lane_share'])} % | "
+                     f"{s['episodes_per_robot']:.1f} | {s['mean_level_end'] + 1:.1f} of {s['levels']} | "
+                     f"{r['wall_s']:.0f} s |")
+    lines += ["", "The last stage's finished episodes per lane, top lane first:", ""]
+    for r in res["runs"]:
         lanes = r["summary"]["last_stage"]["lanes_top_first"]
-        lines.append(f"- {arm} ({r['flags'] or 'no flags'}): "
-                     + ", ".join(f"lane {x['lane'] + 1} {x['episodes']}" for x in lanes) + f"; {r['wall_s']:.0f} s")
+        lines.append(f"- {r['arm']} ({r['flags'] or 'no flags'}), seed {r['seed']}: "
+                     + ", ".join(f"lane {x['lane'] + 1} {x['episodes']}" for x in lanes))
     lines += ["", "An arm out of reach here leaves its last stage below the target even for a walker as good as the "
               "shipped one from the first iteration on; a run's policy, which walks worse early on, climbs no faster. "
-              "One reachable here still has to be reached by what its runs learn (the arms' runs: report.md)."]  # fmt: skip
+              "One reachable here still has to be reached by what its runs learn (the arms' runs: report.md). A "
+              "share counts episodes, and a robot's episodes follow one another up its lanes: the seeds' spread, not "
+              "a binomial error, says how far a share moves."]  # fmt: skip
     return "\n".join(lines) + "\n"
 
 
@@ -144,7 +172,8 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--num_envs", type=positive_int, default=128)
     p.add_argument("--iterations", type=positive_int, default=None, help="default: the task's max_iterations")
     p.add_argument("--action", choices=("sample", "mean"), default="sample")
-    p.add_argument("--seed", type=int, default=1)
+    p.add_argument("--seeds", type=int, nargs="+", default=[1],
+                   help="one run per arm and seed (its terrain, starts and sampled actions)")
     p.add_argument("--device", default=None, help="default: cuda:0 where there is one, else cpu")
     a = p.parse_args(argv)
     check_new_dir(a.out)
@@ -157,13 +186,15 @@ def main(argv: list[str] | None = None) -> int:
     iterations = a.iterations or t.agent.max_iterations
     res = {"command": "python studies/curriculum/ceiling.py " + " ".join(sys.argv[1:] if argv is None else argv),
            "commit": git_rev(), "device": device, "num_envs": a.num_envs, "iterations": iterations,
-           "steps_per_iteration": t.agent.num_steps_per_env, "action": a.action, "seed": a.seed, "arms": {}}
-    for arm in a.arms:
-        r = play_arm(arm, a.num_envs, iterations, a.action, a.seed, device)
-        last = r["summary"]["last_stage"]
-        print(f"{arm}: last stage {pct(last['top_lane_share'])} % of {last['episodes']} episodes on the top lane, "
-              f"{r['summary']['episodes_per_robot']:.1f} per robot, {r['wall_s']:.0f} s", flush=True)
-        res["arms"][arm] = r
+           "steps_per_iteration": t.agent.num_steps_per_env, "action": a.action, "seeds": a.seeds, "runs": []}
+    for seed in a.seeds:
+        for arm in a.arms:
+            r = play_arm(arm, a.num_envs, iterations, a.action, seed, device)
+            last = r["summary"]["last_stage"]
+            print(f"{arm}, seed {seed}: last stage {pct(last['top_lane_share'])} % of {last['episodes']} episodes on "
+                  f"the top lane, {r['summary']['episodes_per_robot']:.1f} per robot, {r['wall_s']:.0f} s", flush=True)
+            res["runs"].append(r)
+    res["arms"] = pooled(res["runs"])
     os.makedirs(a.out)
     with open(os.path.join(a.out, "results.json"), "w") as f:
         json.dump(res, f, indent=1)

@@ -131,7 +131,8 @@ def test_the_ceiling_plays_the_shipped_policy_through_an_arms_curriculum(tmp_pat
     assert ceiling.main(["--out", str(out), "--arms", "spread", "--num_envs", "4", "--iterations", "2",
                          "--device", "cpu"]) == 0  # fmt: skip
     res = json.loads((out / "results.json").read_text())
-    r = res["arms"]["spread"]
+    (r,) = res["runs"]
+    assert r["arm"] == "spread" and r["seed"] == 1 and set(res["arms"]) == {"spread"}
     assert r["iterations"] == 2 and len(r["iteration_top_lane_share"]) == 2 and r["summary"]["levels"] == 10
     assert (out / "report.md").read_text() == ceiling.render(res)
     kept = os.path.join(HERE, "ceiling", "results.json")
