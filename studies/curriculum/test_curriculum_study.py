@@ -135,7 +135,7 @@ def test_the_ceiling_plays_the_shipped_policy_through_an_arms_curriculum(tmp_pat
     assert r["arm"] == "spread" and r["seed"] == 1 and set(res["arms"]) == {"spread"}
     assert r["iterations"] == 2 and len(r["iteration_top_lane_share"]) == 2 and r["summary"]["levels"] == 10
     assert (out / "report.md").read_text() == ceiling.render(res)
-    kept = os.path.join(HERE, "ceiling", "results.json")
-    if os.path.exists(kept):
-        with open(kept) as f:
-            assert ceiling.render(json.load(f)) == open(os.path.join(HERE, "ceiling", "report.md")).read()
+    with open(os.path.join(HERE, "ceiling", "results.json")) as f:
+        kept = json.load(f)
+    assert ceiling.render(kept) == open(os.path.join(HERE, "ceiling", "report.md")).read()
+    assert kept["arms"] == ceiling.pooled(kept["runs"])
