@@ -155,6 +155,17 @@ def episode_status(qpos: np.ndarray, qvel: np.ndarray, ground: np.ndarray, start
     return rules.episode_status(inputs, task.terminations)
 
 
+def bundle_model(bundle: str, given, choice: str | None, prog: str = "sim2sim") -> tuple[RobotConfig, str | None]:
+    """The robot bundle ``bundle`` was exported for (one line where ``given``, ``--robot``'s, is another) and the MJCF
+    file C MuJoCo runs for it (:func:`model_file`; None: the model written from the bundle's description)."""
+    from hexnewton.deploy.runtime import load_spec
+    from hexnewton.robot.registry import check_robot
+
+    robot = spec_robot(load_spec(bundle))
+    check_robot(robot, given, bundle, init=False)
+    return robot, model_file(robot, given, choice, prog)
+
+
 def model_file(robot, given, choice: str | None, prog: str = "sim2sim") -> str | None:
     """The robot's own MJCF file that ``--mjcf`` (``choice``; None: the default) runs, or None for the model written
     from the bundle's description ``robot``; ``given``: ``--robot``'s description (its file the one to run). Where the

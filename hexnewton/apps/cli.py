@@ -179,6 +179,14 @@ def add_robot_args(parser, default: str) -> None:
                              "where the file's tree does not show them")  # fmt: skip
 
 
+def add_mjcf_arg(parser) -> None:
+    """``--mjcf own|generated``: C MuJoCo's model of a bundle's robot (sim2sim, the ROS node's robot;
+    docs/robots.md)."""
+    parser.add_argument("--mjcf", choices=("own", "generated"), default=None,
+                        help="the robot's model: its own MJCF file as written (own; the default for a robot read from "
+                             "one) or the one written from the bundle's description (generated)")  # fmt: skip
+
+
 def robot_from_args(args):
     """The ``RobotConfig`` of ``--robot`` (None where it is left out); one line for a robot that cannot be read."""
     if args.robot is None:

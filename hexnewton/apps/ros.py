@@ -34,8 +34,8 @@ import os
 import sys
 
 from hexnewton.analysis.rollout import EVAL_TERRAIN_SEED
-from hexnewton.apps.cli import ArgumentParser, add_robot_args, check_new_dir, check_writable, positive_int
-from hexnewton.apps.cli import robot_from_args, run, terrain_name
+from hexnewton.apps.cli import ArgumentParser, add_mjcf_arg, add_robot_args, check_new_dir, check_writable
+from hexnewton.apps.cli import positive_int, robot_from_args, run, terrain_name
 from hexnewton.config import TaskConfig
 
 PROG = "python -m hexnewton.apps.ros"
@@ -65,9 +65,7 @@ def _parser() -> ArgumentParser:
     r.add_argument("--bag", metavar="DIR", help="record the run as a rosbag2 folder (MCAP storage)")
     r.add_argument("--out", metavar="PATH.json", help="write the rounds and the robot's counts here")
     r.add_argument("--priority", **priority)
-    r.add_argument("--mjcf", choices=("own", "generated"), default=None,
-                   help="the robot's model, as sim2sim's: its own MJCF file as written (own; the default for a robot "
-                        "read from one) or the one written from the bundle's description (generated)")  # fmt: skip
+    add_mjcf_arg(r)
     add_robot_args(r, "the bundle's (its controller.json's description)")
     b = sub.add_parser("replay", help="play a recorded run's readings back to a node")
     b.add_argument("bag", help="a rosbag2 folder written by robot --bag")
@@ -96,14 +94,9 @@ def main(argv: list[str] | None = None) -> int:
 
 
 def _robot(args) -> int:
-    from hexnewton.analysis.sim2sim import model_file
-    from hexnewton.deploy.runtime import load_spec, spec_robot
-    from hexnewton.robot.registry import check_robot
+    from hexnewton.analysis.sim2sim import bundle_model
 
-    robot = spec_robot(load_spec(args.bundle))
-    given = robot_from_args(args)
-    check_robot(robot, given, args.bundle, init=False)
-    mjcf = model_file(robot, given, args.mjcf, prog="ros robot")
+    _, mjcf = bundle_model(args.bundle, robot_from_args(args), args.mjcf, prog="ros robot")
     if args.out:
         check_writable(args.out, ".json")
     if args.bag:

@@ -59,9 +59,10 @@ import time
 
 from hexnewton.analysis.report import ended_cell
 from hexnewton.analysis.rollout import EVAL_TERRAIN_SEED, START_SEED_OFFSET
-from hexnewton.analysis.sim2sim import Film, Viewer, fixed_cpg_spec, measure, model_file
+from hexnewton.analysis.sim2sim import Film, Viewer, bundle_model, fixed_cpg_spec, measure
 from hexnewton.apps.cli import (
     ArgumentParser,
+    add_mjcf_arg,
     add_robot_args,
     check_writable,
     positive_int,
@@ -71,7 +72,6 @@ from hexnewton.apps.cli import (
     waypoint,
 )
 from hexnewton.config import TaskConfig
-from hexnewton.deploy.runtime import load_spec, spec_robot
 
 PROG = "python -m hexnewton.apps.sim2sim"
 #: the keys results.json carries per terrain (hexnewton.analysis.metrics' names)
@@ -202,9 +202,7 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--viewer", action="store_true", help="show robot 0 in MuJoCo's interactive viewer")
     p.add_argument("--workers", type=int, default=1,
                    help="processes per terrain, each a consecutive range of the rounds (0: one per core)")
-    p.add_argument("--mjcf", choices=("own", "generated"), default=None,
-                   help="the robot's model: its own MJCF file as written (own; the default for a robot read from one) "
-                        "or the one written from the bundle's description (generated)")  # fmt: skip
+    add_mjcf_arg(p)
     add_robot_args(p, "the bundle's (its controller.json's description; the fixed CPG walks it too)")
     args = p.parse_args(argv)
     if args.workers < 0:
@@ -215,12 +213,8 @@ def main(argv: list[str] | None = None) -> int:
         args.fixed_terrains = [] if args.waypoints else ["rugged"]
     if os.path.exists(args.out):
         raise ValueError(f"--out {args.out} exists already (nothing is overwritten)")
-    args.robot_cfg = spec_robot(load_spec(args.bundle))  # the fixed CPG walks the bundle's robot
-    from hexnewton.robot.registry import check_robot
-
-    given = robot_from_args(args)
-    check_robot(args.robot_cfg, given, args.bundle, init=False)
-    args.mjcf_file = model_file(args.robot_cfg, given, args.mjcf)
+    # the fixed CPG walks the bundle's robot, on the same model
+    args.robot_cfg, args.mjcf_file = bundle_model(args.bundle, robot_from_args(args), args.mjcf)
     if args.video:
         check_writable(args.video, ".mp4")
         os.environ.setdefault("MUJOCO_GL", "egl")
